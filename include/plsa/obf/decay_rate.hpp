@@ -1,0 +1,34 @@
+// The decay rate rho of an OBF expansion: how fast the coefficients of a
+// system with poles `true_poles` shrink in a basis built on `basis` (method
+// notes: rho = max_p prod_i |(p - xi_i) / (1 - conj(xi_i) p)|; lower is better).
+#pragma once
+
+#include <algorithm>
+#include <complex>
+#include <vector>
+
+#include "plsa/core/check.hpp"
+#include "plsa/core/pole_set.hpp"
+
+namespace plsa {
+
+/// Kolmogorov distance of one pole p to one basis pole xi (the 1-width inner function).
+inline double poleDistance(std::complex<double> p, std::complex<double> xi) {
+  return std::abs((p - xi) / (1.0 - std::conj(xi) * p));
+}
+
+/// rho(basis, true poles). Throws if either set is empty.
+inline double decayRate(const PoleSet& basis, const std::vector<std::complex<double>>& true_poles) {
+  require(!basis.empty(), "decayRate: the basis pole set is empty");
+  require(!true_poles.empty(), "decayRate: no true poles given");
+  const std::vector<std::complex<double>> xi = basis.poles();
+  double rho = 0.0;
+  for (const auto& p : true_poles) {
+    double prod = 1.0;
+    for (const auto& x : xi) prod *= poleDistance(p, x);
+    rho = std::max(rho, prod);
+  }
+  return rho;
+}
+
+}  // namespace plsa

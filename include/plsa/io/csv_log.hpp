@@ -1,0 +1,52 @@
+// Time-series logs as CSV: `#` comment lines (metadata as `# key: value`), one
+// header line of column names, then numeric rows. The reader rejects malformed
+// files with the file, line and reason; nothing is silently skipped or filled.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace plsa::io {
+
+/// A log in memory: one row per sample, one column per named signal.
+struct Log {
+  std::string source;                          ///< file it came from (for messages)
+  std::vector<std::string> columns;            ///< column names, in file order
+  Eigen::MatrixXd data;                        ///< samples x columns
+  std::map<std::string, std::string> metadata; ///< from `# key: value` lines
+  std::vector<std::string> comments;           ///< other `#` lines, without the '#'
+
+  Eigen::Index samples() const { return data.rows(); }
+  bool hasColumn(const std::string& name) const;
+  /// Index of a column; throws std::invalid_argument naming the file and the
+  /// columns it does have.
+  int columnIndex(const std::string& name) const;
+  Eigen::VectorXd column(const std::string& name) const;
+  /// The named columns side by side, in the order given.
+  Eigen::MatrixXd columnsOf(const std::vector<std::string>& names) const;
+};
+
+struct CsvReadOptions {
+  /// Strictly increasing time is required when this column exists ("" to skip).
+  std::string time_column = "time_s";
+  /// Columns that must be present.
+  std::vector<std::string> required;
+};
+
+/// Reads a log; throws std::runtime_error "FILE:LINE: reason" on any defect
+/// (missing file, no header, duplicate or missing column, ragged row, text or
+/// NaN/Inf in a number field, time not strictly increasing, no data rows).
+Log readCsvLog(const std::string& path, const CsvReadOptions& options = {});
+
+/// Writes metadata as `# key: value`, the header and rows at full precision.
+void writeCsvLog(const std::string& path, const Log& log);
+
+/// Median sample time of the time column; throws if any step is more than
+/// `max_gap_factor` times the median, naming the row and the gap.
+double checkedSampleTime(const Log& log, const std::string& time_column = "time_s",
+                         double max_gap_factor = 1.5);
+
+}  // namespace plsa::io

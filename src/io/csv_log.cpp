@@ -1,0 +1,180 @@
+#include "plsa/io/csv_log.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace plsa::io {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> splitFields(const std::string& line) {
+  std::vector<std::string> out;
+  std::string field;
+  std::istringstream in(line);
+  while (std::getline(in, field, ',')) out.push_back(trim(field));
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+// Shortest text that reads back to the same double.
+std::string shortest(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+[[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& why) {
+  throw std::runtime_error(path + ":" + std::to_string(line) + ": " + why);
+}
+
+}  // namespace
+
+bool Log::hasColumn(const std::string& name) const {
+  return std::find(columns.begin(), columns.end(), name) != columns.end();
+}
+
+int Log::columnIndex(const std::string& name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  if (it == columns.end()) {
+    std::string have;
+    for (const auto& c : columns) have += (have.empty() ? "" : ", ") + c;
+    throw std::invalid_argument(source + ": no column '" + name + "' (columns: " + have + ")");
+  }
+  return static_cast<int>(it - columns.begin());
+}
+
+Eigen::VectorXd Log::column(const std::string& name) const { return data.col(columnIndex(name)); }
+
+Eigen::MatrixXd Log::columnsOf(const std::vector<std::string>& names) const {
+  Eigen::MatrixXd out(data.rows(), static_cast<Eigen::Index>(names.size()));
+  for (std::size_t i = 0; i < names.size(); ++i)
+    out.col(static_cast<Eigen::Index>(i)) = data.col(columnIndex(names[i]));
+  return out;
+}
+
+Log readCsvLog(const std::string& path, const CsvReadOptions& options) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open for reading");
+  Log log;
+  log.source = path;
+  std::vector<double> values;
+  std::string line;
+  std::size_t lineno = 0;
+  bool have_header = false;
+  int time_col = -1;
+  double last_time = -std::numeric_limits<double>::infinity();
+  Eigen::Index rows = 0;
+  while (std::getline(in, line)) {
+    ++lineno;
+    const std::string t = trim(line);
+    if (t.empty()) continue;
+    if (t[0] == '#') {
+      const std::string body = trim(t.substr(1));
+      const auto colon = body.find(':');
+      if (colon != std::string::npos && colon > 0 &&
+          body.find_first_of(" \t") > colon) {
+        log.metadata[trim(body.substr(0, colon))] = trim(body.substr(colon + 1));
+      } else {
+        log.comments.push_back(body);
+      }
+      continue;
+    }
+    const std::vector<std::string> fields = splitFields(t);
+    if (!have_header) {
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        if (fields[i].empty()) fail(path, lineno, "header column " + std::to_string(i + 1) + " has no name");
+        if (std::find(fields.begin(), fields.begin() + static_cast<long>(i), fields[i]) !=
+            fields.begin() + static_cast<long>(i))
+          fail(path, lineno, "header names column '" + fields[i] + "' twice");
+      }
+      log.columns = fields;
+      have_header = true;
+      for (const auto& r : options.required)
+        if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "'");
+      if (!options.time_column.empty() && log.hasColumn(options.time_column))
+        time_col = log.columnIndex(options.time_column);
+      continue;
+    }
+    if (fields.size() != log.columns.size())
+      fail(path, lineno, "row has " + std::to_string(fields.size()) + " fields, header has " +
+                             std::to_string(log.columns.size()));
+    for (std::size_t i = 0; i < fields.size(); ++i) {
+      const std::string& f = fields[i];
+      char* end = nullptr;
+      errno = 0;
+      const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
+      if (f.empty() || end != f.c_str() + f.size())
+        fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
+      if (!std::isfinite(v))
+        fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
+      values.push_back(v);
+    }
+    if (time_col >= 0) {
+      const double tt = values[values.size() - fields.size() + static_cast<std::size_t>(time_col)];
+      if (!(tt > last_time)) {
+        fail(path, lineno, "time " + shortest(tt) + " is not after the previous sample's " +
+                               shortest(last_time) + " (time must increase strictly)");
+      }
+      last_time = tt;
+    }
+    ++rows;
+  }
+  if (!have_header) fail(path, lineno, "no header line (expected comma-separated column names)");
+  if (rows == 0) fail(path, lineno, "no data rows after the header");
+  const auto cols = static_cast<Eigen::Index>(log.columns.size());
+  log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), rows, cols);
+  return log;
+}
+
+void writeCsvLog(const std::string& path, const Log& log) {
+  if (static_cast<Eigen::Index>(log.columns.size()) != log.data.cols())
+    throw std::invalid_argument("writeCsvLog: " + std::to_string(log.columns.size()) +
+                                " column names for " + std::to_string(log.data.cols()) + " columns");
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  for (const auto& [k, v] : log.metadata) out << "# " << k << ": " << v << '\n';
+  for (const auto& c : log.comments) out << "# " << c << '\n';
+  for (std::size_t i = 0; i < log.columns.size(); ++i) out << (i ? "," : "") << log.columns[i];
+  out << '\n' << std::setprecision(17);
+  for (Eigen::Index r = 0; r < log.data.rows(); ++r) {
+    for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << log.data(r, c);
+    out << '\n';
+  }
+  if (!out) throw std::runtime_error(path + ": write failed");
+}
+
+double checkedSampleTime(const Log& log, const std::string& time_column, double max_gap_factor) {
+  const Eigen::VectorXd t = log.column(time_column);
+  if (t.size() < 2) throw std::invalid_argument(log.source + ": need two samples to find the sample time");
+  std::vector<double> dt(static_cast<std::size_t>(t.size() - 1));
+  for (Eigen::Index k = 1; k < t.size(); ++k) dt[static_cast<std::size_t>(k - 1)] = t(k) - t(k - 1);
+  std::vector<double> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  for (std::size_t k = 0; k < dt.size(); ++k) {
+    if (dt[k] > max_gap_factor * median) {
+      std::ostringstream msg;
+      msg << log.source << ": time gap of " << dt[k] << " s before data row " << k + 2
+          << " (median sample time " << median << " s); split the log at the gap";
+      throw std::runtime_error(msg.str());
+    }
+  }
+  return median;
+}
+
+}  // namespace plsa::io

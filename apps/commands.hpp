@@ -1,0 +1,10 @@
+// Subcommands of the `plsa` tool; each registers itself on the CLI11 app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace plsa::app {
+
+void addDemoCommand(CLI::App& app);
+
+}  // namespace plsa::app

@@ -6,5 +6,6 @@
 namespace plsa::app {
 
 void addDemoCommand(CLI::App& app);
+void addSimulateCommands(CLI::App& app);
 
 }  // namespace plsa::app

@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("plsa ") + PLSA_VERSION);
   app.require_subcommand(1);
   plsa::app::addDemoCommand(app);
+  plsa::app::addSimulateCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

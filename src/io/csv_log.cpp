@@ -150,9 +150,9 @@ void writeCsvLog(const std::string& path, const Log& log) {
   for (const auto& [k, v] : log.metadata) out << "# " << k << ": " << v << '\n';
   for (const auto& c : log.comments) out << "# " << c << '\n';
   for (std::size_t i = 0; i < log.columns.size(); ++i) out << (i ? "," : "") << log.columns[i];
-  out << '\n' << std::setprecision(17);
+  out << '\n';
   for (Eigen::Index r = 0; r < log.data.rows(); ++r) {
-    for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << log.data(r, c);
+    for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << shortest(log.data(r, c));
     out << '\n';
   }
   if (!out) throw std::runtime_error(path + ": write failed");

@@ -1,0 +1,80 @@
+// Simulated three-chamber pneumatic soft segment: valve/chamber pneumatics,
+// pressure -> chamber strain, constant-curvature kinematics (Webster & Jones
+// 2010), second-order bending dynamics, and a tip orientation sensor read out
+// with the paper's eqs. (5)-(6). Effects are switched by SimConfig.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/sim/sim_config.hpp"
+
+namespace plsa::sim {
+
+/// One measurement, taken at the end of a sample period.
+struct ActuatorSample {
+  double time_s = 0.0;
+  std::array<double, 3> command_bar{};   ///< as applied (after clamping)
+  std::array<double, 3> pressure_bar{};  ///< chamber pressures
+  double bend_deg = 0.0;                 ///< deflection, eq. (5), from the sensor
+  double steer_deg = 0.0;                ///< steering, eq. (6), from the sensor
+  double true_bend_deg = 0.0;            ///< noise- and bias-free, for tests
+  double true_steer_deg = 0.0;
+  Eigen::Matrix3d sensor_rotation = Eigen::Matrix3d::Identity();  ///< B_A_G
+};
+
+/// Deflection and steering (deg) from a sensor rotation B_A_G, paper eqs. (5), (6).
+void anglesFromRotation(const Eigen::Matrix3d& b_a_g, double& bend_deg, double& steer_deg);
+
+/// Configuration subspace (1..3) a steering angle falls in, bounded by the
+/// single-chamber bending directions, and the angle measured from its start.
+struct Subspace {
+  int index;
+  double angle_deg;
+};
+Subspace configurationSubspace(const SimConfig::Geometry& g, double steer_deg);
+
+/// Tip position (m) for arc length, bending and steering (Webster & Jones 2010).
+Eigen::Vector3d tipPosition(double arc_length_m, double bend_rad, double steer_rad);
+
+class Actuator {
+ public:
+  /// Validates the configuration (throws std::invalid_argument).
+  Actuator(const SimConfig& config, std::uint64_t seed);
+
+  /// Holds `command_bar` for one sample period and returns the measurement.
+  /// Commands are clamped to [0, max_pressure_bar]; a non-finite command throws.
+  ActuatorSample step(const std::array<double, 3>& command_bar);
+  /// Vent: command zero in every chamber.
+  ActuatorSample vent() { return step({0.0, 0.0, 0.0}); }
+
+  const SimConfig& config() const { return config_; }
+  double time() const { return time_s_; }
+  int substepsPerSample() const { return substeps_; }
+
+ private:
+  void substep(const std::array<double, 3>& cmd);
+  double effectivePressure(double p) const;
+  ActuatorSample measure(const std::array<double, 3>& cmd);
+
+  SimConfig config_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  int substeps_ = 1;
+  double dt_ = 0.001;
+  double time_s_ = 0.0;
+  std::int64_t sample_count_ = 0;
+  std::array<double, 3> pressure_{};
+  std::array<std::vector<double>, 3> play_{};  ///< play operator states per chamber
+  std::array<double, 3> creep_{};
+  Eigen::Vector2d bend_ = Eigen::Vector2d::Zero();  ///< theta * (cos phi, sin phi), rad
+  Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();
+  std::vector<std::array<double, 3>> delay_line_;
+  std::size_t delay_head_ = 0;
+};
+
+}  // namespace plsa::sim

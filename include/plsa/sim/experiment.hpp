@@ -1,0 +1,52 @@
+// Identification and validation experiments (paper Section V-A, Table I):
+// single-chamber staircases, the two-chamber reference-pressure grid with one
+// input moving at a time, and smooth joystick-like validation runs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/io/csv_log.hpp"
+#include "plsa/sim/actuator.hpp"
+
+namespace plsa::sim {
+
+struct ExperimentOptions {
+  double sample_rate_hz = 80.0;
+  double hold_s = 4.0;  ///< time at each level, long enough to settle
+  double initial_rest_s = 2.0;
+  // staircase1
+  int staircase_steps = 14;
+  double staircase_max_bar = 0.35;
+  int staircase_chamber = 1;
+  // grid2 (paper: 0.20 to 0.35 bar, four levels per chamber)
+  std::vector<double> grid_levels_bar = {0.20, 0.25, 0.30, 0.35};
+  std::array<int, 2> grid_chambers = {1, 2};
+  // joystick
+  double joystick_duration_s = 60.0;
+  double joystick_min_bar = 0.12;
+  double joystick_max_bar = 0.38;
+  double joystick_bandwidth_hz = 0.3;
+  std::uint64_t seed = 1;
+};
+
+/// Command trajectory (samples x 3, bar) at the sample rate.
+struct Experiment {
+  std::string name;
+  Eigen::MatrixXd commands;
+};
+
+Experiment staircaseExperiment(const ExperimentOptions& o);
+Experiment gridExperiment(const ExperimentOptions& o);
+Experiment joystickExperiment(const ExperimentOptions& o);
+/// By name: "staircase1", "grid2" or "joystick"; throws naming the choices.
+Experiment makeExperiment(const std::string& name, const ExperimentOptions& o);
+
+/// Drives the actuator with the experiment and records the standard columns
+/// time_s, cmd_1..3, p_1..3, bend_deg, steer_deg with metadata.
+io::Log runExperiment(Actuator& actuator, const Experiment& experiment);
+
+}  // namespace plsa::sim

@@ -1,0 +1,112 @@
+// Configuration of the simulated three-chamber actuator: nominal physics plus
+// the candidate unmodelled effects, each a named module that can be switched
+// on or off and whose parameters are addressable by name (for calibration).
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace plsa::sim {
+
+/// The candidate effects, in the order the diagnosis lists them.
+inline const std::vector<std::string>& effectNames() {
+  static const std::vector<std::string> names = {"deadzone", "hysteresis", "stiffening", "coupling",
+                                                 "pneumatic_lag", "creep", "sensor_bias"};
+  return names;
+}
+
+/// A named parameter with its physical bounds (what a calibration may try).
+struct ParamRef {
+  std::string name;
+  double* value;
+  double lower;
+  double upper;
+  std::string unit;
+};
+
+struct SimConfig {
+  double sample_rate_hz = 80.0;
+  double internal_step_s = 0.001;
+  double max_pressure_bar = 0.4;  ///< commands are clamped to [0, this]
+
+  struct Geometry {
+    double length_m = 0.09;
+    double chamber_radius_m = 0.008;  ///< chamber axis to segment axis
+    /// Directions (deg) the tip bends to under each chamber alone.
+    std::array<double, 3> bend_direction_deg = {0.0, 120.0, 240.0};
+  } geometry;
+
+  struct Pneumatics {
+    double time_constant_s = 0.05;
+    double max_rate_bar_per_s = 8.0;  ///< flow limit
+  } pneumatics;
+
+  struct Elongation {
+    double strain_per_bar = 0.75;  ///< chamber strain per bar of effective pressure
+    double quadratic = -0.6;       ///< static nonlinearity: strain += q p^2 (per bar^2)
+  } elongation;
+
+  struct Bending {
+    double natural_freq_hz = 0.8;
+    double damping_ratio = 0.85;
+  } bending;
+
+  struct Sensor {
+    double noise_deg = 0.05;  ///< std of a random rotation per sample
+  } sensor;
+
+  // --- candidate effects ------------------------------------------------
+  struct Deadzone {
+    bool enabled = true;
+    std::string formulation = "sharp";  ///< "sharp" | "smooth"
+    double threshold_bar = 0.06;
+    double smooth_width_bar = 0.01;  ///< only for "smooth"
+  } deadzone;
+  struct Hysteresis {
+    bool enabled = true;
+    std::string formulation = "play";  ///< "play" | "prandtl_ishlinskii"
+    double width = 0.12;  ///< play half-width as a fraction of the strain
+  } hysteresis;
+  struct Stiffening {
+    bool enabled = true;
+    double per_bar = 20.0;  ///< stiffness grows by (1 + per_bar * sum p_eff)
+  } stiffening;
+  struct Coupling {
+    bool enabled = true;
+    /// A pressurised chamber's wall bulges into its neighbours and stiffens
+    /// them: each strain is scaled by (1 - per_bar * other chambers' p_eff).
+    double per_bar = 0.8;
+  } coupling;
+  struct PneumaticLag {
+    bool enabled = true;
+    double fill_time_constant_s = 0.08;
+    double vent_time_constant_s = 0.03;
+    double delay_s = 0.03;
+  } pneumatic_lag;
+  struct Creep {
+    bool enabled = true;
+    double fraction = 0.08;  ///< extra strain reached under a constant pressure
+    double time_constant_s = 8.0;
+  } creep;
+  struct SensorBias {
+    bool enabled = true;
+    double tilt_deg = 1.5;          ///< mount misalignment
+    double yaw_drift_deg_per_s = 0.02;
+  } sensor_bias;
+
+  bool effectEnabled(const std::string& effect) const;
+  void setEffectEnabled(const std::string& effect, bool on);
+  /// The calibratable parameters of an effect, or "nominal" for the base physics.
+  std::vector<ParamRef> parameters(const std::string& module);
+
+  /// Throws std::invalid_argument naming the first value out of range.
+  void validate() const;
+};
+
+/// JSON I/O. Unknown keys and wrong types are errors naming the key path.
+SimConfig loadSimConfig(const std::string& path);
+SimConfig simConfigFromJson(const std::string& text, const std::string& source = "<json>");
+std::string simConfigToJson(const SimConfig& config);
+
+}  // namespace plsa::sim

@@ -1,0 +1,165 @@
+#include "plsa/sim/actuator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace plsa::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+// Prandtl-Ishlinskii formulation: this many play operators, widths spread to 2x.
+constexpr int kPiOperators = 5;
+
+Eigen::Matrix3d rotZ(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+Eigen::Matrix3d rotY(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix(); }
+
+double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
+
+}  // namespace
+
+void anglesFromRotation(const Eigen::Matrix3d& b_a_g, double& bend_deg, double& steer_deg) {
+  // (5): theta_d = acos(<e_x, B_A_G e_Z>); (6): phi = atan2(<e_x, R e_Y>, <e_x, R e_X>).
+  const double c = std::clamp(b_a_g(0, 2), -1.0, 1.0);
+  bend_deg = std::acos(c) / kDeg;
+  steer_deg = std::atan2(b_a_g(0, 1), b_a_g(0, 0)) / kDeg;
+}
+
+Subspace configurationSubspace(const SimConfig::Geometry& g, double steer_deg) {
+  for (int i = 0; i < 3; ++i) {
+    const double start = g.bend_direction_deg[static_cast<std::size_t>(i)];
+    const double end = g.bend_direction_deg[static_cast<std::size_t>((i + 1) % 3)];
+    const double span = std::fmod(end - start + 720.0, 360.0);
+    const double rel = std::fmod(steer_deg - start + 720.0, 360.0);
+    if (rel < span || (i == 2 && rel <= span)) return {i + 1, rel};
+  }
+  return {1, std::fmod(steer_deg - g.bend_direction_deg[0] + 720.0, 360.0)};
+}
+
+Eigen::Vector3d tipPosition(double arc_length_m, double bend_rad, double steer_rad) {
+  if (std::abs(bend_rad) < 1e-9) return {0.0, 0.0, arc_length_m};
+  const double kappa = bend_rad / arc_length_m;
+  const double r = (1.0 - std::cos(bend_rad)) / kappa;
+  return {r * std::cos(steer_rad), r * std::sin(steer_rad), std::sin(bend_rad) / kappa};
+}
+
+Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config), rng_(seed) {
+  config_.validate();
+  const double period = 1.0 / config_.sample_rate_hz;
+  substeps_ = std::max(1, static_cast<int>(std::lround(period / config_.internal_step_s)));
+  dt_ = period / substeps_;
+  const std::size_t n_play = config_.hysteresis.formulation == "prandtl_ishlinskii" ? kPiOperators : 1;
+  for (auto& p : play_) p.assign(n_play, 0.0);
+  const std::size_t delay_steps =
+      config_.pneumatic_lag.enabled ? static_cast<std::size_t>(std::lround(config_.pneumatic_lag.delay_s / dt_)) : 0;
+  delay_line_.assign(delay_steps + 1, {0.0, 0.0, 0.0});
+}
+
+double Actuator::effectivePressure(double p) const {
+  const auto& dz = config_.deadzone;
+  if (!dz.enabled) return p;
+  if (dz.formulation == "smooth") {
+    const double w = dz.smooth_width_bar;
+    return w * (softplus((p - dz.threshold_bar) / w) - softplus(-dz.threshold_bar / w));
+  }
+  return std::max(0.0, p - dz.threshold_bar);
+}
+
+void Actuator::substep(const std::array<double, 3>& cmd) {
+  const SimConfig& c = config_;
+  // Transport delay: a ring of past commands, one per internal step.
+  delay_line_[delay_head_] = cmd;
+  delay_head_ = (delay_head_ + 1) % delay_line_.size();
+  const std::array<double, 3>& delayed = delay_line_[delay_head_];
+
+  std::array<double, 3> p_eff{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    double tau = c.pneumatics.time_constant_s;
+    if (c.pneumatic_lag.enabled)
+      tau = delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s;
+    const double rate = std::clamp((delayed[i] - pressure_[i]) / tau, -c.pneumatics.max_rate_bar_per_s,
+                                   c.pneumatics.max_rate_bar_per_s);
+    pressure_[i] += rate * dt_;
+    p_eff[i] = effectivePressure(pressure_[i]);
+  }
+
+  const double sum_p = p_eff[0] + p_eff[1] + p_eff[2];
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();
+  const double lever = 2.0 * c.geometry.length_m / (3.0 * c.geometry.chamber_radius_m);
+  for (std::size_t i = 0; i < 3; ++i) {
+    double strain = c.elongation.strain_per_bar * p_eff[i] + c.elongation.quadratic * p_eff[i] * p_eff[i];
+    if (c.coupling.enabled) strain *= std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
+    if (c.hysteresis.enabled) {
+      // Play operator(s): output moves only once the input leaves a band around it.
+      auto& plays = play_[i];
+      double out = 0.0;
+      for (std::size_t k = 0; k < plays.size(); ++k) {
+        // Band proportional to the strain, so the loop closes at zero and at the peak.
+        const double w = plays.size() == 1 ? c.hysteresis.width
+                                           : c.hysteresis.width * 2.0 * static_cast<double>(k + 1) /
+                                                 static_cast<double>(plays.size() + 1);
+        const double r = w * std::abs(strain);
+        plays[k] = std::clamp(plays[k], strain - r, strain + r);
+        out += plays[k];
+      }
+      strain = out / static_cast<double>(plays.size());
+    }
+    if (c.creep.enabled) {
+      creep_[i] += (c.creep.fraction * strain - creep_[i]) / c.creep.time_constant_s * dt_;
+      strain += creep_[i];
+    }
+    // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
+    const double dir = c.geometry.bend_direction_deg[i] * kDeg;
+    target += lever * strain * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+  }
+
+  double omega = 2.0 * kPi * c.bending.natural_freq_hz;
+  if (c.stiffening.enabled) omega *= std::sqrt(1.0 + c.stiffening.per_bar * sum_p);
+  // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
+  bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
+  bend_ += bend_rate_ * dt_;
+
+}
+
+ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
+  const SimConfig& c = config_;
+  ActuatorSample s;
+  s.time_s = time_s_;
+  s.command_bar = cmd;
+  s.pressure_bar = pressure_;
+  const double theta = bend_.norm();
+  const double phi = theta > 1e-12 ? std::atan2(bend_.y(), bend_.x()) : 0.0;
+  s.true_bend_deg = theta / kDeg;
+  s.true_steer_deg = phi / kDeg;
+  // Tip frame (Webster & Jones): Rz(phi) Ry(theta) Rz(-phi); the sensor's x axis is the tip normal.
+  Eigen::Matrix3d g_r_b = rotZ(phi) * rotY(theta) * rotZ(-phi) * rotY(-kPi / 2.0);
+  if (c.sensor_bias.enabled) {
+    g_r_b = rotZ(c.sensor_bias.yaw_drift_deg_per_s * kDeg * time_s_) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
+  }
+  if (c.sensor.noise_deg > 0.0) {
+    const Eigen::Vector3d w(normal_(rng_), normal_(rng_), normal_(rng_));
+    const double sigma = c.sensor.noise_deg * kDeg;
+    g_r_b = Eigen::AngleAxisd(sigma * w.norm(), w.normalized()).toRotationMatrix() * g_r_b;
+  }
+  s.sensor_rotation = g_r_b.transpose();
+  anglesFromRotation(s.sensor_rotation, s.bend_deg, s.steer_deg);
+  return s;
+}
+
+ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) {
+  std::array<double, 3> cmd{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (!std::isfinite(command_bar[i]))
+      throw std::invalid_argument("Actuator::step: command for chamber " + std::to_string(i + 1) +
+                                  " is not a finite number");
+    cmd[i] = std::clamp(command_bar[i], 0.0, config_.max_pressure_bar);
+  }
+  for (int k = 0; k < substeps_; ++k) substep(cmd);
+  ++sample_count_;
+  time_s_ = static_cast<double>(sample_count_) / config_.sample_rate_hz;
+  return measure(cmd);
+}
+
+}  // namespace plsa::sim

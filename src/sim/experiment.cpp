@@ -1,0 +1,171 @@
+#include "plsa/sim/experiment.hpp"
+
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include "plsa/core/check.hpp"
+
+namespace plsa::sim {
+namespace {
+
+class CommandWriter {
+ public:
+  explicit CommandWriter(double rate) : rate_(rate) {}
+  void hold(const Eigen::RowVector3d& cmd, double seconds) {
+    const auto n = static_cast<Eigen::Index>(std::lround(seconds * rate_));
+    for (Eigen::Index k = 0; k < n; ++k) rows_.push_back(cmd);
+  }
+  Eigen::MatrixXd matrix() const {
+    Eigen::MatrixXd m(static_cast<Eigen::Index>(rows_.size()), 3);
+    for (std::size_t k = 0; k < rows_.size(); ++k) m.row(static_cast<Eigen::Index>(k)) = rows_[k];
+    return m;
+  }
+
+ private:
+  double rate_;
+  std::vector<Eigen::RowVector3d> rows_;
+};
+
+void checkCommon(const ExperimentOptions& o) {
+  require(o.sample_rate_hz > 0, "experiment: sample_rate_hz must be positive");
+  require(o.hold_s > 0, "experiment: hold_s must be positive");
+  require(o.initial_rest_s >= 0, "experiment: initial_rest_s must be >= 0");
+}
+
+int chamberIndex(int chamber) {
+  require(chamber >= 1 && chamber <= 3, "experiment: chambers are numbered 1 to 3, got " + std::to_string(chamber));
+  return chamber - 1;
+}
+
+}  // namespace
+
+Experiment staircaseExperiment(const ExperimentOptions& o) {
+  checkCommon(o);
+  require(o.staircase_steps >= 1, "staircase: need at least one step");
+  require(o.staircase_max_bar > 0, "staircase: staircase_max_bar must be positive");
+  const int c = chamberIndex(o.staircase_chamber);
+  CommandWriter w(o.sample_rate_hz);
+  Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
+  w.hold(cmd, o.initial_rest_s);
+  const int n = o.staircase_steps;
+  for (int k = 1; k <= n; ++k) {  // increase cases
+    cmd(c) = o.staircase_max_bar * k / n;
+    w.hold(cmd, o.hold_s);
+  }
+  for (int k = n - 1; k >= 0; --k) {  // decrease cases
+    cmd(c) = o.staircase_max_bar * k / n;
+    w.hold(cmd, o.hold_s);
+  }
+  return {"staircase1", w.matrix()};
+}
+
+Experiment gridExperiment(const ExperimentOptions& o) {
+  checkCommon(o);
+  require(o.grid_levels_bar.size() >= 2, "grid2: need at least two levels per chamber");
+  for (std::size_t i = 1; i < o.grid_levels_bar.size(); ++i)
+    require(o.grid_levels_bar[i] > o.grid_levels_bar[i - 1], "grid2: levels must increase");
+  const int a = chamberIndex(o.grid_chambers[0]);
+  const int b = chamberIndex(o.grid_chambers[1]);
+  require(a != b, "grid2: the two chambers must differ");
+  const auto& L = o.grid_levels_bar;
+  CommandWriter w(o.sample_rate_hz);
+  Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
+  w.hold(cmd, o.initial_rest_s);
+  // One input moves at a time: for each level of the fixed input, the moving
+  // input climbs through every level (icr) and comes back down (dcr).
+  for (const auto& [moving, fixed] : {std::pair{a, b}, std::pair{b, a}}) {
+    for (double level : L) {
+      // Move the fixed input, then bring the moving one to its first level: one at a time.
+      if (cmd(fixed) != level) {
+        cmd(fixed) = level;
+        w.hold(cmd, o.hold_s);
+      }
+      if (cmd(moving) != L.front()) {
+        cmd(moving) = L.front();
+        w.hold(cmd, o.hold_s);
+      }
+      for (std::size_t i = 1; i < L.size(); ++i) {
+        cmd(moving) = L[i];
+        w.hold(cmd, o.hold_s);
+      }
+      for (std::size_t i = L.size() - 1; i-- > 0;) {
+        cmd(moving) = L[i];
+        w.hold(cmd, o.hold_s);
+      }
+    }
+  }
+  return {"grid2", w.matrix()};
+}
+
+Experiment joystickExperiment(const ExperimentOptions& o) {
+  checkCommon(o);
+  require(o.joystick_duration_s > 0, "joystick: duration must be positive");
+  require(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
+          "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
+  const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
+  const auto rest = static_cast<Eigen::Index>(std::lround(o.initial_rest_s * o.sample_rate_hz));
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> n01;
+  // Two passes of a critically damped second-order low-pass on white noise.
+  const double w = 2.0 * M_PI * o.joystick_bandwidth_hz / o.sample_rate_hz;
+  const double alpha = 1.0 - std::exp(-w);
+  Eigen::MatrixXd cmd = Eigen::MatrixXd::Zero(rest + n, 3);
+  for (int ch = 0; ch < 2; ++ch) {
+    double s1 = 0, s2 = 0, s3 = 0, s4 = 0;
+    Eigen::VectorXd x(n);
+    for (Eigen::Index k = -4 * static_cast<Eigen::Index>(1.0 / alpha); k < n; ++k) {
+      s1 += alpha * (n01(rng) - s1);
+      s2 += alpha * (s1 - s2);
+      s3 += alpha * (s2 - s3);
+      s4 += alpha * (s3 - s4);
+      if (k >= 0) x(k) = s4;
+    }
+    const double lo = x.minCoeff(), hi = x.maxCoeff();
+    const double span = hi > lo ? hi - lo : 1.0;
+    cmd.col(ch).tail(n) = ((x.array() - lo) / span * (o.joystick_max_bar - o.joystick_min_bar) +
+                           o.joystick_min_bar).matrix();
+  }
+  // Ease in from rest so the run starts with a local move, not a jump.
+  const Eigen::Index ease = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(2.0 * o.sample_rate_hz));
+  for (Eigen::Index k = 0; k < ease; ++k) cmd.row(rest + k) *= static_cast<double>(k) / ease;
+  return {"joystick", cmd};
+}
+
+Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
+  if (name == "staircase1") return staircaseExperiment(o);
+  if (name == "grid2") return gridExperiment(o);
+  if (name == "joystick") return joystickExperiment(o);
+  throw std::invalid_argument("unknown experiment '" + name + "' (choose staircase1, grid2 or joystick)");
+}
+
+io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
+  require(experiment.commands.cols() == 3, "runExperiment: commands must have 3 columns");
+  const Eigen::Index T = experiment.commands.rows();
+  require(T >= 1, "runExperiment: the experiment has no samples");
+  io::Log log;
+  log.source = "plsa simulate (" + experiment.name + ")";
+  log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
+  log.data.resize(T, 9);
+  for (Eigen::Index k = 0; k < T; ++k) {
+    const ActuatorSample s = actuator.step({experiment.commands(k, 0), experiment.commands(k, 1),
+                                            experiment.commands(k, 2)});
+    log.data.row(k) << s.time_s, s.command_bar[0], s.command_bar[1], s.command_bar[2], s.pressure_bar[0],
+        s.pressure_bar[1], s.pressure_bar[2], s.bend_deg, s.steer_deg;
+  }
+  const SimConfig& c = actuator.config();
+  std::ostringstream rate;
+  rate << c.sample_rate_hz;
+  log.metadata["sample_rate_hz"] = rate.str();
+  log.metadata["source"] = "plsa simulated actuator";
+  log.metadata["experiment"] = experiment.name;
+  log.metadata["units"] = "time_s s; cmd_*, p_* bar gauge; bend_deg, steer_deg deg";
+  std::string on;
+  for (const auto& e : effectNames())
+    if (c.effectEnabled(e)) on += (on.empty() ? "" : " ") + e;
+  log.metadata["effects"] = on.empty() ? "none" : on;
+  return log;
+}
+
+}  // namespace plsa::sim

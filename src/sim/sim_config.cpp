@@ -1,0 +1,208 @@
+#include "plsa/sim/sim_config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace plsa::sim {
+namespace {
+
+using nlohmann::json;
+
+// One table drives validation, JSON I/O and calibration access.
+struct Field {
+  std::string module;  // "" for top level
+  ParamRef ref;
+};
+
+std::vector<Field> fields(SimConfig& c) {
+  return {
+      {"", {"sample_rate_hz", &c.sample_rate_hz, 1.0, 10000.0, "Hz"}},
+      {"", {"internal_step_s", &c.internal_step_s, 1e-5, 0.01, "s"}},
+      {"", {"max_pressure_bar", &c.max_pressure_bar, 0.01, 1.0, "bar"}},
+      {"geometry", {"length_m", &c.geometry.length_m, 0.01, 1.0, "m"}},
+      {"geometry", {"chamber_radius_m", &c.geometry.chamber_radius_m, 0.001, 0.1, "m"}},
+      {"pneumatics", {"time_constant_s", &c.pneumatics.time_constant_s, 0.005, 2.0, "s"}},
+      {"pneumatics", {"max_rate_bar_per_s", &c.pneumatics.max_rate_bar_per_s, 0.05, 100.0, "bar/s"}},
+      {"elongation", {"strain_per_bar", &c.elongation.strain_per_bar, 0.01, 5.0, "1/bar"}},
+      {"elongation", {"quadratic", &c.elongation.quadratic, -5.0, 5.0, "1/bar^2"}},
+      {"bending", {"natural_freq_hz", &c.bending.natural_freq_hz, 0.05, 20.0, "Hz"}},
+      {"bending", {"damping_ratio", &c.bending.damping_ratio, 0.05, 5.0, ""}},
+      {"sensor", {"noise_deg", &c.sensor.noise_deg, 0.0, 10.0, "deg"}},
+      {"deadzone", {"threshold_bar", &c.deadzone.threshold_bar, 0.0, 0.2, "bar"}},
+      {"deadzone", {"smooth_width_bar", &c.deadzone.smooth_width_bar, 0.001, 0.1, "bar"}},
+      {"hysteresis", {"width", &c.hysteresis.width, 0.0, 0.5, "fraction"}},
+      {"stiffening", {"per_bar", &c.stiffening.per_bar, 0.0, 60.0, "1/bar"}},
+      {"coupling", {"per_bar", &c.coupling.per_bar, 0.0, 2.5, "1/bar"}},
+      {"pneumatic_lag", {"fill_time_constant_s", &c.pneumatic_lag.fill_time_constant_s, 0.005, 2.0, "s"}},
+      {"pneumatic_lag", {"vent_time_constant_s", &c.pneumatic_lag.vent_time_constant_s, 0.005, 2.0, "s"}},
+      {"pneumatic_lag", {"delay_s", &c.pneumatic_lag.delay_s, 0.0, 0.5, "s"}},
+      {"creep", {"fraction", &c.creep.fraction, 0.0, 0.5, ""}},
+      {"creep", {"time_constant_s", &c.creep.time_constant_s, 0.1, 200.0, "s"}},
+      {"sensor_bias", {"tilt_deg", &c.sensor_bias.tilt_deg, -15.0, 15.0, "deg"}},
+      {"sensor_bias", {"yaw_drift_deg_per_s", &c.sensor_bias.yaw_drift_deg_per_s, -1.0, 1.0, "deg/s"}},
+  };
+}
+
+bool* enabledFlag(SimConfig& c, const std::string& effect) {
+  if (effect == "deadzone") return &c.deadzone.enabled;
+  if (effect == "hysteresis") return &c.hysteresis.enabled;
+  if (effect == "stiffening") return &c.stiffening.enabled;
+  if (effect == "coupling") return &c.coupling.enabled;
+  if (effect == "pneumatic_lag") return &c.pneumatic_lag.enabled;
+  if (effect == "creep") return &c.creep.enabled;
+  if (effect == "sensor_bias") return &c.sensor_bias.enabled;
+  std::string known;
+  for (const auto& e : effectNames()) known += (known.empty() ? "" : ", ") + e;
+  throw std::invalid_argument("unknown effect '" + effect + "' (known: " + known + ")");
+}
+
+std::string* formulation(SimConfig& c, const std::string& module) {
+  if (module == "deadzone") return &c.deadzone.formulation;
+  if (module == "hysteresis") return &c.hysteresis.formulation;
+  return nullptr;
+}
+
+const std::vector<std::string>& formulationsOf(const std::string& module) {
+  static const std::vector<std::string> dz = {"sharp", "smooth"};
+  static const std::vector<std::string> hy = {"play", "prandtl_ishlinskii"};
+  return module == "deadzone" ? dz : hy;
+}
+
+}  // namespace
+
+bool SimConfig::effectEnabled(const std::string& effect) const {
+  return *enabledFlag(const_cast<SimConfig&>(*this), effect);
+}
+
+void SimConfig::setEffectEnabled(const std::string& effect, bool on) { *enabledFlag(*this, effect) = on; }
+
+std::vector<ParamRef> SimConfig::parameters(const std::string& module) {
+  static const std::vector<std::string> nominal = {"pneumatics", "elongation", "bending"};
+  std::vector<ParamRef> out;
+  for (auto& f : fields(*this)) {
+    const bool is_nominal = module == "nominal" &&
+                            std::find(nominal.begin(), nominal.end(), f.module) != nominal.end();
+    if (is_nominal || f.module == module) out.push_back(f.ref);
+  }
+  if (out.empty() && module != "nominal") enabledFlag(*this, module);  // throws for unknown names
+  return out;
+}
+
+void SimConfig::validate() const {
+  SimConfig copy = *this;
+  for (auto& f : fields(copy)) {
+    const double v = *f.ref.value;
+    const std::string name = (f.module.empty() ? "" : f.module + ".") + f.ref.name;
+    if (!std::isfinite(v) || v < f.ref.lower || v > f.ref.upper) {
+      std::ostringstream msg;
+      msg << "sim config: " << name << " = " << v << " is outside [" << f.ref.lower << ", " << f.ref.upper
+          << "] " << f.ref.unit;
+      throw std::invalid_argument(msg.str());
+    }
+  }
+  for (const std::string m : {"deadzone", "hysteresis"}) {
+    const std::string& f = *formulation(copy, m);
+    const auto& ok = formulationsOf(m);
+    if (std::find(ok.begin(), ok.end(), f) == ok.end())
+      throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " +
+                                  ok[0] + ", " + ok[1]);
+  }
+  if (1.0 / sample_rate_hz < internal_step_s)
+    throw std::invalid_argument("sim config: internal_step_s is longer than the sample period");
+}
+
+SimConfig simConfigFromJson(const std::string& text, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw std::invalid_argument(source + ": not valid JSON: " + e.what());
+  }
+  if (!j.is_object()) throw std::invalid_argument(source + ": the top level must be an object");
+  SimConfig c;
+  auto table = fields(c);
+  auto number = [&](const json& v, const std::string& path) {
+    if (!v.is_number()) throw std::invalid_argument(source + ": " + path + " must be a number");
+    return v.get<double>();
+  };
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = it.key();
+    if (it->is_object()) {
+      const bool is_effect = std::find(effectNames().begin(), effectNames().end(), key) != effectNames().end();
+      bool known_module = is_effect;
+      for (const auto& f : table) known_module = known_module || f.module == key;
+      if (!known_module) throw std::invalid_argument(source + ": unknown section '" + key + "'");
+      for (auto jt = it->begin(); jt != it->end(); ++jt) {
+        const std::string path = key + "." + jt.key();
+        if (is_effect && jt.key() == "enabled") {
+          if (!jt->is_boolean()) throw std::invalid_argument(source + ": " + path + " must be true or false");
+          c.setEffectEnabled(key, jt->get<bool>());
+          continue;
+        }
+        if (jt.key() == "formulation" && formulation(c, key)) {
+          if (!jt->is_string()) throw std::invalid_argument(source + ": " + path + " must be a string");
+          *formulation(c, key) = jt->get<std::string>();
+          continue;
+        }
+        if (key == "geometry" && jt.key() == "bend_direction_deg") {
+          if (!jt->is_array() || jt->size() != 3)
+            throw std::invalid_argument(source + ": " + path + " must be an array of 3 numbers");
+          for (std::size_t i = 0; i < 3; ++i) c.geometry.bend_direction_deg[i] = number((*jt)[i], path);
+          continue;
+        }
+        bool found = false;
+        for (auto& f : table)
+          if (f.module == key && f.ref.name == jt.key()) {
+            *f.ref.value = number(*jt, path);
+            found = true;
+          }
+        if (!found) throw std::invalid_argument(source + ": unknown key '" + path + "'");
+      }
+    } else {
+      bool found = false;
+      for (auto& f : table)
+        if (f.module.empty() && f.ref.name == key) {
+          *f.ref.value = number(*it, key);
+          found = true;
+        }
+      if (!found) throw std::invalid_argument(source + ": unknown key '" + key + "'");
+    }
+  }
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  return c;
+}
+
+SimConfig loadSimConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path + ": cannot open the simulator configuration");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return simConfigFromJson(ss.str(), path);
+}
+
+std::string simConfigToJson(const SimConfig& config) {
+  SimConfig c = config;
+  json j = json::object();
+  for (auto& f : fields(c)) {
+    if (f.module.empty())
+      j[f.ref.name] = *f.ref.value;
+    else
+      j[f.module][f.ref.name] = *f.ref.value;
+  }
+  j["geometry"]["bend_direction_deg"] = c.geometry.bend_direction_deg;
+  for (const auto& e : effectNames()) j[e]["enabled"] = c.effectEnabled(e);
+  j["deadzone"]["formulation"] = c.deadzone.formulation;
+  j["hysteresis"]["formulation"] = c.hysteresis.formulation;
+  return j.dump(2);
+}
+
+}  // namespace plsa::sim

@@ -1,0 +1,300 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "plsa/sim/actuator.hpp"
+#include "plsa/sim/experiment.hpp"
+
+using namespace plsa::sim;
+
+namespace {
+
+SimConfig allOff() {
+  SimConfig c;
+  for (const auto& e : effectNames()) c.setEffectEnabled(e, false);
+  c.sensor.noise_deg = 0.0;
+  return c;
+}
+
+SimConfig only(const std::string& effect) {
+  SimConfig c = allOff();
+  c.setEffectEnabled(effect, true);
+  return c;
+}
+
+// Holds a command for `seconds`, returns the samples.
+std::vector<ActuatorSample> hold(Actuator& a, std::array<double, 3> cmd, double seconds) {
+  std::vector<ActuatorSample> out;
+  const int n = static_cast<int>(std::lround(seconds * a.config().sample_rate_hz));
+  for (int k = 0; k < n; ++k) out.push_back(a.step(cmd));
+  return out;
+}
+
+double settled(Actuator& a, std::array<double, 3> cmd, double seconds = 5.0) {
+  return hold(a, cmd, seconds).back().true_bend_deg;
+}
+
+// 10-90% rise time of a local step response, judged against the bend 1.5 s
+// after the step (the local response; creep keeps drifting after that).
+double riseTime(Actuator& a, double from, double to) {
+  const double start = settled(a, {from, 0, 0}, 8.0);
+  const auto r = hold(a, {to, 0, 0}, 1.5);
+  const double end = r.back().true_bend_deg;
+  int t10 = -1, t90 = -1;
+  for (int k = 0; k < static_cast<int>(r.size()); ++k) {
+    const double frac = (r[static_cast<std::size_t>(k)].true_bend_deg - start) / (end - start);
+    if (t10 < 0 && frac >= 0.1) t10 = k;
+    if (t90 < 0 && frac >= 0.9) t90 = k;
+  }
+  return (t90 - t10) / a.config().sample_rate_hz;
+}
+
+// Up and down staircase on chamber 1; bend settled at `probe` bar on each way.
+std::pair<double, double> upDownAt(const SimConfig& c, double probe) {
+  Actuator a(c, 1);
+  double up = 0, down = 0;
+  for (int k = 1; k <= 14; ++k) {
+    const double p = 0.025 * k;
+    const double b = settled(a, {p, 0, 0}, 4.0);
+    if (std::abs(p - probe) < 1e-9) up = b;
+  }
+  for (int k = 13; k >= 0; --k) {
+    const double p = 0.025 * k;
+    const double b = settled(a, {p, 0, 0}, 4.0);
+    if (std::abs(p - probe) < 1e-9) down = b;
+  }
+  return {up, down};
+}
+
+}  // namespace
+
+// --- what the paper's Fig. 3 shows, in the default configuration -----------
+
+TEST(SimFig3, DeadzoneAtLowPressure) {
+  SimConfig c;
+  Actuator a(c, 1);
+  EXPECT_LT(settled(a, {0.04, 0, 0}), 0.2);
+  EXPECT_GT(settled(a, {0.12, 0, 0}), 5.0);
+}
+
+TEST(SimFig3, NonlinearSteadyState) {
+  Actuator a(SimConfig{}, 1);
+  const double b10 = settled(a, {0.10, 0, 0}), b15 = settled(a, {0.15, 0, 0});
+  const double b30 = settled(a, {0.30, 0, 0}), b35 = settled(a, {0.35, 0, 0});
+  const double low_gain = (b15 - b10) / 0.05, high_gain = (b35 - b30) / 0.05;
+  EXPECT_GT(low_gain, 1.3 * high_gain) << low_gain << " vs " << high_gain << " deg/bar";
+}
+
+TEST(SimFig3, HysteresisLoopBetweenIncreaseAndDecrease) {
+  const auto [up, down] = upDownAt(SimConfig{}, 0.2);
+  EXPECT_GT(down - up, 3.0) << "up " << up << " down " << down;
+}
+
+TEST(SimFig3, SteeperLocalStepsAtHigherPressure) {
+  Actuator a(SimConfig{}, 1);
+  const double low = riseTime(a, 0.10, 0.125);
+  const double high = riseTime(a, 0.30, 0.325);
+  EXPECT_LT(high, 0.8 * low) << "rise time " << low << " s at low, " << high << " s at high pressure";
+}
+
+// --- each effect: its signature with it on, gone with it off ---------------
+
+TEST(SimEffects, Deadzone) {
+  for (const std::string f : {"sharp", "smooth"}) {
+    SimConfig on = only("deadzone");
+    on.deadzone.formulation = f;
+    Actuator a(on, 1), b(allOff(), 1);
+    EXPECT_LT(settled(a, {0.03, 0, 0}), 0.5) << f;
+    EXPECT_GT(settled(b, {0.03, 0, 0}), 4.0);
+  }
+}
+
+TEST(SimEffects, Hysteresis) {
+  for (const std::string f : {"play", "prandtl_ishlinskii"}) {
+    SimConfig on = only("hysteresis");
+    on.hysteresis.formulation = f;
+    const auto [up, down] = upDownAt(on, 0.2);
+    EXPECT_GT(down - up, 3.0) << f;
+  }
+  const auto [up, down] = upDownAt(allOff(), 0.2);
+  EXPECT_LT(std::abs(down - up), 0.05);
+}
+
+TEST(SimEffects, Stiffening) {
+  Actuator on(only("stiffening"), 1), off(allOff(), 1);
+  EXPECT_LT(riseTime(on, 0.30, 0.325), 0.75 * riseTime(on, 0.05, 0.075));
+  const double ratio = riseTime(off, 0.30, 0.325) / riseTime(off, 0.05, 0.075);
+  EXPECT_NEAR(ratio, 1.0, 0.05);
+}
+
+TEST(SimEffects, CouplingBreaksSuperposition) {
+  auto gap = [](const SimConfig& c) {
+    auto vec = [&](std::array<double, 3> cmd) {
+      Actuator a(c, 1);
+      const auto s = hold(a, cmd, 6.0).back();
+      const double t = s.true_bend_deg, p = s.true_steer_deg * M_PI / 180;
+      return Eigen::Vector2d(t * std::cos(p), t * std::sin(p));
+    };
+    return (vec({0.25, 0.25, 0}) - vec({0.25, 0, 0}) - vec({0, 0.25, 0})).norm();
+  };
+  EXPECT_GT(gap(only("coupling")), 3.0);
+  EXPECT_LT(gap(allOff()), 0.05);
+}
+
+TEST(SimEffects, PneumaticLagFillsSlowerThanVentAfterADelay) {
+  auto times = [](const SimConfig& c) {
+    Actuator a(c, 1);
+    const auto fill = hold(a, {0.3, 0, 0}, 3.0);
+    const auto vent = hold(a, {0.0, 0, 0}, 3.0);
+    // Counted from the first sample the pressure moves, so the delay is not in it.
+    int f0 = 0, tf = 0, v0 = 0, tv = 0;
+    while (fill[static_cast<std::size_t>(f0)].pressure_bar[0] == 0.0) ++f0;
+    while (fill[static_cast<std::size_t>(tf)].pressure_bar[0] < 0.3 * 0.63) ++tf;
+    while (vent[static_cast<std::size_t>(v0)].pressure_bar[0] >= fill.back().pressure_bar[0]) ++v0;
+    while (vent[static_cast<std::size_t>(tv)].pressure_bar[0] > 0.3 * 0.37) ++tv;
+    return std::tuple{tf - f0, tv - v0, fill[0].pressure_bar[0]};
+  };
+  const auto [tf_on, tv_on, first_on] = times(only("pneumatic_lag"));
+  EXPECT_GT(tf_on, 2 * tv_on);
+  EXPECT_EQ(first_on, 0.0);  // 30 ms transport delay: nothing in the first 12.5 ms sample
+  const auto [tf_off, tv_off, first_off] = times(allOff());
+  EXPECT_LE(std::abs(tf_off - tv_off), 1);
+  EXPECT_GT(first_off, 0.0);
+}
+
+TEST(SimEffects, CreepDriftsUnderConstantPressure) {
+  auto drift = [](const SimConfig& c) {
+    Actuator a(c, 1);
+    const auto r = hold(a, {0.3, 0, 0}, 30.0);
+    return r.back().true_bend_deg - r[5 * 80].true_bend_deg;
+  };
+  EXPECT_GT(drift(only("creep")), 2.0);
+  EXPECT_LT(std::abs(drift(allOff())), 0.01);
+}
+
+TEST(SimEffects, SensorBiasOffsetsAndDrifts) {
+  Actuator on(only("sensor_bias"), 1), off(allOff(), 1);
+  const auto s_on = hold(on, {0, 0, 0}, 1.0).back();
+  EXPECT_NEAR(s_on.bend_deg, on.config().sensor_bias.tilt_deg, 0.05);
+  EXPECT_NEAR(hold(off, {0, 0, 0}, 1.0).back().bend_deg, 0.0, 1e-6);
+  // Yaw drift moves the measured steering while the tip holds still.
+  Actuator d(only("sensor_bias"), 1);
+  const auto r = hold(d, {0.3, 0, 0}, 40.0);
+  const double moved = r.back().steer_deg - r[10 * 80].steer_deg;
+  EXPECT_NEAR(moved, 30.0 * d.config().sensor_bias.yaw_drift_deg_per_s, 0.1);
+  EXPECT_NEAR(r.back().true_steer_deg, r[10 * 80].true_steer_deg, 1e-9);
+}
+
+// --- kinematics and sensor equations -----------------------------------------
+
+TEST(SimKinematics, SensorEquationsRecoverBendAndSteer) {
+  for (double theta : {5.0, 45.0, 100.0})
+    for (double phi : {-150.0, -10.0, 30.0, 170.0}) {
+      const double t = theta * M_PI / 180, p = phi * M_PI / 180;
+      const Eigen::Matrix3d g_r_tip = Eigen::AngleAxisd(p, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                      Eigen::AngleAxisd(t, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                      Eigen::AngleAxisd(-p, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Matrix3d g_r_b =
+          g_r_tip * Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      double bend, steer;
+      anglesFromRotation(g_r_b.transpose(), bend, steer);
+      EXPECT_NEAR(bend, theta, 1e-9);
+      EXPECT_NEAR(steer, phi, 1e-9);
+    }
+}
+
+TEST(SimKinematics, TipPositionIsWebsterJonesArc) {
+  const double l = 0.09;
+  const Eigen::Vector3d straight = tipPosition(l, 0.0, 0.3);
+  EXPECT_NEAR(straight.z(), l, 1e-15);
+  const Eigen::Vector3d quarter = tipPosition(l, M_PI / 2, 0.0);  // quarter circle, radius l/(pi/2)
+  const double r = l / (M_PI / 2);
+  EXPECT_NEAR(quarter.x(), r, 1e-12);
+  EXPECT_NEAR(quarter.z(), r, 1e-12);
+}
+
+TEST(SimKinematics, SingleChamberBendsTowardItsDirectionAndSubspaces) {
+  SimConfig c = allOff();
+  for (int ch = 0; ch < 3; ++ch) {
+    Actuator a(c, 1);
+    std::array<double, 3> cmd{0, 0, 0};
+    cmd[static_cast<std::size_t>(ch)] = 0.3;
+    const auto s = hold(a, cmd, 5.0).back();
+    const double want = c.geometry.bend_direction_deg[static_cast<std::size_t>(ch)];
+    EXPECT_NEAR(std::remainder(s.steer_deg - want, 360.0), 0.0, 1e-6);
+  }
+  Actuator a(c, 1);
+  const auto s = hold(a, {0.3, 0.3, 0}, 5.0).back();
+  const Subspace sub = configurationSubspace(c.geometry, s.steer_deg);
+  EXPECT_EQ(sub.index, 1);
+  EXPECT_NEAR(sub.angle_deg, 60.0, 1e-6);
+  EXPECT_EQ(configurationSubspace(c.geometry, 180.0).index, 2);
+  EXPECT_EQ(configurationSubspace(c.geometry, -60.0).index, 3);
+}
+
+// --- configuration, input checks, determinism ----------------------------------
+
+TEST(SimConfig, JsonRoundTripAndErrors) {
+  SimConfig c;
+  c.creep.enabled = false;
+  c.hysteresis.formulation = "prandtl_ishlinskii";
+  c.coupling.per_bar = 0.5;
+  const SimConfig back = simConfigFromJson(simConfigToJson(c));
+  EXPECT_FALSE(back.creep.enabled);
+  EXPECT_EQ(back.hysteresis.formulation, "prandtl_ishlinskii");
+  EXPECT_EQ(back.coupling.per_bar, 0.5);
+  auto error = [](const std::string& text) {
+    try {
+      simConfigFromJson(text, "cfg.json");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error(R"({"creep": {"fraktion": 0.1}})").find("unknown key 'creep.fraktion'"), std::string::npos);
+  EXPECT_NE(error(R"({"creep": {"fraction": 3}})").find("creep.fraction = 3 is outside"), std::string::npos);
+  EXPECT_NE(error(R"({"creep": {"enabled": "yes"}})").find("true or false"), std::string::npos);
+  EXPECT_NE(error(R"({"deadzone": {"formulation": "round"}})").find("formulation 'round'"), std::string::npos);
+  EXPECT_NE(error(R"({"bogus": {}})").find("unknown section 'bogus'"), std::string::npos);
+  EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
+}
+
+TEST(SimConfig, ParametersAreAddressableByModule) {
+  SimConfig c;
+  auto p = c.parameters("pneumatic_lag");
+  ASSERT_EQ(p.size(), 3u);
+  *p[2].value = 0.07;
+  EXPECT_EQ(c.pneumatic_lag.delay_s, 0.07);
+  EXPECT_GE(c.parameters("nominal").size(), 6u);
+  EXPECT_THROW(c.parameters("friction"), std::invalid_argument);
+}
+
+TEST(SimActuator, ClampsCommandsAndRejectsNaN) {
+  Actuator a(SimConfig{}, 1);
+  const auto s = a.step({0.9, -0.2, 0.1});
+  EXPECT_EQ(s.command_bar[0], 0.4);
+  EXPECT_EQ(s.command_bar[1], 0.0);
+  EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
+}
+
+TEST(SimExperiments, ShapesAndDeterminism) {
+  ExperimentOptions o;
+  const Experiment st = staircaseExperiment(o);
+  EXPECT_EQ(st.commands.rows(), static_cast<Eigen::Index>((2.0 + 28 * 4.0) * 80));
+  EXPECT_DOUBLE_EQ(st.commands.col(0).maxCoeff(), 0.35);
+  const Experiment grid = gridExperiment(o);
+  // One input moves at a time.
+  for (Eigen::Index k = 1; k < grid.commands.rows(); ++k)
+    EXPECT_LE((grid.commands.row(k).array() != grid.commands.row(k - 1).array()).count(), 1);
+  const Experiment joy = joystickExperiment(o);
+  EXPECT_LE(joy.commands.maxCoeff(), o.joystick_max_bar + 1e-12);
+  o.joystick_duration_s = 10;
+  auto run = [&](std::uint64_t seed) {
+    o.seed = seed;
+    Actuator a(SimConfig{}, seed);
+    return runExperiment(a, joystickExperiment(o)).data;
+  };
+  EXPECT_EQ(run(3), run(3));
+  EXPECT_NE(run(3), run(4));
+  EXPECT_THROW(makeExperiment("sine", o), std::invalid_argument);
+}

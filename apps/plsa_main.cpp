@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   plsa::app::addDemoCommand(app);
   plsa::app::addSimulateCommands(app);
+  plsa::app::addSimNodeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

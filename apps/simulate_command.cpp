@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "plsa/lcm/lcm_log.hpp"
 #include "plsa/sim/experiment.hpp"
 
 namespace plsa::app {
@@ -42,7 +43,11 @@ void runSimulate(const SimulateOptions& o) {
   sim::Actuator actuator(config, o.seed);
   io::Log log = sim::runExperiment(actuator, ex);
   log.metadata["seed"] = std::to_string(o.seed);
-  io::writeCsvLog(o.out, log);
+  const bool lcm_out = o.out.size() > 7 && o.out.compare(o.out.size() - 7, 7, ".lcmlog") == 0;
+  if (lcm_out)
+    lcm::writeLcmLog(o.out, log);
+  else
+    io::writeCsvLog(o.out, log);
   std::fprintf(stderr, "plsa simulate: wrote %lld samples to %s (effects: %s)\n",
                static_cast<long long>(log.samples()), o.out.c_str(), log.metadata["effects"].c_str());
 }
@@ -59,7 +64,7 @@ void addSimulateCommands(CLI::App& app) {
   cmd->add_option("--duration", o->duration_s, "Total duration in seconds (default: the design's own)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file");
-  cmd->add_option("--out", o->out, "Output CSV")->required();
+  cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log")->required();
   cmd->callback([o] { runSimulate(*o); });
 
   auto path = std::make_shared<std::string>();

@@ -1,0 +1,38 @@
+// The simulated actuator as an LCM node: takes pressure commands, publishes
+// actuator state (80 Hz real time, or one state per command in lock-step) and
+// vents every chamber when commands stop for longer than a timeout.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "plsa/sim/sim_config.hpp"
+
+namespace plsa::lcm {
+
+struct SimNodeOptions {
+  std::string url;  ///< "" = LCM's default (LCM_DEFAULT_URL)
+  sim::SimConfig config;
+  std::uint64_t seed = 1;
+  bool lockstep = false;
+  double command_timeout_s = 0.5;
+  double duration_s = 0.0;  ///< simulated seconds to run; 0 = until stopped
+  std::string command_channel = "PLSA_COMMAND";
+  std::string state_channel = "PLSA_STATE";
+  std::string status_channel = "PLSA_STATUS";
+};
+
+/// Counts of what the node did, for its status messages and its exit report.
+struct SimNodeStats {
+  std::int64_t states_published = 0;
+  std::int64_t commands_accepted = 0;
+  std::int64_t commands_rejected = 0;
+  std::int64_t vent_events = 0;
+};
+
+/// Runs until `stop` is set or the duration is reached; vents before it returns.
+/// Throws std::runtime_error if LCM cannot be set up.
+SimNodeStats runSimNode(const SimNodeOptions& options, const std::atomic<bool>& stop);
+
+}  // namespace plsa::lcm

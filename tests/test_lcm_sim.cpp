@@ -1,0 +1,158 @@
+// End to end over LCM: `plsa sim` as a separate process in a private network
+// namespace (run_isolated.sh), driven by pressure commands from this test.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <thread>
+
+#include <lcm/lcm-cpp.hpp>
+#include <plsa_lcm/actuator_state_t.hpp>
+#include <plsa_lcm/pressure_command_t.hpp>
+#include <plsa_lcm/status_t.hpp>
+
+#include "plsa/lcm/lcm_log.hpp"
+#include "plsa/sim/actuator.hpp"
+#include "support/child_process.hpp"
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+namespace {
+
+struct Inbox {
+  std::vector<plsa_lcm::actuator_state_t> states;
+  std::vector<plsa_lcm::status_t> statuses;
+  void onState(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
+    states.push_back(*m);
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::status_t* m) {
+    statuses.push_back(*m);
+  }
+};
+
+class LcmSimTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("PLSA_LCM_ISOLATED"))
+      GTEST_SKIP() << "LCM tests run only inside run_isolated.sh (private network namespace)";
+    exe_ = std::getenv("PLSA_EXE") ? std::getenv("PLSA_EXE") : "";
+    ASSERT_TRUE(fs::exists(exe_)) << "PLSA_EXE does not name the plsa binary: " << exe_;
+    lcm_ = std::make_unique<lcm::LCM>();
+    ASSERT_TRUE(lcm_->good());
+    lcm_->subscribe("PLSA_STATE", &Inbox::onState, &inbox_);
+    lcm_->subscribe("PLSA_STATUS", &Inbox::onStatus, &inbox_);
+  }
+
+  // Handles messages until `done()` or the timeout; returns done().
+  template <class Pred>
+  bool waitFor(Pred done, std::chrono::milliseconds timeout) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (!done() && std::chrono::steady_clock::now() < end) lcm_->handleTimeout(20);
+    return done();
+  }
+
+  void send(std::array<double, 3> p, std::int64_t seq) {
+    plsa_lcm::pressure_command_t c;
+    c.utime = seq;
+    c.seq = seq;
+    c.n_chambers = 3;
+    c.pressure_bar = {p[0], p[1], p[2]};
+    lcm_->publish("PLSA_COMMAND", &c);
+  }
+
+  bool sawStatus(int8_t state, const std::string& words) const {
+    for (const auto& s : inbox_.statuses)
+      if (s.state == state && s.message.find(words) != std::string::npos) return true;
+    return false;
+  }
+
+  std::string exe_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  Inbox inbox_;
+};
+
+}  // namespace
+
+TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop) {
+  const fs::path log_path = fs::temp_directory_path() / ("plsa_lcm_test_" + std::to_string(::getpid()) + ".lcmlog");
+  plsa::test::ChildProcess logger({"/usr/bin/lcm-logger", "-q", "-f", "-c", "PLSA_STATE", log_path.string()});
+  plsa::test::ChildProcess sim({exe_, "sim", "--lockstep", "--seed", "5", "--command-timeout", "0.3"});
+  ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s)) << "plsa sim never said it started";
+  std::this_thread::sleep_for(500ms);  // lcm-logger has no ready signal
+
+  // Paper-style local step: rest, then 0.3 bar on chamber 1.
+  std::vector<std::array<double, 3>> commands(80, {0.0, 0.0, 0.0});
+  commands.resize(400, {0.3, 0.0, 0.0});
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    send(commands[k], static_cast<std::int64_t>(k));
+    ASSERT_TRUE(waitFor([&] { return inbox_.states.size() > k; }, 2s)) << "no state for command " << k;
+  }
+  // The same simulator in this process, same seed and commands: identical numbers.
+  plsa::sim::Actuator local(plsa::sim::SimConfig{}, 5);
+  double max_diff = 0;
+  for (std::size_t k = 0; k < commands.size(); ++k) {
+    const auto s = local.step(commands[k]);
+    max_diff = std::max(max_diff, std::abs(s.bend_deg - inbox_.states[k].bend_deg));
+    EXPECT_EQ(inbox_.states[k].seq, static_cast<std::int64_t>(k));
+    EXPECT_EQ(inbox_.states[k].vented, 0);
+  }
+  EXPECT_EQ(max_diff, 0.0);
+  EXPECT_LT(inbox_.states[79].bend_deg, 2.5);   // at rest: sensor tilt and noise only
+  EXPECT_GT(inbox_.states[399].bend_deg, 45.0);  // settled step response
+  EXPECT_GT(inbox_.states[399].pressure_bar[0], 0.29);
+
+  // Stop commanding: after the timeout the node vents on its own.
+  const std::size_t before = inbox_.states.size();
+  ASSERT_TRUE(waitFor([&] {
+    return inbox_.states.size() > before && inbox_.states.back().vented == 1 &&
+           inbox_.states.back().pressure_bar[0] < 0.005;
+  }, 5s)) << "chambers did not vent after commands stopped";
+  EXPECT_TRUE(sawStatus(plsa_lcm::status_t::VENTED, "no command for 0.300 s"));
+
+  EXPECT_EQ(sim.stop(SIGTERM), 0);
+  EXPECT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::STOPPED, "vented"); }, 2s));
+  logger.stop(SIGINT);
+
+  // The recording reads back as a log with the standard columns.
+  const plsa::io::Log rec = plsa::lcm::readLcmLog(log_path.string());
+  ASSERT_GE(rec.samples(), 400);
+  const Eigen::VectorXd bend = rec.column("bend_deg");
+  const Eigen::VectorXd p1 = rec.column("p_1");
+  for (Eigen::Index r = 0; r < 400; ++r) {
+    EXPECT_EQ(bend(r), inbox_.states[static_cast<std::size_t>(r)].bend_deg) << "row " << r;
+    EXPECT_EQ(p1(r), inbox_.states[static_cast<std::size_t>(r)].pressure_bar[0]);
+  }
+  fs::remove(log_path);
+}
+
+TEST_F(LcmSimTest, RejectsMalformedCommandsAndKeepsRunning) {
+  plsa::test::ChildProcess sim({exe_, "sim", "--lockstep"});
+  ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s));
+  send({std::numeric_limits<double>::quiet_NaN(), 0, 0}, 0);
+  ASSERT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::VENTED, "rejected a command"); }, 2s));
+  EXPECT_TRUE(inbox_.states.empty()) << "a rejected command must not advance the simulation";
+  send({0.9, 0, 0}, 1);  // above the limit: clamped, not rejected
+  ASSERT_TRUE(waitFor([&] { return !inbox_.states.empty(); }, 2s));
+  EXPECT_DOUBLE_EQ(inbox_.states[0].command_bar[0], 0.4);
+  EXPECT_EQ(sim.stop(SIGINT), 0);
+}
+
+TEST_F(LcmSimTest, RealTimeModePublishesEverySampleAndStaysVentedWithoutCommands) {
+  plsa::test::ChildProcess sim({exe_, "sim", "--duration", "1.0"});
+  const auto t0 = std::chrono::steady_clock::now();
+  // Receive while it runs: LCM drops what the socket buffer cannot hold.
+  ASSERT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::STOPPED, "vented"); }, 10s));
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(sim.waitExit(5000ms), 0);
+  // 80 samples for one simulated second, then the final vent state.
+  ASSERT_EQ(inbox_.states.size(), 81u);
+  for (std::size_t k = 0; k < inbox_.states.size(); ++k) {
+    EXPECT_EQ(inbox_.states[k].seq, static_cast<std::int64_t>(k));
+    EXPECT_EQ(inbox_.states[k].vented, 1);
+  }
+  EXPECT_GT(wall, 0.9) << "real-time mode ran faster than real time";
+}

@@ -8,5 +8,6 @@ namespace plsa::app {
 void addDemoCommand(CLI::App& app);
 void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
+void addIdentifyCommands(CLI::App& app);
 
 }  // namespace plsa::app

@@ -1,19 +1,24 @@
-// `plsa demo`: the README's main job. At this stage of the project it fits the
-// single-region DIO-OBF model to the real soft-arm trials and validates it
-// leave-one-trial-out; the full DIO-PWL-OBF pipeline replaces it (issue 4).
-#include <algorithm>
-#include <cmath>
-#include <memory>
+// `plsa demo`: the README's main job, on the built-in simulated actuator with
+// every effect on: the paper's protocol (two-chamber grid identification,
+// joystick validation), against the paper's switched PWL and two baselines,
+// with the model, fits and a self-contained HTML report written to --out.
+#include <chrono>
+#include <sstream>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "commands.hpp"
-#include "plsa/eval/dio_prediction.hpp"
-#include "plsa/identify/linear_dio_obf.hpp"
-#include "plsa/io/csv_log.hpp"
+#include "comparison.hpp"
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/model/model_file.hpp"
+#include "plsa/report/svg_chart.hpp"
+#include "plsa/sim/experiment.hpp"
 
 namespace fs = std::filesystem;
 
@@ -21,89 +26,133 @@ namespace plsa::app {
 namespace {
 
 struct DemoOptions {
-  std::string data_dir = std::string(PLSA_DEFAULT_DATA_DIR) + "/softarm-bruder2021";
   std::string out_dir = "plsa-demo";
+  std::string config;
+  std::uint64_t seed = 1;
 };
 
-// Paper Table II, u1->y1, identified at 80 Hz; mapped to the log's rate by p^(T/T80).
-std::vector<double> tableTwoPoles(double sample_time) {
-  std::vector<double> out;
-  for (double p : {0.981, 0.969, 0.964, 0.957, 0.945}) out.push_back(std::pow(p, sample_time * 80.0));
-  return out;
+std::string fmt(double v, const char* f = "%.1f") {
+  char b[32];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
 }
 
 void runDemo(const DemoOptions& opt) {
-  std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(opt.data_dir))
-    if (e.path().extension() == ".csv") files.push_back(e.path().string());
-  std::sort(files.begin(), files.end());
-  if (files.size() < 2)
-    throw std::runtime_error(opt.data_dir + ": need at least two trial CSV files for leave-one-out");
-  const std::vector<std::string> inputs = {"u_1", "u_2", "u_3"};
-  const std::vector<std::string> outputs = {"y_1", "y_2"};
-  io::CsvReadOptions read_opt;
-  read_opt.required = {"time_s", "u_1", "u_2", "u_3", "y_1", "y_2"};
-
-  std::printf("plsa demo: real-data check on %zu trials from %s\n", files.size(), opt.data_dir.c_str());
-  std::vector<Eigen::MatrixXd> U, Y;
-  double sample_time = 0.0;
-  for (const auto& f : files) {
-    const io::Log log = io::readCsvLog(f, read_opt);
-    // One dropped sample is tolerated (a gap under 2.5 periods); a longer gap is an error.
-    sample_time = io::checkedSampleTime(log, "time_s", 2.5);
-    U.push_back(log.columnsOf(inputs));
-    Y.push_back(log.columnsOf(outputs));
-  }
-  const std::vector<double> poles = tableTwoPoles(sample_time);
-  std::printf("  model: single-region DIO-OBF, 5 real poles per input (paper Table II mapped to %.4f s):",
-              sample_time);
-  for (double p : poles) std::printf(" %.3f", p);
-  std::printf("\n  validation: leave-one-trial-out, NRMSE fit %% (100 = perfect)\n");
-
-  const int horizon_long = static_cast<int>(std::lround(1.0 / sample_time));
-  const std::vector<PoleSet> pole_sets(inputs.size(), PoleSet::real(poles));
+  const auto t0 = std::chrono::steady_clock::now();
+  const sim::SimConfig config = opt.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(opt.config);
+  std::string effects;
+  for (const auto& e : sim::effectNames())
+    if (config.effectEnabled(e)) effects += (effects.empty() ? "" : ", ") + e;
+  std::printf("plsa demo: simulated three-chamber actuator at %.0f Hz, effects on: %s\n", config.sample_rate_hz,
+              effects.empty() ? "none" : effects.c_str());
   fs::create_directories(opt.out_dir);
-  const std::string csv_path = (fs::path(opt.out_dir) / "demo_fits.csv").string();
-  std::ofstream csv(csv_path);
-  csv << "held_out,output,fit_k1,fit_k" << horizon_long << ",fit_sim\n";
-  std::printf("  %-14s %-6s %8s %8s %8s\n", "held-out", "output", "1-step",
-              (std::to_string(horizon_long) + "-step").c_str(), "sim");
-  Eigen::MatrixXd sums = Eigen::MatrixXd::Zero(outputs.size(), 3);
-  for (std::size_t hold = 0; hold < files.size(); ++hold) {
-    std::vector<Eigen::MatrixXd> Ut, Yt;
-    for (std::size_t r = 0; r < files.size(); ++r)
-      if (r != hold) {
-        Ut.push_back(U[r]);
-        Yt.push_back(Y[r]);
-      }
-    const LinearDioObf model = LinearDioObf::fit(pole_sets, Ut, Yt);
-    const Eigen::MatrixXd dyhat = model.increments(U[hold]);
-    for (std::size_t o = 0; o < outputs.size(); ++o) {
-      const Eigen::VectorXd y = Y[hold].col(static_cast<Eigen::Index>(o));
-      const Eigen::VectorXd d = dyhat.col(static_cast<Eigen::Index>(o));
-      const double f1 = fitOf(y, kStepAhead(y, d, 1));
-      const double fk = fitOf(y, kStepAhead(y, d, horizon_long));
-      const double fs_ = fitOf(y, simulate(y, d));
-      sums.row(static_cast<Eigen::Index>(o)) += Eigen::RowVector3d(f1, fk, fs_);
-      const std::string name = fs::path(files[hold]).stem().string();
-      std::printf("  %-14s %-6s %8.1f %8.1f %8.1f\n", name.c_str(), outputs[o].c_str(), f1, fk, fs_);
-      csv << name << "," << outputs[o] << "," << f1 << "," << fk << "," << fs_ << "\n";
+  auto path = [&](const std::string& f) { return (fs::path(opt.out_dir) / f).string(); };
+
+  // 1. Experiments (paper Table I, step 3; validation run as in its Section VI).
+  sim::ExperimentOptions eo;
+  eo.sample_rate_hz = config.sample_rate_hz;
+  eo.seed = opt.seed + 1;
+  sim::Actuator rig_id(config, opt.seed);
+  const io::Log train = sim::runExperiment(rig_id, sim::gridExperiment(eo));
+  sim::Actuator rig_val(config, opt.seed + 100);
+  const io::Log val = sim::runExperiment(rig_val, sim::joystickExperiment(eo));
+  io::writeCsvLog(path("train_grid2.csv"), train);
+  io::writeCsvLog(path("validate_joystick.csv"), val);
+  std::printf("  experiments: two-chamber grid 0.20-0.35 bar (%lld samples), joystick validation (%lld samples)\n",
+              static_cast<long long>(train.samples()), static_cast<long long>(val.samples()));
+
+  // 2. Identification: interpolated (ours) and switched (the paper's) scheduling.
+  IdentifyOptions io_;
+  io_.progress = [](const std::string& l) { std::printf("  identify: %s\n", l.c_str()); };
+  IdentifyReport report;
+  const DioPwlObfModel model = identifyModel({train}, io_, &report);
+  io_.progress = nullptr;
+  io_.scheduling = "switched";
+  const DioPwlObfModel switched = identifyModel({train}, io_);
+  const Eigen::MatrixXd Ut = train.columnsOf(model.inputs), Yt = train.columnsOf(model.outputs);
+  const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});
+  const ArxModel arx = ArxModel::fit({Ut}, {Yt}, 4, 4);
+  saveModel(path("model.json"), model);
+
+  // 3. Validation on the joystick run.
+  const std::vector<int> horizons = {40, 80};
+  const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
+  const std::vector<ModelPredictions> preds = {
+      predictDio("DIO-PWL-OBF, interpolated", model, Uv, Yv, horizons),
+      predictDio("DIO-PWL-OBF, switched (paper)", switched, Uv, Yv, horizons),
+      predictDio("global linear OBF", linear, Uv, Yv, horizons), predictArx("linear ARX(4,4)", arx, Uv, Yv, horizons)};
+  const auto fits = commonFits(preds, Yv);
+  std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; all models scored on the same samples)\n");
+  std::printf("  %-30s %-10s %8s %8s %8s\n", "model", "output", "40-step", "80-step", "sim");
+  nlohmann::json j;
+  for (std::size_t m = 0; m < preds.size(); ++m)
+    for (std::size_t o = 0; o < model.outputs.size(); ++o) {
+      const auto& f = fits[m][o];
+      std::printf("  %-30s %-10s %8.1f %8.1f %8.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(), f.at(40),
+                  f.at(80), f.at(0));
+      j["models"][preds[m].name][model.outputs[o]] = {{"fit_k40", f.at(40)}, {"fit_k80", f.at(80)}, {"fit_sim", f.at(0)}};
     }
+  for (std::size_t o = 0; o < model.outputs.size(); ++o)
+    j["outputs"][model.outputs[o]] = {{"fit_k40", fits[0][o].at(40)}, {"fit_k80", fits[0][o].at(80)},
+                                      {"fit_sim", fits[0][o].at(0)}};
+  j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
+  std::ofstream(path("fits.json")) << j.dump(2) << "\n";
+
+  // 4. Report.
+  const Eigen::VectorXd t = val.column("time_s").array() - val.column("time_s")(0);
+  std::ostringstream html;
+  html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
+       << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
+       << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child,th:first-child{text-align:left}"
+       << "</style></head><body><h1>plsa demo: DIO-PWL-OBF on the simulated actuator</h1>"
+       << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving at a "
+       << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ".</p>"
+       << "<h2>Fits (NRMSE %)</h2><table><tr><th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th></tr>";
+  for (std::size_t m = 0; m < preds.size(); ++m)
+    for (std::size_t o = 0; o < model.outputs.size(); ++o)
+      html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
+           << fmt(fits[m][o].at(40)) << "</td><td>" << fmt(fits[m][o].at(80)) << "</td><td>" << fmt(fits[m][o].at(0))
+           << "</td></tr>";
+  html << "</table>";
+  for (std::size_t o = 0; o < model.outputs.size(); ++o) {
+    const auto& p = preds[0].by_output[o];
+    html << report::lineChart(model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, interpolated)", t,
+                              {{"measured", Yv.col(static_cast<Eigen::Index>(o)), "#222", false},
+                               {"40-step", p.at(40), "#1f77b4", false},
+                               {"80-step", p.at(80), "#2ca02c", true},
+                               {"simulation", p.at(0), "#d62728", false}},
+                              "time (s)", model.outputs[o]);
   }
-  sums /= static_cast<double>(files.size());
-  for (std::size_t o = 0; o < outputs.size(); ++o)
-    std::printf("  %-14s %-6s %8.1f %8.1f %8.1f\n", "mean", outputs[o].c_str(), sums(o, 0), sums(o, 1), sums(o, 2));
-  std::printf("  wrote %s\n", csv_path.c_str());
-  std::printf("  not yet in this build: simulated actuator, PWL scheduling, FKcM poles (issues 3, 4)\n");
+  std::vector<report::PoleGroup> groups;
+  std::vector<std::complex<double>> identified, centres;
+  for (const auto& pp : report.pairs) {
+    identified.insert(identified.end(), pp.identified.begin(), pp.identified.end());
+    centres.insert(centres.end(), pp.chosen.centres.begin(), pp.chosen.centres.end());
+  }
+  double zoom = 1.0;
+  for (const auto& p : identified) zoom = std::min(zoom, p.real());
+  for (const auto& p : centres) zoom = std::min(zoom, p.real());
+  groups.push_back({"identified local poles", identified, "#1f77b4", false});
+  groups.push_back({"FKcM centres (OBF poles)", centres, "#d62728", true});
+  html << report::poleMap("Pole map: identified poles and FKcM centres", groups, std::max(-1.0, zoom - 0.05));
+  html << "<h2>Identification log</h2><pre>";
+  for (const auto& l : report.lines) html << report::escape(l) << "\n";
+  html << "</pre></body></html>\n";
+  std::ofstream(path("report.html")) << html.str();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv} in %.1f s\n",
+              opt.out_dir.c_str(), secs);
 }
 
 }  // namespace
 
 void addDemoCommand(CLI::App& app) {
   auto opt = std::make_shared<DemoOptions>();
-  CLI::App* cmd = app.add_subcommand("demo", "Run the main job and print what it did");
-  cmd->add_option("--data", opt->data_dir, "Folder of real trial CSVs (u_1..u_3, y_1, y_2)");
-  cmd->add_option("--out", opt->out_dir, "Folder for the results");
+  CLI::App* cmd = app.add_subcommand("demo", "Identify and validate a model on the built-in simulated actuator");
+  cmd->add_option("--out", opt->out_dir, "Folder for the model, fits and report");
+  cmd->add_option("--config", opt->config, "Simulator configuration (default: built-in, all effects on)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--seed", opt->seed, "Seed of the simulated runs");
   cmd->callback([opt] { runDemo(*opt); });
 }
 

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   plsa::app::addDemoCommand(app);
   plsa::app::addSimulateCommands(app);
   plsa::app::addSimNodeCommand(app);
+  plsa::app::addIdentifyCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -284,10 +284,14 @@ TEST(SimExperiments, ShapesAndDeterminism) {
   EXPECT_DOUBLE_EQ(st.commands.col(0).maxCoeff(), 0.35);
   const Experiment grid = gridExperiment(o);
   // One input moves at a time.
-  for (Eigen::Index k = 1; k < grid.commands.rows(); ++k)
+  EXPECT_GT(grid.record_from, 0);
+  EXPECT_EQ(grid.commands(grid.record_from, 0), 0.20);
+  for (Eigen::Index k = grid.record_from + 1; k < grid.commands.rows(); ++k)
     EXPECT_LE((grid.commands.row(k).array() != grid.commands.row(k - 1).array()).count(), 1);
   const Experiment joy = joystickExperiment(o);
   EXPECT_LE(joy.commands.maxCoeff(), o.joystick_max_bar + 1e-12);
+  EXPECT_GE(joy.commands.bottomRows(joy.commands.rows() - joy.record_from).leftCols(2).minCoeff(),
+            o.joystick_min_bar - 1e-12);
   o.joystick_duration_s = 10;
   auto run = [&](std::uint64_t seed) {
     o.seed = seed;

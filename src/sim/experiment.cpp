@@ -17,6 +17,14 @@ class CommandWriter {
     const auto n = static_cast<Eigen::Index>(std::lround(seconds * rate_));
     for (Eigen::Index k = 0; k < n; ++k) rows_.push_back(cmd);
   }
+  /// Unrecorded pre-roll: ramp from rest to `cmd` over 2 s, then hold the rest of `seconds`.
+  void preroll(const Eigen::RowVector3d& cmd, double seconds) {
+    const auto ramp = static_cast<Eigen::Index>(std::lround(std::min(2.0, seconds) * rate_));
+    for (Eigen::Index k = 1; k <= ramp; ++k) rows_.push_back(cmd * static_cast<double>(k) / static_cast<double>(ramp));
+    hold(cmd, seconds - static_cast<double>(ramp) / rate_);
+    record_from_ = static_cast<Eigen::Index>(rows_.size());
+  }
+  Eigen::Index recordFrom() const { return record_from_; }
   Eigen::MatrixXd matrix() const {
     Eigen::MatrixXd m(static_cast<Eigen::Index>(rows_.size()), 3);
     for (std::size_t k = 0; k < rows_.size(); ++k) m.row(static_cast<Eigen::Index>(k)) = rows_[k];
@@ -26,6 +34,7 @@ class CommandWriter {
  private:
   double rate_;
   std::vector<Eigen::RowVector3d> rows_;
+  Eigen::Index record_from_ = 0;
 };
 
 void checkCommon(const ExperimentOptions& o) {
@@ -72,7 +81,10 @@ Experiment gridExperiment(const ExperimentOptions& o) {
   const auto& L = o.grid_levels_bar;
   CommandWriter w(o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
-  w.hold(cmd, o.initial_rest_s);
+  cmd(a) = L.front();
+  cmd(b) = L.front();
+  w.preroll(cmd, o.preroll_s);
+  w.hold(cmd, 1.0);  // recorded: the level before the first step
   // One input moves at a time: for each level of the fixed input, the moving
   // input climbs through every level (icr) and comes back down (dcr).
   for (const auto& [moving, fixed] : {std::pair{a, b}, std::pair{b, a}}) {
@@ -96,7 +108,7 @@ Experiment gridExperiment(const ExperimentOptions& o) {
       }
     }
   }
-  return {"grid2", w.matrix()};
+  return {"grid2", w.matrix(), w.recordFrom()};
 }
 
 Experiment joystickExperiment(const ExperimentOptions& o) {
@@ -105,13 +117,13 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   require(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
           "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
   const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
-  const auto rest = static_cast<Eigen::Index>(std::lround(o.initial_rest_s * o.sample_rate_hz));
+  require(o.preroll_s > 0, "joystick: preroll_s must be positive");
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01;
   // Two passes of a critically damped second-order low-pass on white noise.
-  const double w = 2.0 * M_PI * o.joystick_bandwidth_hz / o.sample_rate_hz;
-  const double alpha = 1.0 - std::exp(-w);
-  Eigen::MatrixXd cmd = Eigen::MatrixXd::Zero(rest + n, 3);
+  const double wn = 2.0 * M_PI * o.joystick_bandwidth_hz / o.sample_rate_hz;
+  const double alpha = 1.0 - std::exp(-wn);
+  Eigen::MatrixXd traj = Eigen::MatrixXd::Zero(n, 3);
   for (int ch = 0; ch < 2; ++ch) {
     double s1 = 0, s2 = 0, s3 = 0, s4 = 0;
     Eigen::VectorXd x(n);
@@ -124,13 +136,16 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
     }
     const double lo = x.minCoeff(), hi = x.maxCoeff();
     const double span = hi > lo ? hi - lo : 1.0;
-    cmd.col(ch).tail(n) = ((x.array() - lo) / span * (o.joystick_max_bar - o.joystick_min_bar) +
-                           o.joystick_min_bar).matrix();
+    traj.col(ch) = ((x.array() - lo) / span * (o.joystick_max_bar - o.joystick_min_bar) + o.joystick_min_bar).matrix();
   }
-  // Ease in from rest so the run starts with a local move, not a jump.
-  const Eigen::Index ease = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(2.0 * o.sample_rate_hz));
-  for (Eigen::Index k = 0; k < ease; ++k) cmd.row(rest + k) *= static_cast<double>(k) / ease;
-  return {"joystick", cmd};
+  CommandWriter w(o.sample_rate_hz);
+  w.preroll(traj.row(0), o.preroll_s);
+  w.hold(traj.row(0), 1.0);  // recorded: settled at the starting point
+  const Eigen::MatrixXd head = w.matrix();
+  Experiment e{"joystick", Eigen::MatrixXd(head.rows() + n, 3), w.recordFrom()};
+  e.commands.topRows(head.rows()) = head;
+  e.commands.bottomRows(n) = traj;
+  return e;
 }
 
 Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
@@ -142,15 +157,18 @@ Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
 
 io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
   require(experiment.commands.cols() == 3, "runExperiment: commands must have 3 columns");
-  const Eigen::Index T = experiment.commands.rows();
-  require(T >= 1, "runExperiment: the experiment has no samples");
+  const Eigen::Index first = experiment.record_from;
+  const Eigen::Index T = experiment.commands.rows() - first;
+  require(first >= 0 && T >= 1, "runExperiment: the experiment records no samples");
+  for (Eigen::Index k = 0; k < first; ++k)
+    actuator.step({experiment.commands(k, 0), experiment.commands(k, 1), experiment.commands(k, 2)});
   io::Log log;
   log.source = "plsa simulate (" + experiment.name + ")";
   log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
   log.data.resize(T, 9);
   for (Eigen::Index k = 0; k < T; ++k) {
-    const ActuatorSample s = actuator.step({experiment.commands(k, 0), experiment.commands(k, 1),
-                                            experiment.commands(k, 2)});
+    const Eigen::RowVector3d c = experiment.commands.row(first + k);
+    const ActuatorSample s = actuator.step({c(0), c(1), c(2)});
     log.data.row(k) << s.time_s, s.command_bar[0], s.command_bar[1], s.command_bar[2], s.pressure_bar[0],
         s.pressure_bar[1], s.pressure_bar[2], s.bend_deg, s.steer_deg;
   }

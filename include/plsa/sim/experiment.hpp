@@ -17,7 +17,8 @@ namespace plsa::sim {
 struct ExperimentOptions {
   double sample_rate_hz = 80.0;
   double hold_s = 4.0;  ///< time at each level, long enough to settle
-  double initial_rest_s = 2.0;
+  double initial_rest_s = 2.0;  ///< staircase: recorded rest before the first step
+  double preroll_s = 5.0;       ///< grid2, joystick: ramp to the first point and settle, unrecorded
   // staircase1
   int staircase_steps = 14;
   double staircase_max_bar = 0.35;
@@ -27,16 +28,19 @@ struct ExperimentOptions {
   std::array<int, 2> grid_chambers = {1, 2};
   // joystick
   double joystick_duration_s = 60.0;
-  double joystick_min_bar = 0.12;
-  double joystick_max_bar = 0.38;
+  double joystick_min_bar = 0.19;  ///< inside the grid's range: validation, not extrapolation
+  double joystick_max_bar = 0.36;
   double joystick_bandwidth_hz = 0.3;
   std::uint64_t seed = 1;
 };
 
-/// Command trajectory (samples x 3, bar) at the sample rate.
+/// Command trajectory (samples x 3, bar) at the sample rate. Samples before
+/// `record_from` are a pre-roll: simulated to bring the actuator to its first
+/// operating point, not recorded (steering is undefined at rest).
 struct Experiment {
   std::string name;
   Eigen::MatrixXd commands;
+  Eigen::Index record_from = 0;
 };
 
 Experiment staircaseExperiment(const ExperimentOptions& o);

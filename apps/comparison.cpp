@@ -1,0 +1,77 @@
+#include "comparison.hpp"
+
+#include <limits>
+
+#include "plsa/eval/dio_prediction.hpp"
+#include "plsa/eval/fit.hpp"
+#include "plsa/identify/coefficient_fit.hpp"
+
+namespace plsa::app {
+namespace {
+
+Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
+  Eigen::VectorXd v = Eigen::VectorXd::Constant(T, std::numeric_limits<double>::quiet_NaN());
+  v.segment(p.first, p.values.size()) = p.values;
+  return v;
+}
+
+}  // namespace
+
+ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
+  const Eigen::MatrixXd dy = modelIncrements(m, u);
+  ModelPredictions out{name, {}};
+  for (Eigen::Index o = 0; o < y.cols(); ++o) {
+    std::map<int, Eigen::VectorXd> byh;
+    for (int k : horizons) byh[k] = placed(kStepAhead(y.col(o), dy.col(o), k), y.rows());
+    byh[0] = placed(simulate(y.col(o), dy.col(o)), y.rows());
+    out.by_output.push_back(std::move(byh));
+  }
+  return out;
+}
+
+ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
+  ModelPredictions out{name, {}};
+  for (Eigen::Index o = 0; o < y.cols(); ++o) {
+    std::map<int, Eigen::VectorXd> byh;
+    for (int k : horizons) byh[k] = placed(m.kStepAhead(u, y.col(o), static_cast<int>(o), k), y.rows());
+    byh[0] = placed(m.simulate(u, y.col(o), static_cast<int>(o)), y.rows());
+    out.by_output.push_back(std::move(byh));
+  }
+  return out;
+}
+
+std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<ModelPredictions>& models,
+                                                           const Eigen::MatrixXd& y) {
+  std::vector<std::vector<std::map<int, double>>> fits(models.size());
+  for (Eigen::Index o = 0; o < y.cols(); ++o) {
+    for (const auto& [k, unused] : models[0].by_output[static_cast<std::size_t>(o)]) {
+      (void)unused;
+      Eigen::Index from = 0;
+      for (const auto& m : models) {
+        const Eigen::VectorXd& p = m.by_output[static_cast<std::size_t>(o)].at(k);
+        Eigen::Index f = 0;
+        while (f < p.size() && !std::isfinite(p(f))) ++f;
+        from = std::max(from, f);
+      }
+      const Eigen::Index n = y.rows() - from;
+      for (std::size_t i = 0; i < models.size(); ++i) {
+        if (fits[i].size() <= static_cast<std::size_t>(o)) fits[i].resize(static_cast<std::size_t>(o) + 1);
+        fits[i][static_cast<std::size_t>(o)][k] =
+            nrmseFit(y.col(o).segment(from, n), models[i].by_output[static_cast<std::size_t>(o)].at(k).segment(from, n));
+      }
+    }
+  }
+  return fits;
+}
+
+DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
+                              const std::vector<Eigen::MatrixXd>& Y) {
+  DioPwlObfModel g = m;
+  g.partition = PwlPartition::single();
+  fitCoefficients(g, U, Y);
+  return g;
+}
+
+}  // namespace plsa::app

@@ -1,0 +1,36 @@
+// Shared by `plsa demo` and `plsa crossval`: fits of several models on one
+// log, every model scored over the same samples.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/identify/arx.hpp"
+#include "plsa/model/dio_pwl_obf_model.hpp"
+
+namespace plsa::app {
+
+/// Full-length predictions (NaN where a model predicts nothing) per horizon
+/// (0 = free simulation), per output.
+struct ModelPredictions {
+  std::string name;
+  std::vector<std::map<int, Eigen::VectorXd>> by_output;
+};
+
+ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons);
+ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons);
+
+/// fits[model][output][horizon] over the samples every model predicts.
+std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<ModelPredictions>& models,
+                                                           const Eigen::MatrixXd& y);
+
+/// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
+DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
+                              const std::vector<Eigen::MatrixXd>& Y);
+
+}  // namespace plsa::app

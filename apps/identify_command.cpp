@@ -1,0 +1,143 @@
+// `plsa identify` (logs -> model file) and `plsa validate` (model + log -> fits).
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/identify/validation.hpp"
+#include "plsa/lcm/lcm_log.hpp"
+#include "plsa/model/model_file.hpp"
+
+namespace plsa::app {
+namespace {
+
+struct IdentifyArgs {
+  std::vector<std::string> logs;
+  std::vector<std::string> inputs{"p_1", "p_2", "p_3"};
+  std::vector<std::string> outputs{"bend_deg", "steer_deg"};
+  std::vector<std::string> reference;
+  std::string out;
+  bool compare_poles = false;
+  IdentifyOptions options;
+};
+
+struct ValidateArgs {
+  std::string model;
+  std::string log;
+  std::vector<int> horizons{40, 80};
+  std::string json;
+  std::string csv;
+};
+
+std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required) {
+  io::CsvReadOptions ro;
+  ro.required = required;
+  std::vector<io::Log> logs;
+  for (const auto& p : paths) logs.push_back(lcm::readLogFile(p, ro));
+  return logs;
+}
+
+void runIdentify(IdentifyArgs& a) {
+  IdentifyOptions o = a.options;
+  o.inputs = a.inputs;
+  o.outputs = a.outputs;
+  o.reference = a.reference;
+  o.progress = [](const std::string& line) { std::fprintf(stderr, "plsa identify: %s\n", line.c_str()); };
+  std::vector<std::string> required = a.inputs;
+  required.insert(required.end(), a.outputs.begin(), a.outputs.end());
+  const auto logs = readLogs(a.logs, required);
+  IdentifyReport report;
+  const DioPwlObfModel model = identifyModel(logs, o, &report);
+  for (const auto& pp : report.pairs)
+    for (const auto& why : pp.rejections)
+      std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n", a.inputs[static_cast<std::size_t>(pp.input)].c_str(),
+                   a.outputs[static_cast<std::size_t>(pp.output)].c_str(), why.c_str());
+  if (a.compare_poles) {
+    // FKcM against fuzzy c-means, k-means and a global search on rho, same poles.
+    std::printf("%-22s %6s %12s %12s %12s %12s\n", "pair", "poles", "FKcM", "fuzzy c-m", "k-means", "global");
+    for (const auto& pp : report.pairs) {
+      if (pp.identified.size() < 2) continue;
+      ClusteringOptions co = o.clustering;
+      co.centres = o.poles_per_pair;
+      const double f = fkcmClustering(pp.identified, co).rho, c = fuzzyCMeansClustering(pp.identified, co).rho;
+      const double k = kMeansClustering(pp.identified, co).rho, g = globalRhoSearch(pp.identified, co).rho;
+      const std::string name = a.inputs[static_cast<std::size_t>(pp.input)] + " -> " + a.outputs[static_cast<std::size_t>(pp.output)];
+      std::printf("%-22s %6zu %12.3e %12.3e %12.3e %12.3e\n", name.c_str(), pp.identified.size(), f, c, k, g);
+    }
+  }
+  saveModel(a.out, model);
+  std::fprintf(stderr, "plsa identify: wrote %s\n", a.out.c_str());
+}
+
+void runValidate(const ValidateArgs& a) {
+  const DioPwlObfModel model = loadModel(a.model);
+  std::vector<std::string> required = model.inputs;
+  required.insert(required.end(), model.outputs.begin(), model.outputs.end());
+  const io::Log log = readLogs({a.log}, required).front();
+  const ValidationResult v = validateModel(model, log, a.horizons);
+  if (v.input_outside_range > 0)
+    std::fprintf(stderr, "plsa validate: warning: %.1f%% of samples lie outside the inputs' training range [%g, %g]\n",
+                 100 * v.input_outside_range, model.input_min, model.input_max);
+  std::printf("%-12s", "output");
+  for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());
+  std::printf(" %9s\n", "sim");
+  nlohmann::json j;
+  for (const auto& o : v.outputs) {
+    std::printf("%-12s", o.name.c_str());
+    for (int k : a.horizons) {
+      std::printf(" %9.2f", o.fit_k.at(k));
+      j["outputs"][o.name]["fit_k" + std::to_string(k)] = o.fit_k.at(k);
+    }
+    std::printf(" %9.2f\n", o.fit_sim);
+    j["outputs"][o.name]["fit_sim"] = o.fit_sim;
+  }
+  j["model"] = a.model;
+  j["log"] = a.log;
+  j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
+  if (!a.json.empty()) {
+    std::ofstream out(a.json);
+    if (!out) throw std::runtime_error(a.json + ": cannot open for writing");
+    out << j.dump(2) << "\n";
+  }
+  if (!a.csv.empty()) io::writeCsvLog(a.csv, predictionLog(v));
+}
+
+}  // namespace
+
+void addIdentifyCommands(CLI::App& app) {
+  auto a = std::make_shared<IdentifyArgs>();
+  CLI::App* id = app.add_subcommand("identify", "Identify a DIO-PWL-OBF model from logs (paper Table I)");
+  id->add_option("--log", a->logs, "Training log(s): CSV or .lcmlog; repeat for more")->required()->check(CLI::ExistingFile);
+  id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
+  id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
+  id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
+  id->add_option("--poles", a->options.poles_per_pair, "OBF poles per input-output pair")->check(CLI::Range(1, 20));
+  id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")->check(CLI::Range(1, 6));
+  id->add_option("--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global")
+      ->check(CLI::IsMember({"fkcm", "fcm", "kmeans", "global"}));
+  id->add_option("--fuzziness", a->options.clustering.fuzziness, "FKcM fuzziness m > 1");
+  id->add_option("--levels", a->options.quantile_levels, "Levels per input when the logs have no staircase")
+      ->check(CLI::Range(1, 12));
+  id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
+  id->add_option("--scheduling", a->options.scheduling,
+                 "interpolated (coefficients blended between grid nodes) or switched (the paper's PWL)")
+      ->check(CLI::IsMember({"interpolated", "switched"}));
+  id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
+  id->add_option("--out", a->out, "Model file (JSON)")->required();
+  id->callback([a] { runIdentify(*a); });
+
+  auto v = std::make_shared<ValidateArgs>();
+  CLI::App* va = app.add_subcommand("validate", "k-step-ahead and simulation NRMSE fits of a model on a log");
+  va->add_option("--model", v->model, "Model file")->required()->check(CLI::ExistingFile);
+  va->add_option("--log", v->log, "Validation log (CSV or .lcmlog)")->required()->check(CLI::ExistingFile);
+  va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
+  va->add_option("--json", v->json, "Write fits as JSON");
+  va->add_option("--csv", v->csv, "Write measured vs predicted as CSV");
+  va->callback([v] { runValidate(*v); });
+}
+
+}  // namespace plsa::app

@@ -1,0 +1,36 @@
+// Validation of a DIO-PWL-OBF model on a log: NRMSE fit per output for each
+// k-step-ahead horizon and for free simulation, plus the aligned predictions.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "plsa/io/csv_log.hpp"
+#include "plsa/model/dio_pwl_obf_model.hpp"
+
+namespace plsa {
+
+struct OutputValidation {
+  std::string name;
+  std::map<int, double> fit_k;  ///< horizon -> fit %
+  double fit_sim = 0.0;
+  Eigen::VectorXd measured;
+  std::map<int, Eigen::VectorXd> predicted_k;  ///< aligned with measured, NaN where undefined
+  Eigen::VectorXd simulated;
+};
+
+struct ValidationResult {
+  std::vector<OutputValidation> outputs;
+  Eigen::VectorXd time;
+  double input_outside_range = 0.0;  ///< share of samples outside the model's training input range
+};
+
+/// Throws naming the missing column or the bad horizon.
+ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons);
+
+/// Measured vs predicted as a log: time_s, then per output <name>, <name>_k<h>..., <name>_sim,
+/// from the first sample every prediction covers.
+io::Log predictionLog(const ValidationResult& v);
+
+}  // namespace plsa

@@ -1,0 +1,46 @@
+// Self-contained SVG charts for HTML reports (no scripts, no external files):
+// line charts of time series, a pole map on the unit disk, bar charts.
+#pragma once
+
+#include <complex>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace plsa::report {
+
+struct Series {
+  std::string label;
+  Eigen::VectorXd y;  ///< NaN where undefined (not drawn)
+  std::string color;
+  bool dashed = false;
+};
+
+/// Line chart of series over x; long series are thinned to about 1500 points.
+std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const std::vector<Series>& series,
+                      const std::string& x_label, const std::string& y_label, int width = 900, int height = 280);
+
+struct PoleGroup {
+  std::string label;
+  std::vector<std::complex<double>> poles;
+  std::string color;
+  bool cross = false;  ///< crosses instead of dots
+};
+
+/// Poles on the unit disk, zoomed to [zoom_min, 1] on the real axis when given.
+std::string poleMap(const std::string& title, const std::vector<PoleGroup>& groups, double zoom_min = -1.0,
+                    int size = 420);
+
+struct Bar {
+  std::string label;
+  double value;
+  std::string color;
+};
+std::string barChart(const std::string& title, const std::vector<Bar>& bars, const std::string& y_label,
+                     int width = 600, int height = 280);
+
+/// HTML escaping for text nodes.
+std::string escape(const std::string& s);
+
+}  // namespace plsa::report

@@ -1,0 +1,246 @@
+#include "plsa/identify/pipeline.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "plsa/identify/local_fit.hpp"
+#include "plsa/identify/segmentation.hpp"
+
+namespace plsa {
+namespace {
+
+std::string fmtPoles(const std::vector<std::complex<double>>& p) {
+  std::ostringstream s;
+  s.precision(4);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    s << (i ? " " : "") << p[i].real();
+    if (p[i].imag() != 0) s << (p[i].imag() > 0 ? "+" : "") << p[i].imag() << "i";
+  }
+  return s.str();
+}
+
+ClusteringResult cluster(const std::string& method, const std::vector<std::complex<double>>& poles,
+                         const ClusteringOptions& o) {
+  if (method == "fkcm") return fkcmClustering(poles, o);
+  if (method == "fcm") return fuzzyCMeansClustering(poles, o);
+  if (method == "kmeans") return kMeansClustering(poles, o);
+  if (method == "global") return globalRhoSearch(poles, o);
+  throw std::invalid_argument("unknown pole method '" + method + "' (fkcm, fcm, kmeans, global)");
+}
+
+}  // namespace
+
+std::vector<double> midpoints(const std::vector<double>& levels) {
+  std::vector<double> b;
+  for (std::size_t i = 1; i < levels.size(); ++i) b.push_back(0.5 * (levels[i - 1] + levels[i]));
+  return b;
+}
+
+std::vector<double> quantileBreakpoints(std::vector<double> values, int levels) {
+  require(levels >= 1, "quantileBreakpoints: need at least one level");
+  std::sort(values.begin(), values.end());
+  std::vector<double> b;
+  for (int i = 1; i < levels; ++i) {
+    const double v = values[static_cast<std::size_t>(std::lround(i / static_cast<double>(levels) * (values.size() - 1)))];
+    if (b.empty() || v > b.back()) b.push_back(v);
+  }
+  return b;
+}
+
+DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
+  require(!logs.empty(), "identify: no logs given");
+  require(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
+  require(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  IdentifyReport local;
+  IdentifyReport& rep = out ? *out : local;
+  auto say = [&](const std::string& line) {
+    rep.lines.push_back(line);
+    if (o.progress) o.progress(line);
+  };
+
+  // Data and sample time; every log must agree.
+  std::vector<Eigen::MatrixXd> U, Y, Ref;
+  double dt = 0.0;
+  std::vector<std::string> reference = o.reference;
+  if (reference.empty()) {
+    const bool have_cmd = logs[0].hasColumn("cmd_1") && o.inputs.size() <= 3;
+    for (std::size_t j = 0; j < o.inputs.size(); ++j)
+      reference.push_back(have_cmd ? "cmd_" + std::to_string(j + 1) : o.inputs[j]);
+  }
+  require(reference.size() == o.inputs.size(), "identify: need one reference column per input");
+  for (const auto& log : logs) {
+    const double t = io::checkedSampleTime(log, "time_s", o.max_gap_factor);
+    if (dt == 0.0) dt = t;
+    if (std::abs(t - dt) > 0.02 * dt)
+      throw std::invalid_argument(log.source + ": sample time " + std::to_string(t) + " s differs from the first log's " +
+                                  std::to_string(dt) + " s");
+    U.push_back(log.columnsOf(o.inputs));
+    Y.push_back(log.columnsOf(o.outputs));
+    Ref.push_back(log.columnsOf(reference));
+  }
+  Eigen::Index total = 0;
+  for (const auto& u : U) total += u.rows();
+  say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
+      std::to_string(1.0 / dt).substr(0, 6) + " Hz");
+
+  // Steps 1-2: local data sets and local LTI fits.
+  const auto ni = static_cast<int>(o.inputs.size()), no = static_cast<int>(o.outputs.size());
+  rep.pairs.clear();
+  for (int out_i = 0; out_i < no; ++out_i)
+    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, 0, {}, {}});
+  auto pairAt = [&](int in_i, int out_i) -> PairPoles& { return rep.pairs[static_cast<std::size_t>(out_i * ni + in_i)]; };
+  const auto min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
+  rep.segments = 0;
+  for (std::size_t r = 0; r < logs.size(); ++r) {
+    for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
+      ++rep.segments;
+      const Eigen::Index n = seg.end - seg.begin;
+      for (int out_i = 0; out_i < no; ++out_i) {
+        const LocalFit f = fitLocalModel(U[r].col(seg.input).segment(seg.begin, n), Y[r].col(out_i).segment(seg.begin, n),
+                                         U[r](seg.begin - 1, seg.input), Y[r](seg.begin - 1, out_i), o.local_order);
+        PairPoles& pp = pairAt(seg.input, out_i);
+        if (f.usable) {
+          pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
+        } else {
+          ++pp.rejected;
+          pp.rejections.push_back(logs[r].source + " samples " + std::to_string(seg.begin) + "-" +
+                                  std::to_string(seg.end) + ": " + f.reason);
+        }
+      }
+    }
+  }
+  rep.used_windows = rep.segments == 0;
+  if (rep.used_windows) {
+    // No staircase: MISO fits on local windows give each output's poles.
+    const auto w = static_cast<Eigen::Index>(std::lround(o.window_s / dt));
+    for (std::size_t r = 0; r < logs.size(); ++r)
+      for (Eigen::Index b = 1; b + w <= U[r].rows(); b += w)
+        for (int out_i = 0; out_i < no; ++out_i) {
+          // Fit y on each input separately is ill-posed with all moving: use the strongest input.
+          Eigen::Index best = 0;
+          double spread = -1;
+          for (int in_i = 0; in_i < ni; ++in_i) {
+            const auto seg = U[r].col(in_i).segment(b, w);
+            const double s = seg.maxCoeff() - seg.minCoeff();
+            if (s > spread) {
+              spread = s;
+              best = in_i;
+            }
+          }
+          const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Y[r].col(out_i).segment(b, w),
+                                           U[r](b - 1, best), Y[r](b - 1, out_i), o.local_order);
+          for (int in_i = 0; in_i < ni; ++in_i) {
+            PairPoles& pp = pairAt(in_i, out_i);
+            if (f.usable)
+              pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
+            else if (in_i == 0) {
+              ++pp.rejected;
+              pp.rejections.push_back(logs[r].source + " window at " + std::to_string(b) + ": " + f.reason);
+            }
+          }
+        }
+  }
+  int usable = 0, rejected = 0;
+  for (const auto& pp : rep.pairs) {
+    usable += static_cast<int>(pp.identified.size());
+    rejected += pp.rejected;
+  }
+  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" +
+      (rep.used_windows ? " (none found: local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)" : "") +
+      ", " + std::to_string(usable) + " poles kept, " + std::to_string(rejected) + " fits rejected (unstable or badly determined)");
+
+  // Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
+  DioPwlObfModel model;
+  model.sample_time_s = dt;
+  model.inputs = o.inputs;
+  model.outputs = o.outputs;
+  model.poles.assign(static_cast<std::size_t>(no), {});
+  ClusteringOptions co = o.clustering;
+  co.centres = o.poles_per_pair;
+  for (int out_i = 0; out_i < no; ++out_i) {
+    std::vector<std::complex<double>> output_poles;
+    for (int in_i = 0; in_i < ni; ++in_i) {
+      const auto& id = pairAt(in_i, out_i).identified;
+      output_poles.insert(output_poles.end(), id.begin(), id.end());
+    }
+    for (int in_i = 0; in_i < ni; ++in_i) {
+      PairPoles& pp = pairAt(in_i, out_i);
+      const bool own = pp.identified.size() >= 2;
+      const auto& src = own ? pp.identified : output_poles;
+      if (src.empty())
+        throw std::runtime_error("identify: no usable local poles for output '" + o.outputs[static_cast<std::size_t>(out_i)] +
+                                 "'; the logs have no informative steps (see the rejected fits)");
+      pp.chosen = cluster(o.pole_method, src, co);
+      model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
+      say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] +
+          " (" + pp.chosen.method + " over " + std::to_string(src.size()) + (own ? " own" : " output-wide") +
+          " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
+    }
+  }
+
+  // Partition: the experiment's reference levels, else a quantile grid.
+  std::vector<int> sched;
+  std::vector<std::vector<double>> bps;
+  Eigen::MatrixXd all_ref(total, ni), all_u(total, ni);
+  {
+    Eigen::Index row = 0;
+    for (std::size_t r = 0; r < logs.size(); ++r) {
+      all_ref.middleRows(row, Ref[r].rows()) = Ref[r];
+      all_u.middleRows(row, U[r].rows()) = U[r];
+      row += U[r].rows();
+    }
+  }
+  const auto levels = referenceLevels(all_ref, o.step_threshold, min_len);
+  require(o.scheduling == "interpolated" || o.scheduling == "switched",
+          "identify: scheduling must be 'interpolated' or 'switched', not '" + o.scheduling + "'");
+  const bool interpolated = o.scheduling == "interpolated";
+  for (int in_i = 0; in_i < ni; ++in_i) {
+    std::vector<double> lv;
+    for (double l : levels[static_cast<std::size_t>(in_i)])
+      if (l > o.step_threshold) lv.push_back(l);  // the vented level is not a reference pressure
+    if (!rep.used_windows && lv.size() >= 2) {
+      sched.push_back(in_i);
+      bps.push_back(interpolated ? lv : midpoints(lv));
+    } else if (rep.used_windows) {
+      const Eigen::VectorXd col = all_u.col(in_i);
+      if (col.maxCoeff() - col.minCoeff() <= o.step_threshold) continue;
+      std::vector<double> values(col.data(), col.data() + col.size());
+      // Switched: cells between quantiles; interpolated: nodes at the cells' medians.
+      auto b = quantileBreakpoints(values, interpolated ? 2 * o.quantile_levels : o.quantile_levels);
+      if (interpolated) {
+        std::vector<double> nodes;
+        for (std::size_t i = 0; i < b.size(); i += 2) nodes.push_back(b[i]);
+        b = nodes;
+      }
+      if (!b.empty()) {
+        sched.push_back(in_i);
+        bps.push_back(b);
+      }
+    }
+  }
+  model.partition = interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
+                                 : PwlPartition(sched, bps, o.direction_split);
+  model.input_min = all_u.minCoeff();
+  model.input_max = all_u.maxCoeff();
+  {
+    std::string s = "[4/5] partition (" + o.scheduling + "): " + std::to_string(model.partition.regionCount()) + " regions";
+    for (std::size_t i = 0; i < sched.size(); ++i) {
+      s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] + (interpolated ? " nodes" : " split at");
+      for (double b : bps[i]) s += " " + std::to_string(b).substr(0, 6);
+    }
+    if (o.direction_split) s += "; split by direction of change";
+    say(s);
+  }
+
+  // Step 7: coefficients.
+  rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);
+  say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
+      std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
+  for (const auto& n : rep.coefficients.notes) say("      " + n);
+  model.validate();
+  return model;
+}
+
+}  // namespace plsa

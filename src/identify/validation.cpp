@@ -1,0 +1,66 @@
+#include "plsa/identify/validation.hpp"
+
+#include <limits>
+
+#include "plsa/eval/dio_prediction.hpp"
+
+namespace plsa {
+
+ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons) {
+  require(!horizons.empty(), "validate: no horizons given");
+  const Eigen::MatrixXd u = log.columnsOf(model.inputs);
+  const Eigen::MatrixXd y = log.columnsOf(model.outputs);
+  const Eigen::MatrixXd dy = modelIncrements(model, u);
+  ValidationResult res;
+  res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
+  res.input_outside_range =
+      static_cast<double>(((u.array() < model.input_min - 1e-9) || (u.array() > model.input_max + 1e-9)).rowwise().any().count()) /
+      static_cast<double>(u.rows());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int o = 0; o < model.outputCount(); ++o) {
+    OutputValidation ov;
+    ov.name = model.outputs[static_cast<std::size_t>(o)];
+    ov.measured = y.col(o);
+    for (int k : horizons) {
+      require(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
+      const AlignedPrediction p = kStepAhead(ov.measured, dy.col(o), k);
+      ov.fit_k[k] = fitOf(ov.measured, p);
+      Eigen::VectorXd full = Eigen::VectorXd::Constant(y.rows(), nan);
+      full.segment(p.first, p.values.size()) = p.values;
+      ov.predicted_k[k] = full;
+    }
+    const AlignedPrediction s = simulate(ov.measured, dy.col(o));
+    ov.fit_sim = fitOf(ov.measured, s);
+    ov.simulated = Eigen::VectorXd::Constant(y.rows(), nan);
+    ov.simulated.segment(s.first, s.values.size()) = s.values;
+    res.outputs.push_back(std::move(ov));
+  }
+  return res;
+}
+
+io::Log predictionLog(const ValidationResult& v) {
+  io::Log log;
+  log.columns.push_back("time_s");
+  int first = 1;
+  for (const auto& o : v.outputs) {
+    log.columns.push_back(o.name);
+    for (const auto& [k, p] : o.predicted_k) {
+      log.columns.push_back(o.name + "_k" + std::to_string(k));
+      first = std::max(first, k);
+    }
+    log.columns.push_back(o.name + "_sim");
+  }
+  const Eigen::Index T = v.time.size() - first;
+  log.data.resize(T, static_cast<Eigen::Index>(log.columns.size()));
+  Eigen::Index c = 0;
+  log.data.col(c++) = v.time.tail(T);
+  for (const auto& o : v.outputs) {
+    log.data.col(c++) = o.measured.tail(T);
+    for (const auto& [k, p] : o.predicted_k) log.data.col(c++) = p.tail(T);
+    log.data.col(c++) = o.simulated.tail(T);
+  }
+  log.metadata["source"] = "plsa validate";
+  return log;
+}
+
+}  // namespace plsa

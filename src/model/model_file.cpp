@@ -1,0 +1,209 @@
+#include "plsa/model/model_file.hpp"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace plsa {
+namespace {
+
+using nlohmann::json;
+constexpr const char* kSchema = "plsa.dio_pwl_obf";
+
+[[noreturn]] void bad(const std::string& source, const std::string& why) {
+  throw std::invalid_argument(source + ": " + why);
+}
+
+// Checked access: every field read names its path when it is missing or mistyped.
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+  const json& at(const json& j, const std::string& key, const std::string& path) const {
+    if (!j.is_object() || !j.contains(key)) bad(source_, "missing field '" + path + key + "'");
+    return j.at(key);
+  }
+  double number(const json& j, const std::string& path) const {
+    if (!j.is_number()) bad(source_, "'" + path + "' must be a number");
+    return j.get<double>();
+  }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) bad(source_, "'" + path + "' must be a string");
+    return j.get<std::string>();
+  }
+  const json& array(const json& j, const std::string& path) const {
+    if (!j.is_array()) bad(source_, "'" + path + "' must be an array");
+    return j;
+  }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+double finiteOrInf(const json& j) {
+  if (j.is_string()) return j.get<std::string>() == "-inf" ? -INFINITY : INFINITY;
+  return j.get<double>();
+}
+
+json limit(double v) {
+  if (std::isinf(v)) return v < 0 ? "-inf" : "inf";
+  return v;
+}
+
+}  // namespace
+
+std::string modelToJson(const DioPwlObfModel& m) {
+  m.validate();
+  json j;
+  j["schema"] = kSchema;
+  j["version"] = DioPwlObfModel::kSchemaVersion;
+  j["sample_time_s"] = m.sample_time_s;
+  j["inputs"] = m.inputs;
+  j["outputs"] = m.outputs;
+  j["units"] = {{"inputs", m.input_unit}, {"outputs", m.output_unit}};
+  j["input_range"] = {limit(m.input_min), limit(m.input_max)};
+  json poles = json::array();
+  for (const auto& row : m.poles) {
+    json r = json::array();
+    for (const auto& ps : row) {
+      json list = json::array();
+      for (const auto& p : ps.poles()) list.push_back({p.real(), p.imag()});
+      r.push_back(list);
+    }
+    poles.push_back(r);
+  }
+  j["poles"] = poles;
+  json part;
+  part["inputs"] = m.partition.inputs();
+  const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
+  part["scheduling"] = interp ? "interpolated" : "switched";
+  part[interp ? "levels" : "breakpoints"] = m.partition.breakpoints();
+  part["direction_split"] = m.partition.directionSplit();
+  part["direction_threshold"] = m.partition.directionThreshold();
+  j["partition"] = part;
+  json regions = json::array();
+  for (std::size_t r = 0; r < m.coefficients.size(); ++r) {
+    json reg;
+    reg["samples"] = m.region_fits[r].samples;
+    reg["fallback_from"] = m.region_fits[r].fallback_from;
+    reg["note"] = m.region_fits[r].note;
+    json coefs = json::array();
+    for (const auto& c : m.coefficients[r]) coefs.push_back(std::vector<double>(c.data(), c.data() + c.size()));
+    reg["coefficients"] = coefs;
+    regions.push_back(reg);
+  }
+  j["regions"] = regions;
+  return j.dump(1);
+}
+
+DioPwlObfModel modelFromJson(const std::string& text, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    bad(source, std::string("not valid JSON: ") + e.what());
+  }
+  const Reader rd(source);
+  if (rd.string(rd.at(j, "schema", ""), "schema") != kSchema) bad(source, "schema is not '" + std::string(kSchema) + "'");
+  const double version = rd.number(rd.at(j, "version", ""), "version");
+  if (version != DioPwlObfModel::kSchemaVersion)
+    bad(source, "schema version " + std::to_string(static_cast<int>(version)) + " is not supported (this build reads " +
+                    std::to_string(DioPwlObfModel::kSchemaVersion) + ")");
+  DioPwlObfModel m;
+  m.sample_time_s = rd.number(rd.at(j, "sample_time_s", ""), "sample_time_s");
+  for (const auto& s : rd.array(rd.at(j, "inputs", ""), "inputs")) m.inputs.push_back(rd.string(s, "inputs[]"));
+  for (const auto& s : rd.array(rd.at(j, "outputs", ""), "outputs")) m.outputs.push_back(rd.string(s, "outputs[]"));
+  const json& units = rd.at(j, "units", "");
+  m.input_unit = rd.string(rd.at(units, "inputs", "units."), "units.inputs");
+  m.output_unit = rd.string(rd.at(units, "outputs", "units."), "units.outputs");
+  const json& range = rd.array(rd.at(j, "input_range", ""), "input_range");
+  if (range.size() != 2) bad(source, "'input_range' must have two entries");
+  m.input_min = finiteOrInf(range[0]);
+  m.input_max = finiteOrInf(range[1]);
+  const json& poles = rd.array(rd.at(j, "poles", ""), "poles");
+  for (std::size_t o = 0; o < poles.size(); ++o) {
+    std::vector<PoleSet> row;
+    for (std::size_t i = 0; i < rd.array(poles[o], "poles[o]").size(); ++i) {
+      std::vector<std::complex<double>> list;
+      const std::string path = "poles[" + std::to_string(o) + "][" + std::to_string(i) + "]";
+      for (const auto& p : rd.array(poles[o][i], path)) {
+        if (!p.is_array() || p.size() != 2) bad(source, path + ": each pole is [re, im]");
+        list.emplace_back(rd.number(p[0], path), rd.number(p[1], path));
+      }
+      try {
+        row.emplace_back(list);
+      } catch (const std::invalid_argument& e) {
+        bad(source, path + ": " + e.what());
+      }
+    }
+    m.poles.push_back(std::move(row));
+  }
+  const json& part = rd.at(j, "partition", "");
+  std::vector<int> sched;
+  for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {
+    if (!v.is_number_integer()) bad(source, "'partition.inputs' must hold input indices");
+    sched.push_back(v.get<int>());
+  }
+  const std::string mode = rd.string(rd.at(part, "scheduling", "partition."), "partition.scheduling");
+  if (mode != "switched" && mode != "interpolated")
+    bad(source, "'partition.scheduling' must be 'switched' or 'interpolated', not '" + mode + "'");
+  const std::string key = mode == "interpolated" ? "levels" : "breakpoints";
+  std::vector<std::vector<double>> bps;
+  for (const auto& list : rd.array(rd.at(part, key, "partition."), "partition." + key)) {
+    std::vector<double> b;
+    for (const auto& v : rd.array(list, "partition." + key + "[]")) b.push_back(rd.number(v, "partition." + key + "[]"));
+    bps.push_back(std::move(b));
+  }
+  const json& split = rd.at(part, "direction_split", "partition.");
+  if (!split.is_boolean()) bad(source, "'partition.direction_split' must be true or false");
+  try {
+    const double thr = rd.number(rd.at(part, "direction_threshold", "partition."), "partition.direction_threshold");
+    m.partition = mode == "interpolated" ? PwlPartition::interpolated(sched, bps, split.get<bool>(), thr)
+                                         : PwlPartition(sched, bps, split.get<bool>(), thr);
+  } catch (const std::invalid_argument& e) {
+    bad(source, e.what());
+  }
+  const json& regions = rd.array(rd.at(j, "regions", ""), "regions");
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const std::string path = "regions[" + std::to_string(r) + "].";
+    RegionFit fit;
+    fit.samples = static_cast<int>(rd.number(rd.at(regions[r], "samples", path), path + "samples"));
+    fit.fallback_from = static_cast<int>(rd.number(rd.at(regions[r], "fallback_from", path), path + "fallback_from"));
+    fit.note = rd.string(rd.at(regions[r], "note", path), path + "note");
+    std::vector<Eigen::VectorXd> coefs;
+    for (const auto& c : rd.array(rd.at(regions[r], "coefficients", path), path + "coefficients")) {
+      const json& arr = rd.array(c, path + "coefficients[]");
+      Eigen::VectorXd v(static_cast<Eigen::Index>(arr.size()));
+      for (std::size_t i = 0; i < arr.size(); ++i) v(static_cast<Eigen::Index>(i)) = rd.number(arr[i], path + "coefficients[]");
+      coefs.push_back(v);
+    }
+    m.coefficients.push_back(std::move(coefs));
+    m.region_fits.push_back(fit);
+  }
+  try {
+    m.validate();
+  } catch (const std::invalid_argument& e) {
+    bad(source, e.what());
+  }
+  return m;
+}
+
+void saveModel(const std::string& path, const DioPwlObfModel& model) {
+  const std::string text = modelToJson(model);
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  out << text << "\n";
+  if (!out) throw std::runtime_error(path + ": write failed");
+}
+
+DioPwlObfModel loadModel(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path + ": cannot open the model file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return modelFromJson(ss.str(), path);
+}
+
+}  // namespace plsa

@@ -1,0 +1,198 @@
+#include "plsa/report/svg_chart.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace plsa::report {
+namespace {
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.2f", v);
+  return b;
+}
+
+std::string tick(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+// A "nice" step for about n ticks over a span.
+double niceStep(double span, int n) {
+  const double raw = span / std::max(1, n);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * mag >= raw) return m * mag;
+  return 10 * mag;
+}
+
+}  // namespace
+
+std::string escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '<') o += "&lt;";
+    else if (c == '>') o += "&gt;";
+    else if (c == '&') o += "&amp;";
+    else if (c == '"') o += "&quot;";
+    else o += c;
+  }
+  return o;
+}
+
+std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const std::vector<Series>& series,
+                      const std::string& x_label, const std::string& y_label, int width, int height) {
+  const double ml = 60, mr = 150, mt = 30, mb = 40;
+  const double pw = width - ml - mr, ph = height - mt - mb;
+  double ymin = INFINITY, ymax = -INFINITY;
+  for (const auto& s : series)
+    for (Eigen::Index i = 0; i < s.y.size(); ++i)
+      if (std::isfinite(s.y(i))) {
+        ymin = std::min(ymin, s.y(i));
+        ymax = std::max(ymax, s.y(i));
+      }
+  if (!std::isfinite(ymin)) ymin = 0, ymax = 1;
+  if (ymax - ymin < 1e-12) ymin -= 1, ymax += 1;
+  const double pad = 0.05 * (ymax - ymin);
+  ymin -= pad;
+  ymax += pad;
+  const double xmin = x.size() ? x.minCoeff() : 0, xmax = x.size() ? x.maxCoeff() : 1;
+  auto X = [&](double v) { return ml + (v - xmin) / std::max(1e-12, xmax - xmin) * pw; };
+  auto Y = [&](double v) { return mt + (ymax - v) / (ymax - ymin) * ph; };
+  std::ostringstream o;
+  o << "<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" viewBox=\"0 0 " << width << " " << height << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";
+  o << "<text x=\"" << ml << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
+  o << "<rect x=\"" << ml << "\" y=\"" << mt << "\" width=\"" << pw << "\" height=\"" << ph
+    << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
+  const double ys = niceStep(ymax - ymin, 5);
+  for (double v = std::ceil(ymin / ys) * ys; v <= ymax; v += ys)
+    o << "<line x1=\"" << ml << "\" x2=\"" << ml + pw << "\" y1=\"" << num(Y(v)) << "\" y2=\"" << num(Y(v))
+      << "\" stroke=\"#e3e3e3\"/><text x=\"" << ml - 6 << "\" y=\"" << num(Y(v) + 4)
+      << "\" font-size=\"11\" text-anchor=\"end\">" << tick(v) << "</text>\n";
+  const double xs = niceStep(xmax - xmin, 8);
+  for (double v = std::ceil(xmin / xs) * xs; v <= xmax; v += xs)
+    o << "<text x=\"" << num(X(v)) << "\" y=\"" << mt + ph + 15 << "\" font-size=\"11\" text-anchor=\"middle\">"
+      << tick(v) << "</text>\n";
+  o << "<text x=\"" << ml + pw / 2 << "\" y=\"" << height - 6 << "\" font-size=\"12\" text-anchor=\"middle\">"
+    << escape(x_label) << "</text>\n";
+  o << "<text x=\"14\" y=\"" << mt + ph / 2 << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
+    << mt + ph / 2 << ")\">" << escape(y_label) << "</text>\n";
+  const Eigen::Index n = x.size();
+  const Eigen::Index stride = std::max<Eigen::Index>(1, n / 1500);
+  int li = 0;
+  for (const auto& s : series) {
+    o << "<path class=\"series\" fill=\"none\" stroke=\"" << s.color << "\" stroke-width=\"1.3\""
+      << (s.dashed ? " stroke-dasharray=\"5,3\"" : "") << " d=\"";
+    bool pen = false;
+    for (Eigen::Index i = 0; i < std::min(n, s.y.size()); i += stride) {
+      if (!std::isfinite(s.y(i))) {
+        pen = false;
+        continue;
+      }
+      o << (pen ? "L" : "M") << num(X(x(i))) << "," << num(Y(s.y(i))) << " ";
+      pen = true;
+    }
+    o << "\"/>\n";
+    const double ly = mt + 14 + 18 * li++;
+    o << "<line x1=\"" << ml + pw + 10 << "\" x2=\"" << ml + pw + 30 << "\" y1=\"" << ly << "\" y2=\"" << ly
+      << "\" stroke=\"" << s.color << "\" stroke-width=\"2\"" << (s.dashed ? " stroke-dasharray=\"5,3\"" : "")
+      << "/><text x=\"" << ml + pw + 34 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(s.label)
+      << "</text>\n";
+  }
+  o << "</svg>\n";
+  return o.str();
+}
+
+std::string poleMap(const std::string& title, const std::vector<PoleGroup>& groups, double zoom_min, int size) {
+  const double m = 40;
+  const double lo = zoom_min, hi = 1.02;
+  const double half = (hi - lo) / 2;
+  const double cx = (lo + hi) / 2;
+  auto X = [&](double re) { return m + (re - (cx - half)) / (2 * half) * (size - 2 * m); };
+  auto Y = [&](double im) { return size / 2.0 - im / (2 * half) * (size - 2 * m); };
+  std::ostringstream o;
+  o << "<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << size + 170 << "\" height=\"" << size
+    << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";
+  o << "<text x=\"" << m << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
+  o << "<rect x=\"" << m << "\" y=\"" << m << "\" width=\"" << size - 2 * m << "\" height=\"" << size - 2 * m
+    << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
+  // Unit circle as a polyline clipped to the view.
+  o << "<path fill=\"none\" stroke=\"#888\" d=\"";
+  bool pen = false;
+  for (int i = 0; i <= 720; ++i) {
+    const double a = i * M_PI / 360;
+    const double re = std::cos(a), im = std::sin(a);
+    const bool in = re >= cx - half && re <= cx + half && std::abs(im) <= half;
+    if (!in) {
+      pen = false;
+      continue;
+    }
+    o << (pen ? "L" : "M") << num(X(re)) << "," << num(Y(im)) << " ";
+    pen = true;
+  }
+  o << "\"/>\n";
+  o << "<line x1=\"" << m << "\" x2=\"" << size - m << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0) << "\" stroke=\"#ccc\"/>\n";
+  for (double v = std::ceil(lo * 20) / 20; v <= 1.0 + 1e-9; v += 0.05)
+    o << "<text x=\"" << num(X(v)) << "\" y=\"" << size - m + 14 << "\" font-size=\"10\" text-anchor=\"middle\">"
+      << tick(v) << "</text>\n";
+  int li = 0;
+  for (const auto& g : groups) {
+    for (const auto& p : g.poles) {
+      if (p.real() < cx - half || p.real() > cx + half || std::abs(p.imag()) > half) continue;
+      const double x = X(p.real()), y = Y(p.imag());
+      if (g.cross)
+        o << "<path class=\"pole\" d=\"M" << num(x - 5) << "," << num(y - 5) << " L" << num(x + 5) << "," << num(y + 5)
+          << " M" << num(x - 5) << "," << num(y + 5) << " L" << num(x + 5) << "," << num(y - 5) << "\" stroke=\""
+          << g.color << "\" stroke-width=\"2\"/>\n";
+      else
+        o << "<circle class=\"pole\" cx=\"" << num(x) << "\" cy=\"" << num(y) << "\" r=\"3\" fill=\"" << g.color
+          << "\" fill-opacity=\"0.6\"/>\n";
+    }
+    const double ly = m + 10 + 18 * li++;
+    o << "<circle cx=\"" << size - m + 20 << "\" cy=\"" << ly << "\" r=\"4\" fill=\"" << g.color
+      << "\"/><text x=\"" << size - m + 30 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(g.label)
+      << "</text>\n";
+  }
+  o << "</svg>\n";
+  return o.str();
+}
+
+std::string barChart(const std::string& title, const std::vector<Bar>& bars, const std::string& y_label, int width,
+                     int height) {
+  const double ml = 60, mr = 20, mt = 30, mb = 70;
+  const double pw = width - ml - mr, ph = height - mt - mb;
+  double ymax = 0, ymin = 0;
+  for (const auto& b : bars) {
+    ymax = std::max(ymax, b.value);
+    ymin = std::min(ymin, b.value);
+  }
+  if (ymax - ymin < 1e-12) ymax = ymin + 1;
+  auto Y = [&](double v) { return mt + (ymax - v) / (ymax - ymin) * ph; };
+  std::ostringstream o;
+  o << "<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";
+  o << "<text x=\"" << ml << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
+  o << "<text x=\"14\" y=\"" << mt + ph / 2 << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
+    << mt + ph / 2 << ")\">" << escape(y_label) << "</text>\n";
+  const double bw = pw / std::max<std::size_t>(1, bars.size());
+  for (std::size_t i = 0; i < bars.size(); ++i) {
+    const double x = ml + i * bw + bw * 0.15;
+    const double y0 = Y(0), y1 = Y(bars[i].value);
+    o << "<rect class=\"bar\" x=\"" << num(x) << "\" y=\"" << num(std::min(y0, y1)) << "\" width=\"" << num(bw * 0.7)
+      << "\" height=\"" << num(std::abs(y1 - y0)) << "\" fill=\"" << bars[i].color << "\"/>\n";
+    o << "<text x=\"" << num(x + bw * 0.35) << "\" y=\"" << num(std::min(y0, y1) - 4)
+      << "\" font-size=\"11\" text-anchor=\"middle\">" << tick(bars[i].value) << "</text>\n";
+    o << "<text x=\"" << num(x + bw * 0.35) << "\" y=\"" << mt + ph + 14 << "\" font-size=\"11\" text-anchor=\"end\" "
+      << "transform=\"rotate(-30 " << num(x + bw * 0.35) << " " << mt + ph + 14 << ")\">" << escape(bars[i].label)
+      << "</text>\n";
+  }
+  o << "<line x1=\"" << ml << "\" x2=\"" << ml + pw << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0) << "\" stroke=\"#333\"/>\n";
+  o << "</svg>\n";
+  return o.str();
+}
+
+}  // namespace plsa::report

@@ -1,0 +1,86 @@
+// The plsa tool as a user runs it: files in, files out, clear errors.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    exe_ = std::getenv("PLSA_EXE") ? std::getenv("PLSA_EXE") : "";
+    ASSERT_TRUE(fs::exists(exe_)) << "PLSA_EXE does not name the plsa binary";
+    dir_ = fs::temp_directory_path() / ("plsa_cli_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  // Runs plsa with args; returns the exit code, stderr in err_.
+  int run(const std::string& args) {
+    const std::string err = (dir_ / "stderr.txt").string();
+    const int rc = std::system((exe_ + " " + args + " >" + (dir_ / "stdout.txt").string() + " 2>" + err).c_str());
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    err_ = ss.str();
+    return WEXITSTATUS(rc);
+  }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  static std::string slurp(const std::string& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+  std::string exe_, err_;
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(Cli, SimulateIsDeterministicPerSeed) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed 7 --out " + file("a.csv")), 0) << err_;
+  ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed 7 --out " + file("b.csv")), 0) << err_;
+  ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed 8 --out " + file("c.csv")), 0) << err_;
+  EXPECT_EQ(slurp(file("a.csv")), slurp(file("b.csv")));
+  EXPECT_NE(slurp(file("a.csv")), slurp(file("c.csv")));
+  ASSERT_EQ(run("simulate --experiment staircase1 --duration 30 --seed 7 --out " + file("s.lcmlog")), 0) << err_;
+  EXPECT_GT(fs::file_size(file("s.lcmlog")), 1000u);
+}
+
+TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
+  ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
+  ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;
+  ASSERT_EQ(run("identify --log " + file("train.csv") + " --out " + file("model.json")), 0) << err_;
+  EXPECT_NE(err_.find("[5/5] coefficients"), std::string::npos) << "progress lines missing: " << err_;
+  ASSERT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") +
+                " --horizons 40,80 --json " + file("fits.json") + " --csv " + file("pred.csv")),
+            0)
+      << err_;
+  const auto j = nlohmann::json::parse(slurp(file("fits.json")));
+  for (const std::string out : {"bend_deg", "steer_deg"})
+    for (const std::string key : {"fit_k40", "fit_k80", "fit_sim"}) {
+      ASSERT_TRUE(j["outputs"][out].contains(key)) << out << "." << key;
+      EXPECT_TRUE(j["outputs"][out][key].is_number());
+    }
+  EXPECT_NE(slurp(file("pred.csv")).find("bend_deg_k40"), std::string::npos);
+}
+
+TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
+  std::ofstream(file("bad.csv")) << "time_s,p_1\n0,0.1\n0.0125,oops\n";
+  EXPECT_EQ(run("identify --log " + file("bad.csv") + " --inputs p_1 --outputs p_1 --out " + file("m.json")), 1);
+  EXPECT_NE(err_.find("bad.csv:3: column 'p_1': 'oops' is not a number"), std::string::npos) << err_;
+  std::ofstream(file("ok.csv")) << "time_s,u\n0,0.1\n0.0125,0.2\n";
+  EXPECT_EQ(run("identify --log " + file("ok.csv") + " --out " + file("m.json")), 1);
+  EXPECT_NE(err_.find("no column 'p_1'"), std::string::npos) << err_;
+  std::ofstream(file("model.json")) << "{\"schema\": \"plsa.dio_pwl_obf\", \"version\": 1}";
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("ok.csv")), 1);
+  EXPECT_NE(err_.find("missing field 'sample_time_s'"), std::string::npos) << err_;
+  EXPECT_NE(run("simulate --experiment sine --out " + file("x.csv")), 0);
+}

@@ -1,0 +1,291 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "plsa/dio/dio_transform.hpp"
+#include "plsa/identify/arx.hpp"
+#include "plsa/identify/coefficient_fit.hpp"
+#include "plsa/identify/local_fit.hpp"
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/identify/pole_clustering.hpp"
+#include "plsa/identify/segmentation.hpp"
+#include "plsa/identify/validation.hpp"
+#include "plsa/model/model_file.hpp"
+#include "plsa/sim/experiment.hpp"
+#include "plsa/testing/alloc_guard.hpp"
+
+using namespace plsa;
+using C = std::complex<double>;
+
+TEST(PwlPartition, SwitchedLookupDirectionsAndWords) {
+  const PwlPartition p({0, 1}, {{0.225, 0.275}, {0.25}}, true, 1e-3);
+  EXPECT_EQ(p.cellCount(), 6);
+  EXPECT_EQ(p.regionCount(), 24);
+  DirectionState d;
+  const double u1[] = {0.2, 0.3};
+  EXPECT_EQ(p.region(u1, d), 0 + 1 * 3);
+  const double du[] = {-0.01, 0.0};
+  p.updateDirections(du, d);
+  EXPECT_EQ(d.dir[0], -1);
+  EXPECT_EQ(d.dir[1], 1);  // no move: keeps its direction
+  EXPECT_EQ(p.region(u1, d), 3 + 6 * 1);
+  EXPECT_EQ(p.describe(9, {"p_1", "p_2"}), "p_1 in [-inf, 0.225) falling, p_2 in [0.25, inf) rising");
+  EXPECT_THROW(PwlPartition({0}, {{0.3, 0.2}}), std::invalid_argument);
+}
+
+TEST(PwlPartition, InterpolatedBlendIsMultilinearAndClamped) {
+  const PwlPartition p = PwlPartition::interpolated({0, 1}, {{0.2, 0.3}, {0.1, 0.2, 0.4}});
+  ScheduleBlend b;
+  const double u[] = {0.225, 0.3};
+  p.blend(u, DirectionState{}, b);
+  ASSERT_EQ(b.count, 4);
+  double sum = 0, ux = 0, uy = 0;
+  for (int m = 0; m < b.count; ++m) {
+    sum += b.weight[static_cast<std::size_t>(m)];
+    const int r = b.region[static_cast<std::size_t>(m)];
+    ux += b.weight[static_cast<std::size_t>(m)] * std::vector<double>{0.2, 0.3}[static_cast<std::size_t>(p.cellOf(r, 0))];
+    uy += b.weight[static_cast<std::size_t>(m)] * std::vector<double>{0.1, 0.2, 0.4}[static_cast<std::size_t>(p.cellOf(r, 1))];
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-15);
+  EXPECT_NEAR(ux, 0.225, 1e-15);  // weights reproduce the point: multilinear
+  EXPECT_NEAR(uy, 0.3, 1e-15);
+  const double outside[] = {0.9, -1.0};
+  p.blend(outside, DirectionState{}, b);
+  ASSERT_EQ(b.count, 1);
+  EXPECT_EQ(b.region[0], 1 + 0 * 2);
+}
+
+TEST(PwlPartition, LookupAllocatesNothing) {
+  const PwlPartition s({0, 1}, {{0.225, 0.275, 0.325}, {0.225, 0.275, 0.325}}, true);
+  const PwlPartition i = PwlPartition::interpolated({0, 1}, {{0.2, 0.25, 0.3, 0.35}, {0.2, 0.25, 0.3, 0.35}}, true);
+  Eigen::Vector2d u(0.21, 0.33);
+  DirectionState d;
+  ScheduleBlend b;
+  int acc = 0;
+  plsa::testing::AllocGuard guard;
+  for (int k = 0; k < 10000; ++k) {
+    u(0) = 0.2 + 0.15 * std::sin(0.01 * k);
+    s.updateDirections(Eigen::Vector2d(std::cos(0.01 * k), 0.0), d);
+    acc += s.region(u, d);
+    i.blend(u, d, b);
+    acc += b.count;
+  }
+  EXPECT_EQ(guard.allocations(), 0u);
+  EXPECT_GT(acc, 0);
+}
+
+TEST(Segmentation, FindsOneInputStepsAndLevels) {
+  Eigen::MatrixXd ref = Eigen::MatrixXd::Zero(600, 2);
+  ref.block(100, 0, 500, 1).setConstant(0.2);
+  ref.block(200, 1, 400, 1).setConstant(0.25);
+  ref.block(300, 0, 300, 1).setConstant(0.3);
+  ref.block(400, 0, 200, 1).setConstant(0.35);
+  ref.block(400, 1, 200, 1).setConstant(0.3);  // both move at once: not a local step
+  const auto segs = segmentSteps(ref, 0.01, 50);
+  ASSERT_EQ(segs.size(), 3u);
+  EXPECT_EQ(segs[1].input, 1);
+  EXPECT_EQ(segs[1].begin, 200);
+  EXPECT_EQ(segs[1].end, 300);
+  EXPECT_TRUE(segs[2].rising());
+  EXPECT_DOUBLE_EQ(segs[2].to, 0.3);
+  const auto levels = referenceLevels(ref, 0.01, 50);
+  EXPECT_EQ(levels[0], (std::vector<double>{0.0, 0.2, 0.3, 0.35}));
+}
+
+TEST(LocalFit, RecoversFirstOrderPoleAndRejectsBadSegments) {
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  const double a = 0.95, b = 0.5;
+  Eigen::VectorXd u = Eigen::VectorXd::Constant(300, 1.0), y(300);
+  double prev = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    y(k) = a * prev + b * (k == 0 ? 0.0 : 1.0);
+    prev = y(k);
+  }
+  // y(k) responds to u from k-1; the segment starts at the step.
+  Eigen::VectorXd yk(300);
+  prev = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    yk(k) = a * prev + b * 1.0;
+    prev = yk(k);
+  }
+  for (int k = 0; k < 300; ++k) yk(k) += noise(rng);
+  const LocalFit f = fitLocalModel(u, yk, 0.0, 0.0);
+  ASSERT_TRUE(f.usable) << f.reason;
+  EXPECT_NEAR(f.poles[0].real(), a, 0.01);
+  EXPECT_NEAR(f.gain, b / (1 - a), 0.5);
+  // Pure noise: badly determined or too small, never passed on.
+  Eigen::VectorXd n(300);
+  for (int k = 0; k < 300; ++k) n(k) = noise(rng);
+  const LocalFit bad = fitLocalModel(u, n, 0.0, 0.0);
+  EXPECT_FALSE(bad.usable);
+  EXPECT_FALSE(bad.reason.empty());
+  // A diverging response: unstable pole reported.
+  Eigen::VectorXd g(300);
+  for (int k = 0; k < 300; ++k) g(k) = std::pow(1.01, k) - 1.0;
+  const LocalFit unstable = fitLocalModel(u, g, 0.0, 0.0);
+  EXPECT_FALSE(unstable.usable);
+  EXPECT_NE(unstable.reason.find("unstable"), std::string::npos) << unstable.reason;
+}
+
+TEST(PoleClustering, FkcmIsNoWorseThanFcmAndKmeansAndGlobalIsBest) {
+  std::mt19937 rng(8);
+  std::normal_distribution<double> n01;
+  int fkcm_wins = 0, cases = 0;
+  for (int seed = 0; seed < 6; ++seed) {
+    std::vector<C> poles;
+    for (double c : {0.86, 0.9, 0.95, 0.985})
+      for (int i = 0; i < 6; ++i) poles.emplace_back(std::min(0.998, c + 0.01 * n01(rng)), 0.0);
+    ClusteringOptions o;
+    o.centres = 3;
+    const auto f = fkcmClustering(poles, o);
+    const auto c = fuzzyCMeansClustering(poles, o);
+    const auto k = kMeansClustering(poles, o);
+    const auto g = globalRhoSearch(poles, o);
+    ASSERT_EQ(f.centres.size(), 3u);
+    EXPECT_NEAR(f.rho, decayRateOver(f.centres, poles), 1e-15);
+    EXPECT_LE(g.rho, f.rho * (1 + 1e-9));
+    EXPECT_LE(g.rho, std::min(c.rho, k.rho) * (1 + 1e-9));
+    ++cases;
+    if (f.rho <= std::min(c.rho, k.rho) * 1.0001) ++fkcm_wins;
+  }
+  EXPECT_GE(fkcm_wins, cases - 1) << "FKcM should match or beat FCM and k-means on rho";
+}
+
+TEST(PoleClustering, ComplexPairsAndBadInput) {
+  std::vector<C> poles = {C(0.8, 0.3), C(0.8, -0.3), C(0.82, 0.28), C(0.82, -0.28), C(0.9, 0), C(0.91, 0)};
+  ClusteringOptions o;
+  o.centres = 3;
+  o.complex_pairs = 1;
+  const auto f = fkcmClustering(poles, o);
+  ASSERT_EQ(f.centres.size(), 3u);
+  EXPECT_LT(f.rho, 0.05);
+  const PoleSet ok(f.centres);  // a valid, conjugate-closed pole set
+  EXPECT_EQ(ok.size(), 3);
+  EXPECT_THROW(fkcmClustering({C(1.2, 0)}, o), std::invalid_argument);
+  EXPECT_THROW(fkcmClustering({}, o), std::invalid_argument);
+  o.fuzziness = 1.0;
+  EXPECT_THROW(fkcmClustering(poles, o), std::invalid_argument);
+}
+
+namespace {
+// A DIO-PWL-OBF system with known coefficients, driven by a random staircase.
+DioPwlObfModel knownModel() {
+  DioPwlObfModel m;
+  m.inputs = {"u"};
+  m.outputs = {"y"};
+  m.poles = {{PoleSet::real({0.9, 0.7})}};
+  m.partition = PwlPartition({0}, {{0.5}});
+  Eigen::VectorXd lo(2), hi(2);
+  lo << 1.0, -0.3;
+  hi << 2.5, 0.4;
+  m.coefficients = {{lo}, {hi}};
+  m.region_fits = {RegionFit{}, RegionFit{}};
+  return m;
+}
+}  // namespace
+
+TEST(CoefficientFit, RecoversKnownCoefficientsAndReportsEmptyRegions) {
+  const DioPwlObfModel truth = knownModel();
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> level(0.0, 1.0);
+  Eigen::MatrixXd u(4000, 1);
+  for (int k = 0; k < 4000; ++k) u(k, 0) = k % 50 == 0 ? level(rng) : u(std::max(0, k - 1), 0);
+  const Eigen::MatrixXd dy = modelIncrements(truth, u);
+  Eigen::MatrixXd y = dioIntegrate(dy);
+  // Without regularisation, exact data give the exact coefficients.
+  DioPwlObfModel fit = truth;
+  CoefficientFitOptions exact;
+  exact.ridge = 0.0;
+  exact.pull_to_global = 0.0;
+  fitCoefficients(fit, {u}, {y}, exact);
+  EXPECT_LT((fit.coefficients[0][0] - truth.coefficients[0][0]).norm(), 1e-8);
+  EXPECT_LT((fit.coefficients[1][0] - truth.coefficients[1][0]).norm(), 1e-8);
+  // The default pull toward the global solution costs about a percent, no more.
+  DioPwlObfModel pulled = truth;
+  fitCoefficients(pulled, {u}, {y});
+  EXPECT_LT((pulled.coefficients[1][0] - truth.coefficients[1][0]).norm(), 0.02 * truth.coefficients[1][0].norm());
+  // Inputs confined below 0.5: the upper region has no data and must say so.
+  Eigen::MatrixXd u_low = u * 0.45;
+  Eigen::MatrixXd y_low = dioIntegrate(modelIncrements(truth, u_low));
+  DioPwlObfModel partial = truth;
+  const auto rep = fitCoefficients(partial, {u_low}, {y_low});
+  EXPECT_EQ(rep.regions_fallback, 1);
+  EXPECT_EQ(partial.region_fits[1].fallback_from, 0);
+  EXPECT_NE(rep.notes[0].find("too little data"), std::string::npos);
+  EXPECT_EQ(partial.coefficients[1][0], partial.coefficients[0][0]);
+  EXPECT_GT(partial.coefficients[1][0].norm(), 0.5);  // never silent zeros
+}
+
+TEST(Arx, RecoversAKnownArxSystem) {
+  std::mt19937 rng(6);
+  std::normal_distribution<double> n01;
+  const int T = 3000;
+  Eigen::MatrixXd u(T, 1), y(T, 1);
+  u(0, 0) = y(0, 0) = y(1, 0) = 0;
+  for (int k = 1; k < T; ++k) u(k, 0) = n01(rng);
+  for (int k = 2; k < T; ++k) y(k, 0) = 1.5 * y(k - 1, 0) - 0.6 * y(k - 2, 0) + 0.3 * u(k - 1, 0) + 0.1;
+  const ArxModel m = ArxModel::fit({u}, {y}, 2, 1, 0.0);
+  EXPECT_NEAR(m.theta(0, 0), 1.5, 1e-6);
+  EXPECT_NEAR(m.theta(1, 0), -0.6, 1e-6);
+  EXPECT_NEAR(m.theta(2, 0), 0.3, 1e-6);
+  EXPECT_NEAR(m.theta(3, 0), 0.1, 1e-6);
+  EXPECT_NEAR(fitOf(y.col(0), m.kStepAhead(u, y.col(0), 0, 20)), 100.0, 1e-6);
+  EXPECT_NEAR(fitOf(y.col(0), m.simulate(u, y.col(0), 0)), 100.0, 1e-6);
+}
+
+TEST(ModelFile, RoundTripsAndNamesWhatIsWrong) {
+  DioPwlObfModel m = knownModel();
+  m.poles = {{PoleSet({C(0.9, 0), C(0.6, 0.2), C(0.6, -0.2)})}};
+  m.coefficients = {{Eigen::Vector3d(1, 2, 3)}, {Eigen::Vector3d(-1, 0.5, 1.0 / 3.0)}};
+  const DioPwlObfModel back = modelFromJson(modelToJson(m));
+  EXPECT_EQ(back.coefficients[1][0], m.coefficients[1][0]);
+  EXPECT_EQ(back.poles[0][0].poles(), m.poles[0][0].poles());
+  EXPECT_EQ(back.partition.breakpoints(), m.partition.breakpoints());
+  auto error = [&](auto edit) {
+    nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+    edit(j);
+    try {
+      modelFromJson(j.dump(), "m.json");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error([](auto& j) { j.erase("sample_time_s"); }).find("missing field 'sample_time_s'"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["version"] = 7; }).find("version 7 is not supported"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["regions"][1]["coefficients"][0].push_back(1.0); }).find("expected 3"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["poles"][0][0][0] = {1.5, 0.0}; }).find(">= 1"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["partition"]["scheduling"] = "fuzzy"; }).find("'switched' or 'interpolated'"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["regions"][0]["coefficients"][0][0] = "x"; }).find("must be a number"), std::string::npos);
+}
+
+// The paper's protocol on the simulated actuator with its effects switched off:
+// what remains (pneumatics, nonlinear elongation, kinematics, noise) must be
+// predicted well. Floors sit well under the measured values (docs/identification.md).
+TEST(Pipeline, SimulatedActuatorWithoutEffects) {
+  sim::SimConfig c;
+  for (const auto& e : sim::effectNames()) c.setEffectEnabled(e, false);
+  sim::ExperimentOptions eo;
+  eo.seed = 2;
+  sim::Actuator a(c, 1), b(c, 2);
+  const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
+  const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({train}, IdentifyOptions{}, &rep);
+  EXPECT_EQ(rep.coefficients.regions_fitted, 16);
+  EXPECT_FALSE(rep.used_windows);
+  for (const auto& pp : rep.pairs)
+    for (const auto& p : pp.chosen.centres) {
+      EXPECT_GT(p.real(), 0.7);
+      EXPECT_LT(std::abs(p), 1.0);
+    }
+  const ValidationResult v = validateModel(m, val, {40, 80});
+  for (const auto& o : v.outputs) {
+    EXPECT_GT(o.fit_k.at(40), 93.0) << o.name;
+    EXPECT_GT(o.fit_k.at(80), 90.0) << o.name;
+  }
+}

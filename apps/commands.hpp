@@ -9,5 +9,6 @@ void addDemoCommand(CLI::App& app);
 void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
+void addCrossvalCommand(CLI::App& app);
 
 }  // namespace plsa::app

@@ -126,6 +126,22 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--scheduling", a->options.scheduling,
                  "interpolated (coefficients blended between grid nodes) or switched (the paper's PWL)")
       ->check(CLI::IsMember({"interpolated", "switched"}));
+  id->add_option_function<std::vector<std::string>>(
+        "--play",
+        [a](const std::vector<std::string>& sets) {
+          // Each value is one candidate set, widths separated by '/', e.g. 0/0.1/0.2.
+          a->options.play_candidates.clear();
+          for (const auto& s : sets) {
+            std::vector<double> set;
+            std::stringstream ss(s);
+            std::string item;
+            while (std::getline(ss, item, '/')) set.push_back(std::stod(item));
+            a->options.play_candidates.push_back(set);
+          }
+        },
+        "Candidate play channel sets, comma-separated, widths within a set by '/' as fractions of the input "
+        "range (e.g. 0,0/0.1/0.2; '0' alone is the paper's model)")
+      ->delimiter(',');
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

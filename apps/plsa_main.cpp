@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   plsa::app::addSimulateCommands(app);
   plsa::app::addSimNodeCommand(app);
   plsa::app::addIdentifyCommands(app);
+  plsa::app::addCrossvalCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

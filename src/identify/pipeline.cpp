@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/segmentation.hpp"
 
@@ -111,13 +112,23 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       }
     }
   }
-  rep.used_windows = rep.segments == 0;
+  // Outputs whose step fits gave no usable pole get theirs from local windows.
+  std::vector<bool> needs_windows(static_cast<std::size_t>(no), true);
+  for (const auto& pp : rep.pairs)
+    if (!pp.identified.empty()) needs_windows[static_cast<std::size_t>(pp.output)] = false;
+  rep.used_windows = std::find(needs_windows.begin(), needs_windows.end(), true) != needs_windows.end();
   if (rep.used_windows) {
+    for (auto& pp : rep.pairs)
+      if (needs_windows[static_cast<std::size_t>(pp.output)]) {
+        pp.rejected = 0;
+        pp.rejections.clear();
+      }
     // No staircase: MISO fits on local windows give each output's poles.
     const auto w = static_cast<Eigen::Index>(std::lround(o.window_s / dt));
     for (std::size_t r = 0; r < logs.size(); ++r)
       for (Eigen::Index b = 1; b + w <= U[r].rows(); b += w)
         for (int out_i = 0; out_i < no; ++out_i) {
+          if (!needs_windows[static_cast<std::size_t>(out_i)]) continue;
           // Fit y on each input separately is ill-posed with all moving: use the strongest input.
           Eigen::Index best = 0;
           double spread = -1;
@@ -148,7 +159,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     rejected += pp.rejected;
   }
   say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" +
-      (rep.used_windows ? " (none found: local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)" : "") +
+      (rep.used_windows ? " (no usable step responses: local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)" : "") +
       ", " + std::to_string(usable) + " poles kept, " + std::to_string(rejected) + " fits rejected (unstable or badly determined)");
 
   // Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
@@ -169,9 +180,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       PairPoles& pp = pairAt(in_i, out_i);
       const bool own = pp.identified.size() >= 2;
       const auto& src = own ? pp.identified : output_poles;
-      if (src.empty())
+      if (src.empty()) {
+        std::string why;
+        int shown = 0;
+        for (const auto& p : rep.pairs)
+          for (const auto& r : p.rejections)
+            if (p.output == out_i && shown++ < 3) why += "\n  rejected: " + r;
         throw std::runtime_error("identify: no usable local poles for output '" + o.outputs[static_cast<std::size_t>(out_i)] +
-                                 "'; the logs have no informative steps (see the rejected fits)");
+                                 "' (" + std::to_string(rep.segments) + " step segments, all fits rejected)" + why);
+      }
       pp.chosen = cluster(o.pole_method, src, co);
       model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
       say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] +
@@ -193,6 +210,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
   }
   const auto levels = referenceLevels(all_ref, o.step_threshold, min_len);
+  // A designed staircase holds a few reference levels; measured data that
+  // merely pauses holds hundreds: that is no grid, use quantiles instead.
+  constexpr std::size_t kMaxDesignedLevels = 8;
+  bool designed = !rep.used_windows;
+  for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
   require(o.scheduling == "interpolated" || o.scheduling == "switched",
           "identify: scheduling must be 'interpolated' or 'switched', not '" + o.scheduling + "'");
   const bool interpolated = o.scheduling == "interpolated";
@@ -200,10 +222,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     std::vector<double> lv;
     for (double l : levels[static_cast<std::size_t>(in_i)])
       if (l > o.step_threshold) lv.push_back(l);  // the vented level is not a reference pressure
-    if (!rep.used_windows && lv.size() >= 2) {
+    if (designed && lv.size() >= 2) {
       sched.push_back(in_i);
       bps.push_back(interpolated ? lv : midpoints(lv));
-    } else if (rep.used_windows) {
+    } else if (!designed) {
       const Eigen::VectorXd col = all_u.col(in_i);
       if (col.maxCoeff() - col.minCoeff() <= o.step_threshold) continue;
       std::vector<double> values(col.data(), col.data() + col.size());
@@ -222,6 +244,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   model.partition = interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
                                  : PwlPartition(sched, bps, o.direction_split);
+  constexpr int kMaxRegions = 4096;
+  if (model.partition.regionCount() > kMaxRegions)
+    throw std::invalid_argument("identify: the partition would have " + std::to_string(model.partition.regionCount()) +
+                                " regions (limit " + std::to_string(kMaxRegions) +
+                                "); use fewer --levels or scheduling inputs, or no direction split");
   model.input_min = all_u.minCoeff();
   model.input_max = all_u.maxCoeff();
   {
@@ -230,11 +257,80 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] + (interpolated ? " nodes" : " split at");
       for (double b : bps[i]) s += " " + std::to_string(b).substr(0, 6);
     }
+    if (!designed) s += " (quantile grid: the logs hold no designed reference levels)";
     if (o.direction_split) s += "; split by direction of change";
     say(s);
   }
 
-  // Step 7: coefficients.
+  // Step 7: coefficients, for each candidate set of play channels; keep the
+  // set whose model predicts the training data best k steps ahead.
+  require(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
+  std::vector<double> range(static_cast<std::size_t>(ni));
+  for (int in_i = 0; in_i < ni; ++in_i) range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
+  auto applyPlay = [&](const std::vector<double>& fractions) {
+    model.input_play.assign(static_cast<std::size_t>(ni), {});
+    for (int in_i = 0; in_i < ni; ++in_i)
+      for (double f : fractions) {
+        require(f >= 0 && std::isfinite(f), "identify: play widths must be finite and >= 0");
+        model.input_play[static_cast<std::size_t>(in_i)].push_back(f * range[static_cast<std::size_t>(in_i)]);
+      }
+  };
+  auto fmtSet = [](const std::vector<double>& f) {
+    std::string s = "{";
+    for (std::size_t i = 0; i < f.size(); ++i) s += (i ? "," : "") + std::to_string(f[i]).substr(0, 4);
+    return s + "}";
+  };
+  // Blocked cross-validation: every log cut into contiguous blocks; each block
+  // is scored by a model fitted on all the others.
+  require(o.play_selection_folds >= 2, "identify: play selection needs at least 2 folds");
+  std::vector<Eigen::MatrixXd> BU, BY;
+  std::vector<int> fold_of;
+  for (std::size_t r = 0; r < U.size(); ++r) {
+    const Eigen::Index len = U[r].rows() / o.play_selection_folds;
+    for (int f = 0; f < o.play_selection_folds; ++f) {
+      const Eigen::Index b = f * len, n = f + 1 == o.play_selection_folds ? U[r].rows() - b : len;
+      BU.push_back(U[r].middleRows(b, n));
+      BY.push_back(Y[r].middleRows(b, n));
+      fold_of.push_back(f);
+    }
+  }
+  double best_score = -INFINITY;
+  std::vector<double> best_set;
+  rep.play_scores.clear();
+  for (const auto& set : o.play_candidates) {
+    require(!set.empty(), "identify: a play channel set is empty");
+    applyPlay(set);
+    double score = 0.0;
+    int n = 0;
+    for (int f = 0; f < o.play_selection_folds; ++f) {
+      std::vector<Eigen::MatrixXd> TU, TY;
+      for (std::size_t b = 0; b < BU.size(); ++b)
+        if (fold_of[b] != f) {
+          TU.push_back(BU[b]);
+          TY.push_back(BY[b]);
+        }
+      fitCoefficients(model, TU, TY, o.coefficients);
+      for (std::size_t b = 0; b < BU.size(); ++b) {
+        if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
+        const Eigen::MatrixXd dy = modelIncrements(model, BU[b]);
+        for (int out_i = 0; out_i < no; ++out_i, ++n)
+          score += fitOf(BY[b].col(out_i), kStepAhead(BY[b].col(out_i), dy.col(out_i), o.play_selection_horizon));
+      }
+    }
+    score /= std::max(1, n);
+    rep.play_scores.emplace_back(set, score);
+    if (score > best_score + 1e-9) {
+      best_score = score;
+      best_set = set;
+    }
+  }
+  applyPlay(best_set);
+  if (o.play_candidates.size() > 1) {
+    std::string s = "[5/5] play channels (hysteresis memory): " + fmtSet(best_set) + " of each input's range; " +
+                    std::to_string(o.play_selection_horizon) + "-step fit on held-out blocks by set:";
+    for (const auto& [f, sc] : rep.play_scores) s += " " + fmtSet(f) + "->" + std::to_string(sc).substr(0, 5);
+    say(s);
+  }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");

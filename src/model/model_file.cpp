@@ -75,6 +75,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
     poles.push_back(r);
   }
   j["poles"] = poles;
+  j["input_play"] = m.input_play;
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -139,6 +140,11 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
       }
     }
     m.poles.push_back(std::move(row));
+  }
+  for (const auto& list : rd.array(rd.at(j, "input_play", ""), "input_play")) {
+    std::vector<double> widths;
+    for (const auto& v : rd.array(list, "input_play[]")) widths.push_back(rd.number(v, "input_play[][]"));
+    m.input_play.push_back(std::move(widths));
   }
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;

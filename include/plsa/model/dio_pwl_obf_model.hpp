@@ -4,6 +4,8 @@
 //   y_k = y_{k-1} + sum_j c_{l(k), o, j}^T [B_{o,j}(q) du_j]_k.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -24,6 +26,14 @@ struct RegionFit {
   std::string note;
 };
 
+/// Play (backlash) operator: the output follows the input only once it leaves
+/// a band of half-width r around it; r = 0 passes the input through. Placed
+/// before the OBF filters it gives the model the memory of the last reversal
+/// that hysteresis needs (docs/identification.md). Allocation-free.
+inline double playOperator(double input, double previous_output, double half_width) noexcept {
+  return std::clamp(previous_output, input - half_width, input + half_width);
+}
+
 struct DioPwlObfModel {
   static constexpr int kSchemaVersion = 1;
 
@@ -35,6 +45,12 @@ struct DioPwlObfModel {
   double input_min = -std::numeric_limits<double>::infinity();  ///< accepted input range
   double input_max = std::numeric_limits<double>::infinity();
   std::vector<std::vector<PoleSet>> poles;  ///< [output][input]
+  /// [input][channel] play half-widths: each input feeds one OBF bank per
+  /// channel, through a play operator of that width (0 = the raw input, as in
+  /// the paper). Several channels form an identified Prandtl-Ishlinskii operator.
+  std::vector<std::vector<double>> input_play;
+
+  int channelCount(int input) const { return static_cast<int>(input_play[static_cast<std::size_t>(input)].size()); }
   PwlPartition partition = PwlPartition::single();
   std::vector<std::vector<Eigen::VectorXd>> coefficients;  ///< [region][output]
   std::vector<RegionFit> region_fits;                       ///< [region]
@@ -43,7 +59,9 @@ struct DioPwlObfModel {
   int outputCount() const { return static_cast<int>(outputs.size()); }
   int regressorSize(int output) const {
     int n = 0;
-    for (const auto& p : poles[static_cast<std::size_t>(output)]) n += p.size();
+    for (std::size_t j = 0; j < poles[static_cast<std::size_t>(output)].size(); ++j)
+      n += poles[static_cast<std::size_t>(output)][j].size() *
+           (j < input_play.size() ? static_cast<int>(input_play[j].size()) : 1);
     return n;
   }
 
@@ -54,6 +72,11 @@ struct DioPwlObfModel {
     require(!outputs.empty(), "model: no outputs");
     require(input_min < input_max, "model: input_min must be below input_max");
     require(poles.size() == outputs.size(), "model: need one row of pole sets per output");
+    require(input_play.size() == inputs.size(), "model: need one input_play list per input");
+    for (const auto& ch : input_play) {
+      require(!ch.empty(), "model: every input needs at least one play channel (width 0 for the raw input)");
+      for (double r : ch) require(std::isfinite(r) && r >= 0, "model: input_play widths must be finite and >= 0");
+    }
     for (std::size_t o = 0; o < poles.size(); ++o) {
       require(poles[o].size() == inputs.size(),
               "model: output '" + outputs[o] + "' needs one pole set per input");
@@ -88,8 +111,18 @@ struct ModelRegressors {
   std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
 };
 
+/// One input through a play operator of half-width r, starting at rest
+/// (output = first sample).
+inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, double r) {
+  Eigen::VectorXd v = u;
+  if (r > 0.0)
+    for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = playOperator(u(k), v(k - 1), r);
+  return v;
+}
+
+/// `play` as in DioPwlObfModel::input_play; empty = one raw channel per input.
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
-                                       const Eigen::MatrixXd& u) {
+                                       const Eigen::MatrixXd& u, const std::vector<std::vector<double>>& play = {}) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -104,22 +137,29 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     if (k >= 2) partition.updateDirections(du, dir);
     partition.blend(u.row(prev), dir, out.schedule[static_cast<std::size_t>(k)]);
   }
+  require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
+  // Channel inputs: input j through each of its play widths.
+  std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
+  for (std::size_t j = 0; j < n_u; ++j) {
+    const std::vector<double> widths = play.empty() ? std::vector<double>{0.0} : play[j];
+    for (double r : widths) channels[j].push_back(playedInput(u.col(static_cast<Eigen::Index>(j)), r));
+  }
   for (const auto& row : poles) {
     require(row.size() == n_u, "modelRegressors: need one pole set per input");
     int width = 0;
-    for (const auto& p : row) width += p.size();
+    for (std::size_t j = 0; j < n_u; ++j) width += row[j].size() * static_cast<int>(channels[j].size());
     Eigen::MatrixXd phi(T, width);
     int offset = 0;
-    for (std::size_t j = 0; j < n_u; ++j) {
-      ObfBank<> bank(row[j]);
-      const int n = bank.size();
-      for (Eigen::Index k = 0; k < T; ++k) {
-        phi.block(k, offset, 1, n) = bank.state().transpose();
-        const double d = k == 0 ? 0.0 : u(k, static_cast<Eigen::Index>(j)) - u(k - 1, static_cast<Eigen::Index>(j));
-        bank.step(d);
+    for (std::size_t j = 0; j < n_u; ++j)
+      for (const Eigen::VectorXd& v : channels[j]) {
+        ObfBank<> bank(row[j]);
+        const int n = bank.size();
+        for (Eigen::Index k = 0; k < T; ++k) {
+          phi.block(k, offset, 1, n) = bank.state().transpose();
+          bank.step(k == 0 ? 0.0 : v(k) - v(k - 1));
+        }
+        offset += n;
       }
-      offset += n;
-    }
     out.phi.push_back(std::move(phi));
   }
   return out;
@@ -129,7 +169,7 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
-  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u);
+  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];

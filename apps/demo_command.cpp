@@ -68,7 +68,8 @@ void runDemo(const DemoOptions& opt) {
   const DioPwlObfModel model = identifyModel({train}, io_, &report);
   io_.progress = nullptr;
   io_.scheduling = "switched";
-  const DioPwlObfModel switched = identifyModel({train}, io_);
+  io_.play_candidates = {{0.0}};
+  const DioPwlObfModel paper = identifyModel({train}, io_);
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs), Yt = train.columnsOf(model.outputs);
   const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});
   const ArxModel arx = ArxModel::fit({Ut}, {Yt}, 4, 4);
@@ -78,17 +79,17 @@ void runDemo(const DemoOptions& opt) {
   const std::vector<int> horizons = {40, 80};
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
   const std::vector<ModelPredictions> preds = {
-      predictDio("DIO-PWL-OBF, interpolated", model, Uv, Yv, horizons),
-      predictDio("DIO-PWL-OBF, switched (paper)", switched, Uv, Yv, horizons),
-      predictDio("global linear OBF", linear, Uv, Yv, horizons), predictArx("linear ARX(4,4)", arx, Uv, Yv, horizons)};
+      predictDio("DIO-PWL-OBF (plsa)", model, Uv, Yv, horizons),
+      predictDio("DIO-PWL-OBF as in the paper", paper, Uv, Yv, horizons),
+      predictDio("global linear OBF (same poles, play)", linear, Uv, Yv, horizons), predictArx("linear ARX(4,4)", arx, Uv, Yv, horizons)};
   const auto fits = commonFits(preds, Yv);
   std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; all models scored on the same samples)\n");
-  std::printf("  %-30s %-10s %8s %8s %8s\n", "model", "output", "40-step", "80-step", "sim");
+  std::printf("  %-36s %-10s %8s %8s %8s\n", "model", "output", "40-step", "80-step", "sim");
   nlohmann::json j;
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o) {
       const auto& f = fits[m][o];
-      std::printf("  %-30s %-10s %8.1f %8.1f %8.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(), f.at(40),
+      std::printf("  %-36s %-10s %8.1f %8.1f %8.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(), f.at(40),
                   f.at(80), f.at(0));
       j["models"][preds[m].name][model.outputs[o]] = {{"fit_k40", f.at(40)}, {"fit_k80", f.at(80)}, {"fit_sim", f.at(0)}};
     }
@@ -116,7 +117,7 @@ void runDemo(const DemoOptions& opt) {
   html << "</table>";
   for (std::size_t o = 0; o < model.outputs.size(); ++o) {
     const auto& p = preds[0].by_output[o];
-    html << report::lineChart(model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, interpolated)", t,
+    html << report::lineChart(model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, plsa)", t,
                               {{"measured", Yv.col(static_cast<Eigen::Index>(o)), "#222", false},
                                {"40-step", p.at(40), "#1f77b4", false},
                                {"80-step", p.at(80), "#2ca02c", true},

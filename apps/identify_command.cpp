@@ -124,8 +124,9 @@ void addIdentifyCommands(CLI::App& app) {
       ->check(CLI::Range(1, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
   id->add_option("--scheduling", a->options.scheduling,
-                 "interpolated (coefficients blended between grid nodes) or switched (the paper's PWL)")
-      ->check(CLI::IsMember({"interpolated", "switched"}));
+                 "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes) or "
+                 "switched (the paper's PWL)")
+      ->check(CLI::IsMember({"auto", "interpolated", "switched"}));
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {

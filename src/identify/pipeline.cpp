@@ -198,8 +198,6 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
 
   // Partition: the experiment's reference levels, else a quantile grid.
-  std::vector<int> sched;
-  std::vector<std::vector<double>> bps;
   Eigen::MatrixXd all_ref(total, ni), all_u(total, ni);
   {
     Eigen::Index row = 0;
@@ -215,9 +213,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   constexpr std::size_t kMaxDesignedLevels = 8;
   bool designed = !rep.used_windows;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
-  require(o.scheduling == "interpolated" || o.scheduling == "switched",
-          "identify: scheduling must be 'interpolated' or 'switched', not '" + o.scheduling + "'");
-  const bool interpolated = o.scheduling == "interpolated";
+  require(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "auto",
+          "identify: scheduling must be 'auto', 'interpolated' or 'switched', not '" + o.scheduling + "'");
+  std::vector<bool> schedulings;  // interpolated?
+  if (o.scheduling != "switched") schedulings.push_back(true);
+  if (o.scheduling != "interpolated") schedulings.push_back(false);
+  std::vector<PwlPartition> partitions;
+  for (const bool interpolated : schedulings) {
+  std::vector<int> sched;
+  std::vector<std::vector<double>> bps;
   for (int in_i = 0; in_i < ni; ++in_i) {
     std::vector<double> lv;
     for (double l : levels[static_cast<std::size_t>(in_i)])
@@ -242,17 +246,19 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       }
     }
   }
-  model.partition = interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
-                                 : PwlPartition(sched, bps, o.direction_split);
+  partitions.push_back(interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
+                                    : PwlPartition(sched, bps, o.direction_split));
   constexpr int kMaxRegions = 4096;
-  if (model.partition.regionCount() > kMaxRegions)
-    throw std::invalid_argument("identify: the partition would have " + std::to_string(model.partition.regionCount()) +
+  if (partitions.back().regionCount() > kMaxRegions)
+    throw std::invalid_argument("identify: the partition would have " + std::to_string(partitions.back().regionCount()) +
                                 " regions (limit " + std::to_string(kMaxRegions) +
                                 "); use fewer --levels or scheduling inputs, or no direction split");
+  model.partition = partitions.back();
   model.input_min = all_u.minCoeff();
   model.input_max = all_u.maxCoeff();
   {
-    std::string s = "[4/5] partition (" + o.scheduling + "): " + std::to_string(model.partition.regionCount()) + " regions";
+    std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") + "): " +
+                    std::to_string(model.partition.regionCount()) + " regions";
     for (std::size_t i = 0; i < sched.size(); ++i) {
       s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] + (interpolated ? " nodes" : " split at");
       for (double b : bps[i]) s += " " + std::to_string(b).substr(0, 6);
@@ -260,6 +266,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     if (!designed) s += " (quantile grid: the logs hold no designed reference levels)";
     if (o.direction_split) s += "; split by direction of change";
     say(s);
+  }
   }
 
   // Step 7: coefficients, for each candidate set of play channels; keep the
@@ -296,9 +303,12 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   double best_score = -INFINITY;
   std::vector<double> best_set;
+  std::size_t best_partition = 0;
   rep.play_scores.clear();
+  for (std::size_t pi = 0; pi < partitions.size(); ++pi)
   for (const auto& set : o.play_candidates) {
     require(!set.empty(), "identify: a play channel set is empty");
+    model.partition = partitions[pi];
     applyPlay(set);
     double score = 0.0;
     int n = 0;
@@ -322,13 +332,21 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     if (score > best_score + 1e-9) {
       best_score = score;
       best_set = set;
+      best_partition = pi;
     }
   }
+  model.partition = partitions[best_partition];
   applyPlay(best_set);
-  if (o.play_candidates.size() > 1) {
-    std::string s = "[5/5] play channels (hysteresis memory): " + fmtSet(best_set) + " of each input's range; " +
-                    std::to_string(o.play_selection_horizon) + "-step fit on held-out blocks by set:";
-    for (const auto& [f, sc] : rep.play_scores) s += " " + fmtSet(f) + "->" + std::to_string(sc).substr(0, 5);
+  if (o.play_candidates.size() * partitions.size() > 1) {
+    const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;
+    std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
+                    "-step fit on held-out blocks: " + (chosen_interp ? "interpolated" : "switched") +
+                    " scheduling, play channels " + fmtSet(best_set) + " of each input's range. Scores:";
+    std::size_t i = 0;
+    for (const auto& [f, sc] : rep.play_scores) {
+      const bool interp = partitions[i++ / o.play_candidates.size()].scheduling() == Scheduling::kInterpolated;
+      s += std::string(" ") + (interp ? "I" : "S") + fmtSet(f) + "->" + std::to_string(sc).substr(0, 5);
+    }
     say(s);
   }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);

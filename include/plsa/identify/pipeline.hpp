@@ -26,8 +26,9 @@ struct IdentifyOptions {
   /// Levels per scheduling input when the log has no staircase (quantile grid).
   int quantile_levels = 3;
   bool direction_split = false;
-  /// "interpolated" (coefficients blended between grid nodes) or "switched" (paper).
-  std::string scheduling = "interpolated";
+  /// "interpolated" (coefficients blended between grid nodes), "switched"
+  /// (the paper's PWL) or "auto" (both tried, chosen by blocked cross-validation).
+  std::string scheduling = "auto";
   double step_threshold = 0.005;  ///< a reference change above this is a step
   double max_gap_factor = 2.5;    ///< tolerated sample-time gap (dropped samples)
   double window_s = 8.0;          ///< local windows when the log has no steps

@@ -1,0 +1,333 @@
+// The real-time n-step-ahead predictor of a DIO-PWL-OBF model (method notes):
+// update() once per tick with the measured inputs and outputs, predict() for
+// yhat(k+1..k+H) from the measured y(k) and planned inputs. After
+// construction neither allocates, locks, throws nor does I/O; they return
+// status codes. A new model (same structure) can be installed from another
+// thread while they run: it is adopted whole at the next update(), never torn.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/model/dio_pwl_obf_model.hpp"
+
+namespace plsa {
+
+/// Results of the real-time calls: 0 is OK, negative values name the problem.
+enum class PredictorStatus : int {
+  kOk = 0,
+  kNotFinite = -1,          ///< a NaN or Inf in the sample: rejected, state kept
+  kInputOutOfRange = -2,    ///< an input outside the accepted range: rejected, state kept
+  kTimeNotIncreasing = -3,  ///< time did not advance: rejected, state kept
+  kTimeGap = -4,            ///< time jumped: the filters restarted at rest at this sample
+  kHorizonTooLong = -5,     ///< horizon above the capacity set at construction
+  kBadShape = -6,           ///< plan or output buffer of the wrong size
+  kNotReady = -7,           ///< predict() before the first accepted sample
+};
+
+inline const char* toString(PredictorStatus s) {
+  switch (s) {
+    case PredictorStatus::kOk: return "ok";
+    case PredictorStatus::kNotFinite: return "sample has NaN or Inf";
+    case PredictorStatus::kInputOutOfRange: return "input outside the accepted range";
+    case PredictorStatus::kTimeNotIncreasing: return "time did not increase";
+    case PredictorStatus::kTimeGap: return "time gap: filters restarted";
+    case PredictorStatus::kHorizonTooLong: return "horizon above capacity";
+    case PredictorStatus::kBadShape: return "buffer of the wrong size";
+    case PredictorStatus::kNotReady: return "no sample yet";
+  }
+  return "unknown";
+}
+
+struct PredictorOptions {
+  int max_horizon = 400;         ///< capacity of predict(), preallocated
+  double input_margin = 0.25;    ///< accepted inputs: model range widened by this share of it
+  double max_gap_factor = 2.5;   ///< a time step above this many sample times is a gap
+  bool simulate = false;         ///< free simulation: the output is never reset to a measurement
+};
+
+/// NP: poles per filter bank when every bank has the same number (fixed-size
+/// fast path), or Eigen::Dynamic. update() and predict() belong to one
+/// (real-time) thread; install() may be called from any other.
+template <int NP = Eigen::Dynamic>
+class Predictor {
+ public:
+  using BankMatrix = Eigen::Matrix<double, NP, NP>;
+  using BankVector = Eigen::Matrix<double, NP, 1>;
+
+  /// Validates and preallocates everything; throws std::invalid_argument.
+  explicit Predictor(const DioPwlObfModel& model, const PredictorOptions& options = {})
+      : options_(checked(options)), active_(makeSlot(model, nullptr, options_.input_margin)),
+        shape_(std::make_unique<Slot>(*active_)) {
+    const Slot& s = *active_;
+    const auto nu = static_cast<Eigen::Index>(s.n_u), nc = static_cast<Eigen::Index>(s.play.size());
+    u_.setZero(nu);
+    du_.setZero(nu);
+    work_u_.setZero(nu);
+    vc_.setZero(nc);
+    work_vc_.setZero(nc);
+    delta_.setZero(nc);
+    x_.assign(s.A.size(), BankVector::Zero(s.bank_size));
+    work_x_ = x_;
+    tmp_.setZero(s.bank_size);
+    y_.setZero(s.n_y);
+    y_sim_.setZero(s.n_y);
+    work_y_.setZero(s.n_y);
+    dy_.setZero(s.n_y);
+  }
+
+  ~Predictor() {
+    delete active_;
+    delete pending_.exchange(nullptr);
+    delete retired_.exchange(nullptr);
+  }
+  Predictor(const Predictor&) = delete;
+  Predictor& operator=(const Predictor&) = delete;
+
+  int inputCount() const noexcept { return shape_->n_u; }
+  int outputCount() const noexcept { return shape_->n_y; }
+  int maxHorizon() const noexcept { return options_.max_horizon; }
+  /// The model in force on the real-time thread (0 the first; each install adds 1).
+  std::uint64_t modelId() const noexcept { return active_->id; }
+
+  /// One tick: time (s), measured inputs (n_u) and outputs (n_y), any
+  /// indexable vectors with size().
+  template <class U, class Y>
+  PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
+    adoptPendingModel();
+    const Slot& s = *active_;
+    if (static_cast<int>(u.size()) != s.n_u || static_cast<int>(y.size()) != s.n_y) return PredictorStatus::kBadShape;
+    if (!std::isfinite(time_s)) return PredictorStatus::kNotFinite;
+    for (int j = 0; j < s.n_u; ++j) {
+      if (!std::isfinite(u[j])) return PredictorStatus::kNotFinite;
+      if (u[j] < s.accept_min || u[j] > s.accept_max) return PredictorStatus::kInputOutOfRange;
+    }
+    for (int o = 0; o < s.n_y; ++o)
+      if (!std::isfinite(y[o])) return PredictorStatus::kNotFinite;
+    PredictorStatus status = PredictorStatus::kOk;
+    if (samples_ > 0) {
+      if (!(time_s > t_)) return PredictorStatus::kTimeNotIncreasing;
+      if (time_s - t_ > options_.max_gap_factor * s.sample_time) {
+        samples_ = 0;  // restart at rest from this sample, as after construction
+        status = PredictorStatus::kTimeGap;
+      }
+    }
+    if (samples_ == 0) {
+      for (auto& x : x_) x.setZero();
+      for (int j = 0; j < s.n_u; ++j) u_(j) = u[j];
+      for (std::size_t c = 0; c < s.play.size(); ++c) vc_(static_cast<Eigen::Index>(c)) = u_(s.channel_input[c]);
+      dir_ = DirectionState{};
+      for (int o = 0; o < s.n_y; ++o) y_(o) = y_sim_(o) = y[o];
+      t_ = time_s;
+      samples_ = 1;
+      return status;
+    }
+    if (options_.simulate) {  // the increment predicted for this sample, before it is consumed
+      increments(s, x_, u_, dir_, dy_);
+      y_sim_ += dy_;
+    }
+    for (int j = 0; j < s.n_u; ++j) {
+      du_(j) = u[j] - u_(j);
+      u_(j) = u[j];
+    }
+    s.partition.updateDirections(du_, dir_);
+    advance(s, x_, vc_, u_);
+    for (int o = 0; o < s.n_y; ++o) y_(o) = y[o];
+    t_ = time_s;
+    ++samples_;
+    return status;
+  }
+
+  /// yhat(k+1..k+horizon) into the first `horizon` rows of out (n_y columns),
+  /// from the measured y(k) (or the simulated output in simulation mode).
+  /// `plan` row h holds the planned input u(k+1+h); with fewer rows than
+  /// horizon-1 the last input is held (0 rows: hold u(k)).
+  PredictorStatus predict(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                          Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const Slot& s = *active_;
+    if (samples_ == 0) return PredictorStatus::kNotReady;
+    if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
+    if (out.rows() < horizon || out.cols() != s.n_y || (plan.rows() > 0 && plan.cols() != s.n_u))
+      return PredictorStatus::kBadShape;
+    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    for (std::size_t b = 0; b < x_.size(); ++b) work_x_[b] = x_[b];
+    work_u_ = u_;
+    work_vc_ = vc_;
+    DirectionState dir = dir_;
+    work_y_ = options_.simulate ? y_sim_ : y_;
+    for (int h = 0; h < horizon; ++h) {
+      increments(s, work_x_, work_u_, dir, dy_);
+      work_y_ += dy_;
+      out.row(h) = work_y_.transpose();
+      if (h + 1 == horizon) break;
+      if (h < plan.rows()) {
+        for (int j = 0; j < s.n_u; ++j) {
+          du_(j) = plan(h, j) - work_u_(j);
+          work_u_(j) = plan(h, j);
+        }
+        s.partition.updateDirections(du_, dir);
+      }
+      advance(s, work_x_, work_vc_, work_u_);
+    }
+    return PredictorStatus::kOk;
+  }
+
+  /// Installs a model of the same structure (inputs, outputs, pole counts,
+  /// play channels, partition) from any thread but the real-time one. It
+  /// allocates, and throws std::invalid_argument on a structure mismatch. The
+  /// real-time thread adopts it whole at its next update().
+  void install(const DioPwlObfModel& model) {
+    collectRetired();
+    Slot* next = makeSlot(model, shape_.get(), options_.input_margin);
+    next->id = next_id_.fetch_add(1, std::memory_order_relaxed) + 1;
+    delete pending_.exchange(next, std::memory_order_acq_rel);  // a newer model replaces one never adopted
+  }
+  /// Frees a model the real-time thread has let go of (install() does this too).
+  void collectRetired() { delete retired_.exchange(nullptr, std::memory_order_acq_rel); }
+
+ private:
+  // An immutable, fully built model.
+  struct Slot {
+    std::uint64_t id = 0;
+    int n_u = 0, n_y = 0;
+    int bank_size = 0;
+    double sample_time = 0.0;
+    double accept_min = 0.0, accept_max = 0.0;
+    PwlPartition partition;
+    std::vector<BankMatrix> A;
+    std::vector<BankVector> B;
+    std::vector<int> bank_channel;                  ///< bank -> play channel
+    std::vector<std::vector<int>> banks_of_output;  ///< banks in regressor order
+    std::vector<double> play;                       ///< per channel: half-width
+    std::vector<int> channel_input;                 ///< per channel: its input
+    std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
+  };
+
+  static PredictorOptions checked(const PredictorOptions& o) {
+    require(o.max_horizon >= 1, "Predictor: max_horizon must be >= 1");
+    require(o.input_margin >= 0, "Predictor: input_margin must be >= 0");
+    require(o.max_gap_factor > 1, "Predictor: max_gap_factor must be > 1");
+    return o;
+  }
+
+  // Builds a slot; with `shape`, requires the same structure.
+  static Slot* makeSlot(const DioPwlObfModel& m, const Slot* shape, double margin) {
+    m.validate();
+    auto s = std::make_unique<Slot>();
+    s->n_u = m.inputCount();
+    s->n_y = m.outputCount();
+    s->sample_time = m.sample_time_s;
+    const double span = m.input_max - m.input_min;
+    s->accept_min = std::isfinite(span) ? m.input_min - margin * span : -INFINITY;
+    s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
+    s->partition = m.partition;
+    std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
+    for (int j = 0; j < s->n_u; ++j)
+      for (double r : m.input_play[static_cast<std::size_t>(j)]) {
+        channels_of[static_cast<std::size_t>(j)].push_back(static_cast<int>(s->play.size()));
+        s->play.push_back(r);
+        s->channel_input.push_back(j);
+      }
+    s->banks_of_output.resize(static_cast<std::size_t>(s->n_y));
+    for (int o = 0; o < s->n_y; ++o)
+      for (int j = 0; j < s->n_u; ++j) {
+        const PoleSet& ps = m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)];
+        if (s->bank_size == 0) s->bank_size = ps.size();
+        require(ps.size() == s->bank_size, "Predictor: every filter bank needs the same number of poles");
+        if constexpr (NP != Eigen::Dynamic)
+          require(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
+                                       std::to_string(ps.size()) + " poles");
+        const ObfBank<> bank(ps);
+        for (int c : channels_of[static_cast<std::size_t>(j)]) {
+          s->A.push_back(bank.A());
+          s->B.push_back(bank.B());
+          s->bank_channel.push_back(c);
+          s->banks_of_output[static_cast<std::size_t>(o)].push_back(static_cast<int>(s->A.size()) - 1);
+        }
+      }
+    s->coef = m.coefficients;
+    if (shape) {
+      const bool same = shape->n_u == s->n_u && shape->n_y == s->n_y && shape->bank_size == s->bank_size &&
+                        shape->bank_channel == s->bank_channel && shape->coef.size() == s->coef.size() &&
+                        shape->partition.inputs() == s->partition.inputs() &&
+                        shape->partition.scheduling() == s->partition.scheduling() &&
+                        shape->partition.directionSplit() == s->partition.directionSplit();
+      require(same, "Predictor::install: the new model's structure differs from the running one");
+      s->accept_min = shape->accept_min;
+      s->accept_max = shape->accept_max;
+    }
+    return s.release();
+  }
+
+  // dy for the next sample from filter states x, scheduled on (u, dir).
+  void increments(const Slot& s, const std::vector<BankVector>& x, const Eigen::VectorXd& u,
+                  const DirectionState& dir, Eigen::VectorXd& dy) const noexcept {
+    ScheduleBlend blend;
+    s.partition.blend(u, dir, blend);
+    const Eigen::Index n = s.bank_size;
+    for (int o = 0; o < s.n_y; ++o) {
+      const auto& banks = s.banks_of_output[static_cast<std::size_t>(o)];
+      double acc = 0.0;
+      for (int m = 0; m < blend.count; ++m) {
+        const Eigen::VectorXd& c =
+            s.coef[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)];
+        double dot = 0.0;
+        for (std::size_t i = 0; i < banks.size(); ++i) {
+          const auto& xb = x[static_cast<std::size_t>(banks[i])];
+          if constexpr (NP != Eigen::Dynamic)
+            dot += c.template segment<NP>(static_cast<Eigen::Index>(i) * NP).dot(xb);
+          else
+            dot += c.segment(static_cast<Eigen::Index>(i) * n, n).dot(xb);
+        }
+        acc += blend.weight[static_cast<std::size_t>(m)] * dot;
+      }
+      dy(o) = acc;
+    }
+  }
+
+  // Plays every channel forward to u and steps each bank with its channel's change.
+  void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
+    for (std::size_t c = 0; c < s.play.size(); ++c) {
+      const auto cc = static_cast<Eigen::Index>(c);
+      const double next = playOperator(u(s.channel_input[c]), vc(cc), s.play[c]);
+      delta_(cc) = next - vc(cc);
+      vc(cc) = next;
+    }
+    for (std::size_t b = 0; b < x.size(); ++b) {
+      const double d = delta_(s.bank_channel[b]);
+      tmp_.noalias() = s.A[b] * x[b];
+      x[b] = tmp_ + s.B[b] * d;
+    }
+  }
+
+  void adoptPendingModel() noexcept {
+    if (retired_.load(std::memory_order_acquire) != nullptr) return;  // the last one is not collected yet
+    Slot* next = pending_.exchange(nullptr, std::memory_order_acq_rel);
+    if (!next) return;
+    retired_.store(active_, std::memory_order_release);
+    active_ = next;
+  }
+
+  PredictorOptions options_;
+  Slot* active_;                      // owned and read by the real-time thread only
+  std::unique_ptr<const Slot> shape_;  // structure reference for install(); never changes
+  std::atomic<Slot*> pending_{nullptr};
+  std::atomic<Slot*> retired_{nullptr};
+  std::atomic<std::uint64_t> next_id_{0};
+
+  // Real-time state, all sized at construction.
+  std::vector<BankVector> x_, work_x_;
+  BankVector tmp_;
+  Eigen::VectorXd u_, du_, work_u_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
+  DirectionState dir_;
+  double t_ = 0.0;
+  std::int64_t samples_ = 0;
+};
+
+}  // namespace plsa

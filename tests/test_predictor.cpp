@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <set>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include "plsa/eval/dio_prediction.hpp"
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/predict/predictor.hpp"
+#include "plsa/sim/experiment.hpp"
+#include "plsa/testing/alloc_guard.hpp"
+
+using namespace plsa;
+
+namespace {
+
+struct Data {
+  DioPwlObfModel switched, interpolated;
+  Eigen::MatrixXd u, y;  // validation run
+  double dt = 0.0125;
+};
+
+// A model identified on the simulator (all effects on) and a validation run.
+const Data& data() {
+  static const Data d = [] {
+    Data out;
+    sim::ExperimentOptions eo;
+    eo.hold_s = 2.5;
+    eo.joystick_duration_s = 20;
+    sim::Actuator a(sim::SimConfig{}, 1), b(sim::SimConfig{}, 2);
+    const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
+    const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
+    IdentifyOptions o;
+    o.play_candidates = {{0.1}};
+    o.scheduling = "switched";
+    out.switched = identifyModel({train}, o);
+    o.scheduling = "interpolated";
+    out.interpolated = identifyModel({train}, o);
+    out.u = val.columnsOf(out.switched.inputs);
+    out.y = val.columnsOf(out.switched.outputs);
+    return out;
+  }();
+  return d;
+}
+
+template <int NP>
+void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double dt) {
+  const int H = 40;
+  const Eigen::MatrixXd dy = modelIncrements(m, u);
+  std::vector<AlignedPrediction> offline;
+  for (int o = 0; o < m.outputCount(); ++o) offline.push_back(kStepAhead(y.col(o), dy.col(o), H));
+  Predictor<NP> p(m);
+  Eigen::MatrixXd out(H, m.outputCount());
+  double worst = 0.0;
+  int compared = 0;
+  for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
+    ASSERT_EQ(p.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk) << "t=" << t;
+    if (t % 7 != 0) continue;
+    ASSERT_EQ(p.predict(H, u.middleRows(t + 1, H - 1), out), PredictorStatus::kOk);
+    for (int o = 0; o < m.outputCount(); ++o)
+      worst = std::max(worst, std::abs(out(H - 1, o) - offline[static_cast<std::size_t>(o)].values(t)));
+    ++compared;
+  }
+  EXPECT_GT(compared, 100);
+  EXPECT_LT(worst, 1e-9) << "predictor and offline 40-step predictions differ";
+  // Free simulation agrees with the offline simulation too.
+  PredictorOptions so;
+  so.simulate = true;
+  Predictor<NP> s(m, so);
+  for (Eigen::Index t = 0; t + 1 < u.rows(); ++t) ASSERT_EQ(s.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk);
+  const Eigen::Index last = u.rows() - 2;
+  ASSERT_EQ(s.predict(1, u.middleRows(last + 1, 0), out), PredictorStatus::kOk);
+  for (int o = 0; o < m.outputCount(); ++o) {
+    const AlignedPrediction sim = simulate(y.col(o), dy.col(o));
+    EXPECT_NEAR(out(0, o), sim.values(last), 1e-9);
+  }
+}
+
+}  // namespace
+
+TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
+  const Data& d = data();
+  expectAgreement<5>(d.switched, d.u, d.y, d.dt);
+  expectAgreement<Eigen::Dynamic>(d.switched, d.u, d.y, d.dt);
+  expectAgreement<5>(d.interpolated, d.u, d.y, d.dt);
+}
+
+TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
+  const Data& d = data();
+  Predictor<5> p(d.interpolated);
+  Predictor<> q(d.switched);
+  Eigen::MatrixXd out(80, 2), plan(79, 3);
+  Eigen::Vector3d u;
+  Eigen::Vector2d y(40.0, 60.0);
+  std::set<int> regions_seen;
+  plsa::testing::AllocGuard guard;
+  for (int k = 0; k < 100000; ++k) {
+    // Sweep both scheduling inputs across the whole grid, rising and falling.
+    u << 0.275 + 0.09 * std::sin(0.003 * k), 0.275 + 0.09 * std::cos(0.0021 * k), 0.0;
+    y(0) += 0.01 * std::sin(0.01 * k);
+    plan.col(0).setConstant(u(0));
+    plan.col(1).setConstant(u(1));
+    plan.col(2).setZero();
+    if (p.update(k * d.dt, u, y) != PredictorStatus::kOk || q.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
+    if (p.predict(80, plan, out) != PredictorStatus::kOk || q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk)
+      FAIL();
+  }
+  const auto allocations = guard.allocations();
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_TRUE(out.allFinite());
+}
+
+TEST(Predictor, StatusCodesRejectBadSamplesAndKeepState) {
+  const Data& d = data();
+  Predictor<5> p(d.switched), clean(d.switched);
+  Eigen::MatrixXd out(40, 2), out_clean(40, 2);
+  EXPECT_EQ(p.predict(10, Eigen::MatrixXd(0, 3), out), PredictorStatus::kNotReady);
+  for (int t = 0; t < 200; ++t) {
+    ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+    ASSERT_EQ(clean.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+  }
+  Eigen::Vector3d bad_u = d.u.row(200).transpose();
+  bad_u(0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(p.update(200 * d.dt, bad_u, d.y.row(200)), PredictorStatus::kNotFinite);
+  bad_u(0) = 5.0;  // far outside any pressure the model knows
+  EXPECT_EQ(p.update(200 * d.dt, bad_u, d.y.row(200)), PredictorStatus::kInputOutOfRange);
+  EXPECT_EQ(p.update(150 * d.dt, d.u.row(200), d.y.row(200)), PredictorStatus::kTimeNotIncreasing);
+  Eigen::Vector2d bad_y = d.y.row(200).transpose();
+  bad_y(1) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(p.update(200 * d.dt, d.u.row(200), bad_y), PredictorStatus::kNotFinite);
+  // None of that changed the state: predictions equal a predictor that never saw it.
+  ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 3), out), PredictorStatus::kOk);
+  ASSERT_EQ(clean.predict(40, Eigen::MatrixXd(0, 3), out_clean), PredictorStatus::kOk);
+  EXPECT_EQ(out, out_clean);
+  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 3), out), PredictorStatus::kHorizonTooLong);
+  EXPECT_EQ(p.predict(41, Eigen::MatrixXd(0, 3), out), PredictorStatus::kBadShape);
+  EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Zero(4, 2), out), PredictorStatus::kBadShape);
+  // A time gap restarts the filters at rest: the next prediction is y itself.
+  EXPECT_EQ(p.update(300 * d.dt, d.u.row(300), d.y.row(300)), PredictorStatus::kTimeGap);
+  ASSERT_EQ(p.predict(3, Eigen::MatrixXd(0, 3), out), PredictorStatus::kOk);
+  EXPECT_EQ(out(2, 0), d.y(300, 0));
+  EXPECT_STREQ(toString(PredictorStatus::kTimeGap), "time gap: filters restarted");
+}
+
+TEST(Predictor, RejectsMismatchedModelsAtSetUp) {
+  const Data& d = data();
+  EXPECT_THROW(Predictor<4>{d.switched}, std::invalid_argument);
+  Predictor<5> p(d.switched);
+  EXPECT_THROW(p.install(d.interpolated), std::invalid_argument);  // other partition
+  PredictorOptions bad;
+  bad.max_horizon = 0;
+  EXPECT_THROW((Predictor<5>{d.switched, bad}), std::invalid_argument);
+}
+
+// Two threads: one ticks, one swaps models. Every prediction must equal that
+// of the model the predictor says it used, exactly: a torn model would not.
+TEST(Predictor, HotSwapUnderLoadIsNeverTorn) {
+  const Data& d = data();
+  DioPwlObfModel a = d.switched, b = d.switched;
+  for (auto& region : b.coefficients)
+    for (auto& c : region) c *= 1.5;
+  Predictor<5> live(a);
+  Predictor<5> ref_a(a), ref_b(b);
+  std::atomic<bool> done{false};
+  std::atomic<int> installs{0};
+  std::thread installer([&] {
+    for (int i = 1; !done.load(); ++i) {
+      live.install(i % 2 ? b : a);  // model id i: odd -> b
+      installs.fetch_add(1);
+      std::this_thread::yield();
+    }
+  });
+  Eigen::MatrixXd out(40, 2), ra(40, 2), rb(40, 2);
+  int mismatches = 0, used_b = 0;
+  const Eigen::Index T = d.u.rows();
+  for (int k = 0; k < 20000; ++k) {
+    const Eigen::Index t = k % T;
+    const double time = k * d.dt;
+    live.update(time, d.u.row(t), d.y.row(t));
+    ref_a.update(time, d.u.row(t), d.y.row(t));
+    ref_b.update(time, d.u.row(t), d.y.row(t));
+    live.predict(40, Eigen::MatrixXd(0, 3), out);
+    ref_a.predict(40, Eigen::MatrixXd(0, 3), ra);
+    ref_b.predict(40, Eigen::MatrixXd(0, 3), rb);
+    const bool is_b = live.modelId() % 2 == 1;
+    used_b += is_b;
+    if (out != (is_b ? rb : ra)) ++mismatches;
+  }
+  done.store(true);
+  installer.join();
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(installs.load(), 10);
+  EXPECT_GT(used_b, 0);
+}

@@ -65,6 +65,15 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   }
   EXPECT_GT(compared, 100);
   EXPECT_LT(worst, 1e-9) << "predictor and offline 40-step predictions differ";
+  // Holding the input (no plan) takes a faster path: it must equal a plan
+  // that repeats the last input.
+  Eigen::MatrixXd held(H, m.outputCount()), repeated(H, m.outputCount());
+  const Eigen::Index now = u.rows() - H - 1;
+  ASSERT_EQ(p.predict(H, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
+  const Eigen::MatrixXd same = u.row(now).replicate(H - 1, 1);
+  ASSERT_EQ(p.predict(H, same, repeated), PredictorStatus::kOk);
+  EXPECT_LT((held - repeated).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT((held.row(H - 1) - held.row(0)).norm(), 0.0);
   // Free simulation agrees with the offline simulation too.
   PredictorOptions so;
   so.simulate = true;

@@ -80,6 +80,7 @@ class Predictor {
     y_sim_.setZero(s.n_y);
     work_y_.setZero(s.n_y);
     dy_.setZero(s.n_y);
+    for (int o = 0; o < s.n_y; ++o) blended_.emplace_back(Eigen::VectorXd::Zero(s.coef[0][static_cast<std::size_t>(o)].size()));
   }
 
   ~Predictor() {
@@ -157,10 +158,11 @@ class Predictor {
       return PredictorStatus::kBadShape;
     if (!plan.allFinite()) return PredictorStatus::kNotFinite;
     for (std::size_t b = 0; b < x_.size(); ++b) work_x_[b] = x_[b];
+    work_y_ = options_.simulate ? y_sim_ : y_;
+    if (plan.rows() == 0) return predictHeld(s, horizon, out);
     work_u_ = u_;
     work_vc_ = vc_;
     DirectionState dir = dir_;
-    work_y_ = options_.simulate ? y_sim_ : y_;
     for (int h = 0; h < horizon; ++h) {
       increments(s, work_x_, work_u_, dir, dy_);
       work_y_ += dy_;
@@ -291,6 +293,42 @@ class Predictor {
     }
   }
 
+  // Held input: the schedule and so the blended coefficients stay fixed over
+  // the horizon, and the played inputs do not move (every delta is zero).
+  PredictorStatus predictHeld(const Slot& s, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    ScheduleBlend blend;
+    s.partition.blend(u_, dir_, blend);
+    for (int o = 0; o < s.n_y; ++o) {
+      Eigen::VectorXd& c = blended_[static_cast<std::size_t>(o)];
+      c.setZero();
+      for (int m = 0; m < blend.count; ++m)
+        c += blend.weight[static_cast<std::size_t>(m)] *
+             s.coef[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)];
+    }
+    const Eigen::Index n = s.bank_size;
+    for (int h = 0; h < horizon; ++h) {
+      for (int o = 0; o < s.n_y; ++o) {
+        const auto& banks = s.banks_of_output[static_cast<std::size_t>(o)];
+        const Eigen::VectorXd& c = blended_[static_cast<std::size_t>(o)];
+        double dot = 0.0;
+        for (std::size_t i = 0; i < banks.size(); ++i) {
+          if constexpr (NP != Eigen::Dynamic)
+            dot += c.template segment<NP>(static_cast<Eigen::Index>(i) * NP).dot(work_x_[static_cast<std::size_t>(banks[i])]);
+          else
+            dot += c.segment(static_cast<Eigen::Index>(i) * n, n).dot(work_x_[static_cast<std::size_t>(banks[i])]);
+        }
+        work_y_(o) += dot;
+      }
+      out.row(h) = work_y_.transpose();
+      if (h + 1 == horizon) break;
+      for (std::size_t b = 0; b < work_x_.size(); ++b) {
+        tmp_.noalias() = s.A[b] * work_x_[b];
+        work_x_[b] = tmp_;
+      }
+    }
+    return PredictorStatus::kOk;
+  }
+
   // Plays every channel forward to u and steps each bank with its channel's change.
   void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
     for (std::size_t c = 0; c < s.play.size(); ++c) {
@@ -325,6 +363,7 @@ class Predictor {
   std::vector<BankVector> x_, work_x_;
   BankVector tmp_;
   Eigen::VectorXd u_, du_, work_u_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
+  std::vector<Eigen::VectorXd> blended_;  // per output, for held-input predictions
   DirectionState dir_;
   double t_ = 0.0;
   std::int64_t samples_ = 0;

@@ -10,5 +10,6 @@ void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
+void addPredictCommand(CLI::App& app);
 
 }  // namespace plsa::app

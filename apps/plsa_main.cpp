@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   plsa::app::addSimNodeCommand(app);
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
+  plsa::app::addPredictCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

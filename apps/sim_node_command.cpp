@@ -5,14 +5,11 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "stop_signal.hpp"
 #include "plsa/lcm/sim_node.hpp"
 
 namespace plsa::app {
 namespace {
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void onSignal(int) { g_stop.store(true); }
 
 struct SimNodeArgs {
   lcm::SimNodeOptions node;
@@ -21,15 +18,11 @@ struct SimNodeArgs {
 
 void runSimNodeCommand(SimNodeArgs& a) {
   if (!a.config.empty()) a.node.config = sim::loadSimConfig(a.config);
-  struct sigaction sa {};
-  sa.sa_handler = onSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  const std::atomic<bool>& stop = stopOnSignals();
   std::fprintf(stderr, "plsa sim: %s at %.0f Hz, command timeout %.3f s, LCM %s\n",
                a.node.lockstep ? "lock-step" : "real time", a.node.config.sample_rate_hz,
                a.node.command_timeout_s, a.node.url.empty() ? "(LCM_DEFAULT_URL or LCM default)" : a.node.url.c_str());
-  const lcm::SimNodeStats s = lcm::runSimNode(a.node, g_stop);
+  const lcm::SimNodeStats s = lcm::runSimNode(a.node, stop);
   std::fprintf(stderr,
                "plsa sim: stopped, chambers vented; %lld states, %lld commands accepted, %lld rejected, %lld vent events\n",
                static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),

@@ -16,7 +16,14 @@
 #include <plsa_lcm/pressure_command_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include <plsa_lcm/prediction_t.hpp>
+
+#include "plsa/eval/fit.hpp"
+#include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"
+#include "plsa/model/model_file.hpp"
+#include "plsa/predict/predictor.hpp"
+#include "plsa/sim/experiment.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "support/child_process.hpp"
 
@@ -172,4 +179,82 @@ TEST_F(LcmSimTest, RealTimeModePublishesEverySampleAndStaysVentedWithoutCommands
     EXPECT_EQ(inbox_.states[k].vented, 1);
   }
   EXPECT_GT(wall, 0.9) << "real-time mode ran faster than real time";
+}
+
+// plsa sim and plsa predict as separate processes: the published 40-step
+// predictions match an in-process predictor exactly and track what the
+// simulator later does.
+TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
+  // A model of the default simulator, identified here.
+  plsa::sim::ExperimentOptions eo;
+  eo.hold_s = 2.5;
+  eo.joystick_duration_s = 20;
+  plsa::sim::Actuator rig(plsa::sim::SimConfig{}, 11);
+  const plsa::io::Log train = plsa::sim::runExperiment(rig, plsa::sim::gridExperiment(eo));
+  plsa::IdentifyOptions io;
+  io.play_candidates = {{0.1}};
+  const plsa::DioPwlObfModel model = plsa::identifyModel({train}, io);
+  const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
+  plsa::saveModel(model_path.string(), model);
+
+  std::vector<plsa_lcm::prediction_t> predictions;
+  struct Sink {
+    std::vector<plsa_lcm::prediction_t>* out;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::prediction_t* m) { out->push_back(*m); }
+  } sink{&predictions};
+  lcm_->subscribe("PLSA_PREDICTION", &Sink::on, &sink);
+  plsa::test::ChildProcess sim({exe_, "sim", "--lockstep", "--seed", "3", "--command-timeout", "2"});
+  plsa::test::ChildProcess pred({exe_, "predict", "--model", model_path.string(), "--horizons", "40"});
+  ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s));
+  std::this_thread::sleep_for(500ms);  // the predictor subscribes after loading the model
+
+  const plsa::sim::Experiment joy = plsa::sim::joystickExperiment(eo);
+  for (Eigen::Index k = 0; k < joy.commands.rows(); ++k) {
+    std::this_thread::sleep_for(2ms);
+    send({joy.commands(k, 0), joy.commands(k, 1), joy.commands(k, 2)}, k);
+    ASSERT_TRUE(waitFor([&] { return inbox_.states.size() > static_cast<std::size_t>(k); }, 2s)) << "no state " << k;
+  }
+  const std::size_t n_states = static_cast<std::size_t>(joy.commands.rows());
+  waitFor([&] { return !predictions.empty() && predictions.back().state_seq + 1 >= static_cast<std::int64_t>(n_states); }, 3s);
+  EXPECT_EQ(sim.stop(SIGTERM), 0);
+  EXPECT_EQ(pred.stop(SIGTERM), 0);
+  fs::remove(model_path);
+
+  // Reference: the same predictor in this process, fed the same states.
+  plsa::Predictor<> ref(model);
+  std::map<std::int64_t, Eigen::MatrixXd> expected;
+  Eigen::MatrixXd out(40, 2);
+  for (std::size_t k = 0; k < n_states; ++k) {
+    const auto& st = inbox_.states[k];
+    const Eigen::Vector3d u(st.pressure_bar[0], st.pressure_bar[1], st.pressure_bar[2]);
+    const Eigen::Vector2d y(st.bend_deg, st.steer_deg);
+    ASSERT_EQ(ref.update(static_cast<double>(st.utime) * 1e-6, u, y), plsa::PredictorStatus::kOk);
+    ASSERT_EQ(ref.predict(40, Eigen::MatrixXd(0, 3), out), plsa::PredictorStatus::kOk);
+    expected[st.seq] = out;
+  }
+  ASSERT_GT(predictions.size(), n_states * 95 / 100) << "predictions lost";
+  std::vector<double> predicted, actual;
+  for (const auto& p : predictions) {
+    ASSERT_EQ(p.horizon, 40);
+    ASSERT_EQ(p.output_names[0], "bend_deg");
+    const auto& want = expected.at(p.state_seq);
+    for (int h = 0; h < 40; ++h) EXPECT_EQ(p.trajectory[static_cast<std::size_t>(h)][0], want(h, 0));
+    const auto later = static_cast<std::size_t>(p.state_seq + 40);
+    if (p.state_seq >= joy.record_from && later < n_states) {
+      predicted.push_back(p.trajectory[39][0]);
+      actual.push_back(inbox_.states[later].bend_deg);
+    }
+  }
+  const double fit = plsa::nrmseFit(Eigen::Map<Eigen::VectorXd>(actual.data(), static_cast<Eigen::Index>(actual.size())),
+                                    Eigen::Map<Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
+  std::printf("40-step bend fit of the LCM predictor node against the simulator, held inputs: %.1f%%\n", fit);
+  EXPECT_GT(fit, 50.0);
+  // Its status names latency figures and no rejected samples.
+  bool saw = false;
+  for (const auto& s : inbox_.statuses)
+    if (s.source == "plsa predict") {
+      saw = true;
+      EXPECT_EQ(s.names[3], "latency_p50_us");
+    }
+  EXPECT_TRUE(saw);
 }

@@ -1,0 +1,167 @@
+#include "plsa/lcm/predictor_node.hpp"
+
+#include <poll.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include <lcm/lcm-cpp.hpp>
+#include <plsa_lcm/actuator_state_t.hpp>
+#include <plsa_lcm/prediction_t.hpp>
+#include <plsa_lcm/status_t.hpp>
+
+#include "plsa/predict/predictor.hpp"
+
+namespace plsa::lcm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Where a model column lives in an actuator-state message.
+struct Field {
+  enum Kind { kPressure, kCommand, kBend, kSteer } kind;
+  int index = 0;
+};
+
+Field fieldFor(const std::string& name) {
+  if (name == "bend_deg") return {Field::kBend, 0};
+  if (name == "steer_deg") return {Field::kSteer, 0};
+  for (const auto& [prefix, kind] : {std::pair{"p_", Field::kPressure}, std::pair{"cmd_", Field::kCommand}}) {
+    const std::string p = prefix;
+    if (name.rfind(p, 0) == 0) {
+      const int i = std::atoi(name.c_str() + p.size());
+      if (i >= 1 && i <= 3) return {kind, i - 1};
+    }
+  }
+  throw std::invalid_argument("plsa predict: model column '" + name +
+                              "' is not in actuator-state messages (p_1..3, cmd_1..3, bend_deg, steer_deg)");
+}
+
+double read(const plsa_lcm::actuator_state_t& m, const Field& f) {
+  switch (f.kind) {
+    case Field::kPressure: return f.index < m.n_chambers ? m.pressure_bar[static_cast<std::size_t>(f.index)] : NAN;
+    case Field::kCommand: return f.index < m.n_chambers ? m.command_bar[static_cast<std::size_t>(f.index)] : NAN;
+    case Field::kBend: return m.bend_deg;
+    case Field::kSteer: return m.steer_deg;
+  }
+  return NAN;
+}
+
+class PredictorNode {
+ public:
+  PredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& o, const std::atomic<bool>& stop)
+      : o_(o), stop_(stop), lcm_(o.url), predictor_(model, options(o)) {
+    if (!lcm_.good()) throw std::runtime_error("plsa predict: cannot open LCM");
+    for (const auto& n : model.inputs) in_.push_back(fieldFor(n));
+    for (const auto& n : model.outputs) out_.push_back(fieldFor(n));
+    names_ = model.outputs;
+    max_h_ = *std::max_element(o.horizons.begin(), o.horizons.end());
+    traj_.resize(max_h_, model.outputCount());
+    plan_.resize(0, model.inputCount());
+    u_.resize(model.inputCount());
+    y_.resize(model.outputCount());
+    latency_.assign(4096, 0.0);
+    sorted_.assign(4096, 0.0);
+    msgs_.resize(o.horizons.size());
+    for (std::size_t i = 0; i < o.horizons.size(); ++i) {
+      auto& p = msgs_[i];
+      p.sample_time_s = model.sample_time_s;
+      p.horizon = o.horizons[i];
+      p.n_outputs = model.outputCount();
+      p.output_names = names_;
+      p.trajectory.assign(static_cast<std::size_t>(p.horizon), std::vector<double>(static_cast<std::size_t>(p.n_outputs)));
+    }
+    lcm_.subscribe(o.state_channel, &PredictorNode::onState, this);
+  }
+
+  PredictorNodeStats run() {
+    auto next_status = Clock::now() + std::chrono::seconds(1);
+    const int fd = lcm_.getFileno();
+    while (!stop_.load()) {
+      pollfd pfd{fd, POLLIN, 0};
+      if (::poll(&pfd, 1, 100) > 0) lcm_.handle();
+      if (Clock::now() >= next_status) {
+        publishStatus();
+        next_status += std::chrono::seconds(1);
+      }
+    }
+    publishStatus();
+    return stats_;
+  }
+
+ private:
+  static PredictorOptions options(const PredictorNodeOptions& o) {
+    require(!o.horizons.empty(), "plsa predict: no horizons");
+    PredictorOptions p;
+    p.max_horizon = *std::max_element(o.horizons.begin(), o.horizons.end());
+    require(p.max_horizon >= 1, "plsa predict: horizons must be >= 1");
+    return p;
+  }
+
+  void onState(const ::lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
+    ++stats_.states;
+    const auto t0 = Clock::now();
+    for (std::size_t j = 0; j < in_.size(); ++j) u_(static_cast<Eigen::Index>(j)) = read(*m, in_[j]);
+    for (std::size_t o = 0; o < out_.size(); ++o) y_(static_cast<Eigen::Index>(o)) = read(*m, out_[o]);
+    const PredictorStatus st = predictor_.update(static_cast<double>(m->utime) * 1e-6, u_, y_);
+    if (st != PredictorStatus::kOk && st != PredictorStatus::kTimeGap) {
+      ++stats_.rejected;
+      last_problem_ = toString(st);
+      return;
+    }
+    if (predictor_.predict(max_h_, plan_, traj_) != PredictorStatus::kOk) return;
+    latency_[static_cast<std::size_t>(lat_n_++ % latency_.size())] =
+        std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    for (auto& p : msgs_) {
+      p.utime = m->utime;
+      p.state_seq = m->seq;
+      for (int h = 0; h < p.horizon; ++h)
+        for (int o = 0; o < p.n_outputs; ++o) p.trajectory[static_cast<std::size_t>(h)][static_cast<std::size_t>(o)] = traj_(h, o);
+      lcm_.publish(o_.prediction_channel, &p);
+      ++stats_.predictions;
+    }
+  }
+
+  void publishStatus() {
+    const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(lat_n_), latency_.size());
+    std::copy(latency_.begin(), latency_.begin() + static_cast<long>(n), sorted_.begin());
+    std::sort(sorted_.begin(), sorted_.begin() + static_cast<long>(n));
+    auto q = [&](double f) { return n ? sorted_[std::min(n - 1, static_cast<std::size_t>(f * static_cast<double>(n)))] : 0.0; };
+    plsa_lcm::status_t s;
+    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    s.source = "plsa predict";
+    s.state = plsa_lcm::status_t::OK;  // rejected samples are counted and named, not a fault
+    s.message = last_problem_.empty() ? "running" : "running; last rejected sample: " + last_problem_;
+    s.names = {"states", "predictions", "rejected", "latency_p50_us", "latency_p99_us", "latency_max_us"};
+    s.values = {static_cast<double>(stats_.states), static_cast<double>(stats_.predictions),
+                static_cast<double>(stats_.rejected), q(0.5), q(0.99), n ? sorted_[n - 1] : 0.0};
+    s.n_values = static_cast<int32_t>(s.names.size());
+    lcm_.publish(o_.status_channel, &s);
+  }
+
+  PredictorNodeOptions o_;
+  const std::atomic<bool>& stop_;
+  ::lcm::LCM lcm_;
+  Predictor<> predictor_;
+  std::vector<Field> in_, out_;
+  std::vector<std::string> names_;
+  int max_h_ = 1;
+  Eigen::MatrixXd traj_, plan_;
+  Eigen::VectorXd u_, y_;
+  std::vector<double> latency_, sorted_;
+  std::int64_t lat_n_ = 0;
+  std::vector<plsa_lcm::prediction_t> msgs_;
+  std::string last_problem_;
+  PredictorNodeStats stats_;
+};
+
+}  // namespace
+
+PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,
+                                    const std::atomic<bool>& stop) {
+  PredictorNode node(model, options, stop);
+  return node.run();
+}
+
+}  // namespace plsa::lcm

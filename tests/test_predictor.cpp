@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "plsa/eval/dio_prediction.hpp"
+#include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -17,7 +18,7 @@ using namespace plsa;
 namespace {
 
 struct Data {
-  DioPwlObfModel switched, interpolated;
+  DioPwlObfModel switched, interpolated, complex_poles;
   Eigen::MatrixXd u, y;  // validation run
   double dt = 0.0125;
 };
@@ -38,6 +39,11 @@ const Data& data() {
     out.switched = identifyModel({train}, o);
     o.scheduling = "interpolated";
     out.interpolated = identifyModel({train}, o);
+    // Conjugate pairs take the predictor's dense path instead of the cascade.
+    out.complex_poles = out.switched;
+    for (auto& row : out.complex_poles.poles)
+      for (auto& ps : row) ps = PoleSet({{0.93, 0.0}, {0.88, 0.08}, {0.88, -0.08}, {0.8, 0.0}, {0.6, 0.0}});
+    fitCoefficients(out.complex_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     out.u = val.columnsOf(out.switched.inputs);
     out.y = val.columnsOf(out.switched.outputs);
     return out;
@@ -94,6 +100,8 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   expectAgreement<5>(d.switched, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.switched, d.u, d.y, d.dt);
   expectAgreement<5>(d.interpolated, d.u, d.y, d.dt);
+  expectAgreement<5>(d.complex_poles, d.u, d.y, d.dt);
+  expectAgreement<Eigen::Dynamic>(d.complex_poles, d.u, d.y, d.dt);
 }
 
 TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {

@@ -14,6 +14,7 @@
 #include "plsa/identify/segmentation.hpp"
 #include "plsa/identify/validation.hpp"
 #include "plsa/model/model_file.hpp"
+#include "plsa/obf/decay_rate.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/testing/alloc_guard.hpp"
 
@@ -146,7 +147,7 @@ TEST(PoleClustering, FkcmIsNoWorseThanFcmAndKmeansAndGlobalIsBest) {
     const auto k = kMeansClustering(poles, o);
     const auto g = globalRhoSearch(poles, o);
     ASSERT_EQ(f.centres.size(), 3u);
-    EXPECT_NEAR(f.rho, decayRateOver(f.centres, poles), 1e-15);
+    EXPECT_NEAR(f.rho, decayRate(f.centres, poles), 1e-15);
     EXPECT_LE(g.rho, f.rho * (1 + 1e-9));
     EXPECT_LE(g.rho, std::min(c.rho, k.rho) * (1 + 1e-9));
     ++cases;

@@ -149,27 +149,17 @@ ClusteringResult finish(std::string method, const Layout& L, const std::vector<d
   ClusteringResult r;
   r.method = std::move(method);
   r.centres = expand(L, x);
-  r.rho = decayRateOver(r.centres, poles);
+  r.rho = decayRate(r.centres, poles);
   r.objective = objective;
   r.iterations = iterations;
   return r;
 }
 
 double rhoOf(const Layout& L, const std::vector<double>& x, const std::vector<C>& poles) {
-  return decayRateOver(expand(L, x), poles);
+  return decayRate(expand(L, x), poles);
 }
 
 }  // namespace
-
-double decayRateOver(const std::vector<C>& centres, const std::vector<C>& poles) {
-  double rho = 0.0;
-  for (const auto& p : poles) {
-    double prod = 1.0;
-    for (const auto& c : centres) prod *= poleDistance(p, c);
-    rho = std::max(rho, prod);
-  }
-  return rho;
-}
 
 ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOptions& o) {
   checkPoles(poles);

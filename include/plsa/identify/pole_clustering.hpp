@@ -29,10 +29,6 @@ struct ClusteringResult {
   int iterations = 0;
 };
 
-/// rho(centres, poles) = max_k prod_i |(z_k - v_i) / (1 - conj(v_i) z_k)|.
-double decayRateOver(const std::vector<std::complex<double>>& centres,
-                     const std::vector<std::complex<double>>& poles);
-
 /// Throws std::invalid_argument on no poles, unstable poles, or bad options.
 ClusteringResult fkcmClustering(const std::vector<std::complex<double>>& poles, const ClusteringOptions& o);
 ClusteringResult fuzzyCMeansClustering(const std::vector<std::complex<double>>& poles, const ClusteringOptions& o);

@@ -17,11 +17,10 @@ inline double poleDistance(std::complex<double> p, std::complex<double> xi) {
   return std::abs((p - xi) / (1.0 - std::conj(xi) * p));
 }
 
-/// rho(basis, true poles). Throws if either set is empty.
-inline double decayRate(const PoleSet& basis, const std::vector<std::complex<double>>& true_poles) {
-  require(!basis.empty(), "decayRate: the basis pole set is empty");
+/// rho over basis poles given as a plain list (pairs expanded), e.g. cluster centres.
+inline double decayRate(const std::vector<std::complex<double>>& xi, const std::vector<std::complex<double>>& true_poles) {
+  require(!xi.empty(), "decayRate: the basis pole set is empty");
   require(!true_poles.empty(), "decayRate: no true poles given");
-  const std::vector<std::complex<double>> xi = basis.poles();
   double rho = 0.0;
   for (const auto& p : true_poles) {
     double prod = 1.0;
@@ -29,6 +28,11 @@ inline double decayRate(const PoleSet& basis, const std::vector<std::complex<dou
     rho = std::max(rho, prod);
   }
   return rho;
+}
+
+/// rho(basis, true poles). Throws if either set is empty.
+inline double decayRate(const PoleSet& basis, const std::vector<std::complex<double>>& true_poles) {
+  return decayRate(basis.poles(), true_poles);
 }
 
 }  // namespace plsa

@@ -105,6 +105,7 @@ void runDemo(const DemoOptions& opt) {
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
        << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
        << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child,th:first-child{text-align:left}"
+       << "pre{white-space:pre-wrap;font-size:12px}"
        << "</style></head><body><h1>plsa demo: DIO-PWL-OBF on the simulated actuator</h1>"
        << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving at a "
        << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ".</p>"

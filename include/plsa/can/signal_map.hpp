@@ -1,0 +1,65 @@
+// CAN frame layouts as data: a signal map (JSON) names each message's id,
+// length, byte-aligned signals (offset, bits, endianness, scale, offset,
+// unit, sign) and optional rolling counter and checksum bytes. Decoding
+// checks length, checksum and counter continuity, and never allocates.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "plsa/can/can_transport.hpp"
+
+namespace plsa::can {
+
+struct Signal {
+  std::string name;
+  int byte = 0;        ///< first byte
+  int bits = 16;       ///< 8, 16 or 32
+  bool little_endian = true;
+  bool is_signed = false;
+  double scale = 1.0;  ///< physical = raw * scale + offset
+  double offset = 0.0;
+  std::string unit;
+};
+
+struct MessageLayout {
+  static constexpr int kMaxSignals = 8;
+  std::string name;
+  std::uint32_t id = 0;
+  int dlc = 8;
+  int counter_byte = -1;   ///< -1: none; a byte that increases by 1 (mod 256) per frame
+  int checksum_byte = -1;  ///< -1: none; (id low + id high + every other byte) mod 256
+  std::vector<Signal> signals;
+};
+
+/// Why a frame was rejected (kOk: accepted).
+enum class DecodeStatus { kOk, kWrongId, kWrongLength, kBadChecksum, kCounterGap };
+const char* toString(DecodeStatus s);
+
+struct SignalMap {
+  std::string profile;
+  std::vector<MessageLayout> messages;
+
+  const MessageLayout& message(const std::string& name) const;  ///< throws naming the known ones
+  /// Throws std::invalid_argument naming the message and field at fault
+  /// (overlaps, bytes beyond the DLC, bad widths, ids above 11 bits).
+  void validate() const;
+};
+
+SignalMap signalMapFromJson(const std::string& text, const std::string& source = "<json>");
+SignalMap loadSignalMap(const std::string& path);
+/// The documented default profile (docs/can.md): valves 0x100, sensors 0x200.
+SignalMap defaultSignalMap();
+
+/// Encodes physical values (one per signal, in order) with a counter value.
+/// Returns false if a value does not fit the signal's raw range.
+bool encodeFrame(const MessageLayout& m, const double* values, std::uint8_t counter, CanFrame& out) noexcept;
+
+/// Decodes into values (one per signal). `last_counter` carries the counter
+/// between calls (-1: none seen yet); a gap is reported after the values are
+/// written (the frame itself is intact, one was lost before it).
+DecodeStatus decodeFrame(const MessageLayout& m, const CanFrame& f, double* values, int& last_counter) noexcept;
+
+}  // namespace plsa::can

@@ -1,0 +1,195 @@
+#include "plsa/can/signal_map.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace plsa::can {
+namespace {
+
+std::uint8_t checksum(const MessageLayout& m, const CanFrame& f) {
+  unsigned sum = (m.id & 0xFF) + ((m.id >> 8) & 0xFF);
+  for (int i = 0; i < f.dlc; ++i)
+    if (i != m.checksum_byte) sum += f.data[static_cast<std::size_t>(i)];
+  return static_cast<std::uint8_t>(sum & 0xFF);
+}
+
+std::uint32_t readRaw(const Signal& s, const CanFrame& f) {
+  std::uint32_t raw = 0;
+  const int n = s.bits / 8;
+  for (int i = 0; i < n; ++i) {
+    const std::uint32_t byte = f.data[static_cast<std::size_t>(s.byte + (s.little_endian ? i : n - 1 - i))];
+    raw |= byte << (8 * i);
+  }
+  return raw;
+}
+
+}  // namespace
+
+const char* toString(DecodeStatus s) {
+  switch (s) {
+    case DecodeStatus::kOk: return "ok";
+    case DecodeStatus::kWrongId: return "wrong identifier";
+    case DecodeStatus::kWrongLength: return "wrong data length (DLC)";
+    case DecodeStatus::kBadChecksum: return "checksum mismatch";
+    case DecodeStatus::kCounterGap: return "counter gap (a frame was lost)";
+  }
+  return "unknown";
+}
+
+const MessageLayout& SignalMap::message(const std::string& name) const {
+  std::string known;
+  for (const auto& m : messages) {
+    if (m.name == name) return m;
+    known += (known.empty() ? "" : ", ") + m.name;
+  }
+  throw std::invalid_argument("signal map '" + profile + "' has no message '" + name + "' (has: " + known + ")");
+}
+
+void SignalMap::validate() const {
+  for (const auto& m : messages) {
+    const std::string where = "signal map '" + profile + "', message '" + m.name + "': ";
+    if (m.id > 0x7FF) throw std::invalid_argument(where + "id above 11 bits");
+    if (m.dlc < 0 || m.dlc > 8) throw std::invalid_argument(where + "dlc must be 0..8");
+    if (m.signals.empty() || m.signals.size() > static_cast<std::size_t>(MessageLayout::kMaxSignals))
+      throw std::invalid_argument(where + "needs 1 to 8 signals");
+    std::array<bool, 8> used{};
+    auto claim = [&](int byte, const std::string& what) {
+      if (byte < 0 || byte >= m.dlc) throw std::invalid_argument(where + what + " lies beyond the frame's " + std::to_string(m.dlc) + " bytes");
+      if (used[static_cast<std::size_t>(byte)]) throw std::invalid_argument(where + what + " overlaps another field at byte " + std::to_string(byte));
+      used[static_cast<std::size_t>(byte)] = true;
+    };
+    if (m.counter_byte >= 0) claim(m.counter_byte, "the counter");
+    if (m.checksum_byte >= 0) claim(m.checksum_byte, "the checksum");
+    for (const auto& s : m.signals) {
+      if (s.bits != 8 && s.bits != 16 && s.bits != 32)
+        throw std::invalid_argument(where + "signal '" + s.name + "': bits must be 8, 16 or 32 (byte-aligned signals)");
+      if (!(s.scale != 0.0) || !std::isfinite(s.scale) || !std::isfinite(s.offset))
+        throw std::invalid_argument(where + "signal '" + s.name + "': scale must be finite and non-zero");
+      for (int b = 0; b < s.bits / 8; ++b) claim(s.byte + b, "signal '" + s.name + "'");
+    }
+  }
+}
+
+SignalMap signalMapFromJson(const std::string& text, const std::string& source) {
+  using nlohmann::json;
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw std::invalid_argument(source + ": not valid JSON: " + e.what());
+  }
+  SignalMap map;
+  try {
+    map.profile = j.at("profile").get<std::string>();
+    for (const auto& jm : j.at("messages")) {
+      MessageLayout m;
+      m.name = jm.at("name").get<std::string>();
+      m.id = jm.at("id").get<std::uint32_t>();
+      m.dlc = jm.at("dlc").get<int>();
+      m.counter_byte = jm.value("counter_byte", -1);
+      m.checksum_byte = jm.value("checksum_byte", -1);
+      for (const auto& js : jm.at("signals")) {
+        Signal s;
+        s.name = js.at("name").get<std::string>();
+        s.byte = js.at("byte").get<int>();
+        s.bits = js.at("bits").get<int>();
+        const std::string endian = js.value("endian", "little");
+        if (endian != "little" && endian != "big")
+          throw std::invalid_argument("signal '" + s.name + "': endian must be 'little' or 'big'");
+        s.little_endian = endian == "little";
+        s.is_signed = js.value("signed", false);
+        s.scale = js.at("scale").get<double>();
+        s.offset = js.value("offset", 0.0);
+        s.unit = js.value("unit", "");
+        m.signals.push_back(s);
+      }
+      map.messages.push_back(std::move(m));
+    }
+  } catch (const json::exception& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  try {
+    map.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  return map;
+}
+
+SignalMap loadSignalMap(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path + ": cannot open the signal map");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return signalMapFromJson(ss.str(), path);
+}
+
+SignalMap defaultSignalMap() {
+  auto pressures = [](const std::string& prefix) {
+    std::vector<Signal> s;
+    for (int i = 0; i < 3; ++i) s.push_back({prefix + std::to_string(i + 1), 2 * i, 16, true, false, 1e-5, 0.0, "bar"});
+    return s;
+  };
+  SignalMap map{"plsa-default",
+                {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
+                 {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")}}};
+  map.validate();
+  return map;
+}
+
+bool encodeFrame(const MessageLayout& m, const double* values, std::uint8_t counter, CanFrame& out) noexcept {
+  out = CanFrame{};
+  out.id = m.id;
+  out.dlc = static_cast<std::uint8_t>(m.dlc);
+  for (std::size_t k = 0; k < m.signals.size(); ++k) {
+    const Signal& s = m.signals[k];
+    if (!std::isfinite(values[k])) return false;
+    const double raw = std::round((values[k] - s.offset) / s.scale);
+    const double lo = s.is_signed ? -std::ldexp(1.0, s.bits - 1) : 0.0;
+    const double hi = s.is_signed ? std::ldexp(1.0, s.bits - 1) - 1 : std::ldexp(1.0, s.bits) - 1;
+    if (raw < lo || raw > hi) return false;
+    const auto bits = static_cast<std::uint32_t>(static_cast<std::int64_t>(raw));
+    const int n = s.bits / 8;
+    for (int i = 0; i < n; ++i)
+      out.data[static_cast<std::size_t>(s.byte + (s.little_endian ? i : n - 1 - i))] =
+          static_cast<std::uint8_t>((bits >> (8 * i)) & 0xFF);
+  }
+  if (m.counter_byte >= 0) out.data[static_cast<std::size_t>(m.counter_byte)] = counter;
+  if (m.checksum_byte >= 0) out.data[static_cast<std::size_t>(m.checksum_byte)] = checksum(m, out);
+  return true;
+}
+
+DecodeStatus decodeFrame(const MessageLayout& m, const CanFrame& f, double* values, int& last_counter) noexcept {
+  if (f.id != m.id) return DecodeStatus::kWrongId;
+  if (f.dlc != m.dlc) return DecodeStatus::kWrongLength;
+  if (m.checksum_byte >= 0 && f.data[static_cast<std::size_t>(m.checksum_byte)] != checksum(m, f))
+    return DecodeStatus::kBadChecksum;
+  for (std::size_t k = 0; k < m.signals.size(); ++k) {
+    const Signal& s = m.signals[k];
+    std::uint32_t raw = readRaw(s, f);
+    double v;
+    if (s.is_signed) {
+      const std::uint32_t sign = 1u << (s.bits - 1);
+      v = (raw & sign) ? static_cast<double>(static_cast<std::int64_t>(raw) - (std::int64_t{1} << s.bits))
+                       : static_cast<double>(raw);
+    } else {
+      v = static_cast<double>(raw);
+    }
+    values[k] = v * s.scale + s.offset;
+  }
+  if (m.counter_byte >= 0) {
+    const int c = f.data[static_cast<std::size_t>(m.counter_byte)];
+    const bool gap = last_counter >= 0 && c != ((last_counter + 1) & 0xFF);
+    last_counter = c;
+    if (gap) return DecodeStatus::kCounterGap;
+  }
+  return DecodeStatus::kOk;
+}
+
+}  // namespace plsa::can

@@ -1,0 +1,253 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "plsa/can/valve_driver.hpp"
+#include "plsa/testing/alloc_guard.hpp"
+
+using namespace plsa::can;
+using namespace std::chrono_literals;
+
+namespace {
+
+std::string errorOf(const std::string& json) {
+  try {
+    signalMapFromJson(json, "map.json");
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+const char* kOneMessage = R"({"profile": "t", "messages": [{"name": "m", "id": 256, "dlc": 8, "counter_byte": 6,
+  "checksum_byte": 7, "signals": [%s]}]})";
+
+std::string withSignals(const std::string& signals) {
+  char buf[1024];
+  std::snprintf(buf, sizeof buf, kOneMessage, signals.c_str());
+  return buf;
+}
+
+// A pressure sensor on the bus: sends readings with a rolling counter.
+struct SensorNode {
+  std::unique_ptr<CanTransport> port;
+  const MessageLayout& layout;
+  std::uint8_t counter = 0;
+  void send(std::array<double, 3> p) {
+    CanFrame f;
+    ASSERT_TRUE(encodeFrame(layout, p.data(), counter++, f));
+    ASSERT_EQ(port->send(f), TransportStatus::kOk);
+  }
+};
+
+// What the valves were told, read back from the bus.
+std::array<double, 3> lastValveFrame(CanTransport& port, const MessageLayout& valve) {
+  std::array<double, 3> v{-1, -1, -1};
+  CanFrame f;
+  int counter = -1;
+  double values[8];
+  while (port.receive(f, 0us) == TransportStatus::kOk)
+    if (f.id == valve.id && decodeFrame(valve, f, values, counter) != DecodeStatus::kBadChecksum)
+      v = {values[0], values[1], values[2]};
+  return v;
+}
+
+}  // namespace
+
+TEST(SignalMap, DefaultProfileRoundTripsAndDetectsCorruption) {
+  const SignalMap map = defaultSignalMap();
+  const MessageLayout& m = map.message("pressure_sensor");
+  const double in[3] = {0.1, 0.25, 0.39999};
+  CanFrame f;
+  ASSERT_TRUE(encodeFrame(m, in, 5, f));
+  double out[8];
+  int counter = 4;
+  ASSERT_EQ(decodeFrame(m, f, out, counter), DecodeStatus::kOk);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(out[i], in[i], 5e-6);
+  for (int byte = 0; byte < 8; ++byte) {
+    CanFrame bad = f;
+    bad.data[static_cast<std::size_t>(byte)] ^= 0x10;
+    int c = 4;
+    EXPECT_EQ(decodeFrame(m, bad, out, c), DecodeStatus::kBadChecksum) << "byte " << byte;
+  }
+  CanFrame short_frame = f;
+  short_frame.dlc = 6;
+  EXPECT_EQ(decodeFrame(m, short_frame, out, counter), DecodeStatus::kWrongLength);
+  ASSERT_TRUE(encodeFrame(m, in, 7, f));  // counter 5 -> 7: one frame lost
+  counter = 5;
+  EXPECT_EQ(decodeFrame(m, f, out, counter), DecodeStatus::kCounterGap);
+  const double too_big[3] = {0.9, 0.0, 0.0};  // 0.9 bar does not fit 16 bits at 1e-5
+  EXPECT_FALSE(encodeFrame(m, too_big, 0, f));
+  EXPECT_THROW(map.message("heater"), std::invalid_argument);
+}
+
+TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
+  const SignalMap map = signalMapFromJson(withSignals(
+      R"({"name": "a", "byte": 0, "bits": 16, "endian": "big", "signed": true, "scale": 0.01, "offset": 1.0},
+         {"name": "b", "byte": 2, "bits": 32, "scale": 1.0})"));
+  const double in[2] = {-3.21, 123456.0};
+  CanFrame f;
+  ASSERT_TRUE(encodeFrame(map.messages[0], in, 0, f));
+  double out[8];
+  int c = -1;
+  ASSERT_EQ(decodeFrame(map.messages[0], f, out, c), DecodeStatus::kOk);
+  EXPECT_NEAR(out[0], -3.21, 1e-9);
+  EXPECT_EQ(out[1], 123456.0);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 5, "bits": 16, "scale": 1})")).find("overlaps"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 12, "scale": 1})")).find("8, 16 or 32"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 0})")).find("non-zero"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1, "endian": "middle"})")).find("endian"),
+            std::string::npos);
+  EXPECT_NE(errorOf(R"({"profile": "t"})").find("map.json"), std::string::npos);
+  EXPECT_NE(errorOf("{").find("not valid JSON"), std::string::npos);
+}
+
+TEST(SignalMap, DecodingAllocatesNothing) {
+  const SignalMap map = defaultSignalMap();
+  const MessageLayout& m = map.message("pressure_sensor");
+  CanFrame f;
+  const double in[3] = {0.1, 0.2, 0.3};
+  ASSERT_TRUE(encodeFrame(m, in, 0, f));
+  double out[8];
+  int c = -1;
+  int ok = 0;
+  plsa::testing::AllocGuard guard;
+  for (int k = 0; k < 10000; ++k) {
+    f.data[6] = static_cast<std::uint8_t>(k);
+    ok += decodeFrame(m, f, out, c) == DecodeStatus::kBadChecksum ? 0 : 1;
+  }
+  EXPECT_EQ(guard.allocations(), 0u);
+  EXPECT_EQ(ok, (10000 + 255) / 256);  // the checksum is right only where the counter byte is back at 0
+}
+
+TEST(InProcessBus, DeliversToOthersAndInjectsFaults) {
+  auto bus = InProcessBus::create();
+  auto a = bus->connect(), b = bus->connect(4);
+  CanFrame f;
+  f.id = 0x123;
+  f.dlc = 2;
+  f.data[0] = 0xAB;
+  ASSERT_EQ(a->send(f), TransportStatus::kOk);
+  CanFrame got;
+  ASSERT_EQ(b->receive(got, 10ms), TransportStatus::kOk);
+  EXPECT_EQ(got.data[0], 0xAB);
+  EXPECT_EQ(a->receive(got, 1ms), TransportStatus::kTimeout);  // not its own
+  for (int i = 0; i < 6; ++i) a->send(f);
+  EXPECT_EQ(b->stats().overflows, 2u);
+  while (b->receive(got, 0us) == TransportStatus::kOk) {
+  }
+  bus->setFaults({1.0, 0.0, 0us, 3});
+  a->send(f);
+  EXPECT_EQ(b->receive(got, 2ms), TransportStatus::kTimeout);
+  EXPECT_EQ(b->stats().dropped, 1u);
+  bus->setFaults({0.0, 1.0, 0us, 3});
+  a->send(f);
+  ASSERT_EQ(b->receive(got, 10ms), TransportStatus::kOk);
+  EXPECT_NE(got.data, f.data);
+  bus->setFaults({0.0, 0.0, 20ms, 3});
+  a->send(f);
+  EXPECT_EQ(b->receive(got, 2ms), TransportStatus::kTimeout);  // delayed, not lost
+  EXPECT_EQ(b->receive(got, 100ms), TransportStatus::kOk);
+  bus->setBusState(BusState::kBusOff);
+  EXPECT_EQ(a->send(f), TransportStatus::kBusOff);
+  f.dlc = 9;
+  EXPECT_EQ(a->send(f), TransportStatus::kBadFrame);
+}
+
+class DriverTest : public ::testing::Test {
+ protected:
+  std::shared_ptr<InProcessBus> bus = InProcessBus::create();
+  SignalMap map = defaultSignalMap();
+  std::unique_ptr<CanTransport> driver_port = bus->connect(), valves = bus->connect();
+  SensorNode sensor{bus->connect(), map.message("pressure_sensor")};
+  SafetyLimits limits;
+  ValveDriver driver{*driver_port, map, limits, 0.0};
+  const MessageLayout& valve = map.message("valve_command");
+
+  // One 10 ms tick with a fresh reading and (optionally) a command.
+  std::array<double, 3> tick(double t, const std::array<double, 3>* cmd) {
+    sensor.send({0.1, 0.1, 0.1});
+    if (cmd) driver.command(t, *cmd);
+    driver.tick(t);
+    return lastValveFrame(*valves, valve);
+  }
+};
+
+TEST_F(DriverTest, ClampsAndRateLimitsSetPoints) {
+  const std::array<double, 3> cmd{0.9, 0.1, -0.5};
+  auto out = tick(0.01, &cmd);
+  EXPECT_NEAR(out[0], 0.02, 1e-5);  // 2 bar/s for 10 ms
+  EXPECT_NEAR(out[2], 0.0, 1e-9);
+  for (int k = 2; k <= 40; ++k) out = tick(0.01 * k, &cmd);
+  EXPECT_NEAR(out[0], 0.4, 1e-5);  // clamped to the maximum
+  EXPECT_NEAR(out[1], 0.1, 1e-5);
+  EXPECT_EQ(driver.fault(), DriverFault::kNone);
+  EXPECT_NEAR(driver.pressures()[0], 0.1, 1e-5);
+  EXPECT_FALSE(driver.command(0.41, {std::nan(""), 0, 0}));
+  EXPECT_EQ(driver.counters().rejected_commands, 1u);
+}
+
+TEST_F(DriverTest, StaleSensorVentsAndLatchesUntilCleared) {
+  const std::array<double, 3> cmd{0.3, 0.3, 0.3};
+  for (int k = 1; k <= 30; ++k) tick(0.01 * k, &cmd);
+  // The sensor falls silent: within the timeout the driver vents.
+  for (int k = 31; k <= 45; ++k) {
+    driver.command(0.01 * k, cmd);
+    driver.tick(0.01 * k);
+  }
+  EXPECT_EQ(driver.fault(), DriverFault::kStaleSensor);
+  EXPECT_EQ(lastValveFrame(*valves, valve), (std::array<double, 3>{0, 0, 0}));
+  // Readings return: still vented until explicitly cleared.
+  auto out = tick(0.46, &cmd);
+  EXPECT_EQ(driver.fault(), DriverFault::kStaleSensor);
+  EXPECT_EQ(out, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_TRUE(driver.clearFault(0.46));
+  out = tick(0.47, &cmd);
+  EXPECT_NEAR(out[0], 0.02, 1e-5);  // ramps up again under the rate limit
+  EXPECT_STREQ(toString(DriverFault::kStaleSensor), "no valid pressure reading within the sensor timeout: vented");
+}
+
+TEST_F(DriverTest, CommandTimeoutVentsAndCannotBeClearedWhileStale) {
+  const std::array<double, 3> cmd{0.2, 0, 0};
+  for (int k = 1; k <= 20; ++k) tick(0.01 * k, &cmd);
+  std::array<double, 3> out{};
+  for (int k = 21; k <= 50; ++k) out = tick(0.01 * k, nullptr);  // commands stop
+  EXPECT_EQ(driver.fault(), DriverFault::kCommandTimeout);
+  EXPECT_EQ(out, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_FALSE(driver.clearFault(0.5));  // commands are still stale
+  driver.command(0.5, cmd);
+  EXPECT_TRUE(driver.clearFault(0.5));
+}
+
+TEST_F(DriverTest, BusOffAndErrorPassiveVentWithTheirReason) {
+  const std::array<double, 3> cmd{0.2, 0, 0};
+  for (int k = 1; k <= 10; ++k) tick(0.01 * k, &cmd);
+  bus->setBusState(BusState::kErrorPassive);
+  tick(0.11, &cmd);
+  EXPECT_EQ(driver.fault(), DriverFault::kErrorPassive);
+  EXPECT_FALSE(driver.clearFault(0.11));
+  bus->setBusState(BusState::kActive);
+  EXPECT_TRUE(driver.clearFault(0.11));
+  bus->setBusState(BusState::kBusOff);
+  driver.tick(0.12);
+  EXPECT_EQ(driver.fault(), DriverFault::kBusOff);
+  EXPECT_GE(driver.counters().send_failures, 1u);
+}
+
+TEST_F(DriverTest, CorruptSensorFramesAreCountedNotUsed) {
+  const std::array<double, 3> cmd{0.2, 0, 0};
+  tick(0.01, &cmd);
+  bus->setFaults({0.0, 1.0, 0us, 9});
+  for (int k = 2; k <= 20; ++k) tick(0.01 * k, &cmd);
+  EXPECT_GT(driver.counters().bad_checksum, 10u);
+  EXPECT_EQ(driver.fault(), DriverFault::kStaleSensor);  // no valid reading for 0.19 s
+}
+
+TEST_F(DriverTest, ShutdownVents) {
+  const std::array<double, 3> cmd{0.3, 0.3, 0};
+  for (int k = 1; k <= 30; ++k) tick(0.01 * k, &cmd);
+  driver.shutdown(0.31);
+  EXPECT_EQ(driver.fault(), DriverFault::kShutdown);
+  EXPECT_EQ(lastValveFrame(*valves, valve), (std::array<double, 3>{0, 0, 0}));
+}

@@ -1,11 +1,12 @@
 #include "plsa/can/signal_map.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "plsa/core/text_file.hpp"
 
 namespace plsa::can {
 namespace {
@@ -123,11 +124,7 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
 }
 
 SignalMap loadSignalMap(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path + ": cannot open the signal map");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return signalMapFromJson(ss.str(), path);
+  return signalMapFromJson(readTextFile(path, "signal map"), path);
 }
 
 SignalMap defaultSignalMap() {

@@ -1,10 +1,11 @@
 #include "plsa/model/model_file.hpp"
 
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "plsa/core/text_file.hpp"
 
 namespace plsa {
 namespace {
@@ -205,11 +206,7 @@ void saveModel(const std::string& path, const DioPwlObfModel& model) {
 }
 
 DioPwlObfModel loadModel(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path + ": cannot open the model file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return modelFromJson(ss.str(), path);
+  return modelFromJson(readTextFile(path, "model file"), path);
 }
 
 }  // namespace plsa

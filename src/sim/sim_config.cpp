@@ -2,11 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "plsa/core/text_file.hpp"
 
 namespace plsa::sim {
 namespace {
@@ -182,11 +183,7 @@ SimConfig simConfigFromJson(const std::string& text, const std::string& source) 
 }
 
 SimConfig loadSimConfig(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path + ": cannot open the simulator configuration");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return simConfigFromJson(ss.str(), path);
+  return simConfigFromJson(readTextFile(path, "simulator configuration"), path);
 }
 
 std::string simConfigToJson(const SimConfig& config) {

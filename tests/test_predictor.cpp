@@ -18,7 +18,7 @@ using namespace plsa;
 namespace {
 
 struct Data {
-  DioPwlObfModel switched, interpolated, complex_poles;
+  DioPwlObfModel switched, interpolated, complex_poles, repeated_poles, close_poles;
   Eigen::MatrixXd u, y;  // validation run
   double dt = 0.0125;
 };
@@ -44,6 +44,16 @@ const Data& data() {
     for (auto& row : out.complex_poles.poles)
       for (auto& ps : row) ps = PoleSet({{0.93, 0.0}, {0.88, 0.08}, {0.88, -0.08}, {0.8, 0.0}, {0.6, 0.0}});
     fitCoefficients(out.complex_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    // A repeated pole has no eigenbasis; nearly equal ones an ill-conditioned
+    // one: both must keep the held path on the cascade.
+    out.repeated_poles = out.switched;
+    for (auto& row : out.repeated_poles.poles)
+      for (auto& ps : row) ps = PoleSet({{0.9, 0.0}, {0.9, 0.0}, {0.8, 0.0}, {0.6, 0.0}, {0.3, 0.0}});
+    fitCoefficients(out.repeated_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    out.close_poles = out.repeated_poles;
+    for (auto& row : out.close_poles.poles)
+      for (auto& ps : row) ps = PoleSet({{0.9, 0.0}, {0.900001, 0.0}, {0.8, 0.0}, {0.6, 0.0}, {0.3, 0.0}});
+    fitCoefficients(out.close_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     out.u = val.columnsOf(out.switched.inputs);
     out.y = val.columnsOf(out.switched.outputs);
     return out;
@@ -71,15 +81,24 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   }
   EXPECT_GT(compared, 100);
   EXPECT_LT(worst, 1e-9) << "predictor and offline 40-step predictions differ";
-  // Holding the input (no plan) takes a faster path: it must equal a plan
-  // that repeats the last input.
-  Eigen::MatrixXd held(H, m.outputCount()), repeated(H, m.outputCount());
-  const Eigen::Index now = u.rows() - H - 1;
-  ASSERT_EQ(p.predict(H, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
-  const Eigen::MatrixXd same = u.row(now).replicate(H - 1, 1);
-  ASSERT_EQ(p.predict(H, same, repeated), PredictorStatus::kOk);
-  EXPECT_LT((held - repeated).cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_GT((held.row(H - 1) - held.row(0)).norm(), 0.0);
+  // Holding the input (no plan) takes a faster path (modal when the bases
+  // allow): it must equal a plan that repeats the last input, at every
+  // horizon up to the longest, all along the run.
+  const int HL = 400;
+  Predictor<NP> q(m, PredictorOptions{});
+  Eigen::MatrixXd held(HL, m.outputCount()), repeated(HL, m.outputCount());
+  double worst_held = 0.0, moved = 0.0;
+  for (Eigen::Index t = 0; t < u.rows(); ++t) {
+    ASSERT_EQ(q.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk);
+    if (t % 97 != 5) continue;
+    ASSERT_EQ(q.predict(HL, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
+    const Eigen::MatrixXd same = u.row(t).replicate(HL - 1, 1);
+    ASSERT_EQ(q.predict(HL, same, repeated), PredictorStatus::kOk);
+    worst_held = std::max(worst_held, (held - repeated).cwiseAbs().maxCoeff());
+    moved = std::max(moved, (held.row(HL - 1) - held.row(0)).norm());
+  }
+  EXPECT_LT(worst_held, 1e-9) << "held-input path and a repeated plan differ";
+  EXPECT_GT(moved, 1e-3);
   // Free simulation agrees with the offline simulation too.
   PredictorOptions so;
   so.simulate = true;
@@ -97,11 +116,19 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
 
 TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   const Data& d = data();
+  // The identified models have distinct real poles: the held path is modal.
+  EXPECT_TRUE(Predictor<5>(d.switched).heldPathIsModal());
+  EXPECT_TRUE(Predictor<>(d.interpolated).heldPathIsModal());
+  EXPECT_FALSE(Predictor<5>(d.complex_poles).heldPathIsModal());
+  EXPECT_FALSE(Predictor<5>(d.repeated_poles).heldPathIsModal());
+  EXPECT_FALSE(Predictor<5>(d.close_poles).heldPathIsModal());
   expectAgreement<5>(d.switched, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.switched, d.u, d.y, d.dt);
   expectAgreement<5>(d.interpolated, d.u, d.y, d.dt);
   expectAgreement<5>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.complex_poles, d.u, d.y, d.dt);
+  expectAgreement<5>(d.repeated_poles, d.u, d.y, d.dt);
+  expectAgreement<5>(d.close_poles, d.u, d.y, d.dt);
 }
 
 TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
@@ -121,7 +148,8 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     plan.col(1).setConstant(u(1));
     plan.col(2).setZero();
     if (p.update(k * d.dt, u, y) != PredictorStatus::kOk || q.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
-    if (p.predict(80, plan, out) != PredictorStatus::kOk || q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk)
+    if (p.predict(80, plan, out) != PredictorStatus::kOk || q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk ||
+        p.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
   }
   const auto allocations = guard.allocations();

@@ -63,7 +63,7 @@ class Predictor {
 
   /// Validates and preallocates everything; throws std::invalid_argument.
   explicit Predictor(const DioPwlObfModel& model, const PredictorOptions& options = {})
-      : options_(checked(options)), active_(makeSlot(model, nullptr, options_.input_margin)),
+      : options_(checked(options)), active_(makeSlot(model, nullptr, options_)),
         shape_(std::make_unique<Slot>(*active_)) {
     const Slot& s = *active_;
     const auto nu = static_cast<Eigen::Index>(s.n_u), nc = static_cast<Eigen::Index>(s.play.size());
@@ -81,6 +81,7 @@ class Predictor {
     work_y_.setZero(s.n_y);
     dy_.setZero(s.n_y);
     for (int o = 0; o < s.n_y; ++o) blended_.emplace_back(Eigen::VectorXd::Zero(s.coef[0][static_cast<std::size_t>(o)].size()));
+    mode_coef_.assign(static_cast<std::size_t>(s.n_y), Eigen::VectorXd::Zero(s.n_u * s.bank_size));
   }
 
   ~Predictor() {
@@ -94,6 +95,9 @@ class Predictor {
   int inputCount() const noexcept { return shape_->n_u; }
   int outputCount() const noexcept { return shape_->n_y; }
   int maxHorizon() const noexcept { return options_.max_horizon; }
+  /// True when held-input predictions run in modal coordinates (all poles
+  /// real and distinct, well-conditioned bases); false: the cascade is stepped.
+  bool heldPathIsModal() const noexcept { return active_->modal; }
   /// The model in force on the real-time thread (0 the first; each install adds 1).
   std::uint64_t modelId() const noexcept { return active_->id; }
 
@@ -186,7 +190,7 @@ class Predictor {
   /// real-time thread adopts it whole at its next update().
   void install(const DioPwlObfModel& model) {
     collectRetired();
-    Slot* next = makeSlot(model, shape_.get(), options_.input_margin);
+    Slot* next = makeSlot(model, shape_.get(), options_);
     next->id = next_id_.fetch_add(1, std::memory_order_relaxed) + 1;
     delete pending_.exchange(next, std::memory_order_acq_rel);  // a newer model replaces one never adopted
   }
@@ -213,7 +217,20 @@ class Predictor {
     std::vector<double> play;                       ///< per channel: half-width
     std::vector<int> channel_input;                 ///< per channel: its input
     std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
+    // Held input, every bank diagonalisable with a well-conditioned basis:
+    // the horizon runs in modal coordinates, where each mode is one multiply
+    // a step and the increment a sum (exact algebra, not an approximation).
+    bool modal = false;
+    std::vector<BankMatrix> to_modal;                      ///< per bank: V^-1
+    std::vector<int> mode_base;                            ///< per bank: first mode in its output's list
+    std::vector<Eigen::VectorXd> mode_pole;                ///< [output]: n_u * bank_size eigenvalues
+    std::vector<std::vector<Eigen::VectorXd>> modal_coef;  ///< [region][output]: coefficients times V
+    std::vector<Eigen::MatrixXd> mode_sum;                 ///< [output]: row h = sum_{j<=h} lambda^j
   };
+
+  // Largest condition number of an eigenvector basis we diagonalise with:
+  // prediction error grows with it, and 1e5 keeps it near 1e-11.
+  static constexpr double kMaxModalCondition = 1e5;
 
   static PredictorOptions checked(const PredictorOptions& o) {
     require(o.max_horizon >= 1, "Predictor: max_horizon must be >= 1");
@@ -223,13 +240,13 @@ class Predictor {
   }
 
   // Builds a slot; with `shape`, requires the same structure.
-  static Slot* makeSlot(const DioPwlObfModel& m, const Slot* shape, double margin) {
+  static Slot* makeSlot(const DioPwlObfModel& m, const Slot* shape, const PredictorOptions& options) {
     m.validate();
     auto s = std::make_unique<Slot>();
     s->n_u = m.inputCount();
     s->n_y = m.outputCount();
     s->sample_time = m.sample_time_s;
-    const double span = m.input_max - m.input_min;
+    const double span = m.input_max - m.input_min, margin = options.input_margin;
     s->accept_min = std::isfinite(span) ? m.input_min - margin * span : -INFINITY;
     s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
     s->partition = m.partition;
@@ -269,6 +286,7 @@ class Predictor {
       }
     s->cascade = all_real;
     s->coef = m.coefficients;
+    if (all_real) setUpModal(m, options.max_horizon, *s);
     if (shape) {
       const bool same = shape->n_u == s->n_u && shape->n_y == s->n_y && shape->bank_size == s->bank_size &&
                         shape->bank_channel == s->bank_channel && shape->coef.size() == s->coef.size() &&
@@ -280,6 +298,66 @@ class Predictor {
       s->accept_max = shape->accept_max;
     }
     return s.release();
+  }
+
+  // Diagonalises every bank (distinct real poles) when all bases are well
+  // conditioned; otherwise the held path keeps stepping the cascade.
+  static void setUpModal(const DioPwlObfModel& m, int max_horizon, Slot& s) {
+    const Eigen::Index n = s.bank_size;
+    std::vector<Eigen::MatrixXd> V(s.A.size());
+    s.to_modal.resize(s.A.size());
+    s.mode_base.resize(s.A.size());
+    s.mode_pole.assign(static_cast<std::size_t>(s.n_y), Eigen::VectorXd::Zero(s.n_u * n));
+    for (int o = 0; o < s.n_y; ++o)
+      for (int b : s.banks_of_output[static_cast<std::size_t>(o)]) {
+        const auto bb = static_cast<std::size_t>(b);
+        const int j = s.channel_input[static_cast<std::size_t>(s.bank_channel[bb])];
+        const PoleSet& ps = m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)];
+        Eigen::VectorXd lambda(n);
+        for (Eigen::Index i = 0; i < n; ++i) lambda(i) = ps.sections()[static_cast<std::size_t>(i)].pole.real();
+        for (Eigen::Index i = 0; i < n; ++i)
+          for (Eigen::Index k = 0; k < i; ++k)
+            if (lambda(i) == lambda(k)) return;  // repeated pole: a Jordan block, no eigenbasis
+        // The cascade's A is lower triangular with the poles on its diagonal:
+        // each eigenvector by forward substitution.
+        const Eigen::MatrixXd A = s.A[bb];
+        if (!A.template triangularView<Eigen::StrictlyUpper>().toDenseMatrix().isZero(0.0)) return;
+        Eigen::MatrixXd v = Eigen::MatrixXd::Zero(n, n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+          v(k, k) = 1.0;
+          for (Eigen::Index i = k + 1; i < n; ++i)
+            v(i, k) = A.row(i).segment(k, i - k).dot(v.col(k).segment(k, i - k)) / (lambda(k) - A(i, i));
+          v.col(k).normalize();
+        }
+        const Eigen::MatrixXd vinv = v.inverse();
+        if (!vinv.allFinite() || v.norm() * vinv.norm() > kMaxModalCondition) return;
+        if ((v * lambda.asDiagonal() * vinv - A).cwiseAbs().maxCoeff() > 1e-9) return;  // guards the algebra, not rounding
+        V[bb] = v;
+        s.to_modal[bb] = vinv;
+        s.mode_base[bb] = j * static_cast<int>(n);
+        s.mode_pole[static_cast<std::size_t>(o)].segment(j * n, n) = lambda;
+      }
+    for (const Eigen::VectorXd& lambda : s.mode_pole) {
+      Eigen::MatrixXd sum(max_horizon, lambda.size());
+      Eigen::VectorXd power = Eigen::VectorXd::Ones(lambda.size());
+      sum.row(0) = power.transpose();
+      for (int h = 1; h < max_horizon; ++h) {
+        power = power.cwiseProduct(lambda);
+        sum.row(h) = sum.row(h - 1) + power.transpose();
+      }
+      s.mode_sum.push_back(std::move(sum));
+    }
+    s.modal_coef = s.coef;
+    for (std::size_t r = 0; r < s.coef.size(); ++r)
+      for (int o = 0; o < s.n_y; ++o) {
+        const auto& banks = s.banks_of_output[static_cast<std::size_t>(o)];
+        Eigen::VectorXd& mc = s.modal_coef[r][static_cast<std::size_t>(o)];
+        const Eigen::VectorXd& c = s.coef[r][static_cast<std::size_t>(o)];
+        for (std::size_t i = 0; i < banks.size(); ++i)
+          mc.segment(static_cast<Eigen::Index>(i) * n, n) =
+              V[static_cast<std::size_t>(banks[i])].transpose() * c.segment(static_cast<Eigen::Index>(i) * n, n);
+      }
+    s.modal = true;
   }
 
   // dy for the next sample from filter states x, scheduled on (u, dir).
@@ -330,6 +408,7 @@ class Predictor {
   PredictorStatus predictHeld(const Slot& s, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     ScheduleBlend blend;
     s.partition.blend(u_, dir_, blend);
+    if (s.modal && horizon > 2) return predictHeldModal(s, blend, horizon, out);  // its set-up costs about two steps
     for (int o = 0; o < s.n_y; ++o) {
       Eigen::VectorXd& c = blended_[static_cast<std::size_t>(o)];
       c.setZero();
@@ -354,6 +433,44 @@ class Predictor {
       out.row(h) = work_y_.transpose();
       if (h + 1 == horizon) break;
       for (std::size_t b = 0; b < work_x_.size(); ++b) stepBank(s, b, work_x_[b], 0.0);
+    }
+    return PredictorStatus::kOk;
+  }
+
+  // With input held, x(k+h) = V diag(lambda)^h V^-1 x(k) per bank, so the
+  // increment h steps ahead is sum_i c_i lambda_i^h with c the blended
+  // coefficients times V, times the modal state; banks of one output that
+  // share poles (an input and its played copies) share modes.
+  PredictorStatus predictHeldModal(const Slot& s, const ScheduleBlend& blend, int horizon,
+                                   Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const Eigen::Index n = s.bank_size;
+    for (int o = 0; o < s.n_y; ++o) {
+      const auto oo = static_cast<std::size_t>(o);
+      Eigen::VectorXd& c = mode_coef_[oo];
+      c.setZero();
+      const auto& banks = s.banks_of_output[oo];
+      for (std::size_t i = 0; i < banks.size(); ++i) {
+        const auto b = static_cast<std::size_t>(banks[i]);
+        tmp_.noalias() = s.to_modal[b] * work_x_[b];
+        for (int m = 0; m < blend.count; ++m) {
+          const Eigen::VectorXd& mc = s.modal_coef[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(m)])][oo];
+          if constexpr (NP != Eigen::Dynamic)
+            c.template segment<NP>(s.mode_base[b]) +=
+                blend.weight[static_cast<std::size_t>(m)] *
+                mc.template segment<NP>(static_cast<Eigen::Index>(i) * NP).cwiseProduct(tmp_);
+          else
+            c.segment(s.mode_base[b], n) +=
+                blend.weight[static_cast<std::size_t>(m)] * mc.segment(static_cast<Eigen::Index>(i) * n, n).cwiseProduct(tmp_);
+        }
+      }
+    }
+    for (int o = 0; o < s.n_y; ++o) {
+      const auto oo = static_cast<std::size_t>(o);
+      // y(k+1+h) = y(k) + sum_i c_i sum_{j<=h} lambda_i^j: one product with
+      // a table built at set-up, vectorised over the horizon.
+      auto column = out.col(o).head(horizon);
+      column.noalias() = s.mode_sum[oo].topRows(horizon) * mode_coef_[oo];
+      column.array() += work_y_(o);
     }
     return PredictorStatus::kOk;
   }
@@ -388,7 +505,8 @@ class Predictor {
   std::vector<BankVector> x_, work_x_;
   BankVector tmp_;
   Eigen::VectorXd u_, du_, work_u_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
-  std::vector<Eigen::VectorXd> blended_;  // per output, for held-input predictions
+  std::vector<Eigen::VectorXd> blended_;    // per output, for held-input predictions
+  std::vector<Eigen::VectorXd> mode_coef_;  // per output, modal held-input path
   DirectionState dir_;
   double t_ = 0.0;
   std::int64_t samples_ = 0;

@@ -11,5 +11,6 @@ void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);
+void addCanBridgeCommand(CLI::App& app);
 
 }  // namespace plsa::app

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
   plsa::app::addPredictCommand(app);
+  plsa::app::addCanBridgeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

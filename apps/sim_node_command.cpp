@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "stop_signal.hpp"
+#include "plsa/can/udp_transport.hpp"
 #include "plsa/lcm/sim_node.hpp"
 
 namespace plsa::app {
@@ -14,10 +15,25 @@ namespace {
 struct SimNodeArgs {
   lcm::SimNodeOptions node;
   std::string config;
+  std::string can;      // transport spec: the device sits behind CAN instead of LCM commands
+  std::string profile;  // signal map (default profile when empty)
 };
+
+void runSimCan(SimNodeArgs& a) {
+  const can::SignalMap map = a.profile.empty() ? can::defaultSignalMap() : can::loadSignalMap(a.profile);
+  auto transport = can::openTransport(a.can, {map.message("valve_command").id});
+  const std::atomic<bool>& stop = stopOnSignals();
+  std::fprintf(stderr, "plsa sim: behind CAN (%s, profile %s) at %.0f Hz; true state on LCM channel %s\n",
+               a.can.c_str(), map.profile.c_str(), a.node.config.sample_rate_hz, a.node.state_channel.c_str());
+  const lcm::SimNodeStats s = lcm::runSimCanNode(a.node, *transport, map, stop);
+  std::fprintf(stderr, "plsa sim: stopped; %lld samples, %lld valve frames, %lld bad valve frames\n",
+               static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),
+               static_cast<long long>(s.commands_rejected));
+}
 
 void runSimNodeCommand(SimNodeArgs& a) {
   if (!a.config.empty()) a.node.config = sim::loadSimConfig(a.config);
+  if (!a.can.empty()) return runSimCan(a);
   const std::atomic<bool>& stop = stopOnSignals();
   std::fprintf(stderr, "plsa sim: %s at %.0f Hz, command timeout %.3f s, LCM %s\n",
                a.node.lockstep ? "lock-step" : "real time", a.node.config.sample_rate_hz,
@@ -45,6 +61,10 @@ void addSimNodeCommand(CLI::App& app) {
   cmd->add_option("--command-channel", a->node.command_channel, "Channel of pressure commands");
   cmd->add_option("--state-channel", a->node.state_channel, "Channel of actuator state");
   cmd->add_option("--status-channel", a->node.status_channel, "Channel of status messages");
+  cmd->add_option("--can", a->can,
+                  "Sit behind CAN instead of LCM commands: can0, socketcan:<iface> or udp:<listen-port>:<peer-port>");
+  cmd->add_option("--profile", a->profile, "CAN signal map (JSON; default: the built-in profile)")
+      ->check(CLI::ExistingFile);
   cmd->callback([a] { runSimNodeCommand(*a); });
 }
 

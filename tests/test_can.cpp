@@ -101,6 +101,10 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
             std::string::npos);
   EXPECT_NE(errorOf(R"({"profile": "t"})").find("map.json"), std::string::npos);
   EXPECT_NE(errorOf("{").find("not valid JSON"), std::string::npos);
+  // Found by fuzz_signal_map: a number too large for a double is a JSON error too, not a crash.
+  EXPECT_NE(errorOf("77.276e25776e257LF{").find("not valid JSON"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1e999})")).find("map.json"),
+            std::string::npos);
 }
 
 TEST(SignalMap, DecodingAllocatesNothing) {

@@ -26,6 +26,7 @@
 #include "plsa/sim/experiment.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "support/child_process.hpp"
+#include "support/isolated_lcm_test.hpp"
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
@@ -43,15 +44,11 @@ struct Inbox {
   }
 };
 
-class LcmSimTest : public ::testing::Test {
+class LcmSimTest : public plsa::test::IsolatedLcmTest {
  protected:
   void SetUp() override {
-    if (!std::getenv("PLSA_LCM_ISOLATED"))
-      GTEST_SKIP() << "LCM tests run only inside run_isolated.sh (private network namespace)";
-    exe_ = std::getenv("PLSA_EXE") ? std::getenv("PLSA_EXE") : "";
-    ASSERT_TRUE(fs::exists(exe_)) << "PLSA_EXE does not name the plsa binary: " << exe_;
-    lcm_ = std::make_unique<lcm::LCM>();
-    ASSERT_TRUE(lcm_->good());
+    IsolatedLcmTest::SetUp();
+    if (IsSkipped() || HasFatalFailure()) return;
     lcm_->subscribe("PLSA_STATE", &Inbox::onState, &inbox_);
     lcm_->subscribe("PLSA_STATUS", &Inbox::onStatus, &inbox_);
   }
@@ -79,8 +76,6 @@ class LcmSimTest : public ::testing::Test {
     return false;
   }
 
-  std::string exe_;
-  std::unique_ptr<lcm::LCM> lcm_;
   Inbox inbox_;
 };
 

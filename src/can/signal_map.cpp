@@ -41,6 +41,12 @@ const char* toString(DecodeStatus s) {
   return "unknown";
 }
 
+const MessageLayout* SignalMap::find(const std::string& name) const noexcept {
+  for (const auto& m : messages)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
 const MessageLayout& SignalMap::message(const std::string& name) const {
   std::string known;
   for (const auto& m : messages) {
@@ -80,7 +86,7 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers too large
     throw std::invalid_argument(source + ": not valid JSON: " + e.what());
   }
   SignalMap map;
@@ -135,7 +141,9 @@ SignalMap defaultSignalMap() {
   };
   SignalMap map{"plsa-default",
                 {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
-                 {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")}}};
+                 {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")},
+                 {"tip_angle", 0x210, 8, 6, 7,
+                  {{"bend_deg", 0, 16, true, true, 0.01, 0.0, "deg"}, {"steer_deg", 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
   map.validate();
   return map;
 }

@@ -27,6 +27,8 @@ ValveDriver::ValveDriver(CanTransport& transport, const SignalMap& map, const Sa
       last_tick_(start_time_s) {
   if (valve_->signals.size() != 3 || sensor_->signals.size() != 3)
     throw std::invalid_argument("ValveDriver: valve_command and pressure_sensor need three signals each");
+  tip_ = map.find("tip_angle");
+  if (tip_ && tip_->signals.size() != 2) throw std::invalid_argument("ValveDriver: tip_angle needs two signals (bend, steer)");
   if (!(limits.max_pressure_bar > 0) || !(limits.max_rate_bar_per_s > 0) || !(limits.sensor_timeout_s > 0) ||
       !(limits.command_timeout_s > 0))
     throw std::invalid_argument("ValveDriver: every safety limit must be positive");
@@ -52,6 +54,17 @@ void ValveDriver::tick(double time_s) noexcept {
   CanFrame f;
   double values[MessageLayout::kMaxSignals];
   while (transport_.receive(f, std::chrono::microseconds(0)) == TransportStatus::kOk) {
+    if (tip_ && f.id == tip_->id) {
+      const DecodeStatus st = decodeFrame(*tip_, f, values, tip_counter_);
+      if (st == DecodeStatus::kWrongLength) ++counters_.bad_length;
+      if (st == DecodeStatus::kBadChecksum) ++counters_.bad_checksum;
+      if (st == DecodeStatus::kOk || st == DecodeStatus::kCounterGap) {
+        tip_angle_ = {values[0], values[1]};
+        have_tip_ = true;
+        ++counters_.tip_frames;
+      }
+      continue;
+    }
     if (f.id != sensor_->id) {
       ++counters_.other_frames;
       continue;

@@ -11,6 +11,7 @@
 #include <plsa_lcm/pressure_command_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include "plsa/can/simulated_valve_device.hpp"
 #include "plsa/lcm/state_codec.hpp"
 #include "plsa/sim/actuator.hpp"
 
@@ -171,6 +172,22 @@ class SimNode {
 SimNodeStats runSimNode(const SimNodeOptions& options, const std::atomic<bool>& stop) {
   SimNode node(options, stop);
   return node.run();
+}
+
+SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport, const can::SignalMap& map,
+                           const std::atomic<bool>& stop) {
+  ::lcm::LCM lcm(o.url);
+  if (!lcm.good()) throw std::runtime_error("plsa sim: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
+  can::SimulatedValveDevice device(transport, map, o.config, o.seed);
+  SimNodeStats stats;
+  const can::SimulatedDeviceStats d = can::runSimulatedDevice(device, stop, o.duration_s, [&](const sim::ActuatorSample& s) {
+    const bool vented = device.setpoint() == std::array<double, 3>{0, 0, 0};
+    const plsa_lcm::actuator_state_t m = toMessage(s, stats.states_published++, vented);
+    lcm.publish(o.state_channel, &m);
+  });
+  stats.commands_accepted = d.valve_frames;
+  stats.commands_rejected = d.bad_valve_frames;
+  return stats;
 }
 
 }  // namespace plsa::lcm

@@ -1,6 +1,7 @@
 // CAN frames and the transport interface the driver layer sits on: send,
 // receive with timeout and time stamps, error frames, statistics. Backends:
-// an in-process bus (tests, fault injection); SocketCAN is not yet here.
+// an in-process bus here (tests, fault injection); SocketCAN and CAN over
+// loopback UDP (cross-process tests) in their own headers.
 #pragma once
 
 #include <array>
@@ -28,10 +29,18 @@ enum class TransportStatus : int {
   kBackPressure = -2,  ///< transmit queue full (ENOBUFS): try again, not a crash
   kBusOff = -3,        ///< controller is bus-off: nothing goes out
   kBadFrame = -4,      ///< DLC above 8 or identifier above 11 bits
+  kIoError = -5,       ///< the operating system refused (errno in stats().last_errno)
 };
+
+const char* toString(TransportStatus s);
+const char* toString(BusState s);
 
 struct TransportStats {
   std::uint64_t sent = 0, received = 0, dropped = 0, corrupted = 0, back_pressure = 0, overflows = 0;
+  std::uint64_t error_frames = 0;  ///< controller error frames seen (bus state changes)
+  std::uint64_t malformed = 0;     ///< datagrams / frames that were not CAN frames of ours, discarded
+  std::uint64_t ignored = 0;       ///< frames not for us (extended ids, remote frames)
+  int last_errno = 0;
 };
 
 class CanTransport {

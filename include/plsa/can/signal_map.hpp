@@ -43,6 +43,7 @@ struct SignalMap {
   std::vector<MessageLayout> messages;
 
   const MessageLayout& message(const std::string& name) const;  ///< throws naming the known ones
+  const MessageLayout* find(const std::string& name) const noexcept;  ///< nullptr when absent
   /// Throws std::invalid_argument naming the message and field at fault
   /// (overlaps, bytes beyond the DLC, bad widths, ids above 11 bits).
   void validate() const;

@@ -24,11 +24,12 @@ const char* toString(DriverFault f);
 
 struct DriverCounters {
   std::uint64_t sensor_frames = 0, bad_length = 0, bad_checksum = 0, counter_gaps = 0, other_frames = 0;
-  std::uint64_t rejected_commands = 0, valve_frames = 0, send_failures = 0;
+  std::uint64_t rejected_commands = 0, valve_frames = 0, send_failures = 0, tip_frames = 0;
 };
 
 /// Three chambers; the signal map must have "valve_command" and
-/// "pressure_sensor" messages with three signals each. Time is passed in
+/// "pressure_sensor" messages with three signals each, and may have a
+/// "tip_angle" message (bend_deg, steer_deg) from the tip sensor. Time is passed in
 /// (seconds, any monotonic clock), so the safety logic is testable.
 /// command() and tick() never allocate or throw.
 class ValveDriver {
@@ -49,6 +50,9 @@ class ValveDriver {
   const std::array<double, 3>& pressures() const noexcept { return pressure_; }
   const std::array<double, 3>& output() const noexcept { return output_; }  ///< last set-points sent
   const DriverCounters& counters() const noexcept { return counters_; }
+  /// Tip sensor (bend, steer in degrees) when the profile has it and a valid frame came.
+  bool hasTipAngle() const noexcept { return have_tip_; }
+  const std::array<double, 2>& tipAngle() const noexcept { return tip_angle_; }
 
  private:
   void latch(DriverFault f) noexcept;
@@ -57,6 +61,10 @@ class ValveDriver {
   CanTransport& transport_;
   const MessageLayout* valve_;
   const MessageLayout* sensor_;
+  const MessageLayout* tip_ = nullptr;
+  std::array<double, 2> tip_angle_{};
+  bool have_tip_ = false;
+  int tip_counter_ = -1;
   SafetyLimits limits_;
   std::array<double, 3> setpoint_{}, output_{}, pressure_{};
   double last_sensor_ = 0.0, last_command_ = 0.0, last_tick_ = 0.0;

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string>
 
+#include "plsa/can/can_transport.hpp"
+#include "plsa/can/signal_map.hpp"
 #include "plsa/sim/sim_config.hpp"
 
 namespace plsa::lcm {
@@ -34,5 +36,11 @@ struct SimNodeStats {
 /// Runs until `stop` is set or the duration is reached; vents before it returns.
 /// Throws std::runtime_error if LCM cannot be set up.
 SimNodeStats runSimNode(const SimNodeOptions& options, const std::atomic<bool>& stop);
+
+/// The simulated actuator behind the CAN protocol (valve frames in, sensor
+/// frames out) in real time; its true state is published on the state
+/// channel for observers (it takes no LCM commands). Throws like runSimNode.
+SimNodeStats runSimCanNode(const SimNodeOptions& options, can::CanTransport& transport, const can::SignalMap& map,
+                           const std::atomic<bool>& stop);
 
 }  // namespace plsa::lcm

@@ -1,0 +1,38 @@
+// The CAN-to-LCM bridge: pressure commands from LCM go to the valves through
+// the safety driver; sensor frames come back as actuator-state messages,
+// with status messages on faults and once a second. Stopping it vents.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "plsa/can/can_transport.hpp"
+#include "plsa/can/signal_map.hpp"
+#include "plsa/can/valve_driver.hpp"
+
+namespace plsa::lcm {
+
+struct CanBridgeOptions {
+  std::string url;  ///< "" = LCM's default (LCM_DEFAULT_URL)
+  can::SafetyLimits limits;
+  double rate_hz = 80.0;    ///< driver ticks and state messages per second
+  double duration_s = 0.0;  ///< 0: until stopped
+  std::string command_channel = "PLSA_COMMAND";
+  std::string state_channel = "PLSA_STATE";
+  std::string status_channel = "PLSA_STATUS";
+  std::string clear_channel = "PLSA_CLEAR_FAULT";  ///< any message here asks to clear a latched fault
+};
+
+struct CanBridgeStats {
+  std::int64_t states = 0, commands = 0, rejected_commands = 0, faults = 0;
+  can::DriverFault last_fault = can::DriverFault::kNone;
+};
+
+/// Runs until `stop` is set or the duration passes; always leaves the
+/// chambers vented (driver shutdown) before it returns. Throws
+/// std::runtime_error if LCM cannot be set up.
+CanBridgeStats runCanBridge(const CanBridgeOptions& options, can::CanTransport& transport, const can::SignalMap& map,
+                            const std::atomic<bool>& stop);
+
+}  // namespace plsa::lcm

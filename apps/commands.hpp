@@ -12,5 +12,6 @@ void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);
 void addCanBridgeCommand(CLI::App& app);
+void addDiagnoseCommands(CLI::App& app);
 
 }  // namespace plsa::app

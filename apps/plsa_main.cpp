@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   plsa::app::addCrossvalCommand(app);
   plsa::app::addPredictCommand(app);
   plsa::app::addCanBridgeCommand(app);
+  plsa::app::addDiagnoseCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

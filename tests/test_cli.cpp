@@ -84,3 +84,38 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
   EXPECT_NE(err_.find("missing field 'sample_time_s'"), std::string::npos) << err_;
   EXPECT_NE(run("simulate --experiment sine --out " + file("x.csv")), 0);
 }
+
+TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
+  // Data from an actuator with hysteresis; a simulator with every effect off,
+  // asked about two candidates.
+  ASSERT_EQ(run("sim-config --out " + file("full.json")), 0) << err_;
+  auto j = nlohmann::json::parse(slurp(file("full.json")));
+  for (const char* e : {"deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"}) j[e]["enabled"] = false;
+  std::ofstream(file("truth.json")) << j.dump();
+  j["hysteresis"]["enabled"] = false;
+  std::ofstream(file("sim.json")) << j.dump();
+  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment staircase1 --seed 3 --out " + file("a.csv")), 0)
+      << err_;
+  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment joystick --duration 30 --seed 4 --out " +
+                file("b.csv")),
+            0)
+      << err_;
+  ASSERT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
+                " --candidates hysteresis,creep --evaluations 60 --out " + file("diag")),
+            0)
+      << err_;
+  const auto d = nlohmann::json::parse(slurp(file("diag/diagnosis.json")));
+  ASSERT_EQ(d["ranking"].size(), 2u);
+  EXPECT_EQ(d["ranking"][0]["effect"], "hysteresis");
+  EXPECT_TRUE(fs::exists(file("diag/report.html")));
+  EXPECT_TRUE(fs::exists(file("diag/calibrated_sim.json")));
+  EXPECT_NE(err_.find("nominal calibration"), std::string::npos) << "no progress shown: " << err_;
+  // Bad input: a command column far outside the simulator's range names the fix.
+  std::ofstream(file("psi.csv")) << "time_s,cmd_1,cmd_2,cmd_3,bend_deg,steer_deg\n";
+  {
+    std::ofstream f(file("psi.csv"), std::ios::app);
+    for (int i = 0; i < 100; ++i) f << 0.0125 * i << ",5,0,0,1,0\n";
+  }
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("psi.csv") + " --out " + file("d2")), 1);
+  EXPECT_NE(err_.find("check --input-scale"), std::string::npos) << err_;
+}

@@ -195,4 +195,49 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
   return o.str();
 }
 
+std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
+                    const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
+                    int cell) {
+  const double ml = 110, mt = 30, mb = 50;
+  const auto rows = values.rows(), cols = values.cols();
+  const int width = static_cast<int>(ml + cols * cell + 20), height = static_cast<int>(mt + rows * cell + mb);
+  double vmax = 0;
+  for (Eigen::Index i = 0; i < values.size(); ++i)
+    if (std::isfinite(values(i))) vmax = std::max(vmax, values(i));
+  std::ostringstream o;
+  o << "<svg class=\"chart heatmap\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";
+  o << "<text x=\"10\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      // Row 0 at the bottom, like a plot's y axis.
+      const double x = ml + c * cell, y = mt + (rows - 1 - r) * cell;
+      const double v = values(r, c);
+      std::string fill = "#dddddd";
+      if (std::isfinite(v)) {
+        const double t = vmax > 0 ? std::clamp(v / vmax, 0.0, 1.0) : 0.0;
+        char b[16];
+        std::snprintf(b, sizeof b, "#%02x%02x%02x", 255, static_cast<int>(255 - 200 * t), static_cast<int>(255 - 220 * t));
+        fill = b;
+      }
+      o << "<rect class=\"cell\" x=\"" << num(x) << "\" y=\"" << num(y) << "\" width=\"" << cell << "\" height=\"" << cell
+        << "\" fill=\"" << fill << "\" stroke=\"#fff\"/>\n";
+      o << "<text x=\"" << num(x + cell / 2.0) << "\" y=\"" << num(y + cell / 2.0 + 4)
+        << "\" font-size=\"11\" text-anchor=\"middle\">" << (std::isfinite(v) ? tick(v) : std::string("no data"))
+        << "</text>\n";
+    }
+  for (Eigen::Index r = 0; r < rows && r < static_cast<Eigen::Index>(row_labels.size()); ++r)
+    o << "<text x=\"" << ml - 6 << "\" y=\"" << num(mt + (rows - 1 - r) * cell + cell / 2.0 + 4)
+      << "\" font-size=\"11\" text-anchor=\"end\">" << escape(row_labels[static_cast<std::size_t>(r)]) << "</text>\n";
+  for (Eigen::Index c = 0; c < cols && c < static_cast<Eigen::Index>(col_labels.size()); ++c)
+    o << "<text x=\"" << num(ml + c * cell + cell / 2.0) << "\" y=\"" << num(mt + rows * cell + 14)
+      << "\" font-size=\"11\" text-anchor=\"middle\">" << escape(col_labels[static_cast<std::size_t>(c)]) << "</text>\n";
+  o << "<text x=\"" << num(ml + cols * cell / 2.0) << "\" y=\"" << num(mt + rows * cell + 36)
+    << "\" font-size=\"12\" text-anchor=\"middle\">" << escape(col_axis) << "</text>\n";
+  o << "<text x=\"14\" y=\"" << num(mt + rows * cell / 2.0) << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
+    << num(mt + rows * cell / 2.0) << ")\">" << escape(row_axis) << "</text>\n";
+  o << "</svg>\n";
+  return o.str();
+}
+
 }  // namespace plsa::report

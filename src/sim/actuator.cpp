@@ -52,9 +52,12 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   dt_ = period / substeps_;
   const std::size_t n_play = config_.hysteresis.formulation == "prandtl_ishlinskii" ? kPiOperators : 1;
   for (auto& p : play_) p.assign(n_play, 0.0);
-  const std::size_t delay_steps =
-      config_.pneumatic_lag.enabled ? static_cast<std::size_t>(std::lround(config_.pneumatic_lag.delay_s / dt_)) : 0;
-  delay_line_.assign(delay_steps + 1, {0.0, 0.0, 0.0});
+  // A fractional delay (linear between two taps) keeps the response, and so
+  // any calibration of delay_s, continuous in the parameter.
+  const double delay_steps = config_.pneumatic_lag.enabled ? config_.pneumatic_lag.delay_s / dt_ : 0.0;
+  delay_whole_ = static_cast<std::size_t>(std::floor(delay_steps));
+  delay_frac_ = delay_steps - static_cast<double>(delay_whole_);
+  delay_line_.assign(delay_whole_ + 2, {0.0, 0.0, 0.0});
 }
 
 double Actuator::effectivePressure(double p) const {
@@ -70,9 +73,13 @@ double Actuator::effectivePressure(double p) const {
 void Actuator::substep(const std::array<double, 3>& cmd) {
   const SimConfig& c = config_;
   // Transport delay: a ring of past commands, one per internal step.
+  const std::size_t size = delay_line_.size();
   delay_line_[delay_head_] = cmd;
-  delay_head_ = (delay_head_ + 1) % delay_line_.size();
-  const std::array<double, 3>& delayed = delay_line_[delay_head_];
+  const auto& newer = delay_line_[(delay_head_ + size - delay_whole_) % size];
+  const auto& older = delay_line_[(delay_head_ + size - delay_whole_ - 1) % size];
+  delay_head_ = (delay_head_ + 1) % size;
+  std::array<double, 3> delayed{};
+  for (std::size_t i = 0; i < 3; ++i) delayed[i] = (1.0 - delay_frac_) * newer[i] + delay_frac_ * older[i];
 
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {

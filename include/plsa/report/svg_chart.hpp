@@ -41,6 +41,12 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
                      int width = 600, int height = 280);
 
 /// HTML escaping for text nodes.
+/// A grid of cells coloured by value (white = 0 .. dark red = max), with the
+/// value written in each; NaN cells grey ("no data").
+std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
+                    const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
+                    int cell = 64);
+
 std::string escape(const std::string& s);
 
 }  // namespace plsa::report

@@ -75,6 +75,8 @@ class Actuator {
   Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();
   std::vector<std::array<double, 3>> delay_line_;
   std::size_t delay_head_ = 0;
+  std::size_t delay_whole_ = 0;  ///< whole internal steps of transport delay
+  double delay_frac_ = 0.0;      ///< and the fraction of one more
 };
 
 }  // namespace plsa::sim

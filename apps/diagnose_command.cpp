@@ -1,0 +1,138 @@
+// `plsa diagnose` (simulator + real runs -> where, which effect, how far) and
+// `plsa diagnose-selfcheck` (the same, blind, on data with a withheld effect).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "plsa/diagnose/diagnosis.hpp"
+#include "plsa/diagnose/selfcheck.hpp"
+#include "plsa/lcm/lcm_log.hpp"
+#include "plsa/sim/sim_config.hpp"
+
+namespace plsa::app {
+namespace {
+
+struct DiagnoseArgs {
+  std::string sim;
+  std::vector<std::string> real;
+  std::string out;
+  diagnose::RunColumns columns;
+  std::string output_map = "angles";
+  std::vector<std::string> pressures{"p_1", "p_2", "p_3"};
+  diagnose::DiagnoseOptions options;
+};
+
+void writeFile(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream f(p);
+  f << text;
+  if (!f) throw std::runtime_error("cannot write " + p.string());
+}
+
+void runDiagnose(DiagnoseArgs& a) {
+  const sim::SimConfig config = sim::loadSimConfig(a.sim);
+  a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
+  a.columns.pressures = a.pressures.size() == 1 && a.pressures[0] == "none" ? std::vector<std::string>{} : a.pressures;
+  a.options.calibration.gap.map = a.columns.map;
+  std::vector<diagnose::RunData> runs;
+  for (const auto& path : a.real) {
+    io::CsvReadOptions ro;
+    ro.required = a.columns.inputs;
+    ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());
+    runs.push_back(diagnose::runFromLog(lcm::readLogFile(path, ro), a.columns, config.max_pressure_bar));
+  }
+  a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);
+  std::filesystem::create_directories(a.out);
+  const auto dir = std::filesystem::path(a.out);
+  writeFile(dir / "diagnosis.json", diagnose::toJson(d));
+  writeFile(dir / "report.html", diagnose::reportHtml(d));
+  writeFile(dir / "calibrated_sim.json", sim::simConfigToJson(d.final_config));
+  std::printf("%s\n", d.verdict.c_str());
+  std::printf("where (held out, after nominal calibration):\n");
+  for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());
+  std::printf("ranking (held-out gap %.1f%% before):\n", d.gap_before.percent());
+  for (const auto& c : d.ranking)
+    std::printf("  %-14s -> %5.1f%%  shrink %5.1f%%%s\n", c.effect.c_str(), c.heldout_after.percent(), c.shrink_percent,
+                c.signature.present ? "  (signature supports it)" : "");
+  std::printf("wrote %s/diagnosis.json, report.html, calibrated_sim.json (%.0f s)\n", a.out.c_str(), d.elapsed_s);
+}
+
+struct SelfcheckArgs {
+  diagnose::SelfcheckOptions options;
+  bool no_pairs = false;
+  std::string out;
+};
+
+void runSelfcheckCommand(SelfcheckArgs& a) {
+  if (a.no_pairs) a.options.pairs.clear();
+  a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  const diagnose::SelfcheckResult r = diagnose::runSelfcheck(a.options);
+  std::printf("%s", r.summary().c_str());
+  if (!a.out.empty()) {
+    nlohmann::json j;
+    j["cases"] = nlohmann::json::array();
+    for (const auto& c : r.cases)
+      j["cases"].push_back({{"name", c.name}, {"withheld", c.withheld}, {"formulation", c.formulation},
+                            {"selected", c.selected}, {"top2", c.top2}, {"gap_before", c.gap_before},
+                            {"gap_after", c.gap_after}, {"noise", c.noise}, {"true_effect_shrink", c.true_effect_shrink},
+                            {"pass", c.pass}, {"elapsed_s", c.elapsed_s}});
+    j["labels"] = r.labels;
+    j["confusion"] = r.confusion;
+    j["targets_met"] = r.targets_met;
+    writeFile(a.out, j.dump(2));
+  }
+  if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");
+}
+
+}  // namespace
+
+void addDiagnoseCommands(CLI::App& app) {
+  auto a = std::make_shared<DiagnoseArgs>();
+  CLI::App* c = app.add_subcommand("diagnose", "Where and why a simulator disagrees with real runs, and what fixing it buys");
+  c->add_option("--sim", a->sim, "Simulator configuration (JSON; its switched-off effects are the candidates)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--real", a->real, "Real run(s): CSV or .lcmlog; several: split by run, one: split by time")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
+  c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
+  c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');
+  c->add_option("--pressures", a->pressures, "Measured chamber pressure columns, or 'none'")->delimiter(',');
+  c->add_option("--input-scale", a->columns.input_scale, "Bar per input unit")->check(CLI::PositiveNumber);
+  c->add_option("--output-map", a->output_map,
+                "angles (outputs are bend, steer in deg) or affine (an unknown affine image of the bending vector, fitted)")
+      ->check(CLI::IsMember({"angles", "affine"}));
+  c->add_option("--candidates", a->options.candidates, "Effects to try (default: every one switched off)")->delimiter(',');
+  c->add_option("--evaluations", a->options.calibration.max_evaluations, "Simulator runs per calibration")
+      ->check(CLI::Range(20, 100000));
+  c->add_option("--margin", a->options.margin, "An effect must shrink the held-out gap by this many noise floors")
+      ->check(CLI::NonNegativeNumber);
+  c->add_option("--heldout-fraction", a->options.heldout_fraction, "With one run: the share held out at its end")
+      ->check(CLI::Range(0.05, 0.95));
+  c->add_option("--threads", a->options.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
+  c->callback([a] { runDiagnose(*a); });
+
+  auto s = std::make_shared<SelfcheckArgs>();
+  CLI::App* sc = app.add_subcommand("diagnose-selfcheck", "Score the diagnosis blind on data with withheld effects");
+  sc->add_option("--effects", s->options.effects, "Single-effect cases (default: all seven)")->delimiter(',');
+  sc->add_option("--seeds", s->options.seeds_per_effect, "Cases per effect (odd ones use the other formulation)")
+      ->check(CLI::Range(1, 20));
+  sc->add_flag("--no-pairs", s->no_pairs, "Skip the pairs of withheld effects");
+  sc->add_option("--null", s->options.null_cases, "Null cases (nothing withheld)")->check(CLI::Range(0, 20));
+  sc->add_option("--seed", s->options.seed, "First seed");
+  sc->add_option("--train-s", s->options.train_s, "Training run length (s)")->check(CLI::Range(10.0, 600.0));
+  sc->add_option("--heldout-s", s->options.heldout_s, "Held-out run length (s)")->check(CLI::Range(10.0, 600.0));
+  sc->add_option("--evaluations", s->options.diagnose.calibration.max_evaluations, "Simulator runs per calibration")
+      ->check(CLI::Range(20, 100000));
+  sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
+  sc->add_option("--out", s->out, "Results as JSON");
+  sc->add_flag("--verbose", s->options.verbose, "Show each diagnosis's progress");
+  sc->callback([s] { runSelfcheckCommand(*s); });
+}
+
+}  // namespace plsa::app

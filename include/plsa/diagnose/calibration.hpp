@@ -1,0 +1,78 @@
+// Replaying real runs through the simulator and calibrating its parameters
+// to them (NLopt, bounded, derivative-free): the gap measure every later
+// figure uses, and the fit that keeps a plain parameter mismatch from being
+// blamed on a missing effect.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "plsa/diagnose/run_data.hpp"
+#include "plsa/sim/sim_config.hpp"
+
+namespace plsa::diagnose {
+
+/// What the simulator says for a run: noise-free outputs in the run's output
+/// space (bending vector, deg) and chamber pressures.
+struct SimTrace {
+  Eigen::MatrixXd outputs;    ///< samples x 2
+  Eigen::MatrixXd pressures;  ///< samples x 3
+};
+
+/// Runs the simulator (its own sensor noise off) on the run's commands,
+/// after holding the first command for `preroll_s` unrecorded.
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s = 3.0);
+
+/// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.
+struct OutputFit {
+  Eigen::Matrix<double, 3, 2> M = (Eigen::Matrix<double, 3, 2>() << 1, 0, 0, 1, 0, 0).finished();
+  Eigen::MatrixXd apply(const Eigen::MatrixXd& v) const;
+};
+
+/// The gap between runs and the simulator, normalised: squared residual over
+/// the outputs' variance (1 = no better than the mean), pressures (when
+/// measured) weighted by `pressure_weight` the same way.
+struct Gap {
+  double outputs = 0.0;    ///< normalised mean squared residual of the outputs
+  double pressures = 0.0;  ///< the same for chamber pressures (0 without them)
+  double total = 0.0;      ///< outputs + pressure_weight * pressures
+  double percent() const { return 100.0 * std::sqrt(std::max(0.0, total)); }  ///< gap in % (like 100 - NRMSE fit)
+};
+
+struct GapOptions {
+  double pressure_weight = 0.5;
+  OutputMap map = OutputMap::kAngles;
+};
+
+/// Gap of a configuration on runs; with kAffine the map is fitted here when
+/// `fit` is non-null and not frozen, else `fit` is used as given.
+Gap measureGap(const sim::SimConfig& config, const std::vector<RunData>& runs, const GapOptions& options,
+               OutputFit* fit = nullptr, bool refit = true);
+
+/// The noise floor of the same gap measure, estimated from the runs alone
+/// (second differences: a smooth signal has little, white noise 6 sigma^2).
+Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& options);
+
+struct CalibrationOptions {
+  int max_evaluations = 150;
+  double initial_step = 0.15;  ///< in the normalised (0..1, log for wide positive ranges) parameter space
+  GapOptions gap;
+  std::function<void(int evaluation, double best_total)> progress;  ///< optional, every 25 evaluations
+};
+
+struct CalibrationResult {
+  sim::SimConfig config;  ///< with the fitted values
+  Gap train_gap;
+  OutputFit fit;
+  int evaluations = 0;
+  std::vector<std::pair<std::string, double>> values;  ///< "module.name" -> fitted value
+};
+
+/// Fits every parameter of `modules` ("nominal" and effect names; each effect
+/// must be enabled in `start`) to the training runs by bounded BOBYQA from
+/// the start values. Throws std::invalid_argument for unknown modules.
+CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::string>& modules,
+                            const std::vector<RunData>& train, const CalibrationOptions& options);
+
+}  // namespace plsa::diagnose

@@ -1,0 +1,50 @@
+// One recorded run as the diagnosis sees it: chamber commands (bar) in, the
+// tip's bending vector (or any two outputs) out, chamber pressures when they
+// were measured. Built from a log with clear errors for anything unusable.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/io/csv_log.hpp"
+
+namespace plsa::diagnose {
+
+/// How the real outputs relate to the simulator's tip.
+enum class OutputMap {
+  kAngles,  ///< outputs are bend and steer angles (deg), compared as the bending vector
+  kAffine,  ///< outputs are an unknown affine image of the bending vector (e.g. tip position), fitted
+};
+
+struct RunColumns {
+  std::vector<std::string> inputs = {"cmd_1", "cmd_2", "cmd_3"};  ///< 1 to 3 chambers; the rest get 0
+  std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
+  std::vector<std::string> pressures = {"p_1", "p_2", "p_3"};  ///< used when every one is present
+  double input_scale = 1.0;  ///< bar per input unit
+  OutputMap map = OutputMap::kAngles;
+};
+
+struct RunData {
+  std::string name;
+  double sample_time_s = 0.0;
+  Eigen::MatrixXd commands;   ///< samples x 3, bar
+  Eigen::MatrixXd outputs;    ///< samples x 2: bending vector (deg) for kAngles, raw outputs for kAffine
+  Eigen::MatrixXd pressures;  ///< samples x 3 (bar) or no columns
+
+  Eigen::Index samples() const { return commands.rows(); }
+  bool hasPressures() const { return pressures.cols() == 3; }
+};
+
+/// Throws std::invalid_argument naming the run and the problem (missing
+/// column, NaN, negative or out-of-range command, too few samples, no time).
+RunData runFromLog(const io::Log& log, const RunColumns& columns, double max_pressure_bar);
+
+/// Bend and steer (deg) -> bending vector (deg): steer wraps, the vector does not.
+Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::VectorXd& steer_deg);
+
+/// The first (1 - heldout_fraction) of a run and the rest.
+std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction);
+
+}  // namespace plsa::diagnose

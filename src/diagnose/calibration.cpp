@@ -1,0 +1,224 @@
+#include "plsa/diagnose/calibration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <nlopt.hpp>
+
+#include "plsa/sim/actuator.hpp"
+
+namespace plsa::diagnose {
+
+Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const {
+  return (v * M.topRows<2>()).rowwise() + M.row(2);
+}
+
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s) {
+  sim::SimConfig c = config;
+  c.sensor.noise_deg = 0.0;
+  c.sample_rate_hz = 1.0 / run.sample_time_s;
+  c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
+  sim::Actuator a(c, 1);
+  const auto first = std::array<double, 3>{run.commands(0, 0), run.commands(0, 1), run.commands(0, 2)};
+  const auto preroll = static_cast<int>(std::lround(preroll_s / run.sample_time_s));
+  for (int k = 0; k < preroll; ++k) a.step(first);
+  SimTrace t;
+  const Eigen::Index n = run.samples();
+  Eigen::VectorXd bend(n), steer(n);
+  t.pressures.resize(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const sim::ActuatorSample s = a.step({run.commands(i, 0), run.commands(i, 1), run.commands(i, 2)});
+    bend(i) = s.bend_deg;
+    steer(i) = s.steer_deg;
+    for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = s.pressure_bar[static_cast<std::size_t>(j)];
+  }
+  t.outputs = bendingVector(bend, steer);
+  return t;
+}
+
+namespace {
+
+double spread(const Eigen::MatrixXd& m) {
+  if (m.rows() == 0) return 0.0;
+  const Eigen::RowVectorXd mean = m.colwise().mean();
+  return (m.rowwise() - mean).squaredNorm();
+}
+
+// Sums over runs of squared deviation from the pooled mean, and sample count.
+double pooledSpread(const std::vector<RunData>& runs, bool pressures) {
+  Eigen::Index n = 0;
+  for (const auto& r : runs) n += r.samples();
+  const Eigen::Index cols = pressures ? 3 : 2;
+  Eigen::MatrixXd all(n, cols);
+  Eigen::Index at = 0;
+  for (const auto& r : runs) {
+    all.middleRows(at, r.samples()) = pressures ? r.pressures : r.outputs;
+    at += r.samples();
+  }
+  return spread(all);
+}
+
+}  // namespace
+
+Gap measureGap(const sim::SimConfig& config, const std::vector<RunData>& runs, const GapOptions& o, OutputFit* fit,
+               bool refit) {
+  if (runs.empty()) throw std::invalid_argument("measureGap: no runs");
+  const bool pressures = std::all_of(runs.begin(), runs.end(), [](const RunData& r) { return r.hasPressures(); });
+  std::vector<SimTrace> traces;
+  for (const auto& r : runs) traces.push_back(simulateRun(config, r));
+  OutputFit local;
+  OutputFit& f = fit ? *fit : local;
+  if (o.map == OutputMap::kAffine && (refit || !fit)) {
+    Eigen::Index n = 0;
+    for (const auto& r : runs) n += r.samples();
+    Eigen::MatrixXd X(n, 3), Y(n, 2);
+    Eigen::Index at = 0;
+    for (std::size_t k = 0; k < runs.size(); ++k) {
+      const auto m = runs[k].samples();
+      X.middleRows(at, m) << traces[k].outputs, Eigen::VectorXd::Ones(m);
+      Y.middleRows(at, m) = runs[k].outputs;
+      at += m;
+    }
+    f.M = X.colPivHouseholderQr().solve(Y);
+  }
+  double out_sq = 0.0, p_sq = 0.0;
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const Eigen::MatrixXd yhat = o.map == OutputMap::kAffine ? f.apply(traces[k].outputs) : traces[k].outputs;
+    out_sq += (runs[k].outputs - yhat).squaredNorm();
+    if (pressures) p_sq += (runs[k].pressures - traces[k].pressures).squaredNorm();
+  }
+  Gap g;
+  g.outputs = out_sq / std::max(1e-12, pooledSpread(runs, false));
+  if (pressures) g.pressures = p_sq / std::max(1e-12, pooledSpread(runs, true));
+  g.total = g.outputs + o.pressure_weight * g.pressures;
+  return g;
+}
+
+Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& o) {
+  const bool pressures = std::all_of(runs.begin(), runs.end(), [](const RunData& r) { return r.hasPressures(); });
+  // White noise has second differences of variance 6 sigma^2; a median (MAD)
+  // keeps the steps and transients of the signal from passing for noise.
+  auto noiseSq = [](const Eigen::MatrixXd& m) {
+    if (m.rows() < 3) return 0.0;
+    double sum = 0.0;
+    for (Eigen::Index c = 0; c < m.cols(); ++c) {
+      std::vector<double> d;
+      for (Eigen::Index i = 2; i < m.rows(); ++i) d.push_back(std::abs(m(i, c) - 2 * m(i - 1, c) + m(i - 2, c)));
+      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+      const double sigma = 1.4826 * d[d.size() / 2] / std::sqrt(6.0);
+      sum += sigma * sigma * static_cast<double>(m.rows());
+    }
+    return sum;
+  };
+  double out = 0.0, p = 0.0;
+  for (const auto& r : runs) {
+    out += noiseSq(r.outputs);
+    if (pressures) p += noiseSq(r.pressures);
+  }
+  Gap g;
+  g.outputs = out / std::max(1e-12, pooledSpread(runs, false));
+  if (pressures) g.pressures = p / std::max(1e-12, pooledSpread(runs, true));
+  g.total = g.outputs + o.pressure_weight * g.pressures;
+  return g;
+}
+
+namespace {
+
+// A parameter's normalised coordinate: log scale for wide positive ranges.
+struct Axis {
+  std::string name;
+  double lower, upper;
+  bool log;
+  double toUnit(double v) const {
+    v = std::clamp(v, lower, upper);
+    return log ? std::log(v / lower) / std::log(upper / lower) : (v - lower) / (upper - lower);
+  }
+  double fromUnit(double x) const {
+    x = std::clamp(x, 0.0, 1.0);
+    return log ? lower * std::pow(upper / lower, x) : lower + x * (upper - lower);
+  }
+};
+
+}  // namespace
+
+CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::string>& modules,
+                            const std::vector<RunData>& train, const CalibrationOptions& o) {
+  sim::SimConfig work = start;
+  std::vector<double*> slots;
+  std::vector<Axis> axes;
+  for (const auto& m : modules) {
+    if (m != "nominal" && !work.effectEnabled(m))
+      throw std::invalid_argument("calibrate: effect '" + m + "' is switched off; switch it on to calibrate it");
+    for (const sim::ParamRef& p : work.parameters(m)) {
+      // A smooth deadzone's width only matters for that formulation.
+      if (m == "deadzone" && p.name == "smooth_width_bar" && work.deadzone.formulation != "smooth") continue;
+      slots.push_back(p.value);
+      axes.push_back({m + "." + p.name, p.lower, p.upper, p.lower > 0 && p.upper / p.lower > 20});
+    }
+  }
+  CalibrationResult best;
+  best.config = start;
+  best.train_gap = measureGap(start, train, o.gap, &best.fit);
+  const auto n = static_cast<unsigned>(axes.size());
+  if (n == 0) return best;
+  std::vector<double> x(n), lo(n, 0.0), hi(n, 1.0);
+  for (unsigned i = 0; i < n; ++i) x[i] = axes[i].toUnit(*slots[i]);
+  int evaluations = 0;
+  auto objective = [&](const std::vector<double>& xs) {
+    for (unsigned i = 0; i < n; ++i) *slots[i] = axes[i].fromUnit(xs[i]);
+    ++evaluations;
+    OutputFit fit;
+    Gap g;
+    try {
+      g = measureGap(work, train, o.gap, &fit);
+    } catch (const std::invalid_argument&) {
+      return 1e6;  // a combination the simulator rejects: never the answer
+    }
+    if (!std::isfinite(g.total)) return 1e6;
+    if (g.total < best.train_gap.total) {
+      best.train_gap = g;
+      best.config = work;
+      best.fit = fit;
+    }
+    if (o.progress && evaluations % 25 == 0) o.progress(evaluations, best.train_gap.total);
+    return g.total;
+  };
+  nlopt::opt opt(n >= 2 ? nlopt::LN_BOBYQA : nlopt::LN_COBYLA, n);
+  opt.set_lower_bounds(lo);
+  opt.set_upper_bounds(hi);
+  opt.set_initial_step(std::vector<double>(n, o.initial_step));
+  opt.set_maxeval(o.max_evaluations);
+  opt.set_ftol_rel(1e-5);
+  using Fn = decltype(objective);
+  // nlopt::opt wants a plain function: bridge through a small adaptor.
+  struct Bridge {
+    Fn* f;
+    unsigned n;
+  } bridge{&objective, n};
+  opt.set_min_objective(
+      [](unsigned count, const double* xs, double*, void* data) {
+        auto* b = static_cast<Bridge*>(data);
+        return (*b->f)(std::vector<double>(xs, xs + count));
+      },
+      &bridge);
+  double fmin = 0.0;
+  try {
+    opt.optimize(x, fmin);
+  } catch (const nlopt::roundoff_limited&) {
+    // the best point so far stands
+  } catch (const std::runtime_error&) {
+    // NLopt gave up (e.g. a flat start); the best point so far stands
+  }
+  best.evaluations = evaluations;
+  sim::SimConfig tmp = best.config;
+  std::size_t k = 0;
+  for (const auto& m : modules)
+    for (const sim::ParamRef& p : tmp.parameters(m)) {
+      if (m == "deadzone" && p.name == "smooth_width_bar" && tmp.deadzone.formulation != "smooth") continue;
+      best.values.emplace_back(axes[k++].name, *p.value);
+    }
+  return best;
+}
+
+}  // namespace plsa::diagnose

@@ -1,0 +1,212 @@
+// JSON and HTML renderings of a diagnosis.
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "plsa/diagnose/diagnosis.hpp"
+#include "plsa/report/svg_chart.hpp"
+
+namespace plsa::diagnose {
+namespace {
+
+using nlohmann::json;
+
+json gapJson(const Gap& g) {
+  return {{"percent", g.percent()}, {"outputs", g.outputs}, {"pressures", g.pressures}, {"total", g.total}};
+}
+
+json paramsJson(const std::vector<std::pair<std::string, double>>& p) {
+  json j = json::object();
+  for (const auto& [k, v] : p) j[k] = v;
+  return j;
+}
+
+json sharesJson(const std::vector<ResidualShare>& v) {
+  json j = json::array();
+  for (const auto& s : v) j.push_back({{"part", s.label}, {"rms", s.rms}, {"share", s.share}, {"samples", s.samples}});
+  return j;
+}
+
+json placeJson(const GridPlace& g) {
+  return {{"chamber", g.chamber}, {"from_bar", g.from_bar}, {"to_bar", g.to_bar}, {"direction", g.direction},
+          {"rms", g.rms},         {"share", g.share},       {"samples", g.samples}, {"words", g.words}};
+}
+
+json breakdownJson(const Breakdown& b) {
+  json j;
+  j["by_output"] = sharesJson(b.by_output);
+  j["by_direction"] = sharesJson(b.by_direction);
+  j["by_state"] = sharesJson(b.by_state);
+  j["by_band"] = sharesJson(b.by_band);
+  j["by_region"] = json::array();
+  for (const auto& g : b.by_region) j["by_region"].push_back(placeJson(g));
+  j["top_places"] = json::array();
+  for (const auto& g : b.top_places) j["top_places"].push_back(placeJson(g));
+  j["grid_edges_bar"] = b.grid_edges_bar;
+  json map = json::array();
+  for (Eigen::Index r = 0; r < b.gap_map.rows(); ++r) {
+    json row = json::array();
+    for (Eigen::Index c = 0; c < b.gap_map.cols(); ++c)
+      row.push_back(std::isfinite(b.gap_map(r, c)) ? json(b.gap_map(r, c)) : json(nullptr));
+    map.push_back(row);
+  }
+  j["gap_map_rms"] = {{"rows", "chamber 2 band"}, {"cols", "chamber 1 band"}, {"values", map}};
+  j["signatures"] = json::object();
+  for (const auto& [k, s] : b.signatures)
+    j["signatures"][k] = {{"score", s.score}, {"present", s.present}, {"evidence", s.evidence}};
+  return j;
+}
+
+json candidateJson(const CandidateResult& c) {
+  return {{"effect", c.effect},
+          {"round", c.round},
+          {"heldout_gap_before", c.heldout_before.percent()},
+          {"heldout_gap_after", c.heldout_after.percent()},
+          {"shrink_percent", c.shrink_percent},
+          {"train_gap_after", c.train_after.percent()},
+          {"params", paramsJson(c.params)},
+          {"signature", {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
+}
+
+std::string fmt(double v, const char* f = "%.1f") {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+std::string toJson(const Diagnosis& d) {
+  json j;
+  j["schema"] = "plsa.diagnosis v1";
+  j["gap_unit"] = "percent: 100 sqrt(normalised mean squared residual); 0 = perfect, 100 = no better than the mean";
+  j["train_runs"] = d.train_runs;
+  j["heldout_runs"] = d.heldout_runs;
+  j["output_map"] = d.map == OutputMap::kAngles ? "angles" : "affine";
+  j["heldout_gap_uncalibrated"] = d.heldout_uncalibrated.percent();
+  j["gap_before"] = d.gap_before.percent();
+  j["gap_before_detail"] = gapJson(d.gap_before);
+  j["train_gap_before"] = d.train_before.percent();
+  j["noise_floor"] = d.noise.percent();
+  j["nominal_params"] = paramsJson(d.nominal_params);
+  j["ranking"] = json::array();
+  for (const auto& c : d.ranking) j["ranking"].push_back(candidateJson(c));
+  j["later_rounds"] = json::array();
+  for (const auto& c : d.later_rounds) j["later_rounds"].push_back(candidateJson(c));
+  j["selected"] = d.selected;
+  j["steps"] = json::array();
+  for (const auto& [e, gap] : d.steps) j["steps"].push_back({{"effect", e}, {"heldout_gap_after", gap.percent()}});
+  j["gap_after"] = d.gap_after.percent();
+  j["final_params"] = paramsJson(d.final_params);
+  j["where"] = breakdownJson(d.where);
+  j["where_after"] = breakdownJson(d.where_after);
+  j["verdict"] = d.verdict;
+  j["elapsed_s"] = d.elapsed_s;
+  return j.dump(2);
+}
+
+std::string reportHtml(const Diagnosis& d) {
+  using report::escape;
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>plsa diagnosis</title>\n"
+    << "<style>body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}"
+    << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}"
+    << "th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.2em;background:#f6f8ff;"
+    << "padding:1em;border-left:4px solid #4060c0}.note{color:#666;font-size:.9em}</style></head><body>\n";
+  h << "<h1>Sim-to-real gap diagnosis</h1>\n<p class=\"verdict\" id=\"verdict\">" << escape(d.verdict) << "</p>\n";
+  h << "<p class=\"note\">Gap: 100 &times; sqrt(normalised mean squared residual) on held-out data (" << d.heldout_runs.size()
+    << " run(s)); 0 is a perfect match, 100 no better than the mean. Simulator as given: "
+    << fmt(d.heldout_uncalibrated.percent()) << "%; nominal physics calibrated: " << fmt(d.gap_before.percent())
+    << "%; with the selected effects: " << fmt(d.gap_after.percent()) << "%; noise floor: " << fmt(d.noise.percent())
+    << "%.</p>\n";
+
+  h << "<h2>Where</h2>\n<ul id=\"places\">";
+  for (const auto& p : d.where.top_places) h << "<li>" << escape(p.words) << "</li>";
+  h << "</ul>\n";
+  std::vector<std::string> labels;
+  for (std::size_t k = 0; k + 1 < d.where.grid_edges_bar.size(); ++k)
+    labels.push_back(fmt(d.where.grid_edges_bar[k], "%.2f") + "-" + fmt(d.where.grid_edges_bar[k + 1], "%.2f"));
+  h << "<div id=\"gap-map\">"
+    << report::heatMap("Gap map: RMS residual after nominal calibration", d.where.gap_map, labels, labels,
+                       "chamber 2 (bar)", "chamber 1 (bar)")
+    << "</div>\n";
+  if (!d.selected.empty())
+    h << "<div id=\"gap-map-after\">"
+      << report::heatMap("Gap map with the selected effects", d.where_after.gap_map, labels, labels, "chamber 2 (bar)",
+                         "chamber 1 (bar)")
+      << "</div>\n";
+  auto table = [&](const char* title, const std::vector<ResidualShare>& v) {
+    h << "<table><tr><th>" << title << "</th><th>RMS</th><th>share of squared residual</th><th>share of samples</th></tr>";
+    for (const auto& s : v)
+      h << "<tr><td>" << escape(s.label) << "</td><td>" << fmt(s.rms, "%.3g") << "</td><td>" << fmt(100 * s.share)
+        << "%</td><td>" << (s.samples > 0 ? fmt(100 * s.samples) + "%" : "") << "</td></tr>";
+    h << "</table>\n";
+  };
+  table("by output", d.where.by_output);
+  table("by direction of change", d.where.by_direction);
+  table("steady vs transient", d.where.by_state);
+  table("by frequency band", d.where.by_band);
+
+  h << "<h2>Which</h2>\n";
+  std::vector<report::Bar> bars;
+  for (const auto& c : d.ranking) {
+    const bool kept = std::find(d.selected.begin(), d.selected.end(), c.effect) != d.selected.end();
+    bars.push_back({c.effect, c.shrink_percent, kept ? "#c04040" : "#8090b0"});
+  }
+  h << "<div id=\"shrink-chart\">"
+    << report::barChart("Held-out gap shrinkage per candidate effect (round 1)", bars, "shrink (%)") << "</div>\n";
+  h << "<table id=\"ranking\"><tr><th>effect</th><th>held-out gap before</th><th>after</th><th>shrink</th>"
+       "<th>signature</th><th>fitted parameters</th></tr>";
+  for (const auto& c : d.ranking) {
+    std::string params;
+    for (const auto& [k, v] : c.params)
+      if (k.rfind(c.effect + ".", 0) == 0) params += k.substr(c.effect.size() + 1) + " = " + fmt(v, "%.4g") + "; ";
+    h << "<tr><td>" << escape(c.effect) << "</td><td>" << fmt(c.heldout_before.percent()) << "%</td><td>"
+      << fmt(c.heldout_after.percent()) << "%</td><td>" << fmt(c.shrink_percent) << "%</td><td>"
+      << (c.signature.present ? "supports: " : "") << escape(c.signature.evidence) << "</td><td>" << escape(params)
+      << "</td></tr>";
+  }
+  h << "</table>\n";
+  if (!d.later_rounds.empty()) {
+    h << "<p>Later forward-selection rounds:</p><table><tr><th>round</th><th>effect</th><th>held-out gap before</th>"
+         "<th>after</th><th>shrink</th></tr>";
+    for (const auto& c : d.later_rounds)
+      h << "<tr><td>" << c.round << "</td><td>" << escape(c.effect) << "</td><td>" << fmt(c.heldout_before.percent())
+        << "%</td><td>" << fmt(c.heldout_after.percent()) << "%</td><td>" << fmt(c.shrink_percent) << "%</td></tr>";
+    h << "</table>\n";
+  }
+
+  h << "<h2>How far</h2>\n";
+  const Eigen::Index n = d.trace_real.rows();
+  Eigen::VectorXd t(n);
+  for (Eigen::Index i = 0; i < n; ++i) t(i) = i * d.trace_dt;
+  const std::array<std::string, 2> names = d.map == OutputMap::kAngles
+                                               ? std::array<std::string, 2>{"bending vector x (deg)", "bending vector y (deg)"}
+                                               : std::array<std::string, 2>{"output 1", "output 2"};
+  const std::string with = d.selected.empty() ? "sim (no effect kept)" : "sim + " + d.selected[0] +
+                                                                             (d.selected.size() > 1 ? " + ..." : "");
+  for (int c = 0; c < 2; ++c) {
+    h << "<div class=\"trace\" id=\"trace-" << c + 1 << "\">"
+      << report::lineChart("Held-out run: " + names[static_cast<std::size_t>(c)], t,
+                           {{"real", d.trace_real.col(c), "#222222", false},
+                            {"calibrated sim", d.trace_before.col(c), "#4060c0", true},
+                            {with, d.trace_after.col(c), "#c04040", false}},
+                           "time (s)", names[static_cast<std::size_t>(c)])
+      << "</div>\n";
+  }
+  h << "<table><tr><th>region (chamber, band, direction)</th><th>RMS before</th><th>RMS after</th></tr>";
+  for (const auto& b : d.where.by_region)
+    for (const auto& a : d.where_after.by_region)
+      if (a.chamber == b.chamber && a.from_bar == b.from_bar && a.direction == b.direction && b.samples >= 0.03)
+        h << "<tr><td>chamber " << b.chamber << ", " << fmt(b.from_bar, "%.2f") << "-" << fmt(b.to_bar, "%.2f")
+          << " bar, " << b.direction << "</td><td>" << fmt(b.rms, "%.3g") << "</td><td>" << fmt(a.rms, "%.3g")
+          << "</td></tr>";
+  h << "</table>\n<h2>Calibrated nominal parameters</h2><table><tr><th>parameter</th><th>value</th></tr>";
+  for (const auto& [k, v] : d.nominal_params) h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
+  h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace plsa::diagnose

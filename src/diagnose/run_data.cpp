@@ -1,0 +1,76 @@
+#include "plsa/diagnose/run_data.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace plsa::diagnose {
+
+Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::VectorXd& steer_deg) {
+  Eigen::MatrixXd v(bend_deg.size(), 2);
+  for (Eigen::Index i = 0; i < bend_deg.size(); ++i) {
+    const double s = steer_deg(i) * M_PI / 180.0;
+    v(i, 0) = bend_deg(i) * std::cos(s);
+    v(i, 1) = bend_deg(i) * std::sin(s);
+  }
+  return v;
+}
+
+RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_bar) {
+  const std::string where = "diagnosis: run '" + log.source + "': ";
+  if (c.inputs.empty() || c.inputs.size() > 3) throw std::invalid_argument(where + "needs 1 to 3 input columns");
+  if (c.outputs.size() != 2) throw std::invalid_argument(where + "needs exactly 2 output columns");
+  if (!(c.input_scale > 0) || !std::isfinite(c.input_scale)) throw std::invalid_argument(where + "input scale must be positive");
+  if (!log.hasColumn("time_s")) throw std::invalid_argument(where + "has no time_s column");
+  if (log.samples() < 50) throw std::invalid_argument(where + "has " + std::to_string(log.samples()) + " samples; at least 50 needed");
+  RunData r;
+  r.name = log.source;
+  const Eigen::VectorXd t = log.column("time_s");
+  std::vector<double> steps;
+  for (Eigen::Index i = 1; i < t.size(); ++i) steps.push_back(t(i) - t(i - 1));
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  r.sample_time_s = steps[steps.size() / 2];
+  if (!(r.sample_time_s > 0)) throw std::invalid_argument(where + "time does not increase");
+  r.commands = Eigen::MatrixXd::Zero(log.samples(), 3);
+  for (std::size_t j = 0; j < c.inputs.size(); ++j)
+    r.commands.col(static_cast<Eigen::Index>(j)) = log.column(c.inputs[j]) * c.input_scale;
+  for (Eigen::Index i = 0; i < r.commands.rows(); ++i)
+    for (Eigen::Index j = 0; j < 3; ++j) {
+      const double v = r.commands(i, j);
+      if (!std::isfinite(v)) throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " is not finite at row " + std::to_string(i + 1));
+      if (v < -1e-9 || v > max_pressure_bar * 1.5 + 1e-9)
+        throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " = " + std::to_string(v) +
+                                    " bar at row " + std::to_string(i + 1) + " is outside 0.." +
+                                    std::to_string(max_pressure_bar) + " bar (check --input-scale)");
+    }
+  r.commands = r.commands.cwiseMax(0.0);
+  const Eigen::MatrixXd y = log.columnsOf(c.outputs);
+  if (!y.allFinite()) throw std::invalid_argument(where + "an output column has NaN or Inf");
+  r.outputs = c.map == OutputMap::kAngles ? bendingVector(y.col(0), y.col(1)) : y;
+  bool all = !c.pressures.empty();
+  for (const auto& p : c.pressures) all = all && log.hasColumn(p);
+  if (all && c.pressures.size() == 3) {
+    r.pressures = log.columnsOf(c.pressures);
+    if (!r.pressures.allFinite()) throw std::invalid_argument(where + "a pressure column has NaN or Inf");
+  }
+  return r;
+}
+
+std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction) {
+  if (!(heldout_fraction > 0 && heldout_fraction < 1)) throw std::invalid_argument("held-out fraction must be in (0, 1)");
+  const Eigen::Index n = run.samples();
+  const auto cut = static_cast<Eigen::Index>(std::lround(n * (1.0 - heldout_fraction)));
+  if (cut < 50 || n - cut < 50) throw std::invalid_argument("diagnosis: run '" + run.name + "' is too short to split");
+  auto part = [&](Eigen::Index from, Eigen::Index len, const std::string& tag) {
+    RunData r;
+    r.name = run.name + tag;
+    r.sample_time_s = run.sample_time_s;
+    r.commands = run.commands.middleRows(from, len);
+    r.outputs = run.outputs.middleRows(from, len);
+    if (run.hasPressures()) r.pressures = run.pressures.middleRows(from, len);
+    return r;
+  };
+  return {part(0, cut, " (training part)"), part(cut, n - cut, " (held-out part)")};
+}
+
+}  // namespace plsa::diagnose

@@ -119,3 +119,18 @@ TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
   EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("psi.csv") + " --out " + file("d2")), 1);
   EXPECT_NE(err_.find("check --input-scale"), std::string::npos) << err_;
 }
+
+TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {
+  // Hysteresis withheld as the play operator and as Prandtl-Ishlinskii, with
+  // perturbed nominal physics, and a null case; the full set is in docs/diagnosis.md.
+  ASSERT_EQ(run("diagnose-selfcheck --effects hysteresis --seeds 2 --no-pairs --null 1 --train-s 40 --heldout-s 30 "
+                "--out " + file("sc.json")),
+            0)
+      << err_ << slurp(file("stdout.txt"));
+  const auto j = nlohmann::json::parse(slurp(file("sc.json")));
+  ASSERT_EQ(j["cases"].size(), 3u);
+  EXPECT_TRUE(j["targets_met"].get<bool>());
+  EXPECT_EQ(j["cases"][1]["formulation"], "hysteresis prandtl_ishlinskii");
+  EXPECT_TRUE(j["cases"][2]["selected"].empty()) << "the null case claimed an effect";
+  EXPECT_NE(slurp(file("stdout.txt")).find("confusion matrix"), std::string::npos);
+}

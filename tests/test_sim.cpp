@@ -302,3 +302,36 @@ TEST(SimExperiments, ShapesAndDeterminism) {
   EXPECT_NE(run(3), run(4));
   EXPECT_THROW(makeExperiment("sine", o), std::invalid_argument);
 }
+
+TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers) {
+  // What the diagnosis self-check generates "real" data with: the same
+  // phenomenon, a different law. Each alternative must differ from the
+  // default and still show the effect's signature.
+  for (const auto& e : effectNames()) {
+    const auto& forms = formulationsOf(e);
+    ASSERT_EQ(forms.size(), 2u) << e;
+    SimConfig a = only(e), b = only(e);
+    EXPECT_EQ(a.formulationOf(e), forms[0]) << e << ": the default comes first";
+    b.formulationOf(e) = forms[1];
+    Actuator x(a, 1), y(b, 1), off(allOff(), 1);
+    double differs = 0.0, effect = 0.0;
+    for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
+      const auto rx = hold(x, cmd, 4.0), ry = hold(y, cmd, 4.0), ro = hold(off, cmd, 4.0);
+      // Measured bending vector and chamber pressure: every effect shows in one of them.
+      auto v = [](const ActuatorSample& s) {
+        const double p = s.steer_deg * M_PI / 180;
+        return Eigen::Vector3d(s.bend_deg * std::cos(p), s.bend_deg * std::sin(p), 100.0 * s.pressure_bar[0]);
+      };
+      for (std::size_t k = 0; k < rx.size(); ++k) {
+        differs = std::max(differs, (v(rx[k]) - v(ry[k])).norm());
+        effect = std::max(effect, (v(ry[k]) - v(ro[k])).norm());
+        ASSERT_TRUE(std::isfinite(ry[k].bend_deg)) << e << " " << forms[1];
+      }
+    }
+    EXPECT_GT(differs, 1e-3) << e << ": " << forms[1] << " behaves exactly like " << forms[0];
+    EXPECT_GT(effect, 0.05) << e << ": " << forms[1] << " shows no effect at all";
+  }
+  SimConfig bad;
+  bad.creep.formulation = "logarithmic";
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -151,8 +151,7 @@ SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
     std::string forms;
     for (const auto& e : spec.withheld) {
       truth.setEffectEnabled(e, true);
-      if (spec.alternative && e == "deadzone") truth.deadzone.formulation = "smooth";
-      if (spec.alternative && e == "hysteresis") truth.hysteresis.formulation = "prandtl_ishlinskii";
+      if (spec.alternative) truth.formulationOf(e) = sim::formulationsOf(e)[1];
       for (const sim::ParamRef& p : truth.parameters(e)) {
         const auto range = truthRanges().find(e + "." + p.name);
         if (range == truthRanges().end()) continue;
@@ -161,8 +160,7 @@ SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
         *p.value = v;
         c.truth.emplace_back(e + "." + p.name, v);
       }
-      const std::string f = e == "deadzone" ? truth.deadzone.formulation : (e == "hysteresis" ? truth.hysteresis.formulation : "");
-      if (!f.empty()) forms += (forms.empty() ? "" : ", ") + e + " " + f;
+      forms += (forms.empty() ? "" : ", ") + e + " " + truth.formulationOf(e);
     }
     c.formulation = forms;
     std::string label;

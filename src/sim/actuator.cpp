@@ -58,6 +58,11 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   delay_whole_ = static_cast<std::size_t>(std::floor(delay_steps));
   delay_frac_ = delay_steps - static_cast<double>(delay_whole_);
   delay_line_.assign(delay_whole_ + 2, {0.0, 0.0, 0.0});
+  orifice_ = config_.pneumatic_lag.formulation == "orifice";
+  saturating_coupling_ = config_.coupling.formulation == "saturating";
+  two_rate_creep_ = config_.creep.formulation == "two_rate";
+  quadratic_stiffening_ = config_.stiffening.formulation == "quadratic";
+  random_walk_bias_ = config_.sensor_bias.formulation == "random_walk";
 }
 
 double Actuator::effectivePressure(double p) const {
@@ -86,8 +91,9 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     double tau = c.pneumatics.time_constant_s;
     if (c.pneumatic_lag.enabled)
       tau = delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s;
-    const double rate = std::clamp((delayed[i] - pressure_[i]) / tau, -c.pneumatics.max_rate_bar_per_s,
-                                   c.pneumatics.max_rate_bar_per_s);
+    double drive = delayed[i] - pressure_[i];
+    if (c.pneumatic_lag.enabled && orifice_) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
+    const double rate = std::clamp(drive / tau, -c.pneumatics.max_rate_bar_per_s, c.pneumatics.max_rate_bar_per_s);
     pressure_[i] += rate * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
   }
@@ -97,7 +103,9 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   const double lever = 2.0 * c.geometry.length_m / (3.0 * c.geometry.chamber_radius_m);
   for (std::size_t i = 0; i < 3; ++i) {
     double strain = c.elongation.strain_per_bar * p_eff[i] + c.elongation.quadratic * p_eff[i] * p_eff[i];
-    if (c.coupling.enabled) strain *= std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
+    if (c.coupling.enabled)
+      strain *= saturating_coupling_ ? 1.0 / (1.0 + c.coupling.per_bar * (sum_p - p_eff[i]))
+                                     : std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
     if (c.hysteresis.enabled) {
       // Play operator(s): output moves only once the input leaves a band around it.
       auto& plays = play_[i];
@@ -114,8 +122,14 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
       strain = out / static_cast<double>(plays.size());
     }
     if (c.creep.enabled) {
-      creep_[i] += (c.creep.fraction * strain - creep_[i]) / c.creep.time_constant_s * dt_;
-      strain += creep_[i];
+      if (two_rate_creep_) {
+        creep_[i] += (0.5 * c.creep.fraction * strain - creep_[i]) / (0.2 * c.creep.time_constant_s) * dt_;
+        creep_slow_[i] += (0.5 * c.creep.fraction * strain - creep_slow_[i]) / (2.0 * c.creep.time_constant_s) * dt_;
+        strain += creep_[i] + creep_slow_[i];
+      } else {
+        creep_[i] += (c.creep.fraction * strain - creep_[i]) / c.creep.time_constant_s * dt_;
+        strain += creep_[i];
+      }
     }
     // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
     const double dir = c.geometry.bend_direction_deg[i] * kDeg;
@@ -123,7 +137,8 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   }
 
   double omega = 2.0 * kPi * c.bending.natural_freq_hz;
-  if (c.stiffening.enabled) omega *= std::sqrt(1.0 + c.stiffening.per_bar * sum_p);
+  if (c.stiffening.enabled)
+    omega *= std::sqrt(1.0 + c.stiffening.per_bar * (quadratic_stiffening_ ? sum_p * sum_p / 0.2 : sum_p));
   // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
   bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
   bend_ += bend_rate_ * dt_;
@@ -143,7 +158,12 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   // Tip frame (Webster & Jones): Rz(phi) Ry(theta) Rz(-phi); the sensor's x axis is the tip normal.
   Eigen::Matrix3d g_r_b = rotZ(phi) * rotY(theta) * rotZ(-phi) * rotY(-kPi / 2.0);
   if (c.sensor_bias.enabled) {
-    g_r_b = rotZ(c.sensor_bias.yaw_drift_deg_per_s * kDeg * time_s_) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
+    double yaw_deg = c.sensor_bias.yaw_drift_deg_per_s * time_s_;
+    if (random_walk_bias_) {
+      yaw_walk_deg_ += std::abs(c.sensor_bias.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / c.sample_rate_hz) * normal_(rng_);
+      yaw_deg = yaw_walk_deg_;
+    }
+    g_r_b = rotZ(yaw_deg * kDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
   }
   if (c.sensor.noise_deg > 0.0) {
     const Eigen::Vector3d w(normal_(rng_), normal_(rng_), normal_(rng_));

@@ -1,6 +1,7 @@
 #include "plsa/sim/sim_config.hpp"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -65,14 +66,37 @@ bool* enabledFlag(SimConfig& c, const std::string& effect) {
 std::string* formulation(SimConfig& c, const std::string& module) {
   if (module == "deadzone") return &c.deadzone.formulation;
   if (module == "hysteresis") return &c.hysteresis.formulation;
+  if (module == "stiffening") return &c.stiffening.formulation;
+  if (module == "coupling") return &c.coupling.formulation;
+  if (module == "pneumatic_lag") return &c.pneumatic_lag.formulation;
+  if (module == "creep") return &c.creep.formulation;
+  if (module == "sensor_bias") return &c.sensor_bias.formulation;
   return nullptr;
 }
 
+}  // namespace
+
 const std::vector<std::string>& formulationsOf(const std::string& module) {
-  static const std::vector<std::string> dz = {"sharp", "smooth"};
-  static const std::vector<std::string> hy = {"play", "prandtl_ishlinskii"};
-  return module == "deadzone" ? dz : hy;
+  static const std::map<std::string, std::vector<std::string>> all = {
+      {"deadzone", {"sharp", "smooth"}},
+      {"hysteresis", {"play", "prandtl_ishlinskii"}},
+      {"stiffening", {"linear", "quadratic"}},
+      {"coupling", {"multiplicative", "saturating"}},
+      {"pneumatic_lag", {"linear", "orifice"}},
+      {"creep", {"exponential", "two_rate"}},
+      {"sensor_bias", {"linear_drift", "random_walk"}}};
+  const auto it = all.find(module);
+  if (it == all.end()) throw std::invalid_argument("no formulations for '" + module + "'");
+  return it->second;
 }
+
+std::string& SimConfig::formulationOf(const std::string& effect) {
+  std::string* f = formulation(*this, effect);
+  if (!f) throw std::invalid_argument("unknown effect '" + effect + "'");
+  return *f;
+}
+
+namespace {
 
 }  // namespace
 
@@ -106,7 +130,7 @@ void SimConfig::validate() const {
       throw std::invalid_argument(msg.str());
     }
   }
-  for (const std::string m : {"deadzone", "hysteresis"}) {
+  for (const std::string& m : effectNames()) {
     const std::string& f = *formulation(copy, m);
     const auto& ok = formulationsOf(m);
     if (std::find(ok.begin(), ok.end(), f) == ok.end())
@@ -197,8 +221,7 @@ std::string simConfigToJson(const SimConfig& config) {
   }
   j["geometry"]["bend_direction_deg"] = c.geometry.bend_direction_deg;
   for (const auto& e : effectNames()) j[e]["enabled"] = c.effectEnabled(e);
-  j["deadzone"]["formulation"] = c.deadzone.formulation;
-  j["hysteresis"]["formulation"] = c.hysteresis.formulation;
+  for (const auto& e : effectNames()) j[e]["formulation"] = *formulation(const_cast<SimConfig&>(c), e);
   return j.dump(2);
 }
 

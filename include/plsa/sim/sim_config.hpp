@@ -70,32 +70,43 @@ struct SimConfig {
   } hysteresis;
   struct Stiffening {
     bool enabled = true;
+    std::string formulation = "linear";  ///< "linear" | "quadratic" (1 + per_bar * (sum p_eff)^2 / 0.2 bar)
     double per_bar = 20.0;  ///< stiffness grows by (1 + per_bar * sum p_eff)
   } stiffening;
   struct Coupling {
     bool enabled = true;
+    std::string formulation = "multiplicative";  ///< "multiplicative" | "saturating" (strain / (1 + per_bar * others))
     /// A pressurised chamber's wall bulges into its neighbours and stiffens
     /// them: each strain is scaled by (1 - per_bar * other chambers' p_eff).
     double per_bar = 0.8;
   } coupling;
   struct PneumaticLag {
     bool enabled = true;
+    /// "linear" | "orifice": flow grows with the square root of the pressure
+    /// difference (equal to linear at 0.1 bar), as through a restriction.
+    std::string formulation = "linear";
     double fill_time_constant_s = 0.08;
     double vent_time_constant_s = 0.03;
     double delay_s = 0.03;
   } pneumatic_lag;
   struct Creep {
     bool enabled = true;
+    /// "exponential" | "two_rate": half the creep at time_constant_s / 5, half at 2 time_constant_s.
+    std::string formulation = "exponential";
     double fraction = 0.08;  ///< extra strain reached under a constant pressure
     double time_constant_s = 8.0;
   } creep;
   struct SensorBias {
     bool enabled = true;
+    /// "linear_drift" | "random_walk": yaw wanders (steps of |yaw drift| sqrt(dt) x 3) instead of drifting steadily.
+    std::string formulation = "linear_drift";
     double tilt_deg = 1.5;          ///< mount misalignment
     double yaw_drift_deg_per_s = 0.02;
   } sensor_bias;
 
   bool effectEnabled(const std::string& effect) const;
+  /// The effect's formulation (one of formulationsOf(effect)); throws for unknown effects.
+  std::string& formulationOf(const std::string& effect);
   void setEffectEnabled(const std::string& effect, bool on);
   /// The calibratable parameters of an effect, or "nominal" for the base physics.
   std::vector<ParamRef> parameters(const std::string& module);
@@ -103,6 +114,9 @@ struct SimConfig {
   /// Throws std::invalid_argument naming the first value out of range.
   void validate() const;
 };
+
+/// The formulations an effect can take, its default first.
+const std::vector<std::string>& formulationsOf(const std::string& effect);
 
 /// JSON I/O. Unknown keys and wrong types are errors naming the key path.
 SimConfig loadSimConfig(const std::string& path);

@@ -105,6 +105,15 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
   EXPECT_NE(errorOf("77.276e25776e257LF{").find("not valid JSON"), std::string::npos);
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1e999})")).find("map.json"),
             std::string::npos);
+  // Found by fuzz_signal_map under UBSan: a float too large for the id's
+  // integer type was converted before any check. Integer fields are now
+  // type- and range-checked first.
+  EXPECT_NE(errorOf(R"({"profile": "p", "messages": [{"name": "m", "id": 2564444444444444444001722586, "dlc": 8,
+    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})").find("'id' must be an integer"), std::string::npos);
+  EXPECT_NE(errorOf(R"({"profile": "p", "messages": [{"name": "m", "id": 256, "dlc": 8.5,
+    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})").find("'dlc' must be an integer"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": -3, "bits": 16, "scale": 1})")).find("'byte' must be in 0..7"),
+            std::string::npos);
 }
 
 TEST(SignalMap, DecodingAllocatesNothing) {

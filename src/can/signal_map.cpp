@@ -81,6 +81,25 @@ void SignalMap::validate() const {
   }
 }
 
+namespace {
+
+// An integer field in [lo, hi]; rejects floats, strings and out-of-range
+// values before any conversion (a huge float cast to an integer is UB).
+long long integerField(const nlohmann::json& j, const char* key, long long lo, long long hi, const std::string& where,
+                       const nlohmann::json* fallback = nullptr) {
+  const nlohmann::json* v = j.contains(key) ? &j.at(key) : fallback;
+  if (!v) throw std::invalid_argument(where + "missing field '" + key + "'");
+  if (!v->is_number_integer())
+    throw std::invalid_argument(where + "'" + key + "' must be an integer");
+  const bool is_unsigned = v->is_number_unsigned();
+  if (is_unsigned ? v->get<unsigned long long>() > static_cast<unsigned long long>(hi)
+                  : (v->get<long long>() < lo || v->get<long long>() > hi))
+    throw std::invalid_argument(where + "'" + key + "' must be in " + std::to_string(lo) + ".." + std::to_string(hi));
+  return is_unsigned ? static_cast<long long>(v->get<unsigned long long>()) : v->get<long long>();
+}
+
+}  // namespace
+
 SignalMap signalMapFromJson(const std::string& text, const std::string& source) {
   using nlohmann::json;
   json j;
@@ -95,15 +114,17 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
     for (const auto& jm : j.at("messages")) {
       MessageLayout m;
       m.name = jm.at("name").get<std::string>();
-      m.id = jm.at("id").get<std::uint32_t>();
-      m.dlc = jm.at("dlc").get<int>();
-      m.counter_byte = jm.value("counter_byte", -1);
-      m.checksum_byte = jm.value("checksum_byte", -1);
+      const std::string where = "message '" + m.name + "': ";
+      const nlohmann::json none = -1;
+      m.id = static_cast<std::uint32_t>(integerField(jm, "id", 0, 0x7FF, where));
+      m.dlc = static_cast<int>(integerField(jm, "dlc", 0, 8, where));
+      m.counter_byte = static_cast<int>(integerField(jm, "counter_byte", -1, 7, where, &none));
+      m.checksum_byte = static_cast<int>(integerField(jm, "checksum_byte", -1, 7, where, &none));
       for (const auto& js : jm.at("signals")) {
         Signal s;
         s.name = js.at("name").get<std::string>();
-        s.byte = js.at("byte").get<int>();
-        s.bits = js.at("bits").get<int>();
+        s.byte = static_cast<int>(integerField(js, "byte", 0, 7, where + "signal '" + s.name + "': "));
+        s.bits = static_cast<int>(integerField(js, "bits", 8, 32, where + "signal '" + s.name + "': "));
         const std::string endian = js.value("endian", "little");
         if (endian != "little" && endian != "big")
           throw std::invalid_argument("signal '" + s.name + "': endian must be 'little' or 'big'");

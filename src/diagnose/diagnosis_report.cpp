@@ -128,14 +128,18 @@ std::string reportHtml(const Diagnosis& d) {
   std::vector<std::string> labels;
   for (std::size_t k = 0; k + 1 < d.where.grid_edges_bar.size(); ++k)
     labels.push_back(fmt(d.where.grid_edges_bar[k], "%.2f") + "-" + fmt(d.where.grid_edges_bar[k + 1], "%.2f"));
+  // Both maps on the before map's colour scale, so "after" reads as lighter.
+  double scale = 0.0;
+  for (Eigen::Index i = 0; i < d.where.gap_map.size(); ++i)
+    if (std::isfinite(d.where.gap_map(i))) scale = std::max(scale, d.where.gap_map(i));
   h << "<div id=\"gap-map\">"
     << report::heatMap("Gap map: RMS residual after nominal calibration", d.where.gap_map, labels, labels,
-                       "chamber 2 (bar)", "chamber 1 (bar)")
+                       "chamber 2 (bar)", "chamber 1 (bar)", 64, scale)
     << "</div>\n";
   if (!d.selected.empty())
     h << "<div id=\"gap-map-after\">"
-      << report::heatMap("Gap map with the selected effects", d.where_after.gap_map, labels, labels, "chamber 2 (bar)",
-                         "chamber 1 (bar)")
+      << report::heatMap("Gap map with the selected effects (same colour scale)", d.where_after.gap_map, labels, labels,
+                         "chamber 2 (bar)", "chamber 1 (bar)", 64, scale)
       << "</div>\n";
   auto table = [&](const char* title, const std::vector<ResidualShare>& v) {
     h << "<table><tr><th>" << title << "</th><th>RMS</th><th>share of squared residual</th><th>share of samples</th></tr>";

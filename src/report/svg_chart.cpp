@@ -171,6 +171,7 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
     ymin = std::min(ymin, b.value);
   }
   if (ymax - ymin < 1e-12) ymax = ymin + 1;
+  ymax += 0.1 * (ymax - ymin);  // room for the value written above the tallest bar
   auto Y = [&](double v) { return mt + (ymax - v) / (ymax - ymin) * ph; };
   std::ostringstream o;
   o << "<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
@@ -197,13 +198,14 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
 
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
-                    int cell) {
+                    int cell, double scale_max) {
   const double ml = 110, mt = 30, mb = 50;
   const auto rows = values.rows(), cols = values.cols();
   const int width = static_cast<int>(ml + cols * cell + 20), height = static_cast<int>(mt + rows * cell + mb);
-  double vmax = 0;
-  for (Eigen::Index i = 0; i < values.size(); ++i)
-    if (std::isfinite(values(i))) vmax = std::max(vmax, values(i));
+  double vmax = scale_max;
+  if (!(vmax > 0))
+    for (Eigen::Index i = 0; i < values.size(); ++i)
+      if (std::isfinite(values(i))) vmax = std::max(vmax, values(i));
   std::ostringstream o;
   o << "<svg class=\"chart heatmap\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
     << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";

@@ -41,11 +41,12 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
                      int width = 600, int height = 280);
 
 /// HTML escaping for text nodes.
-/// A grid of cells coloured by value (white = 0 .. dark red = max), with the
-/// value written in each; NaN cells grey ("no data").
+/// A grid of cells coloured by value (white = 0 .. dark red = scale_max, or
+/// the largest value when scale_max <= 0), with the value written in each;
+/// NaN cells grey ("no data"). Give maps to be compared the same scale_max.
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
-                    int cell = 64);
+                    int cell = 64, double scale_max = 0.0);
 
 std::string escape(const std::string& s);
 

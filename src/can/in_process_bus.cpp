@@ -6,12 +6,6 @@
 
 namespace plsa::can {
 
-namespace {
-std::int64_t nowUs() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-}  // namespace
-
 struct InProcessBus::Endpoint : CanTransport {
   Endpoint(std::shared_ptr<InProcessBus> bus, std::size_t capacity) : bus_(std::move(bus)), capacity_(capacity) {}
   ~Endpoint() override {
@@ -31,7 +25,7 @@ struct InProcessBus::Endpoint : CanTransport {
     std::unique_lock<std::mutex> lock(m_);
     const auto until = std::chrono::steady_clock::now() + timeout;
     for (;;) {
-      if (!queue_.empty() && queue_.front().timestamp_us <= nowUs()) {
+      if (!queue_.empty() && queue_.front().timestamp_us <= steadyClockUs()) {
         frame = queue_.front();
         queue_.pop_front();
         ++stats_.received;
@@ -98,7 +92,7 @@ void InProcessBus::deliver(const Endpoint* from, const CanFrame& frame) {
   for (Endpoint* e : endpoints_) {
     if (e == from) continue;
     CanFrame f = frame;
-    f.timestamp_us = nowUs() + faults_.delay.count();
+    f.timestamp_us = steadyClockUs() + faults_.delay.count();
     const bool drop = uni(rng_) < faults_.drop_probability;
     const bool corrupt = !drop && f.dlc > 0 && uni(rng_) < faults_.corrupt_probability;
     if (corrupt) f.data[static_cast<std::size_t>(rng_() % f.dlc)] ^= static_cast<std::uint8_t>(1u << (rng_() % 8));

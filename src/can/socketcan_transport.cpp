@@ -36,11 +36,6 @@ std::runtime_error systemError(const std::string& what, int err) {
   return std::runtime_error("SocketCAN: " + what + ": " + std::strerror(err));
 }
 
-std::int64_t steadyNowUs() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 }  // namespace
 
 SocketCanTransport::SocketCanTransport(const SocketCanOptions& o, std::shared_ptr<SocketOps> ops) : ops_(std::move(ops)) {
@@ -132,7 +127,7 @@ TransportStatus SocketCanTransport::receive(CanFrame& frame, std::chrono::micros
       stats_.last_errno = errno;
       return TransportStatus::kIoError;
     }
-    std::int64_t stamp = steadyNowUs();
+    std::int64_t stamp = steadyClockUs();
     for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
       if (c->cmsg_level != SOL_SOCKET) continue;
       if (c->cmsg_type == SO_TIMESTAMP && c->cmsg_len >= CMSG_LEN(sizeof(timeval))) {

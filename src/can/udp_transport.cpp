@@ -19,11 +19,6 @@ namespace {
 constexpr std::uint8_t kMagic[4] = {'P', 'L', 'C', 'N'};
 constexpr std::uint8_t kVersion = 1;
 
-std::int64_t nowUs() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 sockaddr_in loopback(std::uint16_t port) {
   sockaddr_in a{};
   a.sin_family = AF_INET;
@@ -115,7 +110,7 @@ void UdpCanTransport::announceBusState(BusState state) {
 }
 
 bool UdpCanTransport::takeDue(CanFrame& frame) {
-  if (delayed_count_ == 0 || delayed_[delayed_head_].timestamp_us > nowUs()) return false;
+  if (delayed_count_ == 0 || delayed_[delayed_head_].timestamp_us > steadyClockUs()) return false;
   frame = delayed_[delayed_head_];
   delayed_head_ = (delayed_head_ + 1) % kDelayCapacity;
   --delayed_count_;
@@ -124,7 +119,7 @@ bool UdpCanTransport::takeDue(CanFrame& frame) {
 }
 
 TransportStatus UdpCanTransport::receive(CanFrame& frame, std::chrono::microseconds timeout) {
-  const std::int64_t until = nowUs() + timeout.count();
+  const std::int64_t until = steadyClockUs() + timeout.count();
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   for (;;) {
     std::uint8_t buf[64];
@@ -158,12 +153,12 @@ TransportStatus UdpCanTransport::receive(CanFrame& frame, std::chrono::microseco
         f.data[static_cast<std::size_t>(rng_() % f.dlc)] ^= static_cast<std::uint8_t>(1u << (rng_() % 8));
         ++stats_.corrupted;
       }
-      f.timestamp_us = nowUs() + faults_.delay.count();  // when it is delivered
+      f.timestamp_us = steadyClockUs() + faults_.delay.count();  // when it is delivered
       delayed_[(delayed_head_ + delayed_count_) % kDelayCapacity] = f;
       ++delayed_count_;
     }
     if (takeDue(frame)) return TransportStatus::kOk;
-    const std::int64_t now = nowUs();
+    const std::int64_t now = steadyClockUs();
     if (now >= until) return TransportStatus::kTimeout;
     std::int64_t wait = until - now;
     if (delayed_count_ > 0) wait = std::min(wait, delayed_[delayed_head_].timestamp_us - now);

@@ -14,6 +14,12 @@
 
 namespace plsa::can {
 
+/// Microseconds on the steady clock: the time base of the transports' stamps and delays.
+inline std::int64_t steadyClockUs() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 struct CanFrame {
   std::uint32_t id = 0;  ///< 11-bit standard identifier
   std::uint8_t dlc = 0;  ///< data length, 0..8

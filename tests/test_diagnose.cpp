@@ -14,7 +14,6 @@
 
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
-#include "plsa/sim/actuator.hpp"
 
 using namespace plsa;
 using namespace plsa::diagnose;
@@ -33,17 +32,9 @@ RunData recorded(const sim::SimConfig& truth, double seconds, std::uint64_t seed
   r.name = "run" + std::to_string(seed);
   r.sample_time_s = 1.0 / truth.sample_rate_hz;
   r.commands = excitationCommands(seconds, truth.sample_rate_hz, seed);
-  sim::Actuator a(truth, seed);
-  for (int k = 0; k < 240; ++k) a.step({r.commands(0, 0), r.commands(0, 1), r.commands(0, 2)});
-  Eigen::VectorXd bend(r.samples()), steer(r.samples());
-  r.pressures.resize(r.samples(), 3);
-  for (Eigen::Index i = 0; i < r.samples(); ++i) {
-    const auto s = a.step({r.commands(i, 0), r.commands(i, 1), r.commands(i, 2)});
-    bend(i) = s.bend_deg;
-    steer(i) = s.steer_deg;
-    for (int j = 0; j < 3; ++j) r.pressures(i, j) = s.pressure_bar[static_cast<std::size_t>(j)];
-  }
-  r.outputs = bendingVector(bend, steer);
+  const SimTrace t = replayCommands(truth, r.commands, seed);
+  r.outputs = t.outputs;
+  r.pressures = t.pressures;
   return r;
 }
 

@@ -14,27 +14,32 @@ Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const {
   return (v * M.topRows<2>()).rowwise() + M.row(2);
 }
 
-SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s) {
-  sim::SimConfig c = config;
-  c.sensor.noise_deg = 0.0;
-  c.sample_rate_hz = 1.0 / run.sample_time_s;
-  c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
-  sim::Actuator a(c, 1);
-  const auto first = std::array<double, 3>{run.commands(0, 0), run.commands(0, 1), run.commands(0, 2)};
-  const auto preroll = static_cast<int>(std::lround(preroll_s / run.sample_time_s));
+SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
+                        double preroll_s) {
+  sim::Actuator a(config, seed);
+  const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};
+  const auto preroll = static_cast<int>(std::lround(preroll_s * config.sample_rate_hz));
   for (int k = 0; k < preroll; ++k) a.step(first);
   SimTrace t;
-  const Eigen::Index n = run.samples();
+  const Eigen::Index n = commands.rows();
   Eigen::VectorXd bend(n), steer(n);
   t.pressures.resize(n, 3);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const sim::ActuatorSample s = a.step({run.commands(i, 0), run.commands(i, 1), run.commands(i, 2)});
+    const sim::ActuatorSample s = a.step({commands(i, 0), commands(i, 1), commands(i, 2)});
     bend(i) = s.bend_deg;
     steer(i) = s.steer_deg;
     for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = s.pressure_bar[static_cast<std::size_t>(j)];
   }
   t.outputs = bendingVector(bend, steer);
   return t;
+}
+
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s) {
+  sim::SimConfig c = config;
+  c.sensor.noise_deg = 0.0;
+  c.sample_rate_hz = 1.0 / run.sample_time_s;
+  c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
+  return replayCommands(c, run.commands, 1, preroll_s);
 }
 
 namespace {

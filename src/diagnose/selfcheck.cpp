@@ -7,7 +7,6 @@
 #include <random>
 #include <sstream>
 
-#include "plsa/sim/actuator.hpp"
 
 namespace plsa::diagnose {
 namespace {
@@ -26,23 +25,14 @@ const std::map<std::string, std::pair<double, double>>& truthRanges() {
 }
 
 RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed, const std::string& name) {
-  sim::Actuator a(truth, seed);
+  // The same 3 s pre-roll the diagnosis assumes, sensor noise on.
+  SimTrace t = replayCommands(truth, commands, seed);
   RunData r;
   r.name = name;
   r.sample_time_s = 1.0 / truth.sample_rate_hz;
   r.commands = commands;
-  const Eigen::Index n = commands.rows();
-  Eigen::VectorXd bend(n), steer(n);
-  r.pressures.resize(n, 3);
-  for (int k = 0; k < static_cast<int>(std::lround(3.0 * truth.sample_rate_hz)); ++k)
-    a.step({commands(0, 0), commands(0, 1), commands(0, 2)});  // the same pre-roll the diagnosis assumes
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const sim::ActuatorSample s = a.step({commands(i, 0), commands(i, 1), commands(i, 2)});
-    bend(i) = s.bend_deg;
-    steer(i) = s.steer_deg;
-    for (Eigen::Index j = 0; j < 3; ++j) r.pressures(i, j) = s.pressure_bar[static_cast<std::size_t>(j)];
-  }
-  r.outputs = bendingVector(bend, steer);
+  r.outputs = std::move(t.outputs);
+  r.pressures = std::move(t.pressures);
   return r;
 }
 

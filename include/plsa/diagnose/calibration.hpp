@@ -20,8 +20,13 @@ struct SimTrace {
   Eigen::MatrixXd pressures;  ///< samples x 3
 };
 
-/// Runs the simulator (its own sensor noise off) on the run's commands,
-/// after holding the first command for `preroll_s` unrecorded.
+/// Drives the simulator with `commands` (samples x 3, bar) at its own sample
+/// rate, after holding the first command for `preroll_s` unrecorded; sensor
+/// noise as configured, seeded with `seed`.
+SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
+                        double preroll_s = 3.0);
+
+/// replayCommands at the run's sample rate with the simulator's own sensor noise off.
 SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s = 3.0);
 
 /// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.

@@ -168,7 +168,10 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
   const auto n = static_cast<unsigned>(axes.size());
   if (n == 0) return best;
   std::vector<double> x(n), lo(n, 0.0), hi(n, 1.0);
-  for (unsigned i = 0; i < n; ++i) x[i] = axes[i].toUnit(*slots[i]);
+  for (unsigned i = 0; i < n; ++i) {
+    x[i] = axes[i].toUnit(*slots[i]);
+    best.values.emplace_back(axes[i].name, *slots[i]);
+  }
   int evaluations = 0;
   auto objective = [&](const std::vector<double>& xs) {
     for (unsigned i = 0; i < n; ++i) *slots[i] = axes[i].fromUnit(xs[i]);
@@ -185,6 +188,7 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
       best.train_gap = g;
       best.config = work;
       best.fit = fit;
+      for (unsigned i = 0; i < n; ++i) best.values[i].second = *slots[i];
     }
     if (o.progress && evaluations % 25 == 0) o.progress(evaluations, best.train_gap.total);
     return g.total;
@@ -196,17 +200,12 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
   opt.set_maxeval(o.max_evaluations);
   opt.set_ftol_rel(1e-5);
   using Fn = decltype(objective);
-  // nlopt::opt wants a plain function: bridge through a small adaptor.
-  struct Bridge {
-    Fn* f;
-    unsigned n;
-  } bridge{&objective, n};
+  // nlopt::opt wants a plain function pointer and a context.
   opt.set_min_objective(
       [](unsigned count, const double* xs, double*, void* data) {
-        auto* b = static_cast<Bridge*>(data);
-        return (*b->f)(std::vector<double>(xs, xs + count));
+        return (*static_cast<Fn*>(data))(std::vector<double>(xs, xs + count));
       },
-      &bridge);
+      &objective);
   double fmin = 0.0;
   try {
     opt.optimize(x, fmin);
@@ -216,13 +215,6 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
     // NLopt gave up (e.g. a flat start); the best point so far stands
   }
   best.evaluations = evaluations;
-  sim::SimConfig tmp = best.config;
-  std::size_t k = 0;
-  for (const auto& m : modules)
-    for (const sim::ParamRef& p : tmp.parameters(m)) {
-      if (m == "deadzone" && p.name == "smooth_width_bar" && tmp.deadzone.formulation != "smooth") continue;
-      best.values.emplace_back(axes[k++].name, *p.value);
-    }
   return best;
 }
 

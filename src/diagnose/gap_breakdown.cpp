@@ -142,30 +142,40 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     b.by_band.push_back({bands[i].second, overall_rms * std::sqrt(band_energy[i] / band_total), band_energy[i] / band_total, 0.0});
 
   // The pressure grid: four equal bands per chamber, by direction of that chamber.
-  const int nb = 4;
+  constexpr int nb = 4;
   for (int e = 0; e <= nb; ++e) b.grid_edges_bar.push_back(in.max_pressure_bar * e / nb);
   auto band_of = [&](double p) { return std::clamp(static_cast<int>(p / in.max_pressure_bar * nb), 0, nb - 1); };
   const std::array<std::string, 3> dir_names = {"falling", "holding", "rising"};
+  // One pass: per (chamber, band, direction) and per chamber-1 x chamber-2 cell.
+  struct Cell {
+    double sum = 0, count = 0;
+    std::array<double, 2> parts{};
+  };
+  std::array<std::array<std::array<Cell, 3>, nb>, 3> place{};
+  std::array<std::array<Cell, nb>, nb> grid{};
+  for (const auto& s : all) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      Cell& p = place[c][static_cast<std::size_t>(band_of(s.cmd[c]))][static_cast<std::size_t>(s.dir[c] + 1)];
+      p.sum += s.r_sq, p.count += 1;
+      p.parts[0] += s.parts[0], p.parts[1] += s.parts[1];
+    }
+    Cell& g = grid[static_cast<std::size_t>(band_of(s.cmd[1]))][static_cast<std::size_t>(band_of(s.cmd[0]))];
+    g.sum += s.r_sq, g.count += 1;
+  }
   for (int c = 0; c < 3; ++c)
     for (int k = 0; k < nb; ++k)
       for (int d = -1; d <= 1; ++d) {
-        double sum = 0, count = 0;
-        std::array<double, 2> parts{};
-        for (const auto& s : all)
-          if (band_of(s.cmd[static_cast<std::size_t>(c)]) == k && s.dir[static_cast<std::size_t>(c)] == d) {
-            sum += s.r_sq, count += 1;
-            parts[0] += s.parts[0], parts[1] += s.parts[1];
-          }
-        if (count < 5) continue;
+        const Cell& p = place[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)][static_cast<std::size_t>(d + 1)];
+        if (p.count < 5) continue;
         GridPlace g;
         g.chamber = c + 1;
         g.from_bar = b.grid_edges_bar[static_cast<std::size_t>(k)];
         g.to_bar = b.grid_edges_bar[static_cast<std::size_t>(k + 1)];
         g.direction = dir_names[static_cast<std::size_t>(d + 1)];
-        g.rms = std::sqrt(sum / count);
-        g.share = sum / total;
-        g.samples = count / n;
-        const std::string what = parts[0] >= parts[1] ? out_names[0] : out_names[1];
+        g.rms = std::sqrt(p.sum / p.count);
+        g.share = p.sum / total;
+        g.samples = p.count / n;
+        const std::string what = p.parts[0] >= p.parts[1] ? out_names[0] : out_names[1];
         g.words = what + ", chamber " + std::to_string(c + 1) + fmt(" between %.2f and %.2f bar", g.from_bar, g.to_bar) +
                   (d == 0 ? ", pressure holding" : (d > 0 ? ", pressure rising" : ", pressure falling")) +
                   fmt(": residual %.3g RMS, %.1fx the overall RMS, %.0f%% of the samples", g.rms, g.rms / overall_rms,
@@ -181,10 +191,8 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
   b.gap_map = Eigen::MatrixXd::Constant(nb, nb, NAN);
   for (int r = 0; r < nb; ++r)
     for (int c = 0; c < nb; ++c) {
-      double sum = 0, count = 0;
-      for (const auto& s : all)
-        if (band_of(s.cmd[0]) == c && band_of(s.cmd[1]) == r) sum += s.r_sq, count += 1;
-      if (count >= 5) b.gap_map(r, c) = std::sqrt(sum / count);
+      const Cell& g = grid[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)];
+      if (g.count >= 5) b.gap_map(r, c) = std::sqrt(g.sum / g.count);
     }
 
   // Signatures.

@@ -13,6 +13,13 @@ namespace {
 
 using nlohmann::json;
 
+template <class T, class F>
+json arrayOf(const std::vector<T>& items, F&& to_json) {
+  json j = json::array();
+  for (const auto& item : items) j.push_back(to_json(item));
+  return j;
+}
+
 json gapJson(const Gap& g) {
   return {{"percent", g.percent()}, {"outputs", g.outputs}, {"pressures", g.pressures}, {"total", g.total}};
 }
@@ -24,9 +31,9 @@ json paramsJson(const std::vector<std::pair<std::string, double>>& p) {
 }
 
 json sharesJson(const std::vector<ResidualShare>& v) {
-  json j = json::array();
-  for (const auto& s : v) j.push_back({{"part", s.label}, {"rms", s.rms}, {"share", s.share}, {"samples", s.samples}});
-  return j;
+  return arrayOf(v, [](const ResidualShare& s) {
+    return json{{"part", s.label}, {"rms", s.rms}, {"share", s.share}, {"samples", s.samples}};
+  });
 }
 
 json placeJson(const GridPlace& g) {
@@ -40,10 +47,8 @@ json breakdownJson(const Breakdown& b) {
   j["by_direction"] = sharesJson(b.by_direction);
   j["by_state"] = sharesJson(b.by_state);
   j["by_band"] = sharesJson(b.by_band);
-  j["by_region"] = json::array();
-  for (const auto& g : b.by_region) j["by_region"].push_back(placeJson(g));
-  j["top_places"] = json::array();
-  for (const auto& g : b.top_places) j["top_places"].push_back(placeJson(g));
+  j["by_region"] = arrayOf(b.by_region, placeJson);
+  j["top_places"] = arrayOf(b.top_places, placeJson);
   j["grid_edges_bar"] = b.grid_edges_bar;
   json map = json::array();
   for (Eigen::Index r = 0; r < b.gap_map.rows(); ++r) {
@@ -91,10 +96,8 @@ std::string toJson(const Diagnosis& d) {
   j["train_gap_before"] = d.train_before.percent();
   j["noise_floor"] = d.noise.percent();
   j["nominal_params"] = paramsJson(d.nominal_params);
-  j["ranking"] = json::array();
-  for (const auto& c : d.ranking) j["ranking"].push_back(candidateJson(c));
-  j["later_rounds"] = json::array();
-  for (const auto& c : d.later_rounds) j["later_rounds"].push_back(candidateJson(c));
+  j["ranking"] = arrayOf(d.ranking, candidateJson);
+  j["later_rounds"] = arrayOf(d.later_rounds, candidateJson);
   j["selected"] = d.selected;
   j["steps"] = json::array();
   for (const auto& [e, gap] : d.steps) j["steps"].push_back({{"effect", e}, {"heldout_gap_after", gap.percent()}});

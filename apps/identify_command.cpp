@@ -1,4 +1,5 @@
 // `plsa identify` (logs -> model file) and `plsa validate` (model + log -> fits).
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -130,18 +131,32 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {
-          // Each value is one candidate set, widths separated by '/', e.g. 0/0.1/0.2.
+          // Each value is one candidate set, channels separated by '/', e.g. 0/0.1/0.12u.
           a->options.play_candidates.clear();
           for (const auto& s : sets) {
-            std::vector<double> set;
+            std::vector<PlayChannel> set;
             std::stringstream ss(s);
             std::string item;
-            while (std::getline(ss, item, '/')) set.push_back(std::stod(item));
+            while (std::getline(ss, item, '/')) {
+              const bool slope = !item.empty() && item.back() == 'u';
+              const std::string number = slope ? item.substr(0, item.size() - 1) : item;
+              std::size_t used = 0;
+              double v = NAN;
+              try {
+                v = std::stod(number, &used);
+              } catch (const std::exception&) {
+                used = 0;
+              }
+              if (used == 0 || used != number.size() || !std::isfinite(v) || v < 0)
+                throw CLI::ValidationError("--play", "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)");
+              set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
+            }
             a->options.play_candidates.push_back(set);
           }
         },
-        "Candidate play channel sets, comma-separated, widths within a set by '/' as fractions of the input "
-        "range (e.g. 0,0/0.1/0.2; '0' alone is the paper's model)")
+        "Candidate play channel sets, comma-separated, channels within a set by '/': a width as a fraction of "
+        "the input range (0.1) or a band growing with the level (0.12u: 12% of the pressure); "
+        "e.g. 0,0.1,0.12u,0/0.1; '0' alone is the paper's model")
       ->delimiter(',');
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();

@@ -37,7 +37,9 @@ const Data& data() {
     o.play_candidates = {{0.1}};
     o.scheduling = "switched";
     out.switched = identifyModel({train}, o);
+    // The interpolated model also carries a band that grows with the level.
     o.scheduling = "interpolated";
+    o.play_candidates = {{0.1, PlayChannel(0.0, 0.12)}};
     out.interpolated = identifyModel({train}, o);
     // Conjugate pairs take the predictor's dense path instead of the cascade.
     out.complex_poles = out.switched;

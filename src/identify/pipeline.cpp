@@ -33,6 +33,19 @@ ClusteringResult cluster(const std::string& method, const std::vector<std::compl
 
 }  // namespace
 
+std::string formatPlaySet(const std::vector<PlayChannel>& set) {
+  auto num = [](double v) { return std::to_string(v).substr(0, 4); };
+  std::string s = "{";
+  for (std::size_t i = 0; i < set.size(); ++i) {
+    s += i ? "," : "";
+    if (set[i].slope == 0.0)
+      s += num(set[i].width);
+    else
+      s += (set[i].width == 0.0 ? "" : num(set[i].width) + "+") + num(set[i].slope) + "u";
+  }
+  return s + "}";
+}
+
 std::vector<double> midpoints(const std::vector<double>& levels) {
   std::vector<double> b;
   for (std::size_t i = 1; i < levels.size(); ++i) b.push_back(0.5 * (levels[i - 1] + levels[i]));
@@ -274,18 +287,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   require(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
   std::vector<double> range(static_cast<std::size_t>(ni));
   for (int in_i = 0; in_i < ni; ++in_i) range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
-  auto applyPlay = [&](const std::vector<double>& fractions) {
+  auto applyPlay = [&](const std::vector<PlayChannel>& set) {
     model.input_play.assign(static_cast<std::size_t>(ni), {});
     for (int in_i = 0; in_i < ni; ++in_i)
-      for (double f : fractions) {
-        require(f >= 0 && std::isfinite(f), "identify: play widths must be finite and >= 0");
-        model.input_play[static_cast<std::size_t>(in_i)].push_back(f * range[static_cast<std::size_t>(in_i)]);
+      for (const PlayChannel& c : set) {
+        require(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
+                "identify: play widths and slopes must be finite and >= 0");
+        model.input_play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
+                                                                      c.slope);
       }
-  };
-  auto fmtSet = [](const std::vector<double>& f) {
-    std::string s = "{";
-    for (std::size_t i = 0; i < f.size(); ++i) s += (i ? "," : "") + std::to_string(f[i]).substr(0, 4);
-    return s + "}";
   };
   // Blocked cross-validation: every log cut into contiguous blocks; each block
   // is scored by a model fitted on all the others.
@@ -302,7 +312,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
   }
   double best_score = -INFINITY;
-  std::vector<double> best_set;
+  std::vector<PlayChannel> best_set;
   std::size_t best_partition = 0;
   rep.play_scores.clear();
   for (std::size_t pi = 0; pi < partitions.size(); ++pi)
@@ -341,11 +351,12 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;
     std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
                     "-step fit on held-out blocks: " + (chosen_interp ? "interpolated" : "switched") +
-                    " scheduling, play channels " + fmtSet(best_set) + " of each input's range. Scores:";
+                    " scheduling, play channels " + formatPlaySet(best_set) +
+                    " (widths: fractions of each input's range; u: of its level). Scores:";
     std::size_t i = 0;
     for (const auto& [f, sc] : rep.play_scores) {
       const bool interp = partitions[i++ / o.play_candidates.size()].scheduling() == Scheduling::kInterpolated;
-      s += std::string(" ") + (interp ? "I" : "S") + fmtSet(f) + "->" + std::to_string(sc).substr(0, 5);
+      s += std::string(" ") + (interp ? "I" : "S") + formatPlaySet(f) + "->" + std::to_string(sc).substr(0, 5);
     }
     say(s);
   }

@@ -76,7 +76,20 @@ std::string modelToJson(const DioPwlObfModel& m) {
     poles.push_back(r);
   }
   j["poles"] = poles;
-  j["input_play"] = m.input_play;
+  // A fixed band is a plain number (as in files written before slopes existed).
+  json play = json::array();
+  for (const auto& list : m.input_play) {
+    json l = json::array();
+    for (const PlayChannel& c : list) {
+      if (c.slope == 0.0)
+        l.push_back(c.width);
+      else
+        l.push_back({{"width", c.width}, {"slope", c.slope}});
+    }
+    play.push_back(l);
+  }
+  j["input_play"] = play;
+  j["play_start"] = m.play_start == PlayStart::kRising ? "rising" : "centred";
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -143,10 +156,21 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
     m.poles.push_back(std::move(row));
   }
   for (const auto& list : rd.array(rd.at(j, "input_play", ""), "input_play")) {
-    std::vector<double> widths;
-    for (const auto& v : rd.array(list, "input_play[]")) widths.push_back(rd.number(v, "input_play[][]"));
-    m.input_play.push_back(std::move(widths));
+    std::vector<PlayChannel> channels;
+    for (const auto& v : rd.array(list, "input_play[]")) {
+      if (v.is_object())
+        channels.emplace_back(rd.number(rd.at(v, "width", "input_play[][]."), "input_play[][].width"),
+                              rd.number(rd.at(v, "slope", "input_play[][]."), "input_play[][].slope"));
+      else
+        channels.emplace_back(rd.number(v, "input_play[][]"));
+    }
+    m.input_play.push_back(std::move(channels));
   }
+  // Files from before the field existed started their bands centred.
+  const std::string start = j.contains("play_start") ? rd.string(j["play_start"], "play_start") : "centred";
+  if (start != "rising" && start != "centred")
+    bad(source, "'play_start' must be 'rising' or 'centred', not '" + start + "'");
+  m.play_start = start == "rising" ? PlayStart::kRising : PlayStart::kCentred;
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;
   for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {

@@ -33,15 +33,18 @@ struct IdentifyOptions {
   double max_gap_factor = 2.5;    ///< tolerated sample-time gap (dropped samples)
   double window_s = 8.0;          ///< local windows when the log has no steps
   CoefficientFitOptions coefficients;
-  /// Hysteresis memory: candidate sets of play channels, each a list of
-  /// half-widths as fractions of the input's range in the training data. The
+  /// Hysteresis memory: candidate sets of play channels. A channel's width is
+  /// a fraction of the input's range in the training data, its slope a
+  /// fraction of the input's level (a band that grows with the pressure). The
   /// set whose model predicts held-out blocks of the training data best k
-  /// steps ahead (blocked cross-validation) is kept.
-  /// {{0}} alone gives the paper's model.
-  /// Default: one channel per input, its width chosen; several channels per
-  /// set are possible but a grid of one-input steps cannot tell them apart
-  /// (nearly collinear), so they extrapolate badly (docs/identification.md).
-  std::vector<std::vector<double>> play_candidates = {{0.0}, {0.02}, {0.04}, {0.07}, {0.1}, {0.15}, {0.2}};
+  /// steps ahead (blocked cross-validation) is kept. {{0}} alone gives the
+  /// paper's model.
+  /// Default: one channel per input, fixed or growing, its size chosen;
+  /// several channels per set are possible but a grid of one-input steps
+  /// cannot tell them apart (nearly collinear), so they extrapolate badly
+  /// (docs/identification.md).
+  std::vector<std::vector<PlayChannel>> play_candidates = {
+      {0.0}, {0.02}, {0.04}, {0.07}, {0.1}, {0.15}, {0.2}, {{0.0, 0.08}}, {{0.0, 0.12}}, {{0.0, 0.16}}, {{0.0, 0.2}}};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage
@@ -57,7 +60,7 @@ struct PairPoles {
 
 struct IdentifyReport {
   int segments = 0;
-  std::vector<std::pair<std::vector<double>, double>> play_scores;  ///< (channel fractions, held-out k-step fit)
+  std::vector<std::pair<std::vector<PlayChannel>, double>> play_scores;  ///< (candidate channels, held-out k-step fit)
   bool used_windows = false;  ///< no staircase: poles from local windows
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;
@@ -65,6 +68,9 @@ struct IdentifyReport {
 };
 
 /// Throws std::invalid_argument / std::runtime_error naming the log and the problem.
+/// A candidate set as the progress lines print it: {0.10} fixed, {0.12u} growing.
+std::string formatPlaySet(const std::vector<PlayChannel>& set);
+
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& options,
                              IdentifyReport* report = nullptr);
 

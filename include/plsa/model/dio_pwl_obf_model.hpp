@@ -34,6 +34,29 @@ inline double playOperator(double input, double previous_output, double half_wid
   return std::clamp(previous_output, input - half_width, input + half_width);
 }
 
+/// One play channel: half-width `width + slope * max(0, u)`. A slope makes the
+/// band grow with the level, as when the friction behind hysteresis scales
+/// with the strain; slope 0 is a fixed band (implicit from a plain width).
+struct PlayChannel {
+  double width = 0.0;  ///< input units
+  double slope = 0.0;  ///< fraction of the (non-negative) input level
+  PlayChannel(double w = 0.0, double s = 0.0) : width(w), slope(s) {}  // NOLINT: a plain width is a channel
+  double halfWidth(double u) const noexcept { return width + slope * std::max(0.0, u); }
+  bool passesThrough() const noexcept { return width == 0.0 && slope == 0.0; }
+  bool operator==(const PlayChannel& o) const { return width == o.width && slope == o.slope; }
+};
+
+/// Where a play channel starts: every run begins from a vented actuator, so
+/// at the first sample the pressure has just risen and the band trails below
+/// it (rising). Centred was the convention of models written before this
+/// field existed; starting centred hides a band's worth of output from the
+/// first rise and leaves a lasting offset in simulation (docs/identification.md).
+enum class PlayStart { kRising, kCentred };
+
+inline double playStartState(double u, const PlayChannel& ch, PlayStart start) noexcept {
+  return start == PlayStart::kRising ? u - ch.halfWidth(u) : u;
+}
+
 struct DioPwlObfModel {
   static constexpr int kSchemaVersion = 1;
 
@@ -48,7 +71,8 @@ struct DioPwlObfModel {
   /// [input][channel] play half-widths: each input feeds one OBF bank per
   /// channel, through a play operator of that width (0 = the raw input, as in
   /// the paper). Several channels form an identified Prandtl-Ishlinskii operator.
-  std::vector<std::vector<double>> input_play;
+  std::vector<std::vector<PlayChannel>> input_play;
+  PlayStart play_start = PlayStart::kRising;
 
   int channelCount(int input) const { return static_cast<int>(input_play[static_cast<std::size_t>(input)].size()); }
   PwlPartition partition = PwlPartition::single();
@@ -75,7 +99,9 @@ struct DioPwlObfModel {
     require(input_play.size() == inputs.size(), "model: need one input_play list per input");
     for (const auto& ch : input_play) {
       require(!ch.empty(), "model: every input needs at least one play channel (width 0 for the raw input)");
-      for (double r : ch) require(std::isfinite(r) && r >= 0, "model: input_play widths must be finite and >= 0");
+      for (const PlayChannel& c : ch)
+        require(std::isfinite(c.width) && c.width >= 0 && std::isfinite(c.slope) && c.slope >= 0,
+                "model: input_play widths and slopes must be finite and >= 0");
     }
     for (std::size_t o = 0; o < poles.size(); ++o) {
       require(poles[o].size() == inputs.size(),
@@ -111,18 +137,19 @@ struct ModelRegressors {
   std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
 };
 
-/// One input through a play operator of half-width r, starting at rest
-/// (output = first sample).
-inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, double r) {
+/// One input through a play channel, starting as `start` says.
+inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& ch, PlayStart start) {
   Eigen::VectorXd v = u;
-  if (r > 0.0)
-    for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = playOperator(u(k), v(k - 1), r);
+  if (ch.passesThrough() || u.size() == 0) return v;
+  v(0) = playStartState(u(0), ch, start);
+  for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = playOperator(u(k), v(k - 1), ch.halfWidth(u(k)));
   return v;
 }
 
 /// `play` as in DioPwlObfModel::input_play; empty = one raw channel per input.
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
-                                       const Eigen::MatrixXd& u, const std::vector<std::vector<double>>& play = {}) {
+                                       const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
+                                       PlayStart start = PlayStart::kRising) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -141,8 +168,8 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
   // Channel inputs: input j through each of its play widths.
   std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
   for (std::size_t j = 0; j < n_u; ++j) {
-    const std::vector<double> widths = play.empty() ? std::vector<double>{0.0} : play[j];
-    for (double r : widths) channels[j].push_back(playedInput(u.col(static_cast<Eigen::Index>(j)), r));
+    const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];
+    for (const PlayChannel& ch : list) channels[j].push_back(playedInput(u.col(static_cast<Eigen::Index>(j)), ch, start));
   }
   for (const auto& row : poles) {
     require(row.size() == n_u, "modelRegressors: need one pole set per input");
@@ -169,7 +196,7 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
-  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play);
+  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];

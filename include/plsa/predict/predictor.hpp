@@ -126,7 +126,8 @@ class Predictor {
     if (samples_ == 0) {
       for (auto& x : x_) x.setZero();
       for (int j = 0; j < s.n_u; ++j) u_(j) = u[j];
-      for (std::size_t c = 0; c < s.play.size(); ++c) vc_(static_cast<Eigen::Index>(c)) = u_(s.channel_input[c]);
+      for (std::size_t c = 0; c < s.play.size(); ++c)
+        vc_(static_cast<Eigen::Index>(c)) = playStartState(u_(s.channel_input[c]), s.play[c], s.play_start);
       dir_ = DirectionState{};
       for (int o = 0; o < s.n_y; ++o) y_(o) = y_sim_(o) = y[o];
       t_ = time_s;
@@ -214,7 +215,8 @@ class Predictor {
     std::vector<BankVector> xi, gain;
     std::vector<int> bank_channel;                  ///< bank -> play channel
     std::vector<std::vector<int>> banks_of_output;  ///< banks in regressor order
-    std::vector<double> play;                       ///< per channel: half-width
+    std::vector<PlayChannel> play;                  ///< per channel
+    PlayStart play_start = PlayStart::kRising;
     std::vector<int> channel_input;                 ///< per channel: its input
     std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
     // Held input, every bank diagonalisable with a well-conditioned basis:
@@ -250,9 +252,10 @@ class Predictor {
     s->accept_min = std::isfinite(span) ? m.input_min - margin * span : -INFINITY;
     s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
     s->partition = m.partition;
+    s->play_start = m.play_start;
     std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
     for (int j = 0; j < s->n_u; ++j)
-      for (double r : m.input_play[static_cast<std::size_t>(j)]) {
+      for (const PlayChannel& r : m.input_play[static_cast<std::size_t>(j)]) {
         channels_of[static_cast<std::size_t>(j)].push_back(static_cast<int>(s->play.size()));
         s->play.push_back(r);
         s->channel_input.push_back(j);
@@ -479,7 +482,8 @@ class Predictor {
   void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double next = playOperator(u(s.channel_input[c]), vc(cc), s.play[c]);
+      const double ui = u(s.channel_input[c]);
+      const double next = playOperator(ui, vc(cc), s.play[c].halfWidth(ui));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;
     }

@@ -309,29 +309,58 @@ TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers
   // default and still show the effect's signature.
   for (const auto& e : effectNames()) {
     const auto& forms = formulationsOf(e);
-    ASSERT_EQ(forms.size(), 2u) << e;
-    SimConfig a = only(e), b = only(e);
-    EXPECT_EQ(a.formulationOf(e), forms[0]) << e << ": the default comes first";
-    b.formulationOf(e) = forms[1];
-    Actuator x(a, 1), y(b, 1), off(allOff(), 1);
-    double differs = 0.0, effect = 0.0;
-    for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
-      const auto rx = hold(x, cmd, 4.0), ry = hold(y, cmd, 4.0), ro = hold(off, cmd, 4.0);
-      // Measured bending vector and chamber pressure: every effect shows in one of them.
-      auto v = [](const ActuatorSample& s) {
-        const double p = s.steer_deg * M_PI / 180;
-        return Eigen::Vector3d(s.bend_deg * std::cos(p), s.bend_deg * std::sin(p), 100.0 * s.pressure_bar[0]);
-      };
-      for (std::size_t k = 0; k < rx.size(); ++k) {
-        differs = std::max(differs, (v(rx[k]) - v(ry[k])).norm());
-        effect = std::max(effect, (v(ry[k]) - v(ro[k])).norm());
-        ASSERT_TRUE(std::isfinite(ry[k].bend_deg)) << e << " " << forms[1];
+    ASSERT_GE(forms.size(), 2u) << e;
+    for (std::size_t f = 1; f < forms.size(); ++f) {
+      SimConfig a = only(e), b = only(e);
+      EXPECT_EQ(a.formulationOf(e), forms[0]) << e << ": the default comes first";
+      b.formulationOf(e) = forms[f];
+      Actuator x(a, 1), y(b, 1), off(allOff(), 1);
+      double differs = 0.0, effect = 0.0;
+      for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
+        const auto rx = hold(x, cmd, 4.0), ry = hold(y, cmd, 4.0), ro = hold(off, cmd, 4.0);
+        // Measured bending vector and chamber pressure: every effect shows in one of them.
+        auto v = [](const ActuatorSample& s) {
+          const double p = s.steer_deg * M_PI / 180;
+          return Eigen::Vector3d(s.bend_deg * std::cos(p), s.bend_deg * std::sin(p), 100.0 * s.pressure_bar[0]);
+        };
+        for (std::size_t k = 0; k < rx.size(); ++k) {
+          differs = std::max(differs, (v(rx[k]) - v(ry[k])).norm());
+          effect = std::max(effect, (v(ry[k]) - v(ro[k])).norm());
+          ASSERT_TRUE(std::isfinite(ry[k].bend_deg)) << e << " " << forms[f];
+        }
       }
+      EXPECT_GT(differs, 1e-3) << e << ": " << forms[f] << " behaves exactly like " << forms[0];
+      EXPECT_GT(effect, 0.05) << e << ": " << forms[f] << " shows no effect at all";
     }
-    EXPECT_GT(differs, 1e-3) << e << ": " << forms[1] << " behaves exactly like " << forms[0];
-    EXPECT_GT(effect, 0.05) << e << ": " << forms[1] << " shows no effect at all";
   }
   SimConfig bad;
   bad.creep.formulation = "logarithmic";
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The diagnosis's flexible laws must contain the fixed ones they generalise:
+// power stiffening at exponents 1 and 2 is linear and quadratic; power flow at
+// 0.5 and 1 is orifice and linear. Same runs, sample for sample (to rounding:
+// the laws are written differently, and the square root's infinite gain at a
+// zero difference magnifies it).
+TEST(SimEffects, PowerLawsReduceToTheFixedOnes) {
+  struct Case {
+    std::string effect, fixed;
+    double exponent;
+  };
+  for (const Case& c : {Case{"stiffening", "linear", 1.0}, Case{"stiffening", "quadratic", 2.0},
+                        Case{"pneumatic_lag", "linear", 1.0}, Case{"pneumatic_lag", "orifice", 0.5}}) {
+    SimConfig a = only(c.effect), b = only(c.effect);
+    a.formulationOf(c.effect) = c.fixed;
+    b.formulationOf(c.effect) = "power";
+    (c.effect == "stiffening" ? b.stiffening.exponent : b.pneumatic_lag.exponent) = c.exponent;
+    Actuator x(a, 1), y(b, 1);
+    for (std::array<double, 3> cmd : {std::array<double, 3>{0.3, 0.2, 0}, {0.05, 0, 0.35}}) {
+      const auto rx = hold(x, cmd, 2.0), ry = hold(y, cmd, 2.0);
+      for (std::size_t k = 0; k < rx.size(); ++k) {
+        ASSERT_NEAR(rx[k].bend_deg, ry[k].bend_deg, 1e-4) << c.effect << " " << c.fixed << " k=" << k;
+        ASSERT_NEAR(rx[k].pressure_bar[0], ry[k].pressure_bar[0], 1e-6) << c.effect << " " << c.fixed;
+      }
+    }
+  }
 }

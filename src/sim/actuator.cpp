@@ -58,10 +58,18 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   delay_whole_ = static_cast<std::size_t>(std::floor(delay_steps));
   delay_frac_ = delay_steps - static_cast<double>(delay_whole_);
   delay_line_.assign(delay_whole_ + 2, {0.0, 0.0, 0.0});
-  orifice_ = config_.pneumatic_lag.formulation == "orifice";
+  const std::string& flow = config_.pneumatic_lag.formulation;
+  flow_law_ = flow == "orifice" ? FlowLaw::kOrifice
+              : flow == "choked" ? FlowLaw::kChoked
+              : flow == "power"  ? FlowLaw::kPower
+                                 : FlowLaw::kLinear;
+  const std::string& stiff = config_.stiffening.formulation;
+  stiffening_law_ = stiff == "quadratic"     ? StiffeningLaw::kQuadratic
+                    : stiff == "exponential" ? StiffeningLaw::kExponential
+                    : stiff == "power"       ? StiffeningLaw::kPower
+                                             : StiffeningLaw::kLinear;
   saturating_coupling_ = config_.coupling.formulation == "saturating";
   two_rate_creep_ = config_.creep.formulation == "two_rate";
-  quadratic_stiffening_ = config_.stiffening.formulation == "quadratic";
   random_walk_bias_ = config_.sensor_bias.formulation == "random_walk";
 }
 
@@ -92,7 +100,13 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     if (c.pneumatic_lag.enabled)
       tau = delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s;
     double drive = delayed[i] - pressure_[i];
-    if (c.pneumatic_lag.enabled && orifice_) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
+    if (c.pneumatic_lag.enabled) {
+      // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
+      if (flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
+      if (flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
+      if (flow_law_ == FlowLaw::kPower)
+        drive = std::copysign(0.1 * std::pow(std::abs(drive) / 0.1, c.pneumatic_lag.exponent), drive);
+    }
     const double rate = std::clamp(drive / tau, -c.pneumatics.max_rate_bar_per_s, c.pneumatics.max_rate_bar_per_s);
     pressure_[i] += rate * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
@@ -137,8 +151,15 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   }
 
   double omega = 2.0 * kPi * c.bending.natural_freq_hz;
-  if (c.stiffening.enabled)
-    omega *= std::sqrt(1.0 + c.stiffening.per_bar * (quadratic_stiffening_ ? sum_p * sum_p / 0.2 : sum_p));
+  if (c.stiffening.enabled) {
+    // Every law is written against a 0.2 bar reference: per_bar means the same growth there.
+    const double x = sum_p / 0.2;
+    double growth = x;
+    if (stiffening_law_ == StiffeningLaw::kQuadratic) growth = x * x;
+    if (stiffening_law_ == StiffeningLaw::kExponential) growth = std::expm1(x) / (std::exp(1.0) - 1.0);
+    if (stiffening_law_ == StiffeningLaw::kPower) growth = std::pow(std::max(0.0, x), c.stiffening.exponent);
+    omega *= std::sqrt(1.0 + c.stiffening.per_bar * 0.2 * growth);
+  }
   // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
   bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
   bend_ += bend_rate_ * dt_;

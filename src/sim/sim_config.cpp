@@ -19,6 +19,7 @@ using nlohmann::json;
 struct Field {
   std::string module;  // "" for top level
   ParamRef ref;
+  std::string only_for = "";  // a formulation that alone uses it
 };
 
 std::vector<Field> fields(SimConfig& c) {
@@ -36,13 +37,15 @@ std::vector<Field> fields(SimConfig& c) {
       {"bending", {"damping_ratio", &c.bending.damping_ratio, 0.05, 5.0, ""}},
       {"sensor", {"noise_deg", &c.sensor.noise_deg, 0.0, 10.0, "deg"}},
       {"deadzone", {"threshold_bar", &c.deadzone.threshold_bar, 0.0, 0.2, "bar"}},
-      {"deadzone", {"smooth_width_bar", &c.deadzone.smooth_width_bar, 0.001, 0.1, "bar"}},
+      {"deadzone", {"smooth_width_bar", &c.deadzone.smooth_width_bar, 0.001, 0.1, "bar"}, "smooth"},
       {"hysteresis", {"width", &c.hysteresis.width, 0.0, 0.5, "fraction"}},
       {"stiffening", {"per_bar", &c.stiffening.per_bar, 0.0, 60.0, "1/bar"}},
+      {"stiffening", {"exponent", &c.stiffening.exponent, 0.5, 3.0, ""}, "power"},
       {"coupling", {"per_bar", &c.coupling.per_bar, 0.0, 2.5, "1/bar"}},
       {"pneumatic_lag", {"fill_time_constant_s", &c.pneumatic_lag.fill_time_constant_s, 0.005, 2.0, "s"}},
       {"pneumatic_lag", {"vent_time_constant_s", &c.pneumatic_lag.vent_time_constant_s, 0.005, 2.0, "s"}},
       {"pneumatic_lag", {"delay_s", &c.pneumatic_lag.delay_s, 0.0, 0.5, "s"}},
+      {"pneumatic_lag", {"exponent", &c.pneumatic_lag.exponent, 0.3, 1.0, ""}, "power"},
       {"creep", {"fraction", &c.creep.fraction, 0.0, 0.5, ""}},
       {"creep", {"time_constant_s", &c.creep.time_constant_s, 0.1, 200.0, "s"}},
       {"sensor_bias", {"tilt_deg", &c.sensor_bias.tilt_deg, -15.0, 15.0, "deg"}},
@@ -80,9 +83,9 @@ const std::vector<std::string>& formulationsOf(const std::string& module) {
   static const std::map<std::string, std::vector<std::string>> all = {
       {"deadzone", {"sharp", "smooth"}},
       {"hysteresis", {"play", "prandtl_ishlinskii"}},
-      {"stiffening", {"linear", "quadratic"}},
+      {"stiffening", {"linear", "quadratic", "exponential", "power"}},
       {"coupling", {"multiplicative", "saturating"}},
-      {"pneumatic_lag", {"linear", "orifice"}},
+      {"pneumatic_lag", {"linear", "orifice", "choked", "power"}},
       {"creep", {"exponential", "two_rate"}},
       {"sensor_bias", {"linear_drift", "random_walk"}}};
   const auto it = all.find(module);
@@ -112,7 +115,8 @@ std::vector<ParamRef> SimConfig::parameters(const std::string& module) {
   for (auto& f : fields(*this)) {
     const bool is_nominal = module == "nominal" &&
                             std::find(nominal.begin(), nominal.end(), f.module) != nominal.end();
-    if (is_nominal || f.module == module) out.push_back(f.ref);
+    const bool used = f.only_for.empty() || *formulation(*this, f.module) == f.only_for;
+    if ((is_nominal || f.module == module) && used) out.push_back(f.ref);
   }
   if (out.empty() && module != "nominal") enabledFlag(*this, module);  // throws for unknown names
   return out;
@@ -133,9 +137,11 @@ void SimConfig::validate() const {
   for (const std::string& m : effectNames()) {
     const std::string& f = *formulation(copy, m);
     const auto& ok = formulationsOf(m);
-    if (std::find(ok.begin(), ok.end(), f) == ok.end())
-      throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " +
-                                  ok[0] + ", " + ok[1]);
+    if (std::find(ok.begin(), ok.end(), f) == ok.end()) {
+      std::string list;
+      for (const auto& name : ok) list += (list.empty() ? "" : ", ") + name;
+      throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " + list);
+    }
   }
   if (1.0 / sample_rate_hz < internal_step_s)
     throw std::invalid_argument("sim config: internal_step_s is longer than the sample period");

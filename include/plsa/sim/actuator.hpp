@@ -74,8 +74,11 @@ class Actuator {
   std::array<double, 3> creep_slow_{};  ///< second state of two-rate creep
   double yaw_walk_deg_ = 0.0;           ///< random-walk sensor yaw
   // Formulations, decoded once.
-  bool orifice_ = false, saturating_coupling_ = false, two_rate_creep_ = false, quadratic_stiffening_ = false,
-       random_walk_bias_ = false;
+  enum class FlowLaw { kLinear, kOrifice, kChoked, kPower };
+  enum class StiffeningLaw { kLinear, kQuadratic, kExponential, kPower };
+  FlowLaw flow_law_ = FlowLaw::kLinear;
+  StiffeningLaw stiffening_law_ = StiffeningLaw::kLinear;
+  bool saturating_coupling_ = false, two_rate_creep_ = false, random_walk_bias_ = false;
   Eigen::Vector2d bend_ = Eigen::Vector2d::Zero();  ///< theta * (cos phi, sin phi), rad
   Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();
   std::vector<std::array<double, 3>> delay_line_;

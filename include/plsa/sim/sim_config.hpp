@@ -70,8 +70,13 @@ struct SimConfig {
   } hysteresis;
   struct Stiffening {
     bool enabled = true;
-    std::string formulation = "linear";  ///< "linear" | "quadratic" (1 + per_bar * (sum p_eff)^2 / 0.2 bar)
-    double per_bar = 20.0;  ///< stiffness grows by (1 + per_bar * sum p_eff)
+    /// Stiffness grows by (1 + per_bar * s), s = sum of p_eff, or:
+    /// "quadratic": 1 + per_bar s^2 / 0.2 bar;
+    /// "exponential": 1 + per_bar 0.2 bar (e^(s/0.2 bar) - 1) / (e - 1), equal to linear at 0 and 0.2 bar;
+    /// "power": 1 + per_bar 0.2 bar (s/0.2 bar)^exponent, spanning linear (1) and quadratic (2).
+    std::string formulation = "linear";
+    double per_bar = 20.0;
+    double exponent = 1.5;  ///< only for "power"
   } stiffening;
   struct Coupling {
     bool enabled = true;
@@ -82,12 +87,16 @@ struct SimConfig {
   } coupling;
   struct PneumaticLag {
     bool enabled = true;
-    /// "linear" | "orifice": flow grows with the square root of the pressure
-    /// difference (equal to linear at 0.1 bar), as through a restriction.
+    /// "linear"; "orifice": flow grows with the square root of the pressure
+    /// difference (equal to linear at 0.1 bar), as through a restriction;
+    /// "choked": flow stops growing beyond 0.05 bar of difference, as at sonic
+    /// speed; "power": difference^exponent (equal at 0.1 bar), spanning
+    /// orifice (0.5) and linear (1).
     std::string formulation = "linear";
     double fill_time_constant_s = 0.08;
     double vent_time_constant_s = 0.03;
     double delay_s = 0.03;
+    double exponent = 0.75;  ///< only for "power"
   } pneumatic_lag;
   struct Creep {
     bool enabled = true;

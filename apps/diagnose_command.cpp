@@ -56,8 +56,8 @@ void runDiagnose(DiagnoseArgs& a) {
   for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());
   std::printf("ranking (held-out gap %.1f%% before):\n", d.gap_before.percent());
   for (const auto& c : d.ranking)
-    std::printf("  %-14s -> %5.1f%%  shrink %5.1f%%%s\n", c.effect.c_str(), c.heldout_after.percent(), c.shrink_percent,
-                c.signature.present ? "  (signature supports it)" : "");
+    std::printf("  %-14s %-18s -> %5.1f%%  shrink %5.1f%%%s\n", c.effect.c_str(), ("(" + c.formulation + ")").c_str(),
+                c.heldout_after.percent(), c.shrink_percent, c.signature.present ? "  (signature supports it)" : "");
   std::printf("wrote %s/diagnosis.json, report.html, calibrated_sim.json (%.0f s)\n", a.out.c_str(), d.elapsed_s);
 }
 
@@ -108,6 +108,12 @@ void addDiagnoseCommands(CLI::App& app) {
                 "angles (outputs are bend, steer in deg) or affine (an unknown affine image of the bending vector, fitted)")
       ->check(CLI::IsMember({"angles", "affine"}));
   c->add_option("--candidates", a->options.candidates, "Effects to try (default: every one switched off)")->delimiter(',');
+  c->add_flag("--fixed-laws", [a](std::int64_t n) { a->options.flexible_laws = n == 0; },
+              "Calibrate each candidate with the formulation its configuration names, instead of its flexible "
+              "law (stiffening and pneumatic_lag: a power law spanning the fixed ones)");
+  c->add_option("--evaluations-per-parameter", a->options.calibration.evaluations_per_parameter,
+                "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
+      ->check(CLI::Range(0, 1000));
   c->add_option("--evaluations", a->options.calibration.max_evaluations, "Simulator runs per calibration")
       ->check(CLI::Range(20, 100000));
   c->add_option("--margin", a->options.margin, "An effect must shrink the held-out gap by this many noise floors")
@@ -120,13 +126,19 @@ void addDiagnoseCommands(CLI::App& app) {
   auto s = std::make_shared<SelfcheckArgs>();
   CLI::App* sc = app.add_subcommand("diagnose-selfcheck", "Score the diagnosis blind on data with withheld effects");
   sc->add_option("--effects", s->options.effects, "Single-effect cases (default: all seven)")->delimiter(',');
-  sc->add_option("--seeds", s->options.seeds_per_effect, "Cases per effect (odd ones use the other formulation)")
+  sc->add_flag("--fixed-laws", [s](std::int64_t n) { s->options.diagnose.flexible_laws = n == 0; },
+               "Diagnose with each candidate's configured formulation instead of its flexible law");
+  sc->add_option("--seeds", s->options.seeds_per_effect,
+                 "Cases per effect (odd ones generate the data with a law the candidate's cannot express)")
       ->check(CLI::Range(1, 20));
   sc->add_flag("--no-pairs", s->no_pairs, "Skip the pairs of withheld effects");
   sc->add_option("--null", s->options.null_cases, "Null cases (nothing withheld)")->check(CLI::Range(0, 20));
   sc->add_option("--seed", s->options.seed, "First seed");
   sc->add_option("--train-s", s->options.train_s, "Training run length (s)")->check(CLI::Range(10.0, 600.0));
   sc->add_option("--heldout-s", s->options.heldout_s, "Held-out run length (s)")->check(CLI::Range(10.0, 600.0));
+  sc->add_option("--evaluations-per-parameter", s->options.diagnose.calibration.evaluations_per_parameter,
+                 "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
+      ->check(CLI::Range(0, 1000));
   sc->add_option("--evaluations", s->options.diagnose.calibration.max_evaluations, "Simulator runs per calibration")
       ->check(CLI::Range(20, 100000));
   sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));

@@ -143,6 +143,17 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   for (const char* key : {"effect", "heldout_gap_before", "heldout_gap_after", "shrink_percent", "params"})
     EXPECT_TRUE(j["ranking"][0].contains(key)) << key;
   EXPECT_EQ(j["ranking"][0]["effect"], "deadzone");
+  // Every candidate names the law it was calibrated with; the flexible laws
+  // replace the fixed ones where the simulator has them.
+  for (const auto& c : j["ranking"]) {
+    const std::string e = c["effect"], law = c["formulation"];
+    if (e == "stiffening" || e == "pneumatic_lag") {
+      EXPECT_EQ(law, "power") << e;
+      EXPECT_TRUE(c["params"].contains(e + ".exponent")) << e;
+    } else {
+      EXPECT_EQ(law, sim::formulationsOf(e)[0]) << e;
+    }
+  }
 
   // The report renders its charts in a real browser.
   const char* chromium = "/usr/bin/chromium";

@@ -156,8 +156,6 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
     if (m != "nominal" && !work.effectEnabled(m))
       throw std::invalid_argument("calibrate: effect '" + m + "' is switched off; switch it on to calibrate it");
     for (const sim::ParamRef& p : work.parameters(m)) {
-      // A smooth deadzone's width only matters for that formulation.
-      if (m == "deadzone" && p.name == "smooth_width_bar" && work.deadzone.formulation != "smooth") continue;
       slots.push_back(p.value);
       axes.push_back({m + "." + p.name, p.lower, p.upper, p.lower > 0 && p.upper / p.lower > 20});
     }
@@ -197,7 +195,7 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
   opt.set_lower_bounds(lo);
   opt.set_upper_bounds(hi);
   opt.set_initial_step(std::vector<double>(n, o.initial_step));
-  opt.set_maxeval(o.max_evaluations);
+  opt.set_maxeval(std::max(o.max_evaluations, o.evaluations_per_parameter * static_cast<int>(n)));
   opt.set_ftol_rel(1e-5);
   using Fn = decltype(objective);
   // nlopt::opt wants a plain function pointer and a context.

@@ -53,14 +53,19 @@ Breakdown breakdownFor(const sim::SimConfig& c, const std::vector<RunData>& runs
 // (present but doing nothing, so the fit can only improve on the baseline)
 // and the best by training gap of the simulator's own values and two spread
 // points (a neutral start alone can sit in a poor basin).
+void lagTimesAtNominal(sim::SimConfig& c) {
+  c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = c.pneumatics.time_constant_s;
+}
+
 void setNeutral(sim::SimConfig& c, const std::string& effect) {
   if (effect == "deadzone") c.deadzone.threshold_bar = 0.0;
   if (effect == "hysteresis") c.hysteresis.width = 0.0;
   if (effect == "stiffening") c.stiffening.per_bar = 0.0;
   if (effect == "coupling") c.coupling.per_bar = 0.0;
   if (effect == "pneumatic_lag") {
-    c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = c.pneumatics.time_constant_s;
+    lagTimesAtNominal(c);
     c.pneumatic_lag.delay_s = 0.0;
+    c.pneumatic_lag.exponent = 1.0;  // a power law is the nominal linear one only at 1
   }
   if (effect == "creep") c.creep.fraction = 0.0;
   if (effect == "sensor_bias") c.sensor_bias.tilt_deg = c.sensor_bias.yaw_drift_deg_per_s = 0.0;
@@ -71,8 +76,7 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
   sim::SimConfig neutral = c;
   setNeutral(neutral, effect);
   std::vector<sim::SimConfig> spread = {c};
-  if (effect == "pneumatic_lag")
-    spread[0].pneumatic_lag.fill_time_constant_s = spread[0].pneumatic_lag.vent_time_constant_s = c.pneumatics.time_constant_s;
+  if (effect == "pneumatic_lag") lagTimesAtNominal(spread[0]);
   for (double u : {0.2, 0.6}) {
     sim::SimConfig trial = c;
     for (const sim::ParamRef& p : trial.parameters(effect)) {
@@ -162,10 +166,25 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
     std::vector<CandidateResult> results(remaining.size());
     std::vector<sim::SimConfig> configs(remaining.size());
     std::vector<OutputFit> fits(remaining.size());
+    // The bar a candidate must clear: the current model re-calibrated with a
+    // candidate's budget and nothing added. Without it, any candidate was
+    // credited with what further optimisation of the kept parameters buys,
+    // and later rounds kept effects that were not there.
+    Gap null_gap = current_gap;
+    auto recalibrateAlone = [&] {
+      std::vector<std::string> modules = {"nominal"};
+      modules.insert(modules.end(), selected.begin(), selected.end());
+      const CalibrationResult r = calibrate(current, modules, train, o.calibration);
+      OutputFit f = r.fit;
+      null_gap = measureGap(r.config, held, g, &f, false);
+    };
     auto work = [&](std::size_t i) {
+      if (i == remaining.size()) return recalibrateAlone();
       const std::string& e = remaining[i];
       sim::SimConfig c = current;
       c.setEffectEnabled(e, true);
+      const auto& laws = sim::formulationsOf(e);
+      if (o.flexible_laws && std::find(laws.begin(), laws.end(), "power") != laws.end()) c.formulationOf(e) = "power";
       std::vector<std::string> modules = {"nominal"};
       modules.insert(modules.end(), selected.begin(), selected.end());
       modules.push_back(e);
@@ -179,6 +198,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       OutputFit f = r.fit;
       CandidateResult cr;
       cr.effect = e;
+      cr.formulation = c.formulationOf(e);
       cr.round = round;
       cr.heldout_before = current_gap;
       cr.heldout_after = measureGap(r.config, held, g, &f, false);
@@ -198,7 +218,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
     std::mutex failure_mutex;
     for (std::size_t t = 0; t < threads; ++t)
       pool.emplace_back([&] {
-        for (std::size_t i = next++; i < remaining.size(); i = next++) {
+        for (std::size_t i = next++; i <= remaining.size(); i = next++) {
           try {
             work(i);
           } catch (...) {
@@ -221,12 +241,15 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       say(o, line);
       (round == 1 ? d.ranking : d.later_rounds).push_back(results[i]);
     }
+    say(o, "  round " + std::to_string(round) + ": re-calibrated with nothing added: held-out gap " +
+               pct(current_gap.percent()) + " -> " + pct(null_gap.percent()));
     const CandidateResult& best = results[order[0]];
-    const double drop = current_gap.total - best.heldout_after.total;
-    const bool beats_noise = drop > o.margin * d.noise.total && drop > o.min_relative * current_gap.total;
+    const Gap bar = null_gap.total < current_gap.total ? null_gap : current_gap;
+    const double drop = bar.total - best.heldout_after.total;
+    const bool beats_noise = drop > o.margin * d.noise.total && drop > o.min_relative * bar.total;
     if (!beats_noise) {
       say(o, "plsa diagnose: round " + std::to_string(round) + ": the best, " + best.effect +
-                 ", does not beat the noise level by the margin; stopping");
+                 ", does not beat the noise level by the margin over re-calibrating without it; stopping");
       break;
     }
     selected.push_back(best.effect);

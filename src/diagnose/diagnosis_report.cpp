@@ -66,6 +66,7 @@ json breakdownJson(const Breakdown& b) {
 
 json candidateJson(const CandidateResult& c) {
   return {{"effect", c.effect},
+          {"formulation", c.formulation},
           {"round", c.round},
           {"heldout_gap_before", c.heldout_before.percent()},
           {"heldout_gap_after", c.heldout_after.percent()},
@@ -170,8 +171,9 @@ std::string reportHtml(const Diagnosis& d) {
     std::string params;
     for (const auto& [k, v] : c.params)
       if (k.rfind(c.effect + ".", 0) == 0) params += k.substr(c.effect.size() + 1) + " = " + fmt(v, "%.4g") + "; ";
-    h << "<tr><td>" << escape(c.effect) << "</td><td>" << fmt(c.heldout_before.percent()) << "%</td><td>"
-      << fmt(c.heldout_after.percent()) << "%</td><td>" << fmt(c.shrink_percent) << "%</td><td>"
+    h << "<tr><td>" << escape(c.effect) << " (" << escape(c.formulation) << ")</td><td>"
+      << fmt(c.heldout_before.percent()) << "%</td><td>" << fmt(c.heldout_after.percent()) << "%</td><td>"
+      << fmt(c.shrink_percent) << "%</td><td>"
       << (c.signature.present ? "supports: " : "") << escape(c.signature.evidence) << "</td><td>" << escape(params)
       << "</td></tr>";
   }

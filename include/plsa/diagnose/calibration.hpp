@@ -61,6 +61,11 @@ Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& options);
 
 struct CalibrationOptions {
   int max_evaluations = 150;
+  /// ...raised to this many per calibrated parameter: BOBYQA spends 2n + 1
+  /// runs on its first model alone, and a second kept effect brings a
+  /// calibration to 13 parameters, where 150 runs stopped short (a lag +
+  /// stiffening pair then missed stiffening; docs/diagnosis.md). 0: off.
+  int evaluations_per_parameter = 20;
   double initial_step = 0.15;  ///< in the normalised (0..1, log for wide positive ranges) parameter space
   GapOptions gap;
   std::function<void(int evaluation, double best_total)> progress;  ///< optional, every 25 evaluations

@@ -14,7 +14,7 @@ namespace plsa::diagnose {
 
 struct SelfcheckOptions {
   std::vector<std::string> effects;  ///< single-effect cases; empty: all seven
-  int seeds_per_effect = 2;          ///< odd seeds generate the data with the effect's other formulation
+  int seeds_per_effect = 2;          ///< odd seeds generate the data with another law than the candidate's
   std::vector<std::pair<std::string, std::string>> pairs = {
       {"hysteresis", "creep"}, {"deadzone", "coupling"}, {"pneumatic_lag", "stiffening"}};
   int null_cases = 2;

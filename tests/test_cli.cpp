@@ -83,6 +83,15 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
   EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("ok.csv")), 1);
   EXPECT_NE(err_.find("missing field 'sample_time_s'"), std::string::npos) << err_;
   EXPECT_NE(run("simulate --experiment sine --out " + file("x.csv")), 0);
+  std::ofstream(file("steps.csv")) << "time_s,p_1,bend_deg\n0,0.1,1\n0.0125,0.2,2\n";
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --play 0.1,abc --out " +
+                file("m.json")),
+            0);
+  EXPECT_NE(err_.find("'abc' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)"), std::string::npos) << err_;
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --play -0.1u --out " +
+                file("m.json")),
+            0);
+  EXPECT_NE(err_.find("'-0.1u' is not a width"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {

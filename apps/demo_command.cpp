@@ -69,6 +69,7 @@ void runDemo(const DemoOptions& opt) {
   io_.progress = nullptr;
   io_.scheduling = "switched";
   io_.play_candidates = {{0.0}};
+  io_.play_coupling_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, io_);
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs), Yt = train.columnsOf(model.outputs);
   const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});

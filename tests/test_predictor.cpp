@@ -35,12 +35,17 @@ const Data& data() {
     const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
     IdentifyOptions o;
     o.play_candidates = {{0.1}};
+    o.play_coupling_candidates = {};
     o.scheduling = "switched";
     out.switched = identifyModel({train}, o);
     // The interpolated model also carries a band that grows with the level.
     o.scheduling = "interpolated";
     o.play_candidates = {{0.1, PlayChannel(0.0, 0.12)}};
+    o.play_coupling_candidates = {};
     out.interpolated = identifyModel({train}, o);
+    // ...coupled to the other inputs, so the predictor's coupled levels are checked too.
+    out.interpolated.play_coupling = 1.0;
+    fitCoefficients(out.interpolated, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Conjugate pairs take the predictor's dense path instead of the cascade.
     out.complex_poles = out.switched;
     for (auto& row : out.complex_poles.poles)

@@ -315,11 +315,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   std::vector<PlayChannel> best_set;
   std::size_t best_partition = 0;
   rep.play_scores.clear();
-  for (std::size_t pi = 0; pi < partitions.size(); ++pi)
-  for (const auto& set : o.play_candidates) {
-    require(!set.empty(), "identify: a play channel set is empty");
-    model.partition = partitions[pi];
-    applyPlay(set);
+  // Held-out 40-step fit of the model as configured now, averaged over outputs and blocks.
+  auto crossValidated = [&] {
     double score = 0.0;
     int n = 0;
     for (int f = 0; f < o.play_selection_folds; ++f) {
@@ -337,14 +334,41 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
           score += fitOf(BY[b].col(out_i), kStepAhead(BY[b].col(out_i), dy.col(out_i), o.play_selection_horizon));
       }
     }
-    score /= std::max(1, n);
-    rep.play_scores.emplace_back(set, score);
-    if (score > best_score + 1e-9) {
-      best_score = score;
-      best_set = set;
-      best_partition = pi;
+    return score / std::max(1, n);
+  };
+  for (std::size_t pi = 0; pi < partitions.size(); ++pi)
+    for (const auto& set : o.play_candidates) {
+      require(!set.empty(), "identify: a play channel set is empty");
+      model.partition = partitions[pi];
+      applyPlay(set);
+      const double score = crossValidated();
+      rep.play_scores.emplace_back(set, score);
+      if (score > best_score + 1e-9) {
+        best_score = score;
+        best_set = set;
+        best_partition = pi;
+      }
+    }
+  // Coupled channels, on the chosen scheduling: every play set again with
+  // each coupling (a fraction of the largest training input level, inverted).
+  double best_coupling = 0.0;
+  const double top_level = std::max(1e-12, all_u.maxCoeff());
+  for (double c : o.play_coupling_candidates) {
+    require(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
+    model.partition = partitions[best_partition];
+    model.play_coupling = c / top_level;
+    for (const auto& set : o.play_candidates) {
+      applyPlay(set);
+      const double score = crossValidated();
+      rep.coupling_scores.push_back({set, c, score});
+      if (score > best_score + 1e-9) {
+        best_score = score;
+        best_set = set;
+        best_coupling = model.play_coupling;
+      }
     }
   }
+  model.play_coupling = best_coupling;
   model.partition = partitions[best_partition];
   applyPlay(best_set);
   if (o.play_candidates.size() * partitions.size() > 1) {
@@ -358,6 +382,14 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       const bool interp = partitions[i++ / o.play_candidates.size()].scheduling() == Scheduling::kInterpolated;
       s += std::string(" ") + (interp ? "I" : "S") + formatPlaySet(f) + "->" + std::to_string(sc).substr(0, 5);
     }
+    say(s);
+  }
+  if (!rep.coupling_scores.empty()) {
+    std::string s = "[5/5] coupled to the other inputs (kappa x top level): ";
+    s += best_coupling > 0 ? "kept " + std::to_string(best_coupling * top_level).substr(0, 4) : std::string("none kept");
+    s += ". Scores:";
+    for (const auto& c : rep.coupling_scores)
+      s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" + std::to_string(c.score).substr(0, 5);
     say(s);
   }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);

@@ -45,6 +45,11 @@ struct IdentifyOptions {
   /// (docs/identification.md).
   std::vector<std::vector<PlayChannel>> play_candidates = {
       {0.0}, {0.02}, {0.04}, {0.07}, {0.1}, {0.15}, {0.2}, {{0.0, 0.08}}, {{0.0, 0.12}}, {{0.0, 0.16}}, {{0.0, 0.2}}};
+  /// Then, on the chosen scheduling, every play set again with its channels
+  /// coupled to the other inputs (DioPwlObfModel::play_coupling), kappa
+  /// given as a fraction of the largest training input level: 0.3 lets a
+  /// full neighbour cut a chamber's level by 30%. Empty: no coupling.
+  std::vector<double> play_coupling_candidates = {0.15, 0.3};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage
@@ -61,6 +66,12 @@ struct PairPoles {
 struct IdentifyReport {
   int segments = 0;
   std::vector<std::pair<std::vector<PlayChannel>, double>> play_scores;  ///< (candidate channels, held-out k-step fit)
+  struct CouplingScore {
+    std::vector<PlayChannel> set;
+    double coupling;  ///< as given in the options
+    double score;
+  };
+  std::vector<CouplingScore> coupling_scores;
   bool used_windows = false;  ///< no staircase: poles from local windows
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;

@@ -57,6 +57,15 @@ inline double playStartState(double u, const PlayChannel& ch, PlayStart start) n
   return start == PlayStart::kRising ? u - ch.halfWidth(u) : u;
 }
 
+/// What input j's play channels see: its level less kappa times its positive
+/// part times the other inputs' positive parts, `u_j - kappa u_j+ sum_k!=j u_k+`:
+/// a chamber's wall stiffened by its pressurised neighbours, to first order.
+/// kappa = 0 passes u_j through. `positive_sum` is sum_k max(0, u_k).
+inline double coupledLevel(double u_j, double positive_sum, double kappa) noexcept {
+  const double own = std::max(0.0, u_j);
+  return u_j - kappa * own * (positive_sum - own);
+}
+
 struct DioPwlObfModel {
   static constexpr int kSchemaVersion = 1;
 
@@ -73,6 +82,7 @@ struct DioPwlObfModel {
   /// the paper). Several channels form an identified Prandtl-Ishlinskii operator.
   std::vector<std::vector<PlayChannel>> input_play;
   PlayStart play_start = PlayStart::kRising;
+  double play_coupling = 0.0;  ///< kappa of coupledLevel, 1/input unit; 0 = each channel sees its own input
 
   int channelCount(int input) const { return static_cast<int>(input_play[static_cast<std::size_t>(input)].size()); }
   PwlPartition partition = PwlPartition::single();
@@ -103,6 +113,7 @@ struct DioPwlObfModel {
         require(std::isfinite(c.width) && c.width >= 0 && std::isfinite(c.slope) && c.slope >= 0,
                 "model: input_play widths and slopes must be finite and >= 0");
     }
+    require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
     for (std::size_t o = 0; o < poles.size(); ++o) {
       require(poles[o].size() == inputs.size(),
               "model: output '" + outputs[o] + "' needs one pole set per input");
@@ -149,7 +160,7 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
 /// `play` as in DioPwlObfModel::input_play; empty = one raw channel per input.
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
                                        const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
-                                       PlayStart start = PlayStart::kRising) {
+                                       PlayStart start = PlayStart::kRising, double coupling = 0.0) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -165,11 +176,18 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     partition.blend(u.row(prev), dir, out.schedule[static_cast<std::size_t>(k)]);
   }
   require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
-  // Channel inputs: input j through each of its play widths.
+  // Channel inputs: input j (coupled to the others) through each of its play channels.
+  Eigen::MatrixXd level = u;
+  if (coupling != 0.0)
+    for (Eigen::Index k = 0; k < T; ++k) {
+      const double positive_sum = u.row(k).cwiseMax(0.0).sum();
+      for (Eigen::Index j = 0; j < u.cols(); ++j) level(k, j) = coupledLevel(u(k, j), positive_sum, coupling);
+    }
   std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
   for (std::size_t j = 0; j < n_u; ++j) {
     const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];
-    for (const PlayChannel& ch : list) channels[j].push_back(playedInput(u.col(static_cast<Eigen::Index>(j)), ch, start));
+    for (const PlayChannel& ch : list)
+      channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, start));
   }
   for (const auto& row : poles) {
     require(row.size() == n_u, "modelRegressors: need one pole set per input");
@@ -196,7 +214,8 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
-  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start);
+  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
+                                              model.play_coupling);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];

@@ -126,8 +126,10 @@ class Predictor {
     if (samples_ == 0) {
       for (auto& x : x_) x.setZero();
       for (int j = 0; j < s.n_u; ++j) u_(j) = u[j];
+      const double positive_sum = u_.cwiseMax(0.0).sum();
       for (std::size_t c = 0; c < s.play.size(); ++c)
-        vc_(static_cast<Eigen::Index>(c)) = playStartState(u_(s.channel_input[c]), s.play[c], s.play_start);
+        vc_(static_cast<Eigen::Index>(c)) =
+            playStartState(coupledLevel(u_(s.channel_input[c]), positive_sum, s.coupling), s.play[c], s.play_start);
       dir_ = DirectionState{};
       for (int o = 0; o < s.n_y; ++o) y_(o) = y_sim_(o) = y[o];
       t_ = time_s;
@@ -217,6 +219,7 @@ class Predictor {
     std::vector<std::vector<int>> banks_of_output;  ///< banks in regressor order
     std::vector<PlayChannel> play;                  ///< per channel
     PlayStart play_start = PlayStart::kRising;
+    double coupling = 0.0;                          ///< coupledLevel's kappa
     std::vector<int> channel_input;                 ///< per channel: its input
     std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
     // Held input, every bank diagonalisable with a well-conditioned basis:
@@ -253,6 +256,7 @@ class Predictor {
     s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
     s->partition = m.partition;
     s->play_start = m.play_start;
+    s->coupling = m.play_coupling;
     std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
     for (int j = 0; j < s->n_u; ++j)
       for (const PlayChannel& r : m.input_play[static_cast<std::size_t>(j)]) {
@@ -480,9 +484,10 @@ class Predictor {
 
   // Plays every channel forward to u and steps each bank with its channel's change.
   void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
+    const double positive_sum = u.cwiseMax(0.0).sum();
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double ui = u(s.channel_input[c]);
+      const double ui = coupledLevel(u(s.channel_input[c]), positive_sum, s.coupling);
       const double next = playOperator(ui, vc(cc), s.play[c].halfWidth(ui));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;

@@ -484,7 +484,7 @@ class Predictor {
 
   // Plays every channel forward to u and steps each bank with its channel's change.
   void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
-    const double positive_sum = u.cwiseMax(0.0).sum();
+    const double positive_sum = s.coupling != 0.0 ? u.cwiseMax(0.0).sum() : 0.0;  // unused when uncoupled
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
       const double ui = coupledLevel(u(s.channel_input[c]), positive_sum, s.coupling);

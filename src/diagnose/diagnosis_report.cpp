@@ -133,9 +133,7 @@ std::string reportHtml(const Diagnosis& d) {
   for (std::size_t k = 0; k + 1 < d.where.grid_edges_bar.size(); ++k)
     labels.push_back(fmt(d.where.grid_edges_bar[k], "%.2f") + "-" + fmt(d.where.grid_edges_bar[k + 1], "%.2f"));
   // Both maps on the before map's colour scale, so "after" reads as lighter.
-  double scale = 0.0;
-  for (Eigen::Index i = 0; i < d.where.gap_map.size(); ++i)
-    if (std::isfinite(d.where.gap_map(i))) scale = std::max(scale, d.where.gap_map(i));
+  const double scale = report::heatScale(d.where.gap_map);
   h << "<div id=\"gap-map\">"
     << report::heatMap("Gap map: RMS residual after nominal calibration", d.where.gap_map, labels, labels,
                        "chamber 2 (bar)", "chamber 1 (bar)", 64, scale)

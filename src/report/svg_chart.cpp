@@ -196,16 +196,20 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
   return o.str();
 }
 
+double heatScale(const Eigen::MatrixXd& values) {
+  double vmax = 0.0;
+  for (Eigen::Index i = 0; i < values.size(); ++i)
+    if (std::isfinite(values(i))) vmax = std::max(vmax, values(i));
+  return vmax;
+}
+
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
                     int cell, double scale_max) {
   const double ml = 110, mt = 30, mb = 50;
   const auto rows = values.rows(), cols = values.cols();
   const int width = static_cast<int>(ml + cols * cell + 20), height = static_cast<int>(mt + rows * cell + mb);
-  double vmax = scale_max;
-  if (!(vmax > 0))
-    for (Eigen::Index i = 0; i < values.size(); ++i)
-      if (std::isfinite(values(i))) vmax = std::max(vmax, values(i));
+  const double vmax = scale_max > 0 ? scale_max : heatScale(values);
   std::ostringstream o;
   o << "<svg class=\"chart heatmap\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
     << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";

@@ -41,8 +41,11 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
                      int width = 600, int height = 280);
 
 /// HTML escaping for text nodes.
+/// The largest finite value (0 when there is none): a heat map's default scale.
+double heatScale(const Eigen::MatrixXd& values);
+
 /// A grid of cells coloured by value (white = 0 .. dark red = scale_max, or
-/// the largest value when scale_max <= 0), with the value written in each;
+/// heatScale(values) when scale_max <= 0), with the value written in each;
 /// NaN cells grey ("no data"). Give maps to be compared the same scale_max.
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,

@@ -42,6 +42,8 @@ struct PlayChannel {
   double slope = 0.0;  ///< fraction of the (non-negative) input level
   PlayChannel(double w = 0.0, double s = 0.0) : width(w), slope(s) {}  // NOLINT: a plain width is a channel
   double halfWidth(double u) const noexcept { return width + slope * std::max(0.0, u); }
+  /// The played output after `previous` once the input reaches u (the band taken at u).
+  double follow(double u, double previous) const noexcept { return playOperator(u, previous, halfWidth(u)); }
   bool passesThrough() const noexcept { return width == 0.0 && slope == 0.0; }
   bool operator==(const PlayChannel& o) const { return width == o.width && slope == o.slope; }
 };
@@ -153,7 +155,7 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
   Eigen::VectorXd v = u;
   if (ch.passesThrough() || u.size() == 0) return v;
   v(0) = playStartState(u(0), ch, start);
-  for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = playOperator(u(k), v(k - 1), ch.halfWidth(u(k)));
+  for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = ch.follow(u(k), v(k - 1));
   return v;
 }
 
@@ -177,12 +179,15 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
   }
   require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
   // Channel inputs: input j (coupled to the others) through each of its play channels.
-  Eigen::MatrixXd level = u;
-  if (coupling != 0.0)
+  Eigen::MatrixXd coupled;
+  if (coupling != 0.0) {
+    coupled.resize(T, u.cols());
     for (Eigen::Index k = 0; k < T; ++k) {
       const double positive_sum = u.row(k).cwiseMax(0.0).sum();
-      for (Eigen::Index j = 0; j < u.cols(); ++j) level(k, j) = coupledLevel(u(k, j), positive_sum, coupling);
+      for (Eigen::Index j = 0; j < u.cols(); ++j) coupled(k, j) = coupledLevel(u(k, j), positive_sum, coupling);
     }
+  }
+  const Eigen::MatrixXd& level = coupling != 0.0 ? coupled : u;
   std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
   for (std::size_t j = 0; j < n_u; ++j) {
     const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];

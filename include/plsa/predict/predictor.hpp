@@ -488,7 +488,7 @@ class Predictor {
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
       const double ui = coupledLevel(u(s.channel_input[c]), positive_sum, s.coupling);
-      const double next = playOperator(ui, vc(cc), s.play[c].halfWidth(ui));
+      const double next = s.play[c].follow(ui, vc(cc));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;
     }

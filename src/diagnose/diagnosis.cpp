@@ -183,8 +183,8 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       const std::string& e = remaining[i];
       sim::SimConfig c = current;
       c.setEffectEnabled(e, true);
-      const auto& laws = sim::formulationsOf(e);
-      if (o.flexible_laws && std::find(laws.begin(), laws.end(), "power") != laws.end()) c.formulationOf(e) = "power";
+      const std::string flexible = sim::flexibleFormulationOf(e);
+      if (o.flexible_laws && !flexible.empty()) c.formulationOf(e) = flexible;
       std::vector<std::string> modules = {"nominal"};
       modules.insert(modules.end(), selected.begin(), selected.end());
       modules.push_back(e);

@@ -31,12 +31,12 @@ const std::map<std::string, std::pair<double, double>>& truthRanges() {
 // mismatch of form.
 std::vector<std::string> lawsOutsideTheCandidate(const std::string& effect, bool flexible) {
   const auto& laws = sim::formulationsOf(effect);
-  const bool has_power = std::find(laws.begin(), laws.end(), "power") != laws.end();
+  const std::string flexible_law = sim::flexibleFormulationOf(effect);
   std::vector<std::string> out;
   for (std::size_t i = 1; i < laws.size(); ++i) {
     const std::string& f = laws[i];
-    if (f == "power") continue;
-    if (flexible && has_power && (f == "quadratic" || f == "orifice")) continue;
+    if (f == flexible_law) continue;
+    if (flexible && !flexible_law.empty() && (f == "quadratic" || f == "orifice")) continue;
     out.push_back(f);
   }
   return out;

@@ -93,6 +93,11 @@ const std::vector<std::string>& formulationsOf(const std::string& module) {
   return it->second;
 }
 
+std::string flexibleFormulationOf(const std::string& effect) {
+  const auto& laws = formulationsOf(effect);
+  return std::find(laws.begin(), laws.end(), "power") != laws.end() ? "power" : "";
+}
+
 std::string& SimConfig::formulationOf(const std::string& effect) {
   std::string* f = formulation(*this, effect);
   if (!f) throw std::invalid_argument("unknown effect '" + effect + "'");

@@ -127,6 +127,10 @@ struct SimConfig {
 /// The formulations an effect can take, its default first.
 const std::vector<std::string>& formulationsOf(const std::string& effect);
 
+/// The effect's flexible law (one whose shape parameter spans its fixed
+/// laws: "power" for stiffening and pneumatic_lag), or "" when it has none.
+std::string flexibleFormulationOf(const std::string& effect);
+
 /// JSON I/O. Unknown keys and wrong types are errors naming the key path.
 SimConfig loadSimConfig(const std::string& path);
 SimConfig simConfigFromJson(const std::string& text, const std::string& source = "<json>");

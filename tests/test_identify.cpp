@@ -289,6 +289,21 @@ TEST(ModelFile, PlayChannelsAndStartRoundTrip) {
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
 }
 
+TEST(ModelFile, ScheduleLagRoundTripsAndOldFilesHaveNone) {
+  DioPwlObfModel m = knownModel();
+  m.schedule_lag_s = 0.4;
+  EXPECT_EQ(modelFromJson(modelToJson(m)).schedule_lag_s, 0.4);
+  EXPECT_NEAR(m.schedulePole(), std::exp(-m.sample_time_s / 0.4), 1e-15);
+  nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+  j.erase("schedule_lag_s");
+  EXPECT_EQ(modelFromJson(j.dump()).schedule_lag_s, 0.0);
+  EXPECT_EQ(modelFromJson(j.dump()).schedulePole(), 0.0);
+  j["schedule_lag_s"] = -0.1;
+  EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
+  j["schedule_lag_s"] = "slow";
+  EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
+}
+
 // Rising from a vent, the band trails below the first pressure, so the next
 // rise moves the played input at once; centred, the first half-band is lost.
 TEST(PlayChannel, RisingStartFollowsTheFirstRiseAndSlopeGrowsTheBand) {

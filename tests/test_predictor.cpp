@@ -18,7 +18,7 @@ using namespace plsa;
 namespace {
 
 struct Data {
-  DioPwlObfModel switched, interpolated, complex_poles, repeated_poles, close_poles;
+  DioPwlObfModel switched, interpolated, lagged, complex_poles, repeated_poles, close_poles;
   Eigen::MatrixXd u, y;  // validation run
   double dt = 0.0125;
 };
@@ -46,6 +46,11 @@ const Data& data() {
     // ...coupled to the other inputs, so the predictor's coupled levels are checked too.
     out.interpolated.play_coupling = 1.0;
     fitCoefficients(out.interpolated, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    // Scheduled through a lag: the predictor carries the lagged inputs, and a
+    // held input keeps moving the schedule until the lag settles.
+    out.lagged = out.interpolated;
+    out.lagged.schedule_lag_s = 0.4;
+    fitCoefficients(out.lagged, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Conjugate pairs take the predictor's dense path instead of the cascade.
     out.complex_poles = out.switched;
     for (auto& row : out.complex_poles.poles)
@@ -132,6 +137,8 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   expectAgreement<5>(d.switched, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.switched, d.u, d.y, d.dt);
   expectAgreement<5>(d.interpolated, d.u, d.y, d.dt);
+  expectAgreement<5>(d.lagged, d.u, d.y, d.dt);
+  expectAgreement<Eigen::Dynamic>(d.lagged, d.u, d.y, d.dt);
   expectAgreement<5>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<5>(d.repeated_poles, d.u, d.y, d.dt);
@@ -140,7 +147,7 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
 
 TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
   const Data& d = data();
-  Predictor<5> p(d.interpolated);
+  Predictor<5> p(d.interpolated), lagged(d.lagged);
   Predictor<> q(d.switched);
   Eigen::MatrixXd out(80, 2), plan(79, 3);
   Eigen::Vector3d u;
@@ -157,6 +164,9 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     if (p.update(k * d.dt, u, y) != PredictorStatus::kOk || q.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
     if (p.predict(80, plan, out) != PredictorStatus::kOk || q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk ||
         p.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
+      FAIL();
+    if (lagged.update(k * d.dt, u, y) != PredictorStatus::kOk || lagged.predict(80, plan, out) != PredictorStatus::kOk ||
+        lagged.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
   }
   const auto allocations = guard.allocations();

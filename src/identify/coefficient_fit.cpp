@@ -47,7 +47,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
             "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     require(Y[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
     const ModelRegressors reg = modelRegressors(model.poles, model.partition, U[r], model.input_play, model.play_start,
-                                                model.play_coupling);
+                                                model.play_coupling, model.schedulePole());
     for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
       const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
       for (int m = 0; m < b.count; ++m) count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];

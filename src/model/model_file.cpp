@@ -91,6 +91,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["input_play"] = play;
   j["play_start"] = m.play_start == PlayStart::kRising ? "rising" : "centred";
   j["play_coupling"] = m.play_coupling;
+  j["schedule_lag_s"] = m.schedule_lag_s;
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -173,6 +174,7 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
     bad(source, "'play_start' must be 'rising' or 'centred', not '" + start + "'");
   m.play_start = start == "rising" ? PlayStart::kRising : PlayStart::kCentred;
   m.play_coupling = j.contains("play_coupling") ? rd.number(j["play_coupling"], "play_coupling") : 0.0;
+  m.schedule_lag_s = j.contains("schedule_lag_s") ? rd.number(j["schedule_lag_s"], "schedule_lag_s") : 0.0;
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;
   for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {

@@ -85,6 +85,13 @@ struct DioPwlObfModel {
   std::vector<std::vector<PlayChannel>> input_play;
   PlayStart play_start = PlayStart::kRising;
   double play_coupling = 0.0;  ///< kappa of coupledLevel, 1/input unit; 0 = each channel sees its own input
+  /// The partition is looked up at the inputs through a first-order lag of
+  /// this time constant (unit gain), 0 = at the raw inputs (the paper). The
+  /// coefficients then follow the actuator's state rather than its command,
+  /// which keeps the integrated increments from drifting (docs/identification.md).
+  double schedule_lag_s = 0.0;
+  /// Pole of that lag per sample (0 when there is none).
+  double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
   int channelCount(int input) const { return static_cast<int>(input_play[static_cast<std::size_t>(input)].size()); }
   PwlPartition partition = PwlPartition::single();
@@ -116,6 +123,7 @@ struct DioPwlObfModel {
                 "model: input_play widths and slopes must be finite and >= 0");
     }
     require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
+    require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     for (std::size_t o = 0; o < poles.size(); ++o) {
       require(poles[o].size() == inputs.size(),
               "model: output '" + outputs[o] + "' needs one pole set per input");
@@ -162,7 +170,8 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
 /// `play` as in DioPwlObfModel::input_play; empty = one raw channel per input.
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
                                        const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
-                                       PlayStart start = PlayStart::kRising, double coupling = 0.0) {
+                                       PlayStart start = PlayStart::kRising, double coupling = 0.0,
+                                       double schedule_pole = 0.0) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -171,11 +180,15 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
   out.schedule.resize(static_cast<std::size_t>(T));
   DirectionState dir;
   Eigen::RowVectorXd du = Eigen::RowVectorXd::Zero(u.cols());
+  // The schedule of sample k sees the inputs up to k-1 through the lag, which
+  // starts settled at the first input.
+  Eigen::RowVectorXd lagged = T > 0 ? u.row(0) : Eigen::RowVectorXd();
   for (Eigen::Index k = 0; k < T; ++k) {
     const Eigen::Index prev = k == 0 ? 0 : k - 1;
     if (k >= 2) du = u.row(k - 1) - u.row(k - 2);
     if (k >= 2) partition.updateDirections(du, dir);
-    partition.blend(u.row(prev), dir, out.schedule[static_cast<std::size_t>(k)]);
+    if (k >= 2) lagged = schedule_pole * lagged + (1.0 - schedule_pole) * u.row(prev);
+    partition.blend(lagged, dir, out.schedule[static_cast<std::size_t>(k)]);
   }
   require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
   // Channel inputs: input j (coupled to the others) through each of its play channels.
@@ -220,7 +233,7 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
   const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
-                                              model.play_coupling);
+                                              model.play_coupling, model.schedulePole());
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];

@@ -70,6 +70,8 @@ class Predictor {
     u_.setZero(nu);
     du_.setZero(nu);
     work_u_.setZero(nu);
+    us_.setZero(nu);
+    work_us_.setZero(nu);
     vc_.setZero(nc);
     work_vc_.setZero(nc);
     delta_.setZero(nc);
@@ -126,6 +128,7 @@ class Predictor {
     if (samples_ == 0) {
       for (auto& x : x_) x.setZero();
       for (int j = 0; j < s.n_u; ++j) u_(j) = u[j];
+      us_ = u_;  // the schedule's lag starts settled
       const double positive_sum = u_.cwiseMax(0.0).sum();
       for (std::size_t c = 0; c < s.play.size(); ++c)
         vc_(static_cast<Eigen::Index>(c)) =
@@ -137,7 +140,7 @@ class Predictor {
       return status;
     }
     if (options_.simulate) {  // the increment predicted for this sample, before it is consumed
-      increments(s, x_, u_, dir_, dy_);
+      increments(s, x_, us_, dir_, dy_);
       y_sim_ += dy_;
     }
     for (int j = 0; j < s.n_u; ++j) {
@@ -146,6 +149,7 @@ class Predictor {
     }
     s.partition.updateDirections(du_, dir_);
     advance(s, x_, vc_, u_);
+    us_ = s.schedule_pole * us_ + (1.0 - s.schedule_pole) * u_;
     for (int o = 0; o < s.n_y; ++o) y_(o) = y[o];
     t_ = time_s;
     ++samples_;
@@ -166,12 +170,14 @@ class Predictor {
     if (!plan.allFinite()) return PredictorStatus::kNotFinite;
     for (std::size_t b = 0; b < x_.size(); ++b) work_x_[b] = x_[b];
     work_y_ = options_.simulate ? y_sim_ : y_;
-    if (plan.rows() == 0) return predictHeld(s, horizon, out);
+    // A held input keeps the schedule fixed only once its lag has settled.
+    if (plan.rows() == 0 && us_ == u_) return predictHeld(s, horizon, out);
     work_u_ = u_;
+    work_us_ = us_;
     work_vc_ = vc_;
     DirectionState dir = dir_;
     for (int h = 0; h < horizon; ++h) {
-      increments(s, work_x_, work_u_, dir, dy_);
+      increments(s, work_x_, work_us_, dir, dy_);
       work_y_ += dy_;
       out.row(h) = work_y_.transpose();
       if (h + 1 == horizon) break;
@@ -183,6 +189,7 @@ class Predictor {
         s.partition.updateDirections(du_, dir);
       }
       advance(s, work_x_, work_vc_, work_u_);
+      work_us_ = s.schedule_pole * work_us_ + (1.0 - s.schedule_pole) * work_u_;
     }
     return PredictorStatus::kOk;
   }
@@ -220,6 +227,7 @@ class Predictor {
     std::vector<PlayChannel> play;                  ///< per channel
     PlayStart play_start = PlayStart::kRising;
     double coupling = 0.0;                          ///< coupledLevel's kappa
+    double schedule_pole = 0.0;                     ///< lag of the scheduling inputs, per sample
     std::vector<int> channel_input;                 ///< per channel: its input
     std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
     // Held input, every bank diagonalisable with a well-conditioned basis:
@@ -257,6 +265,7 @@ class Predictor {
     s->partition = m.partition;
     s->play_start = m.play_start;
     s->coupling = m.play_coupling;
+    s->schedule_pole = m.schedulePole();
     std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
     for (int j = 0; j < s->n_u; ++j)
       for (const PlayChannel& r : m.input_play[static_cast<std::size_t>(j)]) {
@@ -367,7 +376,8 @@ class Predictor {
     s.modal = true;
   }
 
-  // dy for the next sample from filter states x, scheduled on (u, dir).
+  // dy for the next sample from filter states x, scheduled on (u, dir): u is
+  // the lagged input when the model has a schedule lag.
   void increments(const Slot& s, const std::vector<BankVector>& x, const Eigen::VectorXd& u,
                   const DirectionState& dir, Eigen::VectorXd& dy) const noexcept {
     ScheduleBlend blend;
@@ -513,7 +523,7 @@ class Predictor {
   // Real-time state, all sized at construction.
   std::vector<BankVector> x_, work_x_;
   BankVector tmp_;
-  Eigen::VectorXd u_, du_, work_u_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
+  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
   std::vector<Eigen::VectorXd> blended_;    // per output, for held-input predictions
   std::vector<Eigen::VectorXd> mode_coef_;  // per output, modal held-input path
   DirectionState dir_;

@@ -107,6 +107,17 @@ void runValidate(const ValidateArgs& a) {
   if (!a.csv.empty()) io::writeCsvLog(a.csv, predictionLog(v));
 }
 
+// The whole of `text` as a finite number >= 0, else false.
+bool parseNonNegative(const std::string& text, double& value) {
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used > 0 && used == text.size() && std::isfinite(value) && value >= 0;
+}
+
 }  // namespace
 
 void addIdentifyCommands(CLI::App& app) {
@@ -140,14 +151,8 @@ void addIdentifyCommands(CLI::App& app) {
             while (std::getline(ss, item, '/')) {
               const bool slope = !item.empty() && item.back() == 'u';
               const std::string number = slope ? item.substr(0, item.size() - 1) : item;
-              std::size_t used = 0;
               double v = NAN;
-              try {
-                v = std::stod(number, &used);
-              } catch (const std::exception&) {
-                used = 0;
-              }
-              if (used == 0 || used != number.size() || !std::isfinite(v) || v < 0)
+              if (!parseNonNegative(number, v))
                 throw CLI::ValidationError("--play", "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)");
               set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
             }
@@ -158,6 +163,16 @@ void addIdentifyCommands(CLI::App& app) {
         "the input range (0.1) or a band growing with the level (0.12u: 12% of the pressure); "
         "e.g. 0,0.1,0.12u,0/0.1; '0' alone is the paper's model")
       ->delimiter(',');
+  id->add_option("--schedule-lag", a->options.schedule_lag_candidates,
+                 "Candidate time constants (s) of a lag on the scheduling inputs, tried against none by "
+                 "cross-validation; '0' alone keeps the paper's schedule on the raw inputs")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            double x = NAN;
+            return parseNonNegative(v, x) ? std::string() : "'" + v + "' is not a time constant in seconds (e.g. 0.4)";
+          },
+          "SECONDS"));
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

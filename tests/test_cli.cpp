@@ -92,6 +92,10 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'-0.1u' is not a width"), std::string::npos) << err_;
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " +
+                file("m.json")),
+            0);
+  EXPECT_NE(err_.find("'-1' is not a time constant in seconds"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {

@@ -31,6 +31,13 @@ ClusteringResult cluster(const std::string& method, const std::vector<std::compl
   throw std::invalid_argument("unknown pole method '" + method + "' (fkcm, fcm, kmeans, global)");
 }
 
+// Shortest form that round-trips a plain candidate value: 0.4, 0.15.
+std::string formatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 }  // namespace
 
 std::string formatPlaySet(const std::vector<PlayChannel>& set) {
@@ -390,6 +397,29 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     s += ". Scores:";
     for (const auto& c : rep.coupling_scores)
       s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" + std::to_string(c.score).substr(0, 5);
+    say(s);
+  }
+  // A lag on the scheduling inputs, on the chosen model: it moves the
+  // coefficients with the actuator's state rather than its command.
+  if (!o.schedule_lag_candidates.empty()) {
+    double best_lag = 0.0;
+    rep.schedule_lag_scores.emplace_back(0.0, best_score);
+    for (double lag : o.schedule_lag_candidates) {
+      require(lag >= 0 && std::isfinite(lag), "identify: schedule lags must be finite and >= 0");
+      model.schedule_lag_s = lag;
+      const double score = crossValidated();
+      rep.schedule_lag_scores.emplace_back(lag, score);
+      if (score > best_score + 1e-9) {
+        best_score = score;
+        best_lag = lag;
+      }
+    }
+    model.schedule_lag_s = best_lag;
+    std::string s = "[5/5] lag on the scheduling inputs: ";
+    s += best_lag > 0 ? "kept " + formatNumber(best_lag) + " s" : std::string("none kept");
+    s += ". Scores:";
+    for (const auto& [lag, sc] : rep.schedule_lag_scores)
+      s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
     say(s);
   }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);

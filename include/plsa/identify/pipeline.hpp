@@ -50,6 +50,10 @@ struct IdentifyOptions {
   /// given as a fraction of the largest training input level: 0.3 lets a
   /// full neighbour cut a chamber's level by 30%. Empty: no coupling.
   std::vector<double> play_coupling_candidates = {0.15, 0.3};
+  /// Then the time constants (s) of a lag on the scheduling inputs
+  /// (DioPwlObfModel::schedule_lag_s) tried against none, on the chosen
+  /// model. Empty: no lag (the paper's schedule on the raw inputs).
+  std::vector<double> schedule_lag_candidates = {0.1, 0.2, 0.4, 0.8};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage
@@ -72,6 +76,7 @@ struct IdentifyReport {
     double score;
   };
   std::vector<CouplingScore> coupling_scores;
+  std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   bool used_windows = false;  ///< no staircase: poles from local windows
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;

@@ -70,6 +70,8 @@ DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::
                               const std::vector<Eigen::MatrixXd>& Y) {
   DioPwlObfModel g = m;
   g.partition = PwlPartition::single();
+  g.schedule_side = ScheduleSide::kOutput;  // one region: both sides are the same linear model
+  g.schedule_lag_s = 0.0;
   fitCoefficients(g, U, Y);
   return g;
 }

@@ -136,9 +136,10 @@ void addIdentifyCommands(CLI::App& app) {
       ->check(CLI::Range(1, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
   id->add_option("--scheduling", a->options.scheduling,
-                 "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes) or "
-                 "switched (the paper's PWL)")
-      ->check(CLI::IsMember({"auto", "interpolated", "switched"}));
+                 "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
+                 "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "
+                 "simulation)")
+      ->check(CLI::IsMember({"auto", "interpolated", "switched", "input"}));
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {

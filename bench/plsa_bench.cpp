@@ -32,7 +32,8 @@ using Clock = std::chrono::steady_clock;
 // Poles spread like identified ones (FKcM centres about 0.02 apart in 0.84..0.95),
 // or, with `clustered`, drawn uniformly from 0.85..0.99 where near-equal
 // poles make the held path fall back from modal coordinates to the cascade.
-plsa::DioPwlObfModel syntheticModel(int chambers, int outputs, int poles, std::uint64_t seed, bool clustered = false) {
+plsa::DioPwlObfModel syntheticModel(int chambers, int outputs, int poles, std::uint64_t seed, bool clustered = false,
+                                    bool input_side = false) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uniform_pole(0.85, 0.99), jitter(-0.005, 0.005), coef(-1.0, 1.0);
   plsa::DioPwlObfModel m;
@@ -57,6 +58,7 @@ plsa::DioPwlObfModel syntheticModel(int chambers, int outputs, int poles, std::u
     levels.push_back({0.2, 0.25, 0.3, 0.35});
   }
   m.partition = plsa::PwlPartition::interpolated(inputs, levels);
+  if (input_side) m.schedule_side = plsa::ScheduleSide::kInput;  // a bank per grid node: 16x the filters
   m.coefficients.assign(static_cast<std::size_t>(m.partition.regionCount()), {});
   for (auto& region : m.coefficients)
     for (int o = 0; o < outputs; ++o) {
@@ -181,8 +183,9 @@ void writeJson(const std::string& path) {
 }
 
 template <int NP>
-void latencyFor(const std::string& tag, int chambers, long calls, bool with_naive, bool clustered = false) {
-  const plsa::DioPwlObfModel m = syntheticModel(chambers, 2, 5, 7, clustered);
+void latencyFor(const std::string& tag, int chambers, long calls, bool with_naive, bool clustered = false,
+                bool input_side = false) {
+  const plsa::DioPwlObfModel m = syntheticModel(chambers, 2, 5, 7, clustered, input_side);
   plsa::PredictorOptions po;
   po.max_horizon = 400;
   plsa::Predictor<NP> p(m, po);
@@ -238,6 +241,7 @@ void runLatency(long calls) {
   latencyFor<5>("1 chamber, fixed", 1, calls, false);
   latencyFor<5>("3 chambers, fixed", 3, calls, false);
   latencyFor<5>("3 chambers, fixed, clustered poles", 3, calls, false, true);
+  latencyFor<5>("3 chambers, fixed, input side", 3, calls / 4, false, false, true);
   // N independent 3-chamber segments, each updated and predicted 40 steps per tick.
   for (int n : {1, 10, 50, 100}) {
     std::vector<std::unique_ptr<plsa::Predictor<5>>> segs;

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -302,6 +303,22 @@ TEST(ModelFile, ScheduleLagRoundTripsAndOldFilesHaveNone) {
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
   j["schedule_lag_s"] = "slow";
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
+  j["schedule_lag_s"] = 0.4;
+  EXPECT_EQ(modelFromJson(j.dump()).schedule_side, ScheduleSide::kOutput);  // files from before the field
+  j["schedule_side"] = "sideways";
+  try {
+    modelFromJson(j.dump());
+    ADD_FAILURE() << "accepted schedule_side 'sideways'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'output' or 'input'"), std::string::npos) << e.what();
+  }
+  j["schedule_side"] = "input";  // needs an interpolated partition; this one is switched
+  try {
+    modelFromJson(j.dump());
+    ADD_FAILURE() << "accepted an input-side switched partition";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("interpolated partition"), std::string::npos) << e.what();
+  }
 }
 
 // Rising from a vent, the band trails below the first pressure, so the next
@@ -393,6 +410,47 @@ TEST(Pipeline, ScheduleLagStopsTheSimulationDriftOfAStateSideNonlinearity) {
     EXPECT_GT(v.outputs[i].fit_sim, w.outputs[i].fit_sim + 10.0) << v.outputs[i].name;
     EXPECT_GE(v.outputs[i].fit_k.at(40), w.outputs[i].fit_k.at(40) - 0.5) << v.outputs[i].name;
   }
+}
+
+// Input side, the increments are exact differences of one static map
+// followed by stable filters: an input path that wanders and comes back
+// returns the simulated output to where it started, whatever the
+// coefficients. Output side (the paper's structure) it does not.
+TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
+  sim::SimConfig clean;
+  for (const std::string& e : sim::effectNames()) clean.setEffectEnabled(e, false);
+  sim::ExperimentOptions eo;
+  eo.hold_s = 2.0;
+  sim::Actuator a(clean, 1);
+  const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
+  IdentifyOptions o;
+  o.play_candidates = {{0.0}};
+  o.play_coupling_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.scheduling = "input";
+  const DioPwlObfModel input_side = identifyModel({train}, o);
+  ASSERT_EQ(input_side.schedule_side, ScheduleSide::kInput);
+  o.scheduling = "interpolated";
+  const DioPwlObfModel output_side = identifyModel({train}, o);
+  ASSERT_EQ(output_side.schedule_side, ScheduleSide::kOutput);
+  // 30 s of random wandering over the grid, back to the start, then 30 s held.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> step(0.0, 0.004);
+  const int wander = 2400, hold = 2400;
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(wander + hold, 3);
+  u.row(0) << 0.25, 0.3, 0.0;
+  for (int k = 1; k < wander; ++k)
+    for (int j = 0; j < 2; ++j) u(k, j) = std::clamp(u(k - 1, j) + step(rng), 0.2, 0.35);
+  for (int k = wander; k < wander + hold; ++k) u.row(k) = u.row(0);
+  const Eigen::MatrixXd di = modelIncrements(input_side, u), dout = modelIncrements(output_side, u);
+  for (int out = 0; out < 2; ++out) {
+    const double travel = di.col(out).cwiseAbs().sum();
+    EXPECT_GT(travel, 5.0) << "the output should move along the way";
+    EXPECT_LT(std::abs(di.col(out).sum()), 1e-9 * travel) << input_side.outputs[static_cast<std::size_t>(out)];
+    EXPECT_GT(std::abs(dout.col(out).sum()), 1e-3 * travel) << "output side should not close the loop here";
+  }
+  // The model file keeps the side.
+  EXPECT_EQ(modelFromJson(modelToJson(input_side)).schedule_side, ScheduleSide::kInput);
 }
 
 TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {

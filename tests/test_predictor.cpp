@@ -18,7 +18,7 @@ using namespace plsa;
 namespace {
 
 struct Data {
-  DioPwlObfModel switched, interpolated, lagged, complex_poles, repeated_poles, close_poles;
+  DioPwlObfModel switched, interpolated, lagged, input_side, complex_poles, repeated_poles, close_poles;
   Eigen::MatrixXd u, y;  // validation run
   double dt = 0.0125;
 };
@@ -51,6 +51,10 @@ const Data& data() {
     out.lagged = out.interpolated;
     out.lagged.schedule_lag_s = 0.4;
     fitCoefficients(out.lagged, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    // Scheduled on the input side: a bank per grid node and channel.
+    out.input_side = out.lagged;
+    out.input_side.schedule_side = ScheduleSide::kInput;
+    fitCoefficients(out.input_side, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Conjugate pairs take the predictor's dense path instead of the cascade.
     out.complex_poles = out.switched;
     for (auto& row : out.complex_poles.poles)
@@ -139,6 +143,11 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   expectAgreement<5>(d.interpolated, d.u, d.y, d.dt);
   expectAgreement<5>(d.lagged, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.lagged, d.u, d.y, d.dt);
+  expectAgreement<5>(d.input_side, d.u, d.y, d.dt);
+  DioPwlObfModel settled = d.input_side;  // no lag: the held path runs modal
+  settled.schedule_lag_s = 0.0;
+  EXPECT_TRUE(Predictor<>(settled).heldPathIsModal());
+  expectAgreement<Eigen::Dynamic>(settled, d.u, d.y, d.dt);
   expectAgreement<5>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<5>(d.repeated_poles, d.u, d.y, d.dt);
@@ -147,7 +156,7 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
 
 TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
   const Data& d = data();
-  Predictor<5> p(d.interpolated), lagged(d.lagged);
+  Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side);
   Predictor<> q(d.switched);
   Eigen::MatrixXd out(80, 2), plan(79, 3);
   Eigen::Vector3d u;
@@ -168,6 +177,10 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     if (lagged.update(k * d.dt, u, y) != PredictorStatus::kOk || lagged.predict(80, plan, out) != PredictorStatus::kOk ||
         lagged.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
+    if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
+    if (k % 10 == 0 && (input_side.predict(80, plan, out) != PredictorStatus::kOk ||
+                        input_side.predict(80, plan.topRows(0), out) != PredictorStatus::kOk))
+      FAIL();  // every tenth tick: its 96 banks make each planned call long
   }
   const auto allocations = guard.allocations();
   EXPECT_EQ(allocations, 0u);

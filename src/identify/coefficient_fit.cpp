@@ -30,7 +30,8 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     G[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::MatrixXd::Zero(n, n));
     h[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
   }
-  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated;
+  const bool input_side = model.schedule_side == ScheduleSide::kInput;
+  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
   // Interpolated: samples couple neighbouring nodes, so each output is one
   // joint least-squares problem over all regions; switched: independent blocks.
   std::vector<Eigen::MatrixXd> J(static_cast<std::size_t>(ny));
@@ -47,7 +48,25 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
             "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     require(Y[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
     const ModelRegressors reg = modelRegressors(model.poles, model.partition, U[r], model.input_play, model.play_start,
-                                                model.play_coupling, model.schedulePole());
+                                                model.play_coupling, model.schedulePole(), model.schedule_side);
+    if (input_side) {
+      // Every node's regressors side by side: one dense least-squares problem.
+      const Eigen::Index T = U[r].rows();
+      if (T < 2) continue;
+      for (Eigen::Index k = 1; k < T; ++k) {
+        const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+        for (int m = 0; m < b.count; ++m)
+          count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
+      }
+      for (int out = 0; out < ny; ++out) {
+        const auto oo = static_cast<std::size_t>(out);
+        const auto P = reg.phi[oo].bottomRows(T - 1);
+        const Eigen::VectorXd dy = Y[r].col(out).tail(T - 1) - Y[r].col(out).head(T - 1);
+        J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+        Jh[oo].noalias() += P.transpose() * dy;
+      }
+      continue;
+    }
     for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
       const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
       for (int m = 0; m < b.count; ++m) count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
@@ -73,6 +92,13 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
       }
     }
   }
+  if (input_side)
+    for (int out = 0; out < ny; ++out) {
+      const auto oo = static_cast<std::size_t>(out);
+      const int n = model.regressorSize(out);
+      J[oo] = Eigen::MatrixXd(J[oo].selfadjointView<Eigen::Lower>());
+      for (int l = 0; l < R; ++l) G[oo][static_cast<std::size_t>(l)] = J[oo].block(l * n, l * n, n, n);
+    }
   model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
   model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
   std::vector<bool> own(static_cast<std::size_t>(R), false);

@@ -233,8 +233,9 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   constexpr std::size_t kMaxDesignedLevels = 8;
   bool designed = !rep.used_windows;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
-  require(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "auto",
-          "identify: scheduling must be 'auto', 'interpolated' or 'switched', not '" + o.scheduling + "'");
+  require(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "input" ||
+              o.scheduling == "auto",
+          "identify: scheduling must be 'auto', 'interpolated', 'switched' or 'input', not '" + o.scheduling + "'");
   std::vector<bool> schedulings;  // interpolated?
   if (o.scheduling != "switched") schedulings.push_back(true);
   if (o.scheduling != "interpolated") schedulings.push_back(false);
@@ -288,6 +289,26 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     say(s);
   }
   }
+
+  // The structures to choose from: each partition on the output side (the
+  // paper's), and the interpolated one on the input side too.
+  struct Structure {
+    std::size_t partition;
+    ScheduleSide side;
+    const char* tag;
+  };
+  std::vector<Structure> structures;
+  for (std::size_t pi = 0; pi < partitions.size(); ++pi) {
+    const bool interp = partitions[pi].scheduling() == Scheduling::kInterpolated;
+    if (o.scheduling != "input") structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
+    if (interp && !o.direction_split && (o.scheduling == "input" || o.scheduling == "auto"))
+      structures.push_back({pi, ScheduleSide::kInput, "N"});
+  }
+  require(!structures.empty(), "identify: input-side scheduling cannot split by direction");
+  auto applyStructure = [&](const Structure& st) {
+    model.partition = partitions[st.partition];
+    model.schedule_side = st.side;
+  };
 
   // Step 7: coefficients, for each candidate set of play channels; keep the
   // set whose model predicts the training data best k steps ahead.
@@ -343,10 +364,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
     return score / std::max(1, n);
   };
-  for (std::size_t pi = 0; pi < partitions.size(); ++pi)
+  for (std::size_t pi = 0; pi < structures.size(); ++pi)
     for (const auto& set : o.play_candidates) {
       require(!set.empty(), "identify: a play channel set is empty");
-      model.partition = partitions[pi];
+      applyStructure(structures[pi]);
       applyPlay(set);
       const double score = crossValidated();
       rep.play_scores.emplace_back(set, score);
@@ -362,7 +383,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   const double top_level = std::max(1e-12, all_u.maxCoeff());
   for (double c : o.play_coupling_candidates) {
     require(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
-    model.partition = partitions[best_partition];
+    applyStructure(structures[best_partition]);
     model.play_coupling = c / top_level;
     for (const auto& set : o.play_candidates) {
       applyPlay(set);
@@ -376,19 +397,21 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
   }
   model.play_coupling = best_coupling;
-  model.partition = partitions[best_partition];
+  applyStructure(structures[best_partition]);
   applyPlay(best_set);
-  if (o.play_candidates.size() * partitions.size() > 1) {
+  if (o.play_candidates.size() * structures.size() > 1) {
     const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;
+    const bool chosen_input = model.schedule_side == ScheduleSide::kInput;
     std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
-                    "-step fit on held-out blocks: " + (chosen_interp ? "interpolated" : "switched") +
+                    "-step fit on held-out blocks: " +
+                    (chosen_input ? "input-side interpolated" : chosen_interp ? "interpolated" : "switched") +
                     " scheduling, play channels " + formatPlaySet(best_set) +
-                    " (widths: fractions of each input's range; u: of its level). Scores:";
+                    " (widths: fractions of each input's range; u: of its level). Scores (I interpolated, "
+                    "S switched, N input side):";
     std::size_t i = 0;
-    for (const auto& [f, sc] : rep.play_scores) {
-      const bool interp = partitions[i++ / o.play_candidates.size()].scheduling() == Scheduling::kInterpolated;
-      s += std::string(" ") + (interp ? "I" : "S") + formatPlaySet(f) + "->" + std::to_string(sc).substr(0, 5);
-    }
+    for (const auto& [f, sc] : rep.play_scores)
+      s += std::string(" ") + structures[i++ / o.play_candidates.size()].tag + formatPlaySet(f) + "->" +
+           std::to_string(sc).substr(0, 5);
     say(s);
   }
   if (!rep.coupling_scores.empty()) {

@@ -92,6 +92,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["play_start"] = m.play_start == PlayStart::kRising ? "rising" : "centred";
   j["play_coupling"] = m.play_coupling;
   j["schedule_lag_s"] = m.schedule_lag_s;
+  j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -175,6 +176,10 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   m.play_start = start == "rising" ? PlayStart::kRising : PlayStart::kCentred;
   m.play_coupling = j.contains("play_coupling") ? rd.number(j["play_coupling"], "play_coupling") : 0.0;
   m.schedule_lag_s = j.contains("schedule_lag_s") ? rd.number(j["schedule_lag_s"], "schedule_lag_s") : 0.0;
+  const std::string side = j.contains("schedule_side") ? rd.string(j["schedule_side"], "schedule_side") : "output";
+  if (side != "output" && side != "input")
+    bad(source, "'schedule_side' must be 'output' or 'input', not '" + side + "'");
+  m.schedule_side = side == "input" ? ScheduleSide::kInput : ScheduleSide::kOutput;
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;
   for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {

@@ -68,6 +68,14 @@ inline double coupledLevel(double u_j, double positive_sum, double kappa) noexce
   return u_j - kappa * own * (positive_sum - own);
 }
 
+/// Where the schedule acts. Output side (the paper): the filters run on the
+/// input increments and the region's coefficients weigh their outputs. Input
+/// side (plsa, interpolated scheduling): each grid node filters the increments
+/// of its own weight times the played input, w_n(s) v_j, so the increments are
+/// exact differences of one static map followed by the filters, and free
+/// simulation cannot drift however the inputs wander (docs/identification.md).
+enum class ScheduleSide { kOutput, kInput };
+
 struct DioPwlObfModel {
   static constexpr int kSchemaVersion = 1;
 
@@ -90,6 +98,7 @@ struct DioPwlObfModel {
   /// coefficients then follow the actuator's state rather than its command,
   /// which keeps the integrated increments from drifting (docs/identification.md).
   double schedule_lag_s = 0.0;
+  ScheduleSide schedule_side = ScheduleSide::kOutput;
   /// Pole of that lag per sample (0 when there is none).
   double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
@@ -124,6 +133,9 @@ struct DioPwlObfModel {
     }
     require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
     require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
+    require(schedule_side == ScheduleSide::kOutput ||
+                (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
+            "model: input-side scheduling needs an interpolated partition without a direction split");
     for (std::size_t o = 0; o < poles.size(); ++o) {
       require(poles[o].size() == inputs.size(),
               "model: output '" + outputs[o] + "' needs one pole set per input");
@@ -153,8 +165,11 @@ struct DioPwlObfModel {
 /// OBF regressors of every output and the region of every sample, for an
 /// input record u (T x n_u) starting at rest. At sample k the filters have
 /// seen du_0..du_{k-1} and the region is scheduled on u_{k-1} (strictly causal).
+/// Input side: phi holds every region's regressors side by side (T x
+/// regions * regressorSize(o)), and the schedule of sample k is the weights
+/// its own input gives the nodes.
 struct ModelRegressors {
-  std::vector<Eigen::MatrixXd> phi;    ///< [output] T x regressorSize(o)
+  std::vector<Eigen::MatrixXd> phi;    ///< [output] T x regressorSize(o), or x regions times that
   std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
 };
 
@@ -171,7 +186,7 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
                                        const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
                                        PlayStart start = PlayStart::kRising, double coupling = 0.0,
-                                       double schedule_pole = 0.0) {
+                                       double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -189,6 +204,24 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     if (k >= 2) partition.updateDirections(du, dir);
     if (k >= 2) lagged = schedule_pole * lagged + (1.0 - schedule_pole) * u.row(prev);
     partition.blend(lagged, dir, out.schedule[static_cast<std::size_t>(k)]);
+  }
+  // Input side: node weights at each sample's own (lagged) input, the same
+  // lag one sample on: the output side's schedule of sample k+1.
+  const int regions = partition.regionCount();
+  Eigen::MatrixXd node_weight;
+  if (side == ScheduleSide::kInput) {
+    node_weight = Eigen::MatrixXd::Zero(T, regions);
+    for (Eigen::Index k = 0; k < T; ++k) {
+      ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+      if (k + 1 < T) b = out.schedule[static_cast<std::size_t>(k + 1)];
+      else partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
+      if (T == 1) partition.blend(u.row(0), dir, b);
+    }
+    for (Eigen::Index k = 0; k < T; ++k) {
+      const ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+      for (int m = 0; m < b.count; ++m)
+        node_weight(k, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
+    }
   }
   require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
   // Channel inputs: input j (coupled to the others) through each of its play channels.
@@ -211,18 +244,22 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     require(row.size() == n_u, "modelRegressors: need one pole set per input");
     int width = 0;
     for (std::size_t j = 0; j < n_u; ++j) width += row[j].size() * static_cast<int>(channels[j].size());
-    Eigen::MatrixXd phi(T, width);
+    const int copies = side == ScheduleSide::kInput ? regions : 1;
+    Eigen::MatrixXd phi(T, width * copies);
     int offset = 0;
-    for (std::size_t j = 0; j < n_u; ++j)
-      for (const Eigen::VectorXd& v : channels[j]) {
-        ObfBank<> bank(row[j]);
-        const int n = bank.size();
-        for (Eigen::Index k = 0; k < T; ++k) {
-          phi.block(k, offset, 1, n) = bank.state().transpose();
-          bank.step(k == 0 ? 0.0 : v(k) - v(k - 1));
+    Eigen::VectorXd f;
+    for (int r = 0; r < copies; ++r)
+      for (std::size_t j = 0; j < n_u; ++j)
+        for (const Eigen::VectorXd& v : channels[j]) {
+          ObfBank<> bank(row[j]);
+          const int n = bank.size();
+          f = side == ScheduleSide::kInput ? node_weight.col(r).cwiseProduct(v).eval() : v;
+          for (Eigen::Index k = 0; k < T; ++k) {
+            phi.block(k, offset, 1, n) = bank.state().transpose();
+            bank.step(k == 0 ? 0.0 : f(k) - f(k - 1));
+          }
+          offset += n;
         }
-        offset += n;
-      }
     out.phi.push_back(std::move(phi));
   }
   return out;
@@ -233,8 +270,19 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
   const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
-                                              model.play_coupling, model.schedulePole());
+                                              model.play_coupling, model.schedulePole(), model.schedule_side);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
+  if (model.schedule_side == ScheduleSide::kInput) {
+    for (int o = 0; o < model.outputCount(); ++o) {
+      const int n = model.regressorSize(o);
+      Eigen::VectorXd stacked(static_cast<Eigen::Index>(model.partition.regionCount()) * n);
+      for (int r = 0; r < model.partition.regionCount(); ++r)
+        stacked.segment(static_cast<Eigen::Index>(r) * n, n) =
+            model.coefficients[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
+      dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * stacked;
+    }
+    return dy;
+  }
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
     for (int o = 0; o < model.outputCount(); ++o) {

@@ -72,6 +72,10 @@ class Predictor {
     work_u_.setZero(nu);
     us_.setZero(nu);
     work_us_.setZero(nu);
+    const Eigen::Index nodes = s.input_side ? s.node_partition.regionCount() : 0;
+    node_w_.setZero(nodes);
+    work_node_w_.setZero(nodes);
+    next_node_w_.setZero(nodes);
     vc_.setZero(nc);
     work_vc_.setZero(nc);
     delta_.setZero(nc);
@@ -134,6 +138,7 @@ class Predictor {
         vc_(static_cast<Eigen::Index>(c)) =
             playStartState(coupledLevel(u_(s.channel_input[c]), positive_sum, s.coupling), s.play[c], s.play_start);
       dir_ = DirectionState{};
+      if (s.input_side) nodeWeights(s, us_, node_w_);
       for (int o = 0; o < s.n_y; ++o) y_(o) = y_sim_(o) = y[o];
       t_ = time_s;
       samples_ = 1;
@@ -148,8 +153,8 @@ class Predictor {
       u_(j) = u[j];
     }
     s.partition.updateDirections(du_, dir_);
-    advance(s, x_, vc_, u_);
     us_ = s.schedule_pole * us_ + (1.0 - s.schedule_pole) * u_;
+    advance(s, x_, vc_, us_, node_w_, u_);
     for (int o = 0; o < s.n_y; ++o) y_(o) = y[o];
     t_ = time_s;
     ++samples_;
@@ -175,6 +180,7 @@ class Predictor {
     work_u_ = u_;
     work_us_ = us_;
     work_vc_ = vc_;
+    work_node_w_ = node_w_;
     DirectionState dir = dir_;
     for (int h = 0; h < horizon; ++h) {
       increments(s, work_x_, work_us_, dir, dy_);
@@ -188,8 +194,8 @@ class Predictor {
         }
         s.partition.updateDirections(du_, dir);
       }
-      advance(s, work_x_, work_vc_, work_u_);
       work_us_ = s.schedule_pole * work_us_ + (1.0 - s.schedule_pole) * work_u_;
+      advance(s, work_x_, work_vc_, work_us_, work_node_w_, work_u_);
     }
     return PredictorStatus::kOk;
   }
@@ -228,6 +234,12 @@ class Predictor {
     PlayStart play_start = PlayStart::kRising;
     double coupling = 0.0;                          ///< coupledLevel's kappa
     double schedule_pole = 0.0;                     ///< lag of the scheduling inputs, per sample
+    // Input side: one copy of every bank per grid node, fed the increments of
+    // the node's weight times the played input; `partition` is then the single
+    // region whose stacked coefficients weigh them all.
+    bool input_side = false;
+    PwlPartition node_partition;
+    std::vector<int> bank_region;  ///< input side: bank -> grid node
     std::vector<int> channel_input;                 ///< per channel: its input
     std::vector<std::vector<Eigen::VectorXd>> coef;  ///< [region][output]
     // Held input, every bank diagonalisable with a well-conditioned basis:
@@ -262,7 +274,10 @@ class Predictor {
     const double span = m.input_max - m.input_min, margin = options.input_margin;
     s->accept_min = std::isfinite(span) ? m.input_min - margin * span : -INFINITY;
     s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
-    s->partition = m.partition;
+    s->input_side = m.schedule_side == ScheduleSide::kInput;
+    s->partition = s->input_side ? PwlPartition::single() : m.partition;
+    s->node_partition = m.partition;
+    const int copies = s->input_side ? m.partition.regionCount() : 1;
     s->play_start = m.play_start;
     s->coupling = m.play_coupling;
     s->schedule_pole = m.schedulePole();
@@ -276,39 +291,54 @@ class Predictor {
     s->banks_of_output.resize(static_cast<std::size_t>(s->n_y));
     bool all_real = true;
     for (int o = 0; o < s->n_y; ++o)
-      for (int j = 0; j < s->n_u; ++j) {
-        const PoleSet& ps = m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)];
-        if (s->bank_size == 0) s->bank_size = ps.size();
-        require(ps.size() == s->bank_size, "Predictor: every filter bank needs the same number of poles");
-        if constexpr (NP != Eigen::Dynamic)
-          require(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
-                                       std::to_string(ps.size()) + " poles");
-        const ObfBank<> bank(ps);
-        BankVector xi(ps.size()), gain(ps.size());
-        bool real = ps.sections().size() == static_cast<std::size_t>(ps.size());  // no conjugate pair
-        for (int i = 0; i < ps.size() && real; ++i) {
-          xi(i) = ps.sections()[static_cast<std::size_t>(i)].pole.real();
-          gain(i) = std::sqrt(1.0 - xi(i) * xi(i));
+      for (int r = 0; r < copies; ++r)
+        for (int j = 0; j < s->n_u; ++j) {
+          const PoleSet& ps = m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)];
+          if (s->bank_size == 0) s->bank_size = ps.size();
+          require(ps.size() == s->bank_size, "Predictor: every filter bank needs the same number of poles");
+          if constexpr (NP != Eigen::Dynamic)
+            require(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
+                                         std::to_string(ps.size()) + " poles");
+          const ObfBank<> bank(ps);
+          BankVector xi(ps.size()), gain(ps.size());
+          bool real = ps.sections().size() == static_cast<std::size_t>(ps.size());  // no conjugate pair
+          for (int i = 0; i < ps.size() && real; ++i) {
+            xi(i) = ps.sections()[static_cast<std::size_t>(i)].pole.real();
+            gain(i) = std::sqrt(1.0 - xi(i) * xi(i));
+          }
+          all_real = all_real && real;
+          for (int c : channels_of[static_cast<std::size_t>(j)]) {
+            s->A.push_back(bank.A());
+            s->B.push_back(bank.B());
+            s->xi.push_back(real ? xi : BankVector::Zero(ps.size()));
+            s->gain.push_back(real ? gain : BankVector::Zero(ps.size()));
+            s->bank_channel.push_back(c);
+            s->bank_region.push_back(r);
+            s->banks_of_output[static_cast<std::size_t>(o)].push_back(static_cast<int>(s->A.size()) - 1);
+          }
         }
-        all_real = all_real && real;
-        for (int c : channels_of[static_cast<std::size_t>(j)]) {
-          s->A.push_back(bank.A());
-          s->B.push_back(bank.B());
-          s->xi.push_back(real ? xi : BankVector::Zero(ps.size()));
-          s->gain.push_back(real ? gain : BankVector::Zero(ps.size()));
-          s->bank_channel.push_back(c);
-          s->banks_of_output[static_cast<std::size_t>(o)].push_back(static_cast<int>(s->A.size()) - 1);
-        }
-      }
     s->cascade = all_real;
     s->coef = m.coefficients;
+    if (s->input_side) {  // the nodes' coefficients stacked in bank order, as one region
+      std::vector<Eigen::VectorXd> stacked;
+      for (int o = 0; o < s->n_y; ++o) {
+        const Eigen::Index n = m.regressorSize(o);
+        Eigen::VectorXd c(copies * n);
+        for (int r = 0; r < copies; ++r)
+          c.segment(r * n, n) = m.coefficients[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
+        stacked.push_back(std::move(c));
+      }
+      s->coef = {stacked};
+    }
     if (all_real) setUpModal(m, options.max_horizon, *s);
     if (shape) {
       const bool same = shape->n_u == s->n_u && shape->n_y == s->n_y && shape->bank_size == s->bank_size &&
                         shape->bank_channel == s->bank_channel && shape->coef.size() == s->coef.size() &&
                         shape->partition.inputs() == s->partition.inputs() &&
                         shape->partition.scheduling() == s->partition.scheduling() &&
-                        shape->partition.directionSplit() == s->partition.directionSplit();
+                        shape->partition.directionSplit() == s->partition.directionSplit() &&
+                        shape->input_side == s->input_side && shape->bank_region == s->bank_region &&
+                        shape->node_partition.inputs() == s->node_partition.inputs();
       require(same, "Predictor::install: the new model's structure differs from the running one");
       s->accept_min = shape->accept_min;
       s->accept_max = shape->accept_max;
@@ -493,7 +523,20 @@ class Predictor {
   }
 
   // Plays every channel forward to u and steps each bank with its channel's change.
-  void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& u) noexcept {
+  // Dense node weights (input side) at the scheduling point us.
+  void nodeWeights(const Slot& s, const Eigen::VectorXd& us, Eigen::VectorXd& w) const noexcept {
+    ScheduleBlend blend;
+    s.node_partition.blend(us, DirectionState{}, blend);
+    w.setZero();
+    for (int m = 0; m < blend.count; ++m)
+      w(blend.region[static_cast<std::size_t>(m)]) += blend.weight[static_cast<std::size_t>(m)];
+  }
+
+  // Moves the played channels to the input u and steps every bank with its
+  // increment; input side, the increment of its node's weight (at the lagged
+  // input us; node_w holds the previous weights) times the channel.
+  void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
+               Eigen::VectorXd& node_w, const Eigen::VectorXd& u) noexcept {
     const double positive_sum = s.coupling != 0.0 ? u.cwiseMax(0.0).sum() : 0.0;  // unused when uncoupled
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
@@ -502,7 +545,17 @@ class Predictor {
       delta_(cc) = next - vc(cc);
       vc(cc) = next;
     }
-    for (std::size_t b = 0; b < x.size(); ++b) stepBank(s, b, x[b], delta_(s.bank_channel[b]));
+    if (!s.input_side) {
+      for (std::size_t b = 0; b < x.size(); ++b) stepBank(s, b, x[b], delta_(s.bank_channel[b]));
+      return;
+    }
+    nodeWeights(s, us, next_node_w_);
+    for (std::size_t b = 0; b < x.size(); ++b) {
+      const auto c = static_cast<Eigen::Index>(s.bank_channel[b]);
+      const Eigen::Index r = s.bank_region[b];
+      stepBank(s, b, x[b], next_node_w_(r) * vc(c) - node_w(r) * (vc(c) - delta_(c)));
+    }
+    node_w = next_node_w_;
   }
 
   void adoptPendingModel() noexcept {
@@ -523,6 +576,7 @@ class Predictor {
   // Real-time state, all sized at construction.
   std::vector<BankVector> x_, work_x_;
   BankVector tmp_;
+  Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
   std::vector<Eigen::VectorXd> blended_;    // per output, for held-input predictions
   std::vector<Eigen::VectorXd> mode_coef_;  // per output, modal held-input path

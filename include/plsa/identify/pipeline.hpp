@@ -27,7 +27,9 @@ struct IdentifyOptions {
   int quantile_levels = 3;
   bool direction_split = false;
   /// "interpolated" (coefficients blended between grid nodes), "switched"
-  /// (the paper's PWL) or "auto" (both tried, chosen by blocked cross-validation).
+  /// (the paper's PWL), "input" (interpolated on the input side:
+  /// DioPwlObfModel::schedule_side) or "auto" (all three tried, chosen by
+  /// blocked cross-validation; input side only without a direction split).
   std::string scheduling = "auto";
   double step_threshold = 0.005;  ///< a reference change above this is a step
   double max_gap_factor = 2.5;    ///< tolerated sample-time gap (dropped samples)

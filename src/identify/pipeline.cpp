@@ -341,7 +341,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   double best_score = -INFINITY;
   std::vector<PlayChannel> best_set;
-  std::size_t best_partition = 0;
+  std::size_t best_structure = 0;
   rep.play_scores.clear();
   // Held-out 40-step fit of the model as configured now, averaged over outputs and blocks.
   auto crossValidated = [&] {
@@ -374,7 +374,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       if (score > best_score + 1e-9) {
         best_score = score;
         best_set = set;
-        best_partition = pi;
+        best_structure = pi;
       }
     }
   // Coupled channels, on the chosen scheduling: every play set again with
@@ -383,7 +383,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   const double top_level = std::max(1e-12, all_u.maxCoeff());
   for (double c : o.play_coupling_candidates) {
     require(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
-    applyStructure(structures[best_partition]);
+    applyStructure(structures[best_structure]);
     model.play_coupling = c / top_level;
     for (const auto& set : o.play_candidates) {
       applyPlay(set);
@@ -397,7 +397,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
   }
   model.play_coupling = best_coupling;
-  applyStructure(structures[best_partition]);
+  applyStructure(structures[best_structure]);
   applyPlay(best_set);
   if (o.play_candidates.size() * structures.size() > 1) {
     const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;

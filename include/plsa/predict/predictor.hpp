@@ -522,7 +522,6 @@ class Predictor {
     return PredictorStatus::kOk;
   }
 
-  // Plays every channel forward to u and steps each bank with its channel's change.
   // Dense node weights (input side) at the scheduling point us.
   void nodeWeights(const Slot& s, const Eigen::VectorXd& us, Eigen::VectorXd& w) const noexcept {
     ScheduleBlend blend;

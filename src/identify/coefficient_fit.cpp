@@ -49,15 +49,15 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     require(Y[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
     const ModelRegressors reg = modelRegressors(model.poles, model.partition, U[r], model.input_play, model.play_start,
                                                 model.play_coupling, model.schedulePole(), model.schedule_side);
+    for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
+      const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+      for (int m = 0; m < b.count; ++m)
+        count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
+    }
     if (input_side) {
       // Every node's regressors side by side: one dense least-squares problem.
       const Eigen::Index T = U[r].rows();
       if (T < 2) continue;
-      for (Eigen::Index k = 1; k < T; ++k) {
-        const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-        for (int m = 0; m < b.count; ++m)
-          count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
-      }
       for (int out = 0; out < ny; ++out) {
         const auto oo = static_cast<std::size_t>(out);
         const auto P = reg.phi[oo].bottomRows(T - 1);
@@ -69,7 +69,6 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     }
     for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
       const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-      for (int m = 0; m < b.count; ++m) count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
       for (int out = 0; out < ny; ++out) {
         const auto oo = static_cast<std::size_t>(out);
         const auto phi = reg.phi[oo].row(k).transpose();

@@ -108,6 +108,15 @@ struct DioPwlObfModel {
   std::vector<RegionFit> region_fits;                       ///< [region]
 
   int inputCount() const { return static_cast<int>(inputs.size()); }
+  /// Every region's coefficients for `output`, end to end in region order:
+  /// the weights of an input-side model's stacked regressors.
+  Eigen::VectorXd stackedCoefficients(int output) const {
+    const Eigen::Index n = regressorSize(output);
+    Eigen::VectorXd c(static_cast<Eigen::Index>(coefficients.size()) * n);
+    for (std::size_t r = 0; r < coefficients.size(); ++r)
+      c.segment(static_cast<Eigen::Index>(r) * n, n) = coefficients[r][static_cast<std::size_t>(output)];
+    return c;
+  }
   int outputCount() const { return static_cast<int>(outputs.size()); }
   int regressorSize(int output) const {
     int n = 0;
@@ -214,8 +223,7 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     for (Eigen::Index k = 0; k < T; ++k) {
       ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
       if (k + 1 < T) b = out.schedule[static_cast<std::size_t>(k + 1)];
-      else partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
-      if (T == 1) partition.blend(u.row(0), dir, b);
+      else if (k > 0) partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
     }
     for (Eigen::Index k = 0; k < T; ++k) {
       const ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
@@ -273,14 +281,7 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
                                               model.play_coupling, model.schedulePole(), model.schedule_side);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   if (model.schedule_side == ScheduleSide::kInput) {
-    for (int o = 0; o < model.outputCount(); ++o) {
-      const int n = model.regressorSize(o);
-      Eigen::VectorXd stacked(static_cast<Eigen::Index>(model.partition.regionCount()) * n);
-      for (int r = 0; r < model.partition.regionCount(); ++r)
-        stacked.segment(static_cast<Eigen::Index>(r) * n, n) =
-            model.coefficients[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
-      dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * stacked;
-    }
+    for (int o = 0; o < model.outputCount(); ++o) dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * model.stackedCoefficients(o);
     return dy;
   }
   for (Eigen::Index k = 0; k < u.rows(); ++k) {

@@ -321,13 +321,7 @@ class Predictor {
     s->coef = m.coefficients;
     if (s->input_side) {  // the nodes' coefficients stacked in bank order, as one region
       std::vector<Eigen::VectorXd> stacked;
-      for (int o = 0; o < s->n_y; ++o) {
-        const Eigen::Index n = m.regressorSize(o);
-        Eigen::VectorXd c(copies * n);
-        for (int r = 0; r < copies; ++r)
-          c.segment(r * n, n) = m.coefficients[static_cast<std::size_t>(r)][static_cast<std::size_t>(o)];
-        stacked.push_back(std::move(c));
-      }
+      for (int o = 0; o < s->n_y; ++o) stacked.push_back(m.stackedCoefficients(o));
       s->coef = {stacked};
     }
     if (all_real) setUpModal(m, options.max_horizon, *s);

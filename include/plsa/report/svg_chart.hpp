@@ -40,7 +40,6 @@ struct Bar {
 std::string barChart(const std::string& title, const std::vector<Bar>& bars, const std::string& y_label,
                      int width = 600, int height = 280);
 
-/// HTML escaping for text nodes.
 /// The largest finite value (0 when there is none): a heat map's default scale.
 double heatScale(const Eigen::MatrixXd& values);
 
@@ -51,6 +50,7 @@ std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, con
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
                     int cell = 64, double scale_max = 0.0);
 
+/// HTML escaping for text nodes.
 std::string escape(const std::string& s);
 
 }  // namespace plsa::report

@@ -479,5 +479,9 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
     EXPECT_GT(v.outputs[o].fit_k.at(80), 86.0) << v.outputs[o].name;
     EXPECT_GT(v.outputs[o].fit_k.at(40), w.outputs[o].fit_k.at(40) + 8.0) << v.outputs[o].name;
     EXPECT_GT(v.outputs[o].fit_k.at(80), w.outputs[o].fit_k.at(80) + 15.0) << v.outputs[o].name;
+    // Free simulation from the settled start (86.5 and 84.0 when written; the
+    // paper's configuration drifts to 21 and 28).
+    EXPECT_GT(v.outputs[o].fit_sim, 75.0) << v.outputs[o].name;
+    EXPECT_GT(v.outputs[o].fit_sim, w.outputs[o].fit_sim + 40.0) << v.outputs[o].name;
   }
 }

@@ -277,6 +277,31 @@ TEST(SimActuator, ClampsCommandsAndRejectsNaN) {
   EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
 }
 
+// Free simulation starts from a steady state, so the validation run must:
+// creep (8 s) left unsettled by a short pre-roll would read as model error.
+TEST(SimExperiments, JoystickRunStartsSettled) {
+  ExperimentOptions o;
+  o.joystick_duration_s = 1.0;
+  const Experiment joy = joystickExperiment(o);
+  auto trueBendAfter = [&](Eigen::Index rows, double extra_hold_s) {
+    Actuator a(SimConfig{}, 7);
+    ActuatorSample s;
+    std::array<double, 3> cmd{};
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      for (int c = 0; c < 3; ++c) cmd[static_cast<std::size_t>(c)] = joy.commands(k, c);
+      s = a.step(cmd);
+    }
+    for (int k = 0; k < static_cast<int>(extra_hold_s * o.sample_rate_hz); ++k) s = a.step(cmd);
+    return s.true_bend_deg;
+  };
+  const double at_start = trueBendAfter(joy.record_from, 0.0);
+  const double settled = trueBendAfter(joy.record_from, 200.0);
+  ASSERT_GT(settled, 10.0);
+  EXPECT_NEAR(at_start, settled, 0.1);
+  // The grid's 5 s pre-roll would leave about 2 degrees of creep to come.
+  EXPECT_GT(settled - trueBendAfter(static_cast<Eigen::Index>(o.preroll_s * o.sample_rate_hz), 0.0), 1.0);
+}
+
 TEST(SimExperiments, ShapesAndDeterminism) {
   ExperimentOptions o;
   const Experiment st = staircaseExperiment(o);

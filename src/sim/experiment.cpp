@@ -117,7 +117,7 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   require(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
           "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
   const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
-  require(o.preroll_s > 0, "joystick: preroll_s must be positive");
+  require(o.joystick_preroll_s > 0, "joystick: joystick_preroll_s must be positive");
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01;
   // Two passes of a critically damped second-order low-pass on white noise.
@@ -139,7 +139,7 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
     traj.col(ch) = ((x.array() - lo) / span * (o.joystick_max_bar - o.joystick_min_bar) + o.joystick_min_bar).matrix();
   }
   CommandWriter w(o.sample_rate_hz);
-  w.preroll(traj.row(0), o.preroll_s);
+  w.preroll(traj.row(0), o.joystick_preroll_s);
   w.hold(traj.row(0), 1.0);  // recorded: settled at the starting point
   const Eigen::MatrixXd head = w.matrix();
   Experiment e{"joystick", Eigen::MatrixXd(head.rows() + n, 3), w.recordFrom()};

@@ -18,7 +18,7 @@ struct ExperimentOptions {
   double sample_rate_hz = 80.0;
   double hold_s = 4.0;  ///< time at each level, long enough to settle
   double initial_rest_s = 2.0;  ///< staircase: recorded rest before the first step
-  double preroll_s = 5.0;       ///< grid2, joystick: ramp to the first point and settle, unrecorded
+  double preroll_s = 5.0;       ///< grid2: ramp to the first point and settle, unrecorded
   // staircase1
   int staircase_steps = 14;
   double staircase_max_bar = 0.35;
@@ -31,6 +31,10 @@ struct ExperimentOptions {
   double joystick_min_bar = 0.19;  ///< inside the grid's range: validation, not extrapolation
   double joystick_max_bar = 0.36;
   double joystick_bandwidth_hz = 0.3;
+  /// Unrecorded ramp and hold before a joystick run. Free simulation starts
+  /// from a steady state, so the run must too: 40 s is five time constants
+  /// of the default creep (8 s), leaving under 1% of it.
+  double joystick_preroll_s = 40.0;
   std::uint64_t seed = 1;
 };
 

@@ -5,6 +5,7 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/eval/fit.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
+#include "plsa/identify/validation.hpp"
 
 namespace plsa::app {
 namespace {
@@ -20,11 +21,12 @@ Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
   const Eigen::MatrixXd dy = modelIncrements(m, u);
+  const std::vector<AlignedPrediction> sims = simulateModel(m, u, y, dy);
   ModelPredictions out{name, {}};
   for (Eigen::Index o = 0; o < y.cols(); ++o) {
     std::map<int, Eigen::VectorXd> byh;
     for (int k : horizons) byh[k] = placed(kStepAhead(y.col(o), dy.col(o), k), y.rows());
-    byh[0] = placed(simulate(y.col(o), dy.col(o)), y.rows());
+    byh[0] = placed(sims[static_cast<std::size_t>(o)], y.rows());
     out.by_output.push_back(std::move(byh));
   }
   return out;
@@ -69,10 +71,13 @@ std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<Mod
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
                               const std::vector<Eigen::MatrixXd>& Y) {
   DioPwlObfModel g = m;
-  g.partition = PwlPartition::single();
-  g.schedule_side = ScheduleSide::kOutput;  // one region: both sides are the same linear model
+  // One region: both sides are the same linear model. An input-side model's
+  // baseline keeps the side so that it is simulated the same way (from its level).
+  const bool input_side = m.schedule_side == ScheduleSide::kInput;
+  g.partition = input_side ? PwlPartition::interpolated({}, {}) : PwlPartition::single();
   g.schedule_lag_s = 0.0;
   fitCoefficients(g, U, Y);
+  if (input_side && !m.output_level.empty()) fitOutputLevel(g, U, Y);
   return g;
 }
 

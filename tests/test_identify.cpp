@@ -305,6 +305,17 @@ TEST(ModelFile, ScheduleLagRoundTripsAndOldFilesHaveNone) {
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
   j["schedule_lag_s"] = 0.4;
   EXPECT_EQ(modelFromJson(j.dump()).schedule_side, ScheduleSide::kOutput);  // files from before the field
+  EXPECT_TRUE(modelFromJson(j.dump()).output_level.empty());
+  j["output_level"] = {1.5};  // the level of an output-side model is no function of its inputs
+  try {
+    modelFromJson(j.dump());
+    ADD_FAILURE() << "accepted output_level on an output-side model";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("output_level needs input-side"), std::string::npos) << e.what();
+  }
+  j["output_level"] = {"high"};
+  EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
+  j.erase("output_level");
   j["schedule_side"] = "sideways";
   try {
     modelFromJson(j.dump());
@@ -451,6 +462,23 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   }
   // The model file keeps the side.
   EXPECT_EQ(modelFromJson(modelToJson(input_side)).schedule_side, ScheduleSide::kInput);
+
+  // Its level is a function of the inputs: increments of modelLevels are the
+  // model's increments, and level plus output_level is the settled output.
+  ASSERT_EQ(input_side.output_level.size(), 2u);
+  EXPECT_TRUE(output_side.output_level.empty());
+  const Eigen::MatrixXd level = modelLevels(input_side, u);
+  EXPECT_LT(((level.bottomRows(u.rows() - 1) - level.topRows(u.rows() - 1)) - di.bottomRows(u.rows() - 1))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-9);
+  sim::Actuator held(clean, 3);
+  sim::ActuatorSample settled;
+  for (int k = 0; k < 800; ++k) settled = held.step({u(0, 0), u(0, 1), u(0, 2)});
+  const double truth[2] = {settled.bend_deg, settled.steer_deg};
+  for (int out = 0; out < 2; ++out)  // 0.07 and 0.06 degrees apart when written
+    EXPECT_NEAR(input_side.output_level[static_cast<std::size_t>(out)] + level(u.rows() - 1, out), truth[out], 0.3);
+  EXPECT_EQ(modelFromJson(modelToJson(input_side)).output_level, input_side.output_level);
 }
 
 TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
@@ -474,6 +502,10 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
   EXPECT_GT(ours.play_coupling, 0.0);
   const ValidationResult v = validateModel(ours, val, {40, 80});
   const ValidationResult w = validateModel(paper, val, {40, 80});
+  // A run that starts before the creep has settled.
+  eo.joystick_preroll_s = 5.0;
+  sim::Actuator c(sim::SimConfig{}, 101);
+  const ValidationResult s = validateModel(ours, sim::runExperiment(c, sim::joystickExperiment(eo)), {40});
   for (std::size_t o = 0; o < v.outputs.size(); ++o) {
     EXPECT_GT(v.outputs[o].fit_k.at(40), 90.0) << v.outputs[o].name;
     EXPECT_GT(v.outputs[o].fit_k.at(80), 86.0) << v.outputs[o].name;
@@ -483,5 +515,8 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
     // paper's configuration drifts to 21 and 28).
     EXPECT_GT(v.outputs[o].fit_sim, 75.0) << v.outputs[o].name;
     EXPECT_GT(v.outputs[o].fit_sim, w.outputs[o].fit_sim + 40.0) << v.outputs[o].name;
+    // Simulated from the model's level, an unsettled start costs little (80.3
+    // and 81.2 when written; from the first sample, bending fell to 37).
+    EXPECT_GT(s.outputs[o].fit_sim, 70.0) << v.outputs[o].name;
   }
 }

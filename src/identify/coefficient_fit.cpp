@@ -30,6 +30,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     G[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::MatrixXd::Zero(n, n));
     h[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
   }
+  model.output_level.clear();  // it belongs to the old coefficients
   const bool input_side = model.schedule_side == ScheduleSide::kInput;
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
   // Interpolated: samples couple neighbouring nodes, so each output is one
@@ -190,6 +191,23 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     report.notes.push_back("region " + std::to_string(l) + " (" + where + "): " + fit.note);
   }
   return report;
+}
+
+void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y) {
+  require(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
+  require(!U.empty() && U.size() == Y.size(), "fitOutputLevel: need matching input and output records");
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
+  double n = 0.0;
+  for (std::size_t r = 0; r < U.size(); ++r) {
+    require(Y[r].cols() == model.outputCount() && Y[r].rows() == U[r].rows() && Y[r].allFinite(),
+            "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
+    if (U[r].rows() == 0) continue;
+    sum += (Y[r] - modelLevels(model, U[r])).colwise().sum().transpose();
+    n += static_cast<double>(U[r].rows());
+  }
+  require(n > 0, "fitOutputLevel: no samples");
+  model.output_level.resize(static_cast<std::size_t>(model.outputCount()));
+  for (int o = 0; o < model.outputCount(); ++o) model.output_level[static_cast<std::size_t>(o)] = sum(o) / n;
 }
 
 }  // namespace plsa

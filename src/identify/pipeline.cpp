@@ -446,6 +446,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     say(s);
   }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);
+  // An input-side model's level is a function of its inputs: simulate from it.
+  if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Y);
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
   for (const auto& n : rep.coefficients.notes) say("      " + n);

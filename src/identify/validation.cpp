@@ -6,6 +6,27 @@
 
 namespace plsa {
 
+std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy) {
+  require(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
+              dy.rows() == u.rows(),
+          "simulateModel: the record does not match the model's outputs");
+  std::vector<AlignedPrediction> out;
+  if (model.output_level.empty()) {
+    for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
+    return out;
+  }
+  require(u.rows() >= 2, "simulateModel: need at least two samples");
+  const Eigen::MatrixXd level = modelLevels(model, u);
+  for (int o = 0; o < model.outputCount(); ++o) {
+    AlignedPrediction p;
+    p.first = 1;
+    p.values = level.col(o).tail(u.rows() - 1).array() + model.output_level[static_cast<std::size_t>(o)];
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons) {
   require(!horizons.empty(), "validate: no horizons given");
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
@@ -17,6 +38,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
       static_cast<double>(((u.array() < model.input_min - 1e-9) || (u.array() > model.input_max + 1e-9)).rowwise().any().count()) /
       static_cast<double>(u.rows());
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<AlignedPrediction> sims = simulateModel(model, u, y, dy);
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;
     ov.name = model.outputs[static_cast<std::size_t>(o)];
@@ -29,7 +51,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
       full.segment(p.first, p.values.size()) = p.values;
       ov.predicted_k[k] = full;
     }
-    const AlignedPrediction s = simulate(ov.measured, dy.col(o));
+    const AlignedPrediction& s = sims[static_cast<std::size_t>(o)];
     ov.fit_sim = fitOf(ov.measured, s);
     ov.simulated = Eigen::VectorXd::Constant(y.rows(), nan);
     ov.simulated.segment(s.first, s.values.size()) = s.values;

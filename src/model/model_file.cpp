@@ -93,6 +93,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["play_coupling"] = m.play_coupling;
   j["schedule_lag_s"] = m.schedule_lag_s;
   j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
+  if (!m.output_level.empty()) j["output_level"] = m.output_level;
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -180,6 +181,8 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   if (side != "output" && side != "input")
     bad(source, "'schedule_side' must be 'output' or 'input', not '" + side + "'");
   m.schedule_side = side == "input" ? ScheduleSide::kInput : ScheduleSide::kOutput;
+  if (j.contains("output_level"))
+    for (const auto& v : rd.array(j["output_level"], "output_level")) m.output_level.push_back(rd.number(v, "output_level[]"));
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;
   for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {

@@ -30,4 +30,8 @@ struct CoefficientFitReport {
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                                      const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& options = {});
 
+/// Input-side models: output_level as the mean of y - modelLevels over every
+/// training sample, so that free simulation needs no measured start.
+void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y);
+
 }  // namespace plsa

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "plsa/eval/dio_prediction.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
@@ -25,6 +26,12 @@ struct ValidationResult {
   Eigen::VectorXd time;
   double input_outside_range = 0.0;  ///< share of samples outside the model's training input range
 };
+
+/// Free simulation of every output from the inputs, for samples 1..T-1:
+/// from the model's output_level when it has one, else from the first
+/// measured sample. `dy` is modelIncrements(model, u).
+std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy);
 
 /// Throws naming the missing column or the bad horizon.
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons);

@@ -99,6 +99,12 @@ struct DioPwlObfModel {
   /// which keeps the integrated increments from drifting (docs/identification.md).
   double schedule_lag_s = 0.0;
   ScheduleSide schedule_side = ScheduleSide::kOutput;
+  /// Input side only: the output's level is a function of the inputs alone,
+  /// y = output_level + sum of the filtered weighted inputs (modelLevels), so
+  /// free simulation need not start from a measured sample, whose unsettled
+  /// transient it would otherwise carry for ever. Empty: simulation starts
+  /// from the first measured sample. [output]
+  std::vector<double> output_level;
   /// Pole of that lag per sample (0 when there is none).
   double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
@@ -142,6 +148,11 @@ struct DioPwlObfModel {
     }
     require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
     require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
+    require(output_level.empty() || schedule_side == ScheduleSide::kInput,
+            "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
+    require(output_level.empty() || output_level.size() == outputs.size(),
+            "model: output_level needs one value per output");
+    for (double b : output_level) require(std::isfinite(b), "model: output_level values must be finite");
     require(schedule_side == ScheduleSide::kOutput ||
                 (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
             "model: input-side scheduling needs an interpolated partition without a direction split");
@@ -180,6 +191,9 @@ struct DioPwlObfModel {
 struct ModelRegressors {
   std::vector<Eigen::MatrixXd> phi;    ///< [output] T x regressorSize(o), or x regions times that
   std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
+  /// Input side: [output] the filters' settled states at the first sample
+  /// (DC gain times the first weighted input), laid out as phi's columns.
+  std::vector<Eigen::RowVectorXd> level0;
 };
 
 /// One input through a play channel, starting as `start` says.
@@ -254,6 +268,7 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     for (std::size_t j = 0; j < n_u; ++j) width += row[j].size() * static_cast<int>(channels[j].size());
     const int copies = side == ScheduleSide::kInput ? regions : 1;
     Eigen::MatrixXd phi(T, width * copies);
+    Eigen::RowVectorXd level0 = Eigen::RowVectorXd::Zero(side == ScheduleSide::kInput ? width * copies : 0);
     int offset = 0;
     Eigen::VectorXd f;
     for (int r = 0; r < copies; ++r)
@@ -266,9 +281,12 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
             phi.block(k, offset, 1, n) = bank.state().transpose();
             bank.step(k == 0 ? 0.0 : f(k) - f(k - 1));
           }
+          if (side == ScheduleSide::kInput && T > 0)
+            level0.segment(offset, n) = bank.transfer(1.0).real().transpose() * f(0);
           offset += n;
         }
     out.phi.push_back(std::move(phi));
+    if (side == ScheduleSide::kInput) out.level0.push_back(std::move(level0));
   }
   return out;
 }
@@ -296,6 +314,26 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
     }
   }
   return dy;
+}
+
+/// Input side: the filtered part of the output's level, T x n_y, so that the
+/// model's output is output_level + levels and levels(k) - levels(k-1) is the
+/// increment modelIncrements gives. The filters start settled at the first input.
+inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  require(model.schedule_side == ScheduleSide::kInput,
+          "modelLevels: only an input-side model has a level that is a function of its inputs");
+  require(u.rows() >= 1, "modelLevels: empty record");
+  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
+                                              model.play_coupling, model.schedulePole(), model.schedule_side);
+  Eigen::MatrixXd level(u.rows(), model.outputCount());
+  for (int o = 0; o < model.outputCount(); ++o) {
+    const Eigen::VectorXd c = model.stackedCoefficients(o);
+    const Eigen::VectorXd dy = reg.phi[static_cast<std::size_t>(o)] * c;
+    double acc = reg.level0[static_cast<std::size_t>(o)].dot(c);
+    level(0, o) = acc;
+    for (Eigen::Index k = 1; k < u.rows(); ++k) level(k, o) = acc += dy(k);
+  }
+  return level;
 }
 
 }  // namespace plsa

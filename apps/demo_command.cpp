@@ -71,6 +71,7 @@ void runDemo(const DemoOptions& opt) {
   io_.play_candidates = {{0.0}};
   io_.play_coupling_candidates = {};
   io_.schedule_lag_candidates = {};
+  io_.slow_pole_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, io_);
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs), Yt = train.columnsOf(model.outputs);
   const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});

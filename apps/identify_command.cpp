@@ -174,6 +174,16 @@ void addIdentifyCommands(CLI::App& app) {
             return parseNonNegative(v, x) ? std::string() : "'" + v + "' is not a time constant in seconds (e.g. 0.4)";
           },
           "SECONDS"));
+  id->add_option("--slow-pole", a->options.slow_pole_candidates,
+                 "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
+                 "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            double x = NAN;
+            return parseNonNegative(v, x) ? std::string() : "'" + v + "' is not a time constant in seconds (e.g. 5)";
+          },
+          "SECONDS"));
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

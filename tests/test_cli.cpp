@@ -96,6 +96,10 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'-1' is not a time constant in seconds"), std::string::npos) << err_;
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --slow-pole 5,slow --out " +
+                file("m.json")),
+            0);
+  EXPECT_NE(err_.find("'slow' is not a time constant in seconds (e.g. 5)"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {

@@ -8,6 +8,7 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/segmentation.hpp"
+#include "plsa/identify/validation.hpp"
 
 namespace plsa {
 namespace {
@@ -343,8 +344,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   std::vector<PlayChannel> best_set;
   std::size_t best_structure = 0;
   rep.play_scores.clear();
-  // Held-out 40-step fit of the model as configured now, averaged over outputs and blocks.
-  auto crossValidated = [&] {
+  // Held-out fit of the model as configured now, averaged over outputs and
+  // blocks: 40 steps ahead, or (input side) simulated from the model's level.
+  enum class Score { kStepAhead, kSimulation };
+  auto crossValidated = [&](Score what = Score::kStepAhead) {
     double score = 0.0;
     int n = 0;
     for (int f = 0; f < o.play_selection_folds; ++f) {
@@ -355,9 +358,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
           TY.push_back(BY[b]);
         }
       fitCoefficients(model, TU, TY, o.coefficients);
+      if (what == Score::kSimulation) fitOutputLevel(model, TU, TY);
       for (std::size_t b = 0; b < BU.size(); ++b) {
         if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
         const Eigen::MatrixXd dy = modelIncrements(model, BU[b]);
+        if (what == Score::kSimulation) {
+          const std::vector<AlignedPrediction> sims = simulateModel(model, BU[b], BY[b], dy);
+          for (int out_i = 0; out_i < no; ++out_i, ++n) score += fitOf(BY[b].col(out_i), sims[static_cast<std::size_t>(out_i)]);
+          continue;
+        }
         for (int out_i = 0; out_i < no; ++out_i, ++n)
           score += fitOf(BY[b].col(out_i), kStepAhead(BY[b].col(out_i), dy.col(out_i), o.play_selection_horizon));
       }
@@ -443,6 +452,42 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     s += ". Scores:";
     for (const auto& [lag, sc] : rep.schedule_lag_scores)
       s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
+    say(s);
+  }
+  // A slow pole in every bank, on an input-side model, scored on simulation.
+  if (model.schedule_side == ScheduleSide::kInput && !o.slow_pole_candidates.empty()) {
+    const std::vector<std::vector<PoleSet>> base_poles = model.poles;
+    auto withSlowPole = [&](double tau) {
+      model.poles = base_poles;
+      if (tau <= 0) return;
+      for (auto& row : model.poles)
+        for (PoleSet& ps : row) {
+          std::vector<std::complex<double>> p = ps.poles();
+          p.emplace_back(std::exp(-dt / tau), 0.0);
+          ps = PoleSet(p);
+        }
+    };
+    double best_tau = 0.0;
+    double best_sim = crossValidated(Score::kSimulation);
+    rep.slow_pole_scores.emplace_back(0.0, best_sim);
+    for (double tau : o.slow_pole_candidates) {
+      require(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
+      if (tau == 0) continue;  // none, scored already
+      withSlowPole(tau);
+      const double score = crossValidated(Score::kSimulation);
+      rep.slow_pole_scores.emplace_back(tau, score);
+      if (score > best_sim + 1e-9) {
+        best_sim = score;
+        best_tau = tau;
+      }
+    }
+    withSlowPole(best_tau);
+    std::string s = "[5/5] slow pole in every bank (scored on held-out simulation): ";
+    s += best_tau > 0 ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
+                      : std::string("none kept");
+    s += ". Scores:";
+    for (const auto& [tau, sc] : rep.slow_pole_scores)
+      s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);
     say(s);
   }
   rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);

@@ -56,6 +56,12 @@ struct IdentifyOptions {
   /// (DioPwlObfModel::schedule_lag_s) tried against none, on the chosen
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
   std::vector<double> schedule_lag_candidates = {0.1, 0.2, 0.4, 0.8};
+  /// Then, for an input-side model, the time constants (s) of one extra real
+  /// pole in every bank, tried against none: dynamics slower than the local
+  /// fits can see (creep, drift). Scored on simulation of the held-out
+  /// blocks from the model's level, the horizon where a slow pole shows (it
+  /// hardly moves a 40-step fit). Empty: no extra pole.
+  std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage
@@ -79,6 +85,7 @@ struct IdentifyReport {
   };
   std::vector<CouplingScore> coupling_scores;
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
+  std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
   bool used_windows = false;  ///< no staircase: poles from local windows
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;

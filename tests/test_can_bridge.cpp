@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <thread>
 
 #include <lcm/lcm-cpp.hpp>
 #include <plsa_lcm/actuator_state_t.hpp>
@@ -65,6 +64,14 @@ class CanBridgeTest : public plsa::test::IsolatedLcmTest {
     }
   }
 
+  // Handles LCM until `done` holds or `limit` passes (start-up on a loaded machine).
+  template <class Done>
+  bool runUntil(Done done, std::chrono::milliseconds limit) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!done() && std::chrono::steady_clock::now() < end) lcm_->handleTimeout(10);
+    return done();
+  }
+
   const plsa_lcm::status_t* lastStatusWith(const std::string& words) const {
     for (auto it = inbox_.statuses.rbegin(); it != inbox_.statuses.rend(); ++it)
       if (it->message.find(words) != std::string::npos) return &*it;
@@ -79,12 +86,13 @@ class CanBridgeTest : public plsa::test::IsolatedLcmTest {
 
 TEST_F(CanBridgeTest, CommandsReachTheSimulatedValvesAndStopsVent) {
   plsa::test::ChildProcess sim({exe_, "sim", "--can", "udp:7201:7200", "--state-channel", "SIM_TRUTH", "--seed", "3"});
-  std::this_thread::sleep_for(300ms);  // the device is on the bus before the bridge's sensor watchdog starts
+  // The device is on the bus before the bridge's sensor watchdog starts.
+  ASSERT_TRUE(runUntil([&] { return !inbox_.truth.empty(); }, 10s)) << "the simulator never published its state";
   plsa::test::ChildProcess bridge({exe_, "can-bridge", "--iface", "udp:7200:7201?drop=0.03&corrupt=0.03&seed=5",
                                    "--command-channel", "BRIDGE_COMMAND", "--state-channel", "BRIDGE_STATE",
                                    "--status-channel", "BRIDGE_STATUS", "--command-timeout", "0.25"});
+  ASSERT_TRUE(runUntil([&] { return !inbox_.bridge.empty(); }, 10s)) << "the bridge published no state";
   run(500ms, nullptr);
-  ASSERT_FALSE(inbox_.bridge.empty()) << "the bridge published no state";
   EXPECT_EQ(lastStatusWith("no valid pressure reading"), nullptr) << "sensor frames did not reach the bridge";
 
   // Step: chamber 1 to 0.25 bar, chamber 2 asked for 0.6 (clamped to 0.4).

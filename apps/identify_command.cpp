@@ -99,6 +99,9 @@ void runValidate(const ValidateArgs& a) {
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
+  // Say how the simulation started: the two differ when the log starts unsettled.
+  j["simulation_start"] = model.output_level.empty() ? "first measured sample" : "model output level";
+  std::printf("(sim from the %s)\n", model.output_level.empty() ? "first measured sample" : "model's output level");
   if (!a.json.empty()) {
     std::ofstream out(a.json);
     if (!out) throw std::runtime_error(a.json + ": cannot open for writing");

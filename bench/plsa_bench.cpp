@@ -184,8 +184,8 @@ void writeJson(const std::string& path) {
 
 template <int NP>
 void latencyFor(const std::string& tag, int chambers, long calls, bool with_naive, bool clustered = false,
-                bool input_side = false) {
-  const plsa::DioPwlObfModel m = syntheticModel(chambers, 2, 5, 7, clustered, input_side);
+                bool input_side = false, int poles = 5) {
+  const plsa::DioPwlObfModel m = syntheticModel(chambers, 2, poles, 7, clustered, input_side);
   plsa::PredictorOptions po;
   po.max_horizon = 400;
   plsa::Predictor<NP> p(m, po);
@@ -234,7 +234,7 @@ void latencyFor(const std::string& tag, int chambers, long calls, bool with_naiv
 }
 
 void runLatency(long calls) {
-  std::printf("plsa-bench latency: %ld calls each (predict 400: %ld), synthetic models, 5 poles per pair, 2 outputs\n",
+  std::printf("plsa-bench latency: %ld calls each (predict 400: %ld), synthetic models, 5 poles per pair unless named, 2 outputs\n",
               calls, calls / 10);
   latencyFor<5>("2 chambers, fixed", 2, calls, true);
   latencyFor<Eigen::Dynamic>("2 chambers, dynamic", 2, calls, false);
@@ -242,6 +242,8 @@ void runLatency(long calls) {
   latencyFor<5>("3 chambers, fixed", 3, calls, false);
   latencyFor<5>("3 chambers, fixed, clustered poles", 3, calls, false, true);
   latencyFor<5>("3 chambers, fixed, input side", 3, calls / 4, false, false, true);
+  // As identified now: input side with a slow pole (6 per bank), any-size predictor.
+  latencyFor<Eigen::Dynamic>("3 chambers, dynamic, input side, 6 poles", 3, calls / 4, false, false, true, 6);
   // N independent 3-chamber segments, each updated and predicted 40 steps per tick.
   for (int n : {1, 10, 50, 100}) {
     std::vector<std::unique_ptr<plsa::Predictor<5>>> segs;

@@ -129,17 +129,22 @@ void runDemo(const DemoOptions& opt) {
                               "time (s)", model.outputs[o]);
   }
   std::vector<report::PoleGroup> groups;
-  std::vector<std::complex<double>> identified, centres;
+  std::vector<std::complex<double>> identified, centres, slow;
   for (const auto& pp : report.pairs) {
     identified.insert(identified.end(), pp.identified.begin(), pp.identified.end());
     centres.insert(centres.end(), pp.chosen.centres.begin(), pp.chosen.centres.end());
+    // Poles the model carries beyond the FKcM centres: the cross-validated slow pole.
+    const auto used = model.poles[static_cast<std::size_t>(pp.output)][static_cast<std::size_t>(pp.input)].poles();
+    if (used.size() > pp.chosen.centres.size()) slow.push_back(used.back());
   }
   double zoom = 1.0;
   for (const auto& p : identified) zoom = std::min(zoom, p.real());
   for (const auto& p : centres) zoom = std::min(zoom, p.real());
   groups.push_back({"identified local poles", identified, "#1f77b4", false});
   groups.push_back({"FKcM centres (OBF poles)", centres, "#d62728", true});
-  html << report::poleMap("Pole map: identified poles and FKcM centres", groups, std::max(-1.0, zoom - 0.05));
+  if (!slow.empty()) groups.push_back({"slow pole (cross-validated)", slow, "#2ca02c", true});
+  html << report::poleMap("Pole map: identified poles, FKcM centres and the slow pole", groups,
+                          std::max(-1.0, zoom - 0.05));
   html << "<h2>Identification log</h2><pre>";
   for (const auto& l : report.lines) html << report::escape(l) << "\n";
   html << "</pre></body></html>\n";

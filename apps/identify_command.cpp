@@ -121,6 +121,17 @@ bool parseNonNegative(const std::string& text, double& value) {
   return used > 0 && used == text.size() && std::isfinite(value) && value >= 0;
 }
 
+// Accepts a time constant in seconds; the error quotes the value and an example.
+CLI::Validator secondsValidator(const std::string& example) {
+  return CLI::Validator(
+      [example](std::string& v) {
+        double x = NAN;
+        return parseNonNegative(v, x) ? std::string()
+                                      : "'" + v + "' is not a time constant in seconds (e.g. " + example + ")";
+      },
+      "SECONDS");
+}
+
 }  // namespace
 
 void addIdentifyCommands(CLI::App& app) {
@@ -171,22 +182,12 @@ void addIdentifyCommands(CLI::App& app) {
                  "Candidate time constants (s) of a lag on the scheduling inputs, tried against none by "
                  "cross-validation; '0' alone keeps the paper's schedule on the raw inputs")
       ->delimiter(',')
-      ->check(CLI::Validator(
-          [](std::string& v) {
-            double x = NAN;
-            return parseNonNegative(v, x) ? std::string() : "'" + v + "' is not a time constant in seconds (e.g. 0.4)";
-          },
-          "SECONDS"));
+      ->check(secondsValidator("0.4"));
   id->add_option("--slow-pole", a->options.slow_pole_candidates,
                  "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
       ->delimiter(',')
-      ->check(CLI::Validator(
-          [](std::string& v) {
-            double x = NAN;
-            return parseNonNegative(v, x) ? std::string() : "'" + v + "' is not a time constant in seconds (e.g. 5)";
-          },
-          "SECONDS"));
+      ->check(secondsValidator("5"));
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

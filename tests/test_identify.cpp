@@ -472,6 +472,13 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
                 .cwiseAbs()
                 .maxCoeff(),
             1e-9);
+  // The settled start depends on the first sample alone: the same as from the whole record's regressors.
+  const ModelRegressors whole = modelRegressors(input_side.poles, input_side.partition, u, input_side.input_play,
+                                                input_side.play_start, input_side.play_coupling,
+                                                input_side.schedulePole(), input_side.schedule_side);
+  for (int out = 0; out < 2; ++out)
+    EXPECT_NEAR(level(0, out), whole.level0[static_cast<std::size_t>(out)].dot(input_side.stackedCoefficients(out)),
+                1e-9);
   sim::Actuator held(clean, 3);
   sim::ActuatorSample settled;
   for (int k = 0; k < 800; ++k) settled = held.step({u(0, 0), u(0, 1), u(0, 2)});

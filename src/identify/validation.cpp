@@ -17,7 +17,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
     return out;
   }
   require(u.rows() >= 2, "simulateModel: need at least two samples");
-  const Eigen::MatrixXd level = modelLevels(model, u);
+  const Eigen::MatrixXd level = modelLevels(model, u, dy);
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;
     p.first = 1;

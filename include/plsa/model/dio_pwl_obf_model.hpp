@@ -318,22 +318,28 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
 
 /// Input side: the filtered part of the output's level, T x n_y, so that the
 /// model's output is output_level + levels and levels(k) - levels(k-1) is the
-/// increment modelIncrements gives. The filters start settled at the first input.
-inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+/// increment dy(k). The filters start settled at the first input, so only the
+/// first sample's regressors are needed beside `dy` = modelIncrements(model, u).
+inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {
   require(model.schedule_side == ScheduleSide::kInput,
           "modelLevels: only an input-side model has a level that is a function of its inputs");
   require(u.rows() >= 1, "modelLevels: empty record");
-  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
-                                              model.play_coupling, model.schedulePole(), model.schedule_side);
+  require(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
+  // Settled states depend on the first sample alone (its schedule, played and coupled level).
+  const ModelRegressors first = modelRegressors(model.poles, model.partition, u.topRows(1), model.input_play,
+                                                model.play_start, model.play_coupling, model.schedulePole(),
+                                                model.schedule_side);
   Eigen::MatrixXd level(u.rows(), model.outputCount());
   for (int o = 0; o < model.outputCount(); ++o) {
-    const Eigen::VectorXd c = model.stackedCoefficients(o);
-    const Eigen::VectorXd dy = reg.phi[static_cast<std::size_t>(o)] * c;
-    double acc = reg.level0[static_cast<std::size_t>(o)].dot(c);
+    double acc = first.level0[static_cast<std::size_t>(o)].dot(model.stackedCoefficients(o));
     level(0, o) = acc;
-    for (Eigen::Index k = 1; k < u.rows(); ++k) level(k, o) = acc += dy(k);
+    for (Eigen::Index k = 1; k < u.rows(); ++k) level(k, o) = acc += dy(k, o);
   }
   return level;
+}
+
+inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  return modelLevels(model, u, modelIncrements(model, u));
 }
 
 }  // namespace plsa

@@ -20,13 +20,11 @@ Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
-  const Eigen::MatrixXd dy = modelIncrements(m, u);
-  const std::vector<AlignedPrediction> sims = simulateModel(m, u, y, dy);
+  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(m, u, y, horizons);
   ModelPredictions out{name, {}};
-  for (Eigen::Index o = 0; o < y.cols(); ++o) {
+  for (const auto& by_horizon : pred) {
     std::map<int, Eigen::VectorXd> byh;
-    for (int k : horizons) byh[k] = placed(kStepAhead(y.col(o), dy.col(o), k), y.rows());
-    byh[0] = placed(sims[static_cast<std::size_t>(o)], y.rows());
+    for (const auto& [k, p] : by_horizon) byh[k] = placed(p, y.rows());
     out.by_output.push_back(std::move(byh));
   }
   return out;

@@ -4,11 +4,13 @@
 #include <set>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <thread>
 
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/identify/validation.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/testing/alloc_guard.hpp"
@@ -18,7 +20,7 @@ using namespace plsa;
 namespace {
 
 struct Data {
-  DioPwlObfModel switched, interpolated, lagged, input_side, complex_poles, repeated_poles, close_poles;
+  DioPwlObfModel switched, interpolated, lagged, input_side, tip, complex_poles, repeated_poles, close_poles;
   Eigen::MatrixXd u, y;  // validation run
   double dt = 0.0125;
 };
@@ -55,6 +57,10 @@ const Data& data() {
     out.input_side = out.lagged;
     out.input_side.schedule_side = ScheduleSide::kInput;
     fitCoefficients(out.input_side, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    // On the tip direction's components: the predictor converts both ways.
+    out.tip = out.input_side;
+    out.tip.output_frame = OutputFrame::kTipCartesian;
+    fitCoefficients(out.tip, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Conjugate pairs take the predictor's dense path instead of the cascade.
     out.complex_poles = out.switched;
     for (auto& row : out.complex_poles.poles)
@@ -80,9 +86,10 @@ const Data& data() {
 template <int NP>
 void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double dt) {
   const int H = 40;
-  const Eigen::MatrixXd dy = modelIncrements(m, u);
+  // In the log's frame, whatever the model's.
+  const std::vector<std::map<int, AlignedPrediction>> offline_all = predictOutputs(m, u, y, {H});
   std::vector<AlignedPrediction> offline;
-  for (int o = 0; o < m.outputCount(); ++o) offline.push_back(kStepAhead(y.col(o), dy.col(o), H));
+  for (const auto& by_h : offline_all) offline.push_back(by_h.at(H));
   Predictor<NP> p(m);
   Eigen::MatrixXd out(H, m.outputCount());
   double worst = 0.0;
@@ -122,10 +129,10 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   for (Eigen::Index t = 0; t + 1 < u.rows(); ++t) ASSERT_EQ(s.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk);
   const Eigen::Index last = u.rows() - 2;
   ASSERT_EQ(s.predict(1, u.middleRows(last + 1, 0), out), PredictorStatus::kOk);
-  for (int o = 0; o < m.outputCount(); ++o) {
-    const AlignedPrediction sim = simulate(y.col(o), dy.col(o));
-    EXPECT_NEAR(out(0, o), sim.values(last), 1e-9);
-  }
+  DioPwlObfModel from_first_sample = m;  // the predictor's simulation starts from the measured sample
+  from_first_sample.output_level.clear();
+  const auto sims = predictOutputs(from_first_sample, u, y, {}, true);
+  for (int o = 0; o < m.outputCount(); ++o) EXPECT_NEAR(out(0, o), sims[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
 }
 
 }  // namespace
@@ -148,6 +155,7 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   settled.schedule_lag_s = 0.0;
   EXPECT_TRUE(Predictor<>(settled).heldPathIsModal());
   expectAgreement<Eigen::Dynamic>(settled, d.u, d.y, d.dt);
+  expectAgreement<5>(d.tip, d.u, d.y, d.dt);
   expectAgreement<5>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<Eigen::Dynamic>(d.complex_poles, d.u, d.y, d.dt);
   expectAgreement<5>(d.repeated_poles, d.u, d.y, d.dt);
@@ -156,7 +164,7 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
 
 TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
   const Data& d = data();
-  Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side);
+  Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side), tip(d.tip);
   Predictor<> q(d.switched);
   Eigen::MatrixXd out(80, 2), plan(79, 3);
   Eigen::Vector3d u;
@@ -177,10 +185,13 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     if (lagged.update(k * d.dt, u, y) != PredictorStatus::kOk || lagged.predict(80, plan, out) != PredictorStatus::kOk ||
         lagged.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
-    if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
+    if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk || tip.update(k * d.dt, u, y) != PredictorStatus::kOk)
+      FAIL();
     if (k % 10 == 0 && (input_side.predict(80, plan, out) != PredictorStatus::kOk ||
-                        input_side.predict(80, plan.topRows(0), out) != PredictorStatus::kOk))
-      FAIL();  // every tenth tick: its 96 banks make each planned call long
+                        input_side.predict(80, plan.topRows(0), out) != PredictorStatus::kOk ||
+                        tip.predict(80, plan, out) != PredictorStatus::kOk ||
+                        tip.predict(80, plan.topRows(0), out) != PredictorStatus::kOk))
+      FAIL();  // every tenth tick: their 96 banks make each planned call long
   }
   const auto allocations = guard.allocations();
   EXPECT_EQ(allocations, 0u);
@@ -224,6 +235,9 @@ TEST(Predictor, RejectsMismatchedModelsAtSetUp) {
   EXPECT_THROW(Predictor<4>{d.switched}, std::invalid_argument);
   Predictor<5> p(d.switched);
   EXPECT_THROW(p.install(d.interpolated), std::invalid_argument);  // other partition
+  Predictor<5> q(d.input_side);
+  EXPECT_THROW(q.install(d.tip), std::invalid_argument);  // same banks, other output frame
+  EXPECT_NO_THROW(q.install(d.input_side));
   PredictorOptions bad;
   bad.max_horizon = 0;
   EXPECT_THROW((Predictor<5>{d.switched, bad}), std::invalid_argument);
@@ -268,4 +282,24 @@ TEST(Predictor, HotSwapUnderLoadIsNeverTorn) {
   EXPECT_EQ(mismatches, 0);
   EXPECT_GT(installs.load(), 10);
   EXPECT_GT(used_b, 0);
+}
+
+TEST(Predictor, TipFrameKeepsSteeringOnTheMeasuredBranch) {
+  // Steering measured around 180 deg (the run's angles turned by 120): atan2
+  // alone would answer near -180 for half the predictions.
+  const Data& d = data();
+  Predictor<5> p(d.tip);
+  Eigen::MatrixXd out(80, 2);
+  double worst = 0.0, above = 0.0;
+  for (Eigen::Index t = 0; t + 80 < d.u.rows(); ++t) {
+    const Eigen::Vector2d y(d.y(t, 0), d.y(t, 1) + 120.0);
+    ASSERT_EQ(p.update(t * d.dt, d.u.row(t), y), PredictorStatus::kOk);
+    if (t % 11 != 0) continue;
+    ASSERT_EQ(p.predict(80, d.u.middleRows(t + 1, 79), out), PredictorStatus::kOk);
+    worst = std::max(worst, (out.col(1).array() - y(1)).abs().maxCoeff());
+    above = std::max(above, out.col(1).maxCoeff());
+    EXPECT_GE(out.col(0).minCoeff(), 0.0);  // bending comes back as a magnitude
+  }
+  EXPECT_GT(above, 180.0) << "the run never crossed 180 deg: the test shows nothing";
+  EXPECT_LT(worst, 30.0) << "a predicted steering angle jumped a turn";
 }

@@ -19,8 +19,9 @@ int regionDistance(const PwlPartition& p, int a, int b) {
 }  // namespace
 
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
-                                     const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& o) {
-  require(!U.empty() && U.size() == Y.size(), "fitCoefficients: need matching input and output records");
+                                     const std::vector<Eigen::MatrixXd>& Y_logged, const CoefficientFitOptions& o) {
+  require(!U.empty() && U.size() == Y_logged.size(), "fitCoefficients: need matching input and output records");
+  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   const int R = model.partition.regionCount();
   const int ny = model.outputCount();
   std::vector<std::vector<Eigen::MatrixXd>> G(static_cast<std::size_t>(ny));
@@ -193,9 +194,11 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   return report;
 }
 
-void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y) {
+void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
+                    const std::vector<Eigen::MatrixXd>& Y_logged) {
   require(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
-  require(!U.empty() && U.size() == Y.size(), "fitOutputLevel: need matching input and output records");
+  require(!U.empty() && U.size() == Y_logged.size(), "fitOutputLevel: need matching input and output records");
+  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
   double n = 0.0;
   for (std::size_t r = 0; r < U.size(); ++r) {

@@ -102,10 +102,18 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     Y.push_back(log.columnsOf(o.outputs));
     Ref.push_back(log.columnsOf(reference));
   }
+  // Local fits see the outputs in the model's frame; every other step takes them as logged.
+  if (o.output_frame == OutputFrame::kTipCartesian)
+    require(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
+                                   "steering in deg), got " + std::to_string(o.outputs.size()));
+  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(o.output_frame, Y);
   Eigen::Index total = 0;
   for (const auto& u : U) total += u.rows();
   say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
       std::to_string(1.0 / dt).substr(0, 6) + " Hz");
+  if (o.output_frame == OutputFrame::kTipCartesian)
+    say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] + " as a tip's bending and steering angles; the model "
+        "runs on " + o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
 
   // Steps 1-2: local data sets and local LTI fits.
   const auto ni = static_cast<int>(o.inputs.size()), no = static_cast<int>(o.outputs.size());
@@ -120,8 +128,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       ++rep.segments;
       const Eigen::Index n = seg.end - seg.begin;
       for (int out_i = 0; out_i < no; ++out_i) {
-        const LocalFit f = fitLocalModel(U[r].col(seg.input).segment(seg.begin, n), Y[r].col(out_i).segment(seg.begin, n),
-                                         U[r](seg.begin - 1, seg.input), Y[r](seg.begin - 1, out_i), o.local_order);
+        const LocalFit f = fitLocalModel(U[r].col(seg.input).segment(seg.begin, n), Ym[r].col(out_i).segment(seg.begin, n),
+                                         U[r](seg.begin - 1, seg.input), Ym[r](seg.begin - 1, out_i), o.local_order);
         PairPoles& pp = pairAt(seg.input, out_i);
         if (f.usable) {
           pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
@@ -161,8 +169,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
               best = in_i;
             }
           }
-          const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Y[r].col(out_i).segment(b, w),
-                                           U[r](b - 1, best), Y[r](b - 1, out_i), o.local_order);
+          const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Ym[r].col(out_i).segment(b, w),
+                                           U[r](b - 1, best), Ym[r](b - 1, out_i), o.local_order);
           for (int in_i = 0; in_i < ni; ++in_i) {
             PairPoles& pp = pairAt(in_i, out_i);
             if (f.usable)
@@ -188,6 +196,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   model.sample_time_s = dt;
   model.inputs = o.inputs;
   model.outputs = o.outputs;
+  model.output_frame = o.output_frame;
   model.poles.assign(static_cast<std::size_t>(no), {});
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
@@ -361,14 +370,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       if (what == Score::kSimulation) fitOutputLevel(model, TU, TY);
       for (std::size_t b = 0; b < BU.size(); ++b) {
         if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
-        const Eigen::MatrixXd dy = modelIncrements(model, BU[b]);
-        if (what == Score::kSimulation) {
-          const std::vector<AlignedPrediction> sims = simulateModel(model, BU[b], BY[b], dy);
-          for (int out_i = 0; out_i < no; ++out_i, ++n) score += fitOf(BY[b].col(out_i), sims[static_cast<std::size_t>(out_i)]);
-          continue;
-        }
+        const bool sim = what == Score::kSimulation;
+        const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(
+            model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim);
         for (int out_i = 0; out_i < no; ++out_i, ++n)
-          score += fitOf(BY[b].col(out_i), kStepAhead(BY[b].col(out_i), dy.col(out_i), o.play_selection_horizon));
+          score += fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
       }
     }
     return score / std::max(1, n);

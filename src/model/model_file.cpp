@@ -94,6 +94,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["schedule_lag_s"] = m.schedule_lag_s;
   j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
   if (!m.output_level.empty()) j["output_level"] = m.output_level;
+  j["output_frame"] = toString(m.output_frame);
   json part;
   part["inputs"] = m.partition.inputs();
   const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
@@ -181,6 +182,10 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   if (side != "output" && side != "input")
     bad(source, "'schedule_side' must be 'output' or 'input', not '" + side + "'");
   m.schedule_side = side == "input" ? ScheduleSide::kInput : ScheduleSide::kOutput;
+  const std::string frame = j.contains("output_frame") ? rd.string(j["output_frame"], "output_frame") : "as_logged";
+  if (frame != "as_logged" && frame != "tip_cartesian")
+    bad(source, "'output_frame' must be 'as_logged' or 'tip_cartesian', not '" + frame + "'");
+  m.output_frame = outputFrameFromString(frame);
   if (j.contains("output_level"))
     for (const auto& v : rd.array(j["output_level"], "output_level")) m.output_level.push_back(rd.number(v, "output_level[]"));
   const json& part = rd.at(j, "partition", "");

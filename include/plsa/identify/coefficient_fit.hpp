@@ -26,7 +26,8 @@ struct CoefficientFitReport {
 };
 
 /// Fills model.coefficients and model.region_fits. The model's poles,
-/// partition, inputs and outputs must be set; U[r], Y[r] are records (T x n).
+/// partition, inputs and outputs must be set; U[r], Y[r] are records (T x n),
+/// Y in the log's frame (converted to the model's output_frame here).
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                                      const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& options = {});
 

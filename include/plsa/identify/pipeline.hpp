@@ -17,6 +17,9 @@ namespace plsa {
 struct IdentifyOptions {
   std::vector<std::string> inputs = {"p_1", "p_2", "p_3"};
   std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
+  /// tip_cartesian: the two outputs are a tip's bending and steering angles
+  /// (deg) and the model runs on the tip direction's components (output_frame.hpp).
+  OutputFrame output_frame = OutputFrame::kAsLogged;
   /// Piecewise-constant references to segment on; empty: cmd_1..3 when present, else the inputs.
   std::vector<std::string> reference;
   int poles_per_pair = 5;

@@ -27,11 +27,19 @@ struct ValidationResult {
   double input_outside_range = 0.0;  ///< share of samples outside the model's training input range
 };
 
-/// Free simulation of every output from the inputs, for samples 1..T-1:
-/// from the model's output_level when it has one, else from the first
-/// measured sample. `dy` is modelIncrements(model, u).
+/// Free simulation of every output from the inputs, for samples 1..T-1, in
+/// the model's output frame (y too): from the model's output_level when it
+/// has one, else from the first measured sample. `dy` is modelIncrements(model, u).
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy);
+
+/// Every output's predictions in the log's frame (y as logged): key k >= 1
+/// the k-step-ahead predictions, key 0 the free simulation when asked for.
+/// A tip_cartesian model's steering is put on the branch of the measured
+/// angle its prediction starts from (simulation: of its own previous value).
+std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                                                             bool with_simulation = true);
 
 /// Throws naming the missing column or the bad horizon.
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons);

@@ -14,6 +14,7 @@
 
 #include "plsa/core/check.hpp"
 #include "plsa/core/pole_set.hpp"
+#include "plsa/model/output_frame.hpp"
 #include "plsa/model/pwl_partition.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
@@ -105,6 +106,9 @@ struct DioPwlObfModel {
   /// transient it would otherwise carry for ever. Empty: simulation starts
   /// from the first measured sample. [output]
   std::vector<double> output_level;
+  /// The frame the poles, coefficients and output_level are in; `outputs`
+  /// always names the logged columns (output_frame.hpp).
+  OutputFrame output_frame = OutputFrame::kAsLogged;
   /// Pole of that lag per sample (0 when there is none).
   double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
@@ -153,6 +157,8 @@ struct DioPwlObfModel {
     require(output_level.empty() || output_level.size() == outputs.size(),
             "model: output_level needs one value per output");
     for (double b : output_level) require(std::isfinite(b), "model: output_level values must be finite");
+    require(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
+            "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
     require(schedule_side == ScheduleSide::kOutput ||
                 (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
             "model: input-side scheduling needs an interpolated partition without a direction split");

@@ -83,6 +83,7 @@ class Predictor {
     work_x_ = x_;
     tmp_.setZero(s.bank_size);
     y_.setZero(s.n_y);
+    ym_.setZero(s.n_y);
     y_sim_.setZero(s.n_y);
     work_y_.setZero(s.n_y);
     dy_.setZero(s.n_y);
@@ -121,6 +122,11 @@ class Predictor {
     }
     for (int o = 0; o < s.n_y; ++o)
       if (!std::isfinite(y[o])) return PredictorStatus::kNotFinite;
+    if (s.frame == OutputFrame::kTipCartesian) {
+      tipComponents(y[0], y[1], ym_(0), ym_(1));
+    } else {
+      for (int o = 0; o < s.n_y; ++o) ym_(o) = y[o];
+    }
     PredictorStatus status = PredictorStatus::kOk;
     if (samples_ > 0) {
       if (!(time_s > t_)) return PredictorStatus::kTimeNotIncreasing;
@@ -139,7 +145,8 @@ class Predictor {
             playStartState(coupledLevel(u_(s.channel_input[c]), positive_sum, s.coupling), s.play[c], s.play_start);
       dir_ = DirectionState{};
       if (s.input_side) nodeWeights(s, us_, node_w_);
-      for (int o = 0; o < s.n_y; ++o) y_(o) = y_sim_(o) = y[o];
+      y_ = y_sim_ = ym_;
+      steer_reference_ = s.frame == OutputFrame::kTipCartesian ? y[1] : 0.0;
       t_ = time_s;
       samples_ = 1;
       return status;
@@ -155,7 +162,8 @@ class Predictor {
     s.partition.updateDirections(du_, dir_);
     us_ = s.schedule_pole * us_ + (1.0 - s.schedule_pole) * u_;
     advance(s, x_, vc_, us_, node_w_, u_);
-    for (int o = 0; o < s.n_y; ++o) y_(o) = y[o];
+    y_ = ym_;
+    if (s.frame == OutputFrame::kTipCartesian) steer_reference_ = y[1];
     t_ = time_s;
     ++samples_;
     return status;
@@ -165,8 +173,38 @@ class Predictor {
   /// from the measured y(k) (or the simulated output in simulation mode).
   /// `plan` row h holds the planned input u(k+1+h); with fewer rows than
   /// horizon-1 the last input is held (0 rows: hold u(k)).
+  /// A tip_cartesian model answers in bending and steering, each predicted
+  /// steering angle on the branch nearest the one before it (the first: the
+  /// last measured).
   PredictorStatus predict(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                           Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const PredictorStatus status = predictInModelFrame(horizon, plan, out);
+    if (status != PredictorStatus::kOk || active_->frame != OutputFrame::kTipCartesian) return status;
+    double reference = steer_reference_;
+    for (int h = 0; h < horizon; ++h) {
+      tipAngles(out(h, 0), out(h, 1), reference, out(h, 0), out(h, 1));
+      reference = out(h, 1);
+    }
+    return status;
+  }
+
+  /// Installs a model of the same structure (inputs, outputs, pole counts,
+  /// play channels, partition, output frame) from any thread but the real-time one. It
+  /// allocates, and throws std::invalid_argument on a structure mismatch. The
+  /// real-time thread adopts it whole at its next update().
+  void install(const DioPwlObfModel& model) {
+    collectRetired();
+    Slot* next = makeSlot(model, shape_.get(), options_);
+    next->id = next_id_.fetch_add(1, std::memory_order_relaxed) + 1;
+    delete pending_.exchange(next, std::memory_order_acq_rel);  // a newer model replaces one never adopted
+  }
+  /// Frees a model the real-time thread has let go of (install() does this too).
+  void collectRetired() { delete retired_.exchange(nullptr, std::memory_order_acq_rel); }
+
+ private:
+  // predict() in the model's output frame.
+  PredictorStatus predictInModelFrame(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const Slot& s = *active_;
     if (samples_ == 0) return PredictorStatus::kNotReady;
     if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
@@ -200,25 +238,12 @@ class Predictor {
     return PredictorStatus::kOk;
   }
 
-  /// Installs a model of the same structure (inputs, outputs, pole counts,
-  /// play channels, partition) from any thread but the real-time one. It
-  /// allocates, and throws std::invalid_argument on a structure mismatch. The
-  /// real-time thread adopts it whole at its next update().
-  void install(const DioPwlObfModel& model) {
-    collectRetired();
-    Slot* next = makeSlot(model, shape_.get(), options_);
-    next->id = next_id_.fetch_add(1, std::memory_order_relaxed) + 1;
-    delete pending_.exchange(next, std::memory_order_acq_rel);  // a newer model replaces one never adopted
-  }
-  /// Frees a model the real-time thread has let go of (install() does this too).
-  void collectRetired() { delete retired_.exchange(nullptr, std::memory_order_acq_rel); }
-
- private:
   // An immutable, fully built model.
   struct Slot {
     std::uint64_t id = 0;
     int n_u = 0, n_y = 0;
     int bank_size = 0;
+    OutputFrame frame = OutputFrame::kAsLogged;
     double sample_time = 0.0;
     double accept_min = 0.0, accept_max = 0.0;
     PwlPartition partition;
@@ -271,6 +296,7 @@ class Predictor {
     s->n_u = m.inputCount();
     s->n_y = m.outputCount();
     s->sample_time = m.sample_time_s;
+    s->frame = m.output_frame;
     const double span = m.input_max - m.input_min, margin = options.input_margin;
     s->accept_min = std::isfinite(span) ? m.input_min - margin * span : -INFINITY;
     s->accept_max = std::isfinite(span) ? m.input_max + margin * span : INFINITY;
@@ -327,6 +353,7 @@ class Predictor {
     if (all_real) setUpModal(m, options.max_horizon, *s);
     if (shape) {
       const bool same = shape->n_u == s->n_u && shape->n_y == s->n_y && shape->bank_size == s->bank_size &&
+                        shape->frame == s->frame &&
                         shape->bank_channel == s->bank_channel && shape->coef.size() == s->coef.size() &&
                         shape->partition.inputs() == s->partition.inputs() &&
                         shape->partition.scheduling() == s->partition.scheduling() &&
@@ -570,11 +597,12 @@ class Predictor {
   std::vector<BankVector> x_, work_x_;
   BankVector tmp_;
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
-  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, y_sim_, work_y_, dy_;
+  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
   std::vector<Eigen::VectorXd> blended_;    // per output, for held-input predictions
   std::vector<Eigen::VectorXd> mode_coef_;  // per output, modal held-input path
   DirectionState dir_;
   double t_ = 0.0;
+  double steer_reference_ = 0.0;  // tip_cartesian: the last measured steering angle
   std::int64_t samples_ = 0;
 };
 

@@ -149,6 +149,12 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--levels", a->options.quantile_levels, "Levels per input when the logs have no staircase")
       ->check(CLI::Range(1, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
+  id->add_option_function<std::string>(
+        "--output-frame", [a](const std::string& f) { a->options.output_frame = outputFrameFromString(f); },
+        "as_logged (default) or tip_cartesian: the two outputs are a tip's bending and steering angles (deg) and "
+        "the model runs on bend*cos(steer), bend*sin(steer), where a constant-curvature segment's dynamics are "
+        "linear; predictions come back as the logged angles")
+      ->check(CLI::IsMember({"as_logged", "tip_cartesian"}));
   id->add_option("--scheduling", a->options.scheduling,
                  "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
                  "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "

@@ -57,8 +57,10 @@ TEST_F(Cli, SimulateIsDeterministicPerSeed) {
 TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
   ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;
-  ASSERT_EQ(run("identify --log " + file("train.csv") + " --out " + file("model.json")), 0) << err_;
+  ASSERT_EQ(run("identify --log " + file("train.csv") + " --output-frame tip_cartesian --out " + file("model.json")), 0)
+      << err_;
   EXPECT_NE(err_.find("[5/5] coefficients"), std::string::npos) << "progress lines missing: " << err_;
+  EXPECT_EQ(nlohmann::json::parse(slurp(file("model.json")))["output_frame"], "tip_cartesian");
   ASSERT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") +
                 " --horizons 40,80 --json " + file("fits.json") + " --csv " + file("pred.csv")),
             0)
@@ -100,6 +102,14 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'slow' is not a time constant in seconds (e.g. 5)"), std::string::npos) << err_;
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --output-frame tip_cartesian "
+                "--out " + file("m.json")),
+            0);
+  EXPECT_NE(err_.find("tip_cartesian output frame needs exactly two outputs"), std::string::npos) << err_;
+  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --output-frame polar --out " +
+                file("m.json")),
+            0);
+  EXPECT_NE(err_.find("--output-frame"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {

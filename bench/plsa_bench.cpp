@@ -184,8 +184,9 @@ void writeJson(const std::string& path) {
 
 template <int NP>
 void latencyFor(const std::string& tag, int chambers, long calls, bool with_naive, bool clustered = false,
-                bool input_side = false, int poles = 5) {
-  const plsa::DioPwlObfModel m = syntheticModel(chambers, 2, poles, 7, clustered, input_side);
+                bool input_side = false, int poles = 5, bool tip_frame = false) {
+  plsa::DioPwlObfModel m = syntheticModel(chambers, 2, poles, 7, clustered, input_side);
+  if (tip_frame) m.output_frame = plsa::OutputFrame::kTipCartesian;
   plsa::PredictorOptions po;
   po.max_horizon = 400;
   plsa::Predictor<NP> p(m, po);
@@ -244,6 +245,9 @@ void runLatency(long calls) {
   latencyFor<5>("3 chambers, fixed, input side", 3, calls / 4, false, false, true);
   // As identified now: input side with a slow pole (6 per bank), any-size predictor.
   latencyFor<Eigen::Dynamic>("3 chambers, dynamic, input side, 6 poles", 3, calls / 4, false, false, true, 6);
+  // The demo's model: the same, on the tip direction's components (a conversion each way).
+  latencyFor<Eigen::Dynamic>("3 chambers, dynamic, input side, 6 poles, tip frame", 3, calls / 4, false, false, true, 6,
+                             true);
   // N independent 3-chamber segments, each updated and predicted 40 steps per tick.
   for (int n : {1, 10, 50, 100}) {
     std::vector<std::unique_ptr<plsa::Predictor<5>>> segs;

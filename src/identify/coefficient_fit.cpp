@@ -49,8 +49,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     require(U[r].cols() == model.inputCount() && Y[r].cols() == ny && U[r].rows() == Y[r].rows(),
             "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     require(Y[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
-    const ModelRegressors reg = modelRegressors(model.poles, model.partition, U[r], model.input_play, model.play_start,
-                                                model.play_coupling, model.schedulePole(), model.schedule_side);
+    const ModelRegressors reg = modelRegressors(model, U[r]);
     for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
       const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
       for (int m = 0; m < b.count; ++m)

@@ -69,6 +69,21 @@ inline double coupledLevel(double u_j, double positive_sum, double kappa) noexce
   return u_j - kappa * own * (positive_sum - own);
 }
 
+/// An input's level counted from `threshold` (DioPwlObfModel::play_threshold):
+/// zero below it, as a chamber that has not reached its opening pressure.
+/// Threshold 0 passes the input through, negative levels included.
+inline double levelAbove(double u, double threshold) noexcept {
+  return threshold > 0.0 ? std::max(0.0, u - threshold) : u;
+}
+
+/// coupledLevel's `positive_sum` for levels counted from `threshold`.
+template <typename Derived>
+double positiveSumAbove(const Eigen::MatrixBase<Derived>& u, double threshold) noexcept {
+  double s = 0.0;
+  for (Eigen::Index j = 0; j < u.size(); ++j) s += std::max(0.0, u(j) - threshold);
+  return s;
+}
+
 /// Where the schedule acts. Output side (the paper): the filters run on the
 /// input increments and the region's coefficients weigh their outputs. Input
 /// side (plsa, interpolated scheduling): each grid node filters the increments
@@ -94,6 +109,11 @@ struct DioPwlObfModel {
   std::vector<std::vector<PlayChannel>> input_play;
   PlayStart play_start = PlayStart::kRising;
   double play_coupling = 0.0;  ///< kappa of coupledLevel, 1/input unit; 0 = each channel sees its own input
+  /// Input level the play channels count from: they see max(0, u - play_threshold)
+  /// (levelAbove), so a growing band and the coupling start there, as a
+  /// chamber's wall only stretches once its pressure passes an opening
+  /// threshold. 0 = the inputs as they are. Input units.
+  double play_threshold = 0.0;
   /// The partition is looked up at the inputs through a first-order lag of
   /// this time constant (unit gain), 0 = at the raw inputs (the paper). The
   /// coefficients then follow the actuator's state rather than its command,
@@ -151,6 +171,7 @@ struct DioPwlObfModel {
                 "model: input_play widths and slopes must be finite and >= 0");
     }
     require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
+    require(std::isfinite(play_threshold) && play_threshold >= 0, "model: play_threshold must be finite and >= 0");
     require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     require(output_level.empty() || schedule_side == ScheduleSide::kInput,
             "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
@@ -215,7 +236,8 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
 inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
                                        const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
                                        PlayStart start = PlayStart::kRising, double coupling = 0.0,
-                                       double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput) {
+                                       double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
+                                       double threshold = 0.0) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -252,16 +274,19 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     }
   }
   require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
-  // Channel inputs: input j (coupled to the others) through each of its play channels.
+  // Channel inputs: input j above the threshold (coupled to the others)
+  // through each of its play channels.
   Eigen::MatrixXd coupled;
-  if (coupling != 0.0) {
+  const bool shaped = coupling != 0.0 || threshold != 0.0;
+  if (shaped) {
     coupled.resize(T, u.cols());
     for (Eigen::Index k = 0; k < T; ++k) {
-      const double positive_sum = u.row(k).cwiseMax(0.0).sum();
-      for (Eigen::Index j = 0; j < u.cols(); ++j) coupled(k, j) = coupledLevel(u(k, j), positive_sum, coupling);
+      const double positive_sum = positiveSumAbove(u.row(k), threshold);
+      for (Eigen::Index j = 0; j < u.cols(); ++j)
+        coupled(k, j) = coupledLevel(levelAbove(u(k, j), threshold), positive_sum, coupling);
     }
   }
-  const Eigen::MatrixXd& level = coupling != 0.0 ? coupled : u;
+  const Eigen::MatrixXd& level = shaped ? coupled : u;
   std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
   for (std::size_t j = 0; j < n_u; ++j) {
     const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];
@@ -297,12 +322,18 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
   return out;
 }
 
+/// The regressors of `model`'s own structure (poles, partition, play, start,
+/// coupling, threshold, lag and side) for an input record.
+inline ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  return modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
+                         model.schedulePole(), model.schedule_side, model.play_threshold);
+}
+
 /// The model's predicted increments dyhat (T x n_y) for an input record.
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
-  const ModelRegressors reg = modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start,
-                                              model.play_coupling, model.schedulePole(), model.schedule_side);
+  const ModelRegressors reg = modelRegressors(model, u);
   Eigen::MatrixXd dy(u.rows(), model.outputCount());
   if (model.schedule_side == ScheduleSide::kInput) {
     for (int o = 0; o < model.outputCount(); ++o) dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * model.stackedCoefficients(o);
@@ -332,9 +363,7 @@ inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::Mat
   require(u.rows() >= 1, "modelLevels: empty record");
   require(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
   // Settled states depend on the first sample alone (its schedule, played and coupled level).
-  const ModelRegressors first = modelRegressors(model.poles, model.partition, u.topRows(1), model.input_play,
-                                                model.play_start, model.play_coupling, model.schedulePole(),
-                                                model.schedule_side);
+  const ModelRegressors first = modelRegressors(model, u.topRows(1));
   Eigen::MatrixXd level(u.rows(), model.outputCount());
   for (int o = 0; o < model.outputCount(); ++o) {
     double acc = first.level0[static_cast<std::size_t>(o)].dot(model.stackedCoefficients(o));

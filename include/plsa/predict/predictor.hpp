@@ -139,10 +139,10 @@ class Predictor {
       for (auto& x : x_) x.setZero();
       for (int j = 0; j < s.n_u; ++j) u_(j) = u[j];
       us_ = u_;  // the schedule's lag starts settled
-      const double positive_sum = u_.cwiseMax(0.0).sum();
+      const double positive_sum = positiveSumAbove(u_, s.threshold);
       for (std::size_t c = 0; c < s.play.size(); ++c)
-        vc_(static_cast<Eigen::Index>(c)) =
-            playStartState(coupledLevel(u_(s.channel_input[c]), positive_sum, s.coupling), s.play[c], s.play_start);
+        vc_(static_cast<Eigen::Index>(c)) = playStartState(
+            coupledLevel(levelAbove(u_(s.channel_input[c]), s.threshold), positive_sum, s.coupling), s.play[c], s.play_start);
       dir_ = DirectionState{};
       if (s.input_side) nodeWeights(s, us_, node_w_);
       y_ = y_sim_ = ym_;
@@ -258,6 +258,7 @@ class Predictor {
     std::vector<PlayChannel> play;                  ///< per channel
     PlayStart play_start = PlayStart::kRising;
     double coupling = 0.0;                          ///< coupledLevel's kappa
+    double threshold = 0.0;                         ///< level the channels count from
     double schedule_pole = 0.0;                     ///< lag of the scheduling inputs, per sample
     // Input side: one copy of every bank per grid node, fed the increments of
     // the node's weight times the played input; `partition` is then the single
@@ -306,6 +307,7 @@ class Predictor {
     const int copies = s->input_side ? m.partition.regionCount() : 1;
     s->play_start = m.play_start;
     s->coupling = m.play_coupling;
+    s->threshold = m.play_threshold;
     s->schedule_pole = m.schedulePole();
     std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
     for (int j = 0; j < s->n_u; ++j)
@@ -557,10 +559,10 @@ class Predictor {
   // input us; node_w holds the previous weights) times the channel.
   void advance(const Slot& s, std::vector<BankVector>& x, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
                Eigen::VectorXd& node_w, const Eigen::VectorXd& u) noexcept {
-    const double positive_sum = s.coupling != 0.0 ? u.cwiseMax(0.0).sum() : 0.0;  // unused when uncoupled
+    const double positive_sum = s.coupling != 0.0 ? positiveSumAbove(u, s.threshold) : 0.0;  // unused when uncoupled
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double ui = coupledLevel(u(s.channel_input[c]), positive_sum, s.coupling);
+      const double ui = coupledLevel(levelAbove(u(s.channel_input[c]), s.threshold), positive_sum, s.coupling);
       const double next = s.play[c].follow(ui, vc(cc));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;

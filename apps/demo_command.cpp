@@ -77,6 +77,7 @@ void runDemo(const DemoOptions& opt) {
   io_.output_frame = OutputFrame::kAsLogged;
   io_.play_candidates = {{0.0}};
   io_.play_coupling_candidates = {};
+  io_.play_threshold_candidates = {};
   io_.schedule_lag_candidates = {};
   io_.slow_pole_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, io_);

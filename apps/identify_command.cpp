@@ -189,6 +189,17 @@ void addIdentifyCommands(CLI::App& app) {
                  "cross-validation; '0' alone keeps the paper's schedule on the raw inputs")
       ->delimiter(',')
       ->check(secondsValidator("0.4"));
+  id->add_option("--play-coupling", a->options.play_coupling_candidates,
+                 "Candidate couplings of each play channel to the other inputs, as fractions of the largest training "
+                 "input (0.3: a full neighbour cuts a chamber's level by 30%), tried by cross-validation; '0' alone "
+                 "couples none")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.95));
+  id->add_option("--play-threshold", a->options.play_threshold_candidates,
+                 "Candidate levels the play channels count from, as fractions of the largest training input (a "
+                 "chamber's opening pressure), tried against zero by cross-validation; '0' alone counts from zero")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.95));
   id->add_option("--slow-pole", a->options.slow_pole_candidates,
                  "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")

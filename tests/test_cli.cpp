@@ -57,9 +57,21 @@ TEST_F(Cli, SimulateIsDeterministicPerSeed) {
 TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
   ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;
-  ASSERT_EQ(run("identify --log " + file("train.csv") + " --output-frame tip_cartesian --out " + file("model.json")), 0)
+  ASSERT_EQ(run("identify --log " + file("train.csv") + " --output-frame tip_cartesian --play-coupling 0.3 "
+                "--play-threshold 0.2 --out " + file("model.json")),
+            0)
       << err_;
   EXPECT_NE(err_.find("[5/5] coefficients"), std::string::npos) << "progress lines missing: " << err_;
+  // The candidates given are the ones tried: coupling 0.3 only, threshold 0.2 only.
+  const auto line = [&](const std::string& head) {
+    const std::size_t at = err_.find(head);
+    return at == std::string::npos ? std::string() : err_.substr(at, err_.find('\n', at) - at);
+  };
+  const std::string coupling = line("[5/5] coupled to the other inputs"), threshold = line("[5/5] play channels counted");
+  EXPECT_NE(coupling.find(" 0.30{"), std::string::npos) << coupling;
+  EXPECT_EQ(coupling.find(" 0.15{"), std::string::npos) << coupling;
+  EXPECT_NE(threshold.find(" 0.2/"), std::string::npos) << threshold;
+  EXPECT_EQ(threshold.find(" 0.1/"), std::string::npos) << threshold;
   EXPECT_EQ(nlohmann::json::parse(slurp(file("model.json")))["output_frame"], "tip_cartesian");
   ASSERT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") +
                 " --horizons 40,80 --json " + file("fits.json") + " --csv " + file("pred.csv")),
@@ -110,6 +122,13 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("--output-frame"), std::string::npos) << err_;
+  for (const std::string bad : {"--play-threshold 1.5", "--play-threshold low", "--play-coupling -0.2"}) {
+    EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg " + bad + " --out " +
+                  file("m.json")),
+              0)
+        << bad;
+    EXPECT_NE(err_.find(bad.substr(0, bad.find(' '))), std::string::npos) << bad << ": " << err_;
+  }
 }
 
 TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {

@@ -460,6 +460,51 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
     say(s);
   }
+  // Where the play channels count from, on the chosen model. A threshold moves
+  // where a growing band starts and how much of a neighbour the coupling
+  // sees, so each one is tried with every growing set as well as the chosen one.
+  if (!o.play_threshold_candidates.empty()) {
+    std::vector<std::vector<PlayChannel>> sets{best_set};
+    for (const auto& set : o.play_candidates)
+      if (set != best_set && std::any_of(set.begin(), set.end(), [](const PlayChannel& c) { return c.slope > 0; }))
+        sets.push_back(set);
+    // A neighbour's level now counts from the threshold: the chosen coupling
+    // is kept as a fraction of the top level above it.
+    const double coupling_fraction = best_coupling * top_level;
+    double best_threshold = 0.0;
+    rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, best_score});
+    for (double d : o.play_threshold_candidates) {
+      require(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
+      if (d == 0) continue;  // scored already
+      model.play_threshold = d * top_level;
+      model.play_coupling = coupling_fraction / (top_level - model.play_threshold);
+      for (const auto& set : sets) {
+        applyPlay(set);
+        const double score = crossValidated();
+        rep.threshold_scores.push_back({set, d, coupling_fraction, score});
+        if (score > best_score + 1e-9) {
+          best_score = score;
+          best_set = set;
+          best_threshold = model.play_threshold;
+          best_coupling = model.play_coupling;
+        }
+      }
+    }
+    model.play_threshold = best_threshold;
+    model.play_coupling = best_coupling;
+    applyPlay(best_set);
+    std::string s = "[5/5] play channels counted from a threshold (x top level; coupling x top level above it): ";
+    s += best_threshold > 0 ? "kept " + formatNumber(best_threshold / top_level) + " (" +
+                                  formatNumber(best_threshold) + " input units), coupling " +
+                                  formatNumber(best_coupling * (top_level - best_threshold)) + ", play " +
+                                  formatPlaySet(best_set)
+                            : std::string("none kept");
+    s += ". Scores (threshold/coupling{play}):";
+    for (const auto& t : rep.threshold_scores)
+      s += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) + formatPlaySet(t.set) + "->" +
+           std::to_string(t.score).substr(0, 5);
+    say(s);
+  }
   // A slow pole in every bank, on an input-side model, scored on simulation.
   if (model.schedule_side == ScheduleSide::kInput && !o.slow_pole_candidates.empty()) {
     const std::vector<std::vector<PoleSet>> base_poles = model.poles;

@@ -59,6 +59,12 @@ struct IdentifyOptions {
   /// (DioPwlObfModel::schedule_lag_s) tried against none, on the chosen
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
   std::vector<double> schedule_lag_candidates = {0.1, 0.2, 0.4, 0.8};
+  /// Then, on the chosen model, levels the play channels count from
+  /// (DioPwlObfModel::play_threshold), tried against zero with every growing
+  /// play set and (if coupling was kept) every coupling, as fractions of the
+  /// largest training input level: a chamber that only stretches past an
+  /// opening pressure. Empty: from zero.
+  std::vector<double> play_threshold_candidates = {0.1, 0.2, 0.3};
   /// Then, for an input-side model, the time constants (s) of one extra real
   /// pole in every bank, tried against none: dynamics slower than the local
   /// fits can see (creep, drift). Scored on simulation of the held-out
@@ -87,6 +93,13 @@ struct IdentifyReport {
     double score;
   };
   std::vector<CouplingScore> coupling_scores;
+  struct ThresholdScore {
+    std::vector<PlayChannel> set;
+    double threshold;  ///< as given in the options (0: none)
+    double coupling;   ///< as given in the options, of the top level above the threshold
+    double score;
+  };
+  std::vector<ThresholdScore> threshold_scores;
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
   bool used_windows = false;  ///< no staircase: poles from local windows

@@ -61,8 +61,9 @@ void runDemo(const DemoOptions& opt) {
   std::printf("  experiments: two-chamber grid 0.20-0.35 bar (%lld samples), joystick validation (%lld samples)\n",
               static_cast<long long>(train.samples()), static_cast<long long>(val.samples()));
 
-  // 2. Identification: plsa's (tip frame, input side; play, coupling, lag and
-  // slow pole by cross-validation) and the paper's (switched, no play, the angles as logged).
+  // 2. Identification: plsa's (tip frame, input side; play, coupling, lag,
+  // threshold and slow pole by cross-validation) and the paper's (switched,
+  // no play, the angles as logged).
   IdentifyOptions io_;
   io_.output_frame = OutputFrame::kTipCartesian;  // bend and steer are the tip direction's polar coordinates
   // The grid moves one input at a time, so its held-out blocks cannot show the
@@ -121,8 +122,8 @@ void runDemo(const DemoOptions& opt) {
        << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving at a "
        << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ". plsa's model runs "
        << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
-       << "coupling, schedule lag and slow pole chosen by cross-validation on the grid. Every model is scored on the "
-       << "logged angles.</p>"
+       << "coupling, schedule lag, play threshold and slow pole chosen by cross-validation on the grid. Every model "
+       << "is scored on the logged angles.</p>"
        << "<h2>Fits (NRMSE %)</h2><table><tr><th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th></tr>";
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o)

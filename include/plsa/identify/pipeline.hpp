@@ -60,10 +60,11 @@ struct IdentifyOptions {
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
   std::vector<double> schedule_lag_candidates = {0.1, 0.2, 0.4, 0.8};
   /// Then, on the chosen model, levels the play channels count from
-  /// (DioPwlObfModel::play_threshold), tried against zero with every growing
-  /// play set and (if coupling was kept) every coupling, as fractions of the
-  /// largest training input level: a chamber that only stretches past an
-  /// opening pressure. Empty: from zero.
+  /// (DioPwlObfModel::play_threshold), as fractions of the largest training
+  /// input level, tried against zero with the chosen and every growing play
+  /// set; the kept coupling stays the same fraction of the top level above
+  /// the threshold. A chamber that only stretches past an opening pressure.
+  /// Empty: from zero.
   std::vector<double> play_threshold_candidates = {0.1, 0.2, 0.3};
   /// Then, for an input-side model, the time constants (s) of one extra real
   /// pole in every bank, tried against none: dynamics slower than the local

@@ -141,8 +141,9 @@ class Predictor {
       us_ = u_;  // the schedule's lag starts settled
       const double positive_sum = positiveSumAbove(u_, s.threshold);
       for (std::size_t c = 0; c < s.play.size(); ++c)
-        vc_(static_cast<Eigen::Index>(c)) = playStartState(
-            coupledLevel(levelAbove(u_(s.channel_input[c]), s.threshold), positive_sum, s.coupling), s.play[c], s.play_start);
+        vc_(static_cast<Eigen::Index>(c)) =
+            playStartState(coupledLevel(levelAbove(u_(s.channel_input[c]), s.threshold), positive_sum, s.coupling),
+                           s.play[c], s.play_start);
       dir_ = DirectionState{};
       if (s.input_side) nodeWeights(s, us_, node_w_);
       y_ = y_sim_ = ym_;

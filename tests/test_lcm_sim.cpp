@@ -188,9 +188,10 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   const plsa::io::Log train = plsa::sim::runExperiment(rig, plsa::sim::gridExperiment(eo));
   plsa::IdentifyOptions io;
   io.play_candidates = {{0.1}};
-  // Any model serves the node; the threshold stage only costs time (under ASan
-  // it pushed this test past its limit).
+  // Any model serves the node; the threshold and drift stages only cost time
+  // (under ASan the threshold stage pushed this test past its limit).
   io.play_threshold_candidates = {};
+  io.output_drift = "off";
   const plsa::DioPwlObfModel model = plsa::identifyModel({train}, io);
   const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), model);

@@ -7,6 +7,7 @@
 
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/local_fit.hpp"
+#include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/segmentation.hpp"
 #include "plsa/identify/validation.hpp"
 
@@ -75,6 +76,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   require(!logs.empty(), "identify: no logs given");
   require(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   require(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  require(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
+          "identify: output drift '" + o.output_drift + "': expected auto, on or off");
   IdentifyReport local;
   IdentifyReport& rep = out ? *out : local;
   auto say = [&](const std::string& line) {
@@ -84,6 +87,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
 
   // Data and sample time; every log must agree.
   std::vector<Eigen::MatrixXd> U, Y, Ref;
+  std::vector<Eigen::VectorXd> times;
   double dt = 0.0;
   std::vector<std::string> reference = o.reference;
   if (reference.empty()) {
@@ -101,6 +105,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     U.push_back(log.columnsOf(o.inputs));
     Y.push_back(log.columnsOf(o.outputs));
     Ref.push_back(log.columnsOf(reference));
+    times.push_back(log.column("time_s"));
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
   if (o.output_frame == OutputFrame::kTipCartesian)
@@ -339,6 +344,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // is scored by a model fitted on all the others.
   require(o.play_selection_folds >= 2, "identify: play selection needs at least 2 folds");
   std::vector<Eigen::MatrixXd> BU, BY;
+  std::vector<Eigen::VectorXd> BT;
   std::vector<int> fold_of;
   for (std::size_t r = 0; r < U.size(); ++r) {
     const Eigen::Index len = U[r].rows() / o.play_selection_folds;
@@ -346,6 +352,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       const Eigen::Index b = f * len, n = f + 1 == o.play_selection_folds ? U[r].rows() - b : len;
       BU.push_back(U[r].middleRows(b, n));
       BY.push_back(Y[r].middleRows(b, n));
+      BT.push_back(times[r].segment(b, n));
       fold_of.push_back(f);
     }
   }
@@ -355,17 +362,25 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   rep.play_scores.clear();
   // Held-out fit of the model as configured now, averaged over outputs and
   // blocks: 40 steps ahead, or (input side) simulated from the model's level.
+  // Fits are always scored against the logged outputs; they are fitted to
+  // FY, the logged ones until a sensor drift is kept, or, with
+  // drift_per_fold, to each fold's own outputs less the drift estimated on them.
   enum class Score { kStepAhead, kSimulation };
+  std::vector<Eigen::MatrixXd> FY = BY;
+  bool drift_per_fold = false;
   auto crossValidated = [&](Score what = Score::kStepAhead) {
     double score = 0.0;
     int n = 0;
     for (int f = 0; f < o.play_selection_folds; ++f) {
       std::vector<Eigen::MatrixXd> TU, TY;
+      std::vector<Eigen::VectorXd> TT;
       for (std::size_t b = 0; b < BU.size(); ++b)
         if (fold_of[b] != f) {
           TU.push_back(BU[b]);
-          TY.push_back(BY[b]);
+          TY.push_back(FY[b]);
+          TT.push_back(BT[b]);
         }
+      if (drift_per_fold) TY = removeOutputDrift(TY, TT, estimateOutputDrift(model, TU, TY, TT, o.coefficients));
       fitCoefficients(model, TU, TY, o.coefficients);
       if (what == Score::kSimulation) fitOutputLevel(model, TU, TY);
       for (std::size_t b = 0; b < BU.size(); ++b) {
@@ -505,6 +520,42 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
            std::to_string(t.score).substr(0, 5);
     say(s);
   }
+  // A sensor drift, on an input-side model: estimated on each fold's training
+  // blocks and taken out of them; kept if the held-out simulation, scored
+  // against the logged outputs, improves.
+  std::vector<Eigen::MatrixXd> Yfit = Y;
+  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != "off") {
+    const double without = crossValidated(Score::kSimulation);
+    drift_per_fold = true;
+    const double with = crossValidated(Score::kSimulation);
+    drift_per_fold = false;
+    rep.drift_scores = {without, with};
+    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
+    std::string s = "[5/5] sensor drift over the training run: ";
+    for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
+      if (o.output_frame != OutputFrame::kTipCartesian || oi == 1)
+        s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
+    rep.output_drift = drift;
+    if (o.output_drift == "on" || with > without + 1e-9) {
+      rep.drift_taken_out = true;
+      Yfit = removeOutputDrift(Y, times, drift);
+      // Later stages fit to the outputs less the drift found on all of them.
+      for (std::size_t b = 0, r = 0; r < U.size(); ++r) {
+        const Eigen::Index len = U[r].rows() / o.play_selection_folds;
+        for (int f = 0; f < o.play_selection_folds; ++f, ++b)
+          FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
+      }
+      s += "taken out";
+    } else {
+      s += "left in";
+    }
+    s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
+         std::to_string(with).substr(0, 5) + " with it taken out)";
+    say(s);
+  } else if (o.output_drift != "off") {
+    say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
+        "inputs)");
+  }
   // A slow pole in every bank, on an input-side model, scored on simulation.
   if (model.schedule_side == ScheduleSide::kInput && !o.slow_pole_candidates.empty()) {
     const std::vector<std::vector<PoleSet>> base_poles = model.poles;
@@ -541,9 +592,9 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);
     say(s);
   }
-  rep.coefficients = fitCoefficients(model, U, Y, o.coefficients);
+  rep.coefficients = fitCoefficients(model, U, Yfit, o.coefficients);
   // An input-side model's level is a function of its inputs: simulate from it.
-  if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Y);
+  if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Yfit);
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
   for (const auto& n : rep.coefficients.notes) say("      " + n);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "plsa/identify/coefficient_fit.hpp"
+#include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/pole_clustering.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
@@ -72,6 +73,13 @@ struct IdentifyOptions {
   /// blocks from the model's level, the horizon where a slow pole shows (it
   /// hardly moves a 40-step fit). Empty: no extra pole.
   std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
+  /// Then, for an input-side model, a sensor drift linear in time (a tip
+  /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
+  /// taken out of the training outputs. "auto": kept if held-out simulation
+  /// against the logged outputs improves; "on": always taken out; "off": the
+  /// outputs as logged. Taken out, the model carries the sensor's mean state
+  /// over the training run.
+  std::string output_drift = "auto";
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage
@@ -103,6 +111,9 @@ struct IdentifyReport {
   std::vector<ThresholdScore> threshold_scores;
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
+  std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
+  OutputDrift output_drift;     ///< the drift estimated on all training logs (empty rates: stage not run)
+  bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
   bool used_windows = false;  ///< no staircase: poles from local windows
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;

@@ -1,0 +1,94 @@
+#include "plsa/identify/output_drift.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace plsa {
+
+double meanSampleTime(const std::vector<Eigen::VectorXd>& t) {
+  double sum = 0.0;
+  Eigen::Index n = 0;
+  for (const Eigen::VectorXd& v : t) {
+    sum += v.sum();
+    n += v.size();
+  }
+  require(n > 0, "output drift: no sample times");
+  return sum / static_cast<double>(n);
+}
+
+std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
+                                               const OutputDrift& drift) {
+  require(Y.size() == t.size(), "output drift: need one time vector per record");
+  std::vector<Eigen::MatrixXd> out = Y;
+  for (std::size_t r = 0; r < Y.size(); ++r) {
+    require(t[r].size() == Y[r].rows() && static_cast<std::size_t>(Y[r].cols()) == drift.rate.size(),
+            "output drift: record " + std::to_string(r) + " does not match the drift's outputs or its times");
+    const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
+    for (Eigen::Index o = 0; o < Y[r].cols(); ++o)
+      if (drift.rate[static_cast<std::size_t>(o)] != 0.0)
+        out[r].col(o).array() -= drift.rate[static_cast<std::size_t>(o)] * since;
+  }
+  return out;
+}
+
+OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vector<Eigen::MatrixXd>& U,
+                                const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
+                                const CoefficientFitOptions& options, int iterations) {
+  require(model_in.schedule_side == ScheduleSide::kInput,
+          "output drift: needs an input-side model (only its level is a function of the inputs)");
+  require(U.size() == Y.size() && U.size() == t.size() && !U.empty(), "output drift: need matching records and times");
+  require(iterations >= 1, "output drift: need at least one iteration");
+  const int ny = model_in.outputCount();
+  const bool tip = model_in.output_frame == OutputFrame::kTipCartesian;
+  OutputDrift drift;
+  drift.rate.assign(static_cast<std::size_t>(ny), 0.0);
+  drift.reference_time_s = meanSampleTime(t);
+  DioPwlObfModel model = model_in;
+  for (int it = 0; it < iterations; ++it) {
+    const std::vector<Eigen::MatrixXd> Yc = removeOutputDrift(Y, t, drift);
+    fitCoefficients(model, U, Yc, options);
+    fitOutputLevel(model, U, Yc);
+    // Residual and signature, model frame, with their means taken out per
+    // output (the level absorbs any constant).
+    std::vector<double> zz(static_cast<std::size_t>(ny), 0.0), zr(static_cast<std::size_t>(ny), 0.0);
+    std::vector<double> sz(static_cast<std::size_t>(ny), 0.0), sr(static_cast<std::size_t>(ny), 0.0);
+    double n = 0.0;
+    for (std::size_t r = 0; r < U.size(); ++r) {
+      const Eigen::MatrixXd ym = toModelFrame(model.output_frame, Yc[r]);
+      const Eigen::MatrixXd level = modelLevels(model, U[r], modelIncrements(model, U[r]));
+      const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
+      for (Eigen::Index k = 0; k < ym.rows(); ++k) {
+        for (int o = 0; o < ny; ++o) {
+          const auto oo = static_cast<std::size_t>(o);
+          const double res = ym(k, o) - model.output_level[oo] - level(k, o);
+          // A yaw of d deg turns (x, y) by d: dx = -y d, dy = x d (radians).
+          const double z = !tip ? since(k) : (o == 0 ? -ym(k, 1) : ym(k, 0)) * kRadPerDeg * since(k);
+          zz[oo] += z * z;
+          zr[oo] += z * res;
+          sz[oo] += z;
+          sr[oo] += res;
+        }
+        n += 1.0;
+      }
+    }
+    for (int o = 0; o < ny; ++o) {
+      const auto oo = static_cast<std::size_t>(o);
+      zz[oo] -= sz[oo] * sz[oo] / n;
+      zr[oo] -= sz[oo] * sr[oo] / n;
+    }
+    if (tip) {
+      const double den = zz[0] + zz[1];
+      require(den > 0, "output drift: the tip never leaves the origin, no yaw to see");
+      drift.rate[1] += (zr[0] + zr[1]) / den;
+    } else {
+      for (int o = 0; o < ny; ++o) {
+        const auto oo = static_cast<std::size_t>(o);
+        require(zz[oo] > 0, "output drift: the logs span no time");
+        drift.rate[oo] += zr[oo] / zz[oo];
+      }
+    }
+  }
+  return drift;
+}
+
+}  // namespace plsa

@@ -58,19 +58,32 @@ void runCrossval(CrossvalArgs& a) {
   for (std::size_t hold = 0; hold < logs.size(); ++hold) {
     std::vector<io::Log> train;
     std::vector<Eigen::MatrixXd> U, Y;
+    std::vector<Eigen::VectorXd> T;
     for (std::size_t r = 0; r < logs.size(); ++r)
       if (r != hold) {
         train.push_back(logs[r]);
         U.push_back(logs[r].columnsOf(a.inputs));
         Y.push_back(logs[r].columnsOf(a.outputs));
+        T.push_back(logs[r].column("time_s"));
       }
-    const DioPwlObfModel model = identifyModel(train, o);
+    IdentifyReport report;
+    const DioPwlObfModel model = identifyModel(train, o, &report);
+    // ARX is fitted to the same outputs as the model: less any drift it took out.
+    if (report.drift_taken_out) Y = removeOutputDrift(Y, T, report.output_drift);
     const ArxModel arx = ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
     const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
     const std::vector<ModelPredictions> preds = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
                                                  predictArx("ARX", arx, uv, yv, a.horizons)};
     const auto fits = commonFits(preds, yv);
     const std::string name = fs::path(files[hold]).stem().string();
+    if (report.drift_taken_out) {
+      std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
+      for (std::size_t out = 0; out < a.outputs.size(); ++out) {
+        std::printf(" %s %.4g", a.outputs[out].c_str(), report.output_drift.rate[out]);
+        j["folds"][name]["output_drift_per_s"][a.outputs[out]] = report.output_drift.rate[out];
+      }
+      std::printf("\n");
+    }
     for (std::size_t m = 0; m < preds.size(); ++m)
       for (std::size_t out = 0; out < a.outputs.size(); ++out) {
         std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), preds[m].name.c_str());

@@ -205,6 +205,11 @@ void addIdentifyCommands(CLI::App& app) {
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
+  id->add_option("--output-drift", a->options.output_drift,
+                 "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
+                 "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
+                 "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

@@ -72,6 +72,11 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   EXPECT_EQ(coupling.find(" 0.15{"), std::string::npos) << coupling;
   EXPECT_NE(threshold.find(" 0.2/"), std::string::npos) << threshold;
   EXPECT_EQ(threshold.find(" 0.1/"), std::string::npos) << threshold;
+  // The drift stage says what it did (input side) or why not (output side);
+  // in the tip frame a drift is one yaw rate, never the bending's.
+  const std::string drift = line("[5/5] sensor drift");
+  EXPECT_FALSE(drift.empty()) << err_;
+  EXPECT_EQ(drift.find("bend_deg "), std::string::npos) << drift;
   EXPECT_EQ(nlohmann::json::parse(slurp(file("model.json")))["output_frame"], "tip_cartesian");
   ASSERT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") +
                 " --horizons 40,80 --json " + file("fits.json") + " --csv " + file("pred.csv")),
@@ -122,7 +127,8 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("--output-frame"), std::string::npos) << err_;
-  for (const std::string bad : {"--play-threshold 1.5", "--play-threshold low", "--play-coupling -0.2"}) {
+  for (const std::string bad :
+       {"--play-threshold 1.5", "--play-threshold low", "--play-coupling -0.2", "--output-drift sometimes"}) {
     EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg " + bad + " --out " +
                   file("m.json")),
               0)

@@ -15,7 +15,9 @@ namespace plsa {
 
 /// Drift rates per logged output (output units per second) about a reference
 /// time, where the correction is zero: the logs' mean sample time, so the
-/// model keeps the sensor's average state over the training run.
+/// model keeps the sensor's average state over the training run. One trend
+/// runs through every log's time stamps: on one clock, a drift since
+/// power-up; on clocks that restart per log, a trend within each log.
 struct OutputDrift {
   std::vector<double> rate;  ///< per logged output; tip_cartesian: {0, steering's yaw rate}
   double reference_time_s = 0.0;

@@ -363,6 +363,33 @@ TEST(ModelFile, PlayThresholdRoundTripsAndIsChecked) {
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
 }
 
+TEST(ModelFile, TrainingDriftRoundTripsAndIsChecked) {
+  DioPwlObfModel m = knownModel();
+  ASSERT_EQ(m.outputCount(), 1);
+  EXPECT_EQ(nlohmann::json::parse(modelToJson(m)).count("training_output_drift"), 0u);  // none: not written
+  m.training_drift_per_s = {0.0244};
+  m.training_drift_reference_s = 115.5;
+  const DioPwlObfModel back = modelFromJson(modelToJson(m));
+  EXPECT_EQ(back.training_drift_per_s, m.training_drift_per_s);
+  EXPECT_EQ(back.training_drift_reference_s, 115.5);
+  nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+  const auto rejected = [&](const std::string& what) {
+    try {
+      modelFromJson(j.dump());
+      ADD_FAILURE() << "accepted: " << j["training_output_drift"].dump();
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  j["training_output_drift"]["rate_per_s"] = {0.01, 0.02};  // two rates, one output
+  rejected("training_output_drift");
+  j["training_output_drift"]["rate_per_s"] = {"fast"};
+  rejected("training_output_drift.rate_per_s");
+  j["training_output_drift"]["rate_per_s"] = {0.01};
+  j["training_output_drift"].erase("reference_time_s");
+  rejected("training_output_drift.reference_time_s");
+}
+
 TEST(ModelFile, ScheduleLagRoundTripsAndOldFilesHaveNone) {
   DioPwlObfModel m = knownModel();
   m.schedule_lag_s = 0.4;
@@ -675,6 +702,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_NEAR(rep.output_drift.rate[1], rate, 0.1 * rate) << toString(frame);  // 0.02997 and 0.03025 when written
     EXPECT_NEAR(rep.output_drift.rate[0], 0.0, 0.1 * rate) << toString(frame);  // a yaw leaves the bend alone
     EXPECT_TRUE(rep.drift_taken_out) << toString(frame);
+    EXPECT_EQ(taken.training_drift_per_s, rep.output_drift.rate) << toString(frame);  // recorded in the model
     if (!tip) continue;  // as logged the trend barely moves an angle model's fit (83.02 -> 83.04 held out)
     EXPECT_GT(rep.drift_scores.second, rep.drift_scores.first);
     o.output_drift = "off";
@@ -682,6 +710,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     const DioPwlObfModel left = identifyModel({runs.train}, o, &rep_off);
     EXPECT_TRUE(rep_off.output_drift.rate.empty());
     EXPECT_FALSE(rep_off.drift_taken_out);
+    EXPECT_TRUE(left.training_drift_per_s.empty());
     const ValidationResult v = validateModel(taken, runs.val, {40}), w = validateModel(left, runs.val, {40});
     // When written, simulation as bending / steering: 95.6 / 76.4 taken out
     // against 93.5 / 75.3 left in. Steering stays low: the validation run's

@@ -595,6 +595,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   rep.coefficients = fitCoefficients(model, U, Yfit, o.coefficients);
   // An input-side model's level is a function of its inputs: simulate from it.
   if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Yfit);
+  if (rep.drift_taken_out) {
+    model.training_drift_per_s = rep.output_drift.rate;
+    model.training_drift_reference_s = rep.output_drift.reference_time_s;
+  }
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
   for (const auto& n : rep.coefficients.notes) say("      " + n);

@@ -95,6 +95,9 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["schedule_lag_s"] = m.schedule_lag_s;
   j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
   if (!m.output_level.empty()) j["output_level"] = m.output_level;
+  if (!m.training_drift_per_s.empty())
+    j["training_output_drift"] = {{"rate_per_s", m.training_drift_per_s},
+                                  {"reference_time_s", m.training_drift_reference_s}};
   j["output_frame"] = toString(m.output_frame);
   json part;
   part["inputs"] = m.partition.inputs();
@@ -190,6 +193,13 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   m.output_frame = outputFrameFromString(frame);
   if (j.contains("output_level"))
     for (const auto& v : rd.array(j["output_level"], "output_level")) m.output_level.push_back(rd.number(v, "output_level[]"));
+  if (j.contains("training_output_drift")) {
+    const json& d = j["training_output_drift"];
+    for (const auto& v : rd.array(rd.at(d, "rate_per_s", "training_output_drift."), "training_output_drift.rate_per_s"))
+      m.training_drift_per_s.push_back(rd.number(v, "training_output_drift.rate_per_s[]"));
+    m.training_drift_reference_s =
+        rd.number(rd.at(d, "reference_time_s", "training_output_drift."), "training_output_drift.reference_time_s");
+  }
   const json& part = rd.at(j, "partition", "");
   std::vector<int> sched;
   for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {

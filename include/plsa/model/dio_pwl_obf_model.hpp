@@ -126,6 +126,12 @@ struct DioPwlObfModel {
   /// transient it would otherwise carry for ever. Empty: simulation starts
   /// from the first measured sample. [output]
   std::vector<double> output_level;
+  /// Provenance, not used to predict: the sensor drift taken out of the
+  /// training outputs before the fit (identify's sensor-drift stage), per
+  /// logged output in output units per second, zero at training_drift_reference_s
+  /// on the training logs' clock. Empty: fitted to the outputs as logged.
+  std::vector<double> training_drift_per_s;
+  double training_drift_reference_s = 0.0;
   /// The frame the poles, coefficients and output_level are in; `outputs`
   /// always names the logged columns (output_frame.hpp).
   OutputFrame output_frame = OutputFrame::kAsLogged;
@@ -178,6 +184,10 @@ struct DioPwlObfModel {
     require(output_level.empty() || output_level.size() == outputs.size(),
             "model: output_level needs one value per output");
     for (double b : output_level) require(std::isfinite(b), "model: output_level values must be finite");
+    require(training_drift_per_s.empty() || training_drift_per_s.size() == outputs.size(),
+            "model: training_output_drift needs one rate per output");
+    for (double r : training_drift_per_s) require(std::isfinite(r), "model: training_output_drift rates must be finite");
+    require(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
     require(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
             "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
     require(schedule_side == ScheduleSide::kOutput ||

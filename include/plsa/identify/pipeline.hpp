@@ -67,12 +67,6 @@ struct IdentifyOptions {
   /// the threshold. A chamber that only stretches past an opening pressure.
   /// Empty: from zero.
   std::vector<double> play_threshold_candidates = {0.1, 0.2, 0.3};
-  /// Then, for an input-side model, the time constants (s) of one extra real
-  /// pole in every bank, tried against none: dynamics slower than the local
-  /// fits can see (creep, drift). Scored on simulation of the held-out
-  /// blocks from the model's level, the horizon where a slow pole shows (it
-  /// hardly moves a 40-step fit). Empty: no extra pole.
-  std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
   /// taken out of the training outputs. "auto": kept if held-out simulation
@@ -80,6 +74,12 @@ struct IdentifyOptions {
   /// outputs as logged. Taken out, the model carries the sensor's mean state
   /// over the training run.
   std::string output_drift = "auto";
+  /// Then, for an input-side model, the time constants (s) of one extra real
+  /// pole in every bank, tried against none: dynamics slower than the local
+  /// fits can see (creep, drift). Scored on simulation of the held-out
+  /// blocks from the model's level, the horizon where a slow pole shows (it
+  /// hardly moves a 40-step fit). Empty: no extra pole.
+  std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< contiguous time blocks per training log
   std::function<void(const std::string&)> progress;  ///< one line per stage

@@ -654,6 +654,33 @@ TEST(OutputDrift, RemovalIsALinearTrendAboutTheReferenceAndChecksItsInput) {
   }
 }
 
+// A model that is exactly right plus a known trend: the estimate must find
+// the trend, skip an empty record, and give zero where nothing can show one.
+TEST(OutputDrift, EstimateFindsAKnownTrendAndToleratesUninformativeData) {
+  DioPwlObfModel truth = knownModel();
+  truth.partition = PwlPartition::interpolated({}, {});  // one node: a linear input-side model
+  truth.schedule_side = ScheduleSide::kInput;
+  truth.coefficients = {{Eigen::Vector2d(1.5, -0.2)}};
+  truth.region_fits = {RegionFit{}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> level(0.0, 1.0);
+  Eigen::MatrixXd u(2000, 1);
+  for (Eigen::Index k = 0; k < u.rows(); k += 100) u.middleRows(k, 100).setConstant(level(rng));
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(u.rows(), 0.0, 199.9);
+  const Eigen::MatrixXd clean = modelLevels(truth, u, modelIncrements(truth, u));
+  const double rate = 0.004;
+  const Eigen::MatrixXd y = clean.array() + rate * (t.array() - t.mean());
+  const std::vector<Eigen::MatrixXd> U{u, Eigen::MatrixXd(0, 1)}, Y{y, Eigen::MatrixXd(0, 1)};
+  const std::vector<Eigen::VectorXd> T{t, Eigen::VectorXd(0)};
+  const OutputDrift d = estimateOutputDrift(truth, U, Y, T);
+  ASSERT_EQ(d.rate.size(), 1u);
+  EXPECT_NEAR(d.rate[0], rate, 0.02 * rate);
+  EXPECT_NEAR(d.reference_time_s, t.mean(), 1e-9);
+  // Every sample at one time: no trend can show.
+  const OutputDrift flat = estimateOutputDrift(truth, {u}, {y}, {Eigen::VectorXd::Constant(u.rows(), 3.0)});
+  EXPECT_EQ(flat.rate[0], 0.0);
+}
+
 namespace {
 // Grid training and joystick validation with only the sensor's yaw drifting
 // (no tilt) at `yaw_rate` deg/s, and the structure fixed so that only the

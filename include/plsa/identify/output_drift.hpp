@@ -42,7 +42,9 @@ std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd
 /// first fits absorb part of a drift wherever the inputs trend with time.
 /// Levels, not increments: a drift of a few hundredths of a degree per
 /// second is buried in the sensor noise of 80 Hz increments.
-/// Throws naming the problem (output-side model, mismatched records).
+/// Empty records are skipped; data that cannot show a drift (a tip at the
+/// origin, no time span) give rate 0. Throws naming the problem (output-side
+/// model, mismatched records).
 OutputDrift estimateOutputDrift(const DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
                                 const CoefficientFitOptions& options = {}, int iterations = 3);

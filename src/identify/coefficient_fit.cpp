@@ -2,6 +2,8 @@
 
 #include <climits>
 #include <cmath>
+#include <exception>
+#include <thread>
 
 namespace plsa {
 namespace {
@@ -18,86 +20,224 @@ int regionDistance(const PwlPartition& p, int a, int b) {
 
 }  // namespace
 
-CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
-                                     const std::vector<Eigen::MatrixXd>& Y_logged, const CoefficientFitOptions& o) {
-  require(!U.empty() && U.size() == Y_logged.size(), "fitCoefficients: need matching input and output records");
-  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
+void checkSampleWeights(const std::vector<Eigen::MatrixXd>& U, const SampleWeights& weights, const char* who) {
+  if (weights.empty()) return;
+  require(weights.size() == U.size(), std::string(who) + ": need one weight vector per record");
+  for (std::size_t r = 0; r < U.size(); ++r)
+    require(weights[r].size() == U[r].rows() && weights[r].allFinite() && (weights[r].array() >= 0).all(),
+            std::string(who) + ": record " + std::to_string(r) + " needs one finite weight >= 0 per sample");
+}
+
+namespace {
+
+CoefficientSums::Group emptyGroup(const DioPwlObfModel& model) {
   const int R = model.partition.regionCount();
   const int ny = model.outputCount();
-  std::vector<std::vector<Eigen::MatrixXd>> G(static_cast<std::size_t>(ny));
-  std::vector<std::vector<Eigen::VectorXd>> h(static_cast<std::size_t>(ny));
+  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
+  CoefficientSums::Group g;
+  g.G.resize(static_cast<std::size_t>(ny));
+  g.h.resize(static_cast<std::size_t>(ny));
+  g.J.resize(static_cast<std::size_t>(ny));
+  g.Jh.resize(static_cast<std::size_t>(ny));
   for (int out = 0; out < ny; ++out) {
+    const auto oo = static_cast<std::size_t>(out);
     const int n = model.regressorSize(out);
-    G[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::MatrixXd::Zero(n, n));
-    h[static_cast<std::size_t>(out)].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
+    // Input side keeps only J: its G blocks are J's diagonal blocks.
+    if (model.schedule_side != ScheduleSide::kInput) {
+      g.G[oo].assign(static_cast<std::size_t>(R), Eigen::MatrixXd::Zero(n, n));
+      g.h[oo].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
+    }
+    if (joint) {
+      g.J[oo] = Eigen::MatrixXd::Zero(R * n, R * n);
+      g.Jh[oo] = Eigen::VectorXd::Zero(R * n);
+    }
   }
-  model.output_level.clear();  // it belongs to the old coefficients
+  g.count.assign(static_cast<std::size_t>(R), 0.0);
+  return g;
+}
+
+// One record's terms into the sums: sample k joins group(k) (group 0 when
+// `group` is null), times its weight (1 when `w` is null).
+void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+                const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
+  const int ny = model.outputCount();
+  const Eigen::Index T = Y.rows();
   const bool input_side = model.schedule_side == ScheduleSide::kInput;
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
-  // Interpolated: samples couple neighbouring nodes, so each output is one
-  // joint least-squares problem over all regions; switched: independent blocks.
-  std::vector<Eigen::MatrixXd> J(static_cast<std::size_t>(ny));
-  std::vector<Eigen::VectorXd> Jh(static_cast<std::size_t>(ny));
-  if (joint)
-    for (int out = 0; out < ny; ++out) {
-      const int n = model.regressorSize(out);
-      J[static_cast<std::size_t>(out)] = Eigen::MatrixXd::Zero(R * n, R * n);
-      Jh[static_cast<std::size_t>(out)] = Eigen::VectorXd::Zero(R * n);
-    }
-  std::vector<double> count(static_cast<std::size_t>(R), 0.0);
-  for (std::size_t r = 0; r < U.size(); ++r) {
-    require(U[r].cols() == model.inputCount() && Y[r].cols() == ny && U[r].rows() == Y[r].rows(),
-            "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
-    require(Y[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
-    const ModelRegressors reg = modelRegressors(model, U[r]);
-    for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
-      const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-      for (int m = 0; m < b.count; ++m)
-        count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += b.weight[static_cast<std::size_t>(m)];
-    }
-    if (input_side) {
-      // Every node's regressors side by side: one dense least-squares problem.
-      const Eigen::Index T = U[r].rows();
-      if (T < 2) continue;
-      for (int out = 0; out < ny; ++out) {
-        const auto oo = static_cast<std::size_t>(out);
-        const auto P = reg.phi[oo].bottomRows(T - 1);
-        const Eigen::VectorXd dy = Y[r].col(out).tail(T - 1) - Y[r].col(out).head(T - 1);
-        J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
-        Jh[oo].noalias() += P.transpose() * dy;
+  auto weightOf = [&](Eigen::Index k) { return w ? (*w)(k) : 1.0; };
+  auto groupOf = [&](Eigen::Index k) { return group ? (*group)(k) : 0; };
+  for (Eigen::Index k = 1; k < T; ++k) {
+    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+    std::vector<double>& count = sums.groups[static_cast<std::size_t>(groupOf(k))].count;
+    for (int m = 0; m < b.count; ++m)
+      count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += weightOf(k) * b.weight[static_cast<std::size_t>(m)];
+  }
+  if (input_side) {
+    // Every node's regressors side by side: one dense least-squares problem,
+    // summed over runs of samples in the same group. The outputs' problems
+    // are independent and the largest cost of identification: one thread each.
+    auto terms = [&](int out) {
+      const auto oo = static_cast<std::size_t>(out);
+      for (Eigen::Index a = 1; a < T;) {
+        Eigen::Index e = a + 1;
+        while (e < T && groupOf(e) == groupOf(a)) ++e;
+        CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(a))];
+        const Eigen::Index len = e - a;
+        Eigen::VectorXd dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
+        if (w) {
+          const Eigen::VectorXd root = w->segment(a, len).cwiseSqrt();
+          const Eigen::MatrixXd P = root.asDiagonal() * reg.phi[oo].middleRows(a, len);
+          dy.array() *= root.array();
+          g.J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+          g.Jh[oo].noalias() += P.transpose() * dy;
+        } else {
+          const auto P = reg.phi[oo].middleRows(a, len);
+          g.J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+          g.Jh[oo].noalias() += P.transpose() * dy;
+        }
+        a = e;
       }
-      continue;
-    }
-    for (Eigen::Index k = 1; k < U[r].rows(); ++k) {
-      const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-      for (int out = 0; out < ny; ++out) {
-        const auto oo = static_cast<std::size_t>(out);
-        const auto phi = reg.phi[oo].row(k).transpose();
-        const double dy = Y[r](k, out) - Y[r](k - 1, out);
-        const Eigen::MatrixXd outer = phi * phi.transpose();
-        const Eigen::Index n = phi.size();
-        for (int a = 0; a < b.count; ++a) {
-          const auto ra = static_cast<std::size_t>(b.region[static_cast<std::size_t>(a)]);
-          const double wa = b.weight[static_cast<std::size_t>(a)];
-          G[oo][ra] += wa * wa * outer;
-          h[oo][ra] += wa * dy * phi;
-          if (!joint) continue;
-          Jh[oo].segment(static_cast<Eigen::Index>(ra) * n, n) += wa * dy * phi;
-          for (int c = 0; c < b.count; ++c) {
-            const auto rc = static_cast<std::size_t>(b.region[static_cast<std::size_t>(c)]);
-            J[oo].block(static_cast<Eigen::Index>(ra) * n, static_cast<Eigen::Index>(rc) * n, n, n) +=
-                wa * b.weight[static_cast<std::size_t>(c)] * outer;
-          }
+    };
+    std::vector<std::exception_ptr> failed(static_cast<std::size_t>(ny));
+    auto guarded = [&](int out) {
+      try {
+        terms(out);
+      } catch (...) {
+        failed[static_cast<std::size_t>(out)] = std::current_exception();
+      }
+    };
+    std::vector<std::thread> workers;
+    for (int out = 1; out < ny; ++out) workers.emplace_back(guarded, out);
+    if (ny > 0) guarded(0);
+    for (std::thread& t : workers) t.join();
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
+    return;
+  }
+  for (Eigen::Index k = 1; k < T; ++k) {
+    const double wk = weightOf(k);
+    if (wk == 0.0) continue;
+    CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(k))];
+    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+    for (int out = 0; out < ny; ++out) {
+      const auto oo = static_cast<std::size_t>(out);
+      const auto phi = reg.phi[oo].row(k).transpose();
+      const double dy = Y(k, out) - Y(k - 1, out);
+      const Eigen::MatrixXd outer = wk * phi * phi.transpose();
+      const Eigen::Index n = phi.size();
+      for (int i = 0; i < b.count; ++i) {
+        const auto ra = static_cast<std::size_t>(b.region[static_cast<std::size_t>(i)]);
+        const double wa = b.weight[static_cast<std::size_t>(i)];
+        g.G[oo][ra] += wa * wa * outer;
+        g.h[oo][ra] += wk * wa * dy * phi;
+        if (!joint) continue;
+        g.Jh[oo].segment(static_cast<Eigen::Index>(ra) * n, n) += wk * wa * dy * phi;
+        for (int c = 0; c < b.count; ++c) {
+          const auto rc = static_cast<std::size_t>(b.region[static_cast<std::size_t>(c)]);
+          g.J[oo].block(static_cast<Eigen::Index>(ra) * n, static_cast<Eigen::Index>(rc) * n, n, n) +=
+              wa * b.weight[static_cast<std::size_t>(c)] * outer;
         }
       }
     }
   }
+}
+
+CoefficientSums sumsOver(const DioPwlObfModel& model, const std::vector<const ModelRegressors*>& regs,
+                         const std::vector<Eigen::MatrixXd>& Y_logged, const SampleWeights& weights,
+                         const std::vector<Eigen::VectorXi>& group, int groups, const char* who) {
+  require(groups >= 1, std::string(who) + ": need at least one group");
+  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
+  CoefficientSums sums;
+  sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
+  for (std::size_t r = 0; r < Y.size(); ++r) {
+    const ModelRegressors& reg = *regs[r];
+    require(Y[r].cols() == model.outputCount() && static_cast<Eigen::Index>(reg.schedule.size()) == Y[r].rows(),
+            std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
+    require(Y[r].allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
+    if (!group.empty())
+      require(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
+              std::string(who) + ": record " + std::to_string(r) + " needs one group in [0, " +
+                  std::to_string(groups) + ") per sample");
+    accumulate(model, reg, Y[r], weights.empty() ? nullptr : &weights[r], group.empty() ? nullptr : &group[r], sums);
+  }
+  return sums;
+}
+
+}  // namespace
+
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
+                                const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
+                                int groups) {
+  require(!regressors.empty() && regressors.size() == Y.size() && group.size() == Y.size(),
+          "coefficientSums: need one regressor set, output record and group vector per record");
+  std::vector<const ModelRegressors*> regs;
+  for (const ModelRegressors& r : regressors) regs.push_back(&r);
+  return sumsOver(model, regs, Y, {}, group, groups, "coefficientSums");
+}
+
+CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
+                                     const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& o,
+                                     const SampleWeights& weights) {
+  require(!U.empty() && U.size() == Y.size(), "fitCoefficients: need matching input and output records");
+  checkSampleWeights(U, weights, "fitCoefficients");
+  CoefficientSums sums;
+  sums.groups.assign(1, emptyGroup(model));
+  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
+  for (std::size_t r = 0; r < U.size(); ++r) {
+    require(U[r].cols() == model.inputCount() && Ym[r].cols() == model.outputCount() && U[r].rows() == Ym[r].rows(),
+            "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
+    require(Ym[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
+    const ModelRegressors reg = modelRegressors(model, U[r]);  // one record at a time: they are large
+    accumulate(model, reg, Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
+  }
+  return solveCoefficients(model, sums, -1, o);
+}
+
+CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
+                                       const CoefficientFitOptions& o) {
+  require(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
+          "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
+  const int R = model.partition.regionCount();
+  const int ny = model.outputCount();
+  const bool input_side = model.schedule_side == ScheduleSide::kInput;
+  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
+  require(static_cast<int>(sums.groups.front().count.size()) == R &&
+              static_cast<int>(sums.groups.front().J.size()) == ny,
+          "solveCoefficients: the sums were made for another model structure");
+  CoefficientSums::Group total = emptyGroup(model);
+  for (std::size_t gi = 0; gi < sums.groups.size(); ++gi) {
+    if (static_cast<int>(gi) == leave_out) continue;
+    const CoefficientSums::Group& g = sums.groups[gi];
+    for (int out = 0; out < ny; ++out) {
+      const auto oo = static_cast<std::size_t>(out);
+      for (std::size_t l = 0; l < total.G[oo].size(); ++l) {
+        total.G[oo][l] += g.G[oo][l];
+        total.h[oo][l] += g.h[oo][l];
+      }
+      if (joint) {
+        total.J[oo] += g.J[oo];
+        total.Jh[oo] += g.Jh[oo];
+      }
+    }
+    for (int l = 0; l < R; ++l) total.count[static_cast<std::size_t>(l)] += g.count[static_cast<std::size_t>(l)];
+  }
+  model.output_level.clear();  // it belongs to the old coefficients
+  auto& G = total.G;
+  auto& h = total.h;
+  auto& J = total.J;
+  auto& Jh = total.Jh;
+  const std::vector<double>& count = total.count;
   if (input_side)
     for (int out = 0; out < ny; ++out) {
       const auto oo = static_cast<std::size_t>(out);
       const int n = model.regressorSize(out);
       J[oo] = Eigen::MatrixXd(J[oo].selfadjointView<Eigen::Lower>());
-      for (int l = 0; l < R; ++l) G[oo][static_cast<std::size_t>(l)] = J[oo].block(l * n, l * n, n, n);
+      G[oo].resize(static_cast<std::size_t>(R));
+      h[oo].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
+      for (int l = 0; l < R; ++l) {
+        G[oo][static_cast<std::size_t>(l)] = J[oo].block(l * n, l * n, n, n);
+        h[oo][static_cast<std::size_t>(l)] = Jh[oo].segment(l * n, n);
+      }
     }
   model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
   model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
@@ -194,9 +334,12 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
 }
 
 void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
-                    const std::vector<Eigen::MatrixXd>& Y_logged) {
+                    const std::vector<Eigen::MatrixXd>& Y_logged, const SampleWeights& weights,
+                    const std::vector<Eigen::MatrixXd>& increments) {
   require(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
   require(!U.empty() && U.size() == Y_logged.size(), "fitOutputLevel: need matching input and output records");
+  checkSampleWeights(U, weights, "fitOutputLevel");
+  require(increments.empty() || increments.size() == U.size(), "fitOutputLevel: need one increment record per record");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
   double n = 0.0;
@@ -204,10 +347,17 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
     require(Y[r].cols() == model.outputCount() && Y[r].rows() == U[r].rows() && Y[r].allFinite(),
             "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
     if (U[r].rows() == 0) continue;
-    sum += (Y[r] - modelLevels(model, U[r])).colwise().sum().transpose();
-    n += static_cast<double>(U[r].rows());
+    const Eigen::MatrixXd residual =
+        Y[r] - (increments.empty() ? modelLevels(model, U[r]) : modelLevels(model, U[r], increments[r]));
+    if (weights.empty()) {
+      sum += residual.colwise().sum().transpose();
+      n += static_cast<double>(U[r].rows());
+    } else {
+      sum += residual.transpose() * weights[r];
+      n += weights[r].sum();
+    }
   }
-  require(n > 0, "fitOutputLevel: no samples");
+  require(n > 0, "fitOutputLevel: no samples (or all weights zero)");
   model.output_level.resize(static_cast<std::size_t>(model.outputCount()));
   for (int o = 0; o < model.outputCount(); ++o) model.output_level[static_cast<std::size_t>(o)] = sum(o) / n;
 }

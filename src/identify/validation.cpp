@@ -48,10 +48,17 @@ std::pair<AlignedPrediction, AlignedPrediction> toTipAngles(const AlignedPredict
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                                                              bool with_simulation) {
+  return predictOutputs(model, u, y, horizons, with_simulation, modelIncrements(model, u));
+}
+
+std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                                                             bool with_simulation, const Eigen::MatrixXd& dy) {
   require(y.cols() == model.outputCount() && y.rows() == u.rows(),
           "predictOutputs: the record does not match the model's outputs");
+  require(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
+          "predictOutputs: the increments do not match the record");
   const Eigen::MatrixXd ym = toModelFrame(model.output_frame, y);
-  const Eigen::MatrixXd dy = modelIncrements(model, u);
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
   for (int k : horizons) {
     require(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));

@@ -25,14 +25,53 @@ struct CoefficientFitReport {
   std::vector<std::string> notes;  ///< one line per fallback region, in words
 };
 
+/// Per-sample weights of the least-squares terms, one vector per record
+/// (T entries, >= 0); empty: every sample counts once. Weight 0 leaves a
+/// sample out of the fit while the regressors still run through it, so held-out
+/// stretches of a log keep the filters', lag's and play channels' states
+/// continuous (identify's interleaved cross-validation).
+using SampleWeights = std::vector<Eigen::VectorXd>;
+
 /// Fills model.coefficients and model.region_fits. The model's poles,
 /// partition, inputs and outputs must be set; U[r], Y[r] are records (T x n),
 /// Y in the log's frame (converted to the model's output_frame here).
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
-                                     const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& options = {});
+                                     const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& options = {},
+                                     const SampleWeights& weights = {});
 
-/// Input-side models: output_level as the mean of y - modelLevels over every
-/// training sample, so that free simulation needs no measured start.
-void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y);
+/// The least-squares sums behind fitCoefficients, kept apart per group of
+/// samples (cross-validation folds), so that a fit leaving one group out costs
+/// a solve rather than another pass over the data.
+struct CoefficientSums {
+  struct Group {
+    std::vector<std::vector<Eigen::MatrixXd>> G;  ///< [output][region] normal matrices (not input side)
+    std::vector<std::vector<Eigen::VectorXd>> h;  ///< [output][region] right-hand sides (not input side)
+    std::vector<Eigen::MatrixXd> J;               ///< [output] joint normal matrix (interpolated or input side)
+    std::vector<Eigen::VectorXd> Jh;              ///< [output] its right-hand side
+    std::vector<double> count;                    ///< [region] schedule weight of the samples
+  };
+  std::vector<Group> groups;
+};
+
+/// Sums over records whose regressors are given (modelRegressors(model, U[r])
+/// of the model's current structure); sample k of record r joins group
+/// group[r](k) in [0, groups). Y in the log's frame.
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
+                                const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
+                                int groups);
+
+/// fitCoefficients from sums made for the model's current structure, leaving
+/// out group `leave_out` (-1: none).
+CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
+                                       const CoefficientFitOptions& options = {});
+
+/// Input-side models: output_level as the (weighted) mean of y - modelLevels
+/// over the training samples, so that free simulation needs no measured start.
+/// `increments`, when given, are modelIncrements(model, U[r]) for every record.
+void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y,
+                    const SampleWeights& weights = {}, const std::vector<Eigen::MatrixXd>& increments = {});
+
+/// Throws unless `weights` is empty or has one finite, non-negative weight per sample of every record.
+void checkSampleWeights(const std::vector<Eigen::MatrixXd>& U, const SampleWeights& weights, const char* who);
 
 }  // namespace plsa

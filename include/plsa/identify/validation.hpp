@@ -40,6 +40,10 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                                                              bool with_simulation = true);
+/// The same from increments already computed (`dy` = modelIncrements(model, u)).
+std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                                                             bool with_simulation, const Eigen::MatrixXd& dy);
 
 /// Throws naming the missing column or the bad horizon.
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons);

@@ -339,17 +339,18 @@ inline ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen:
                          model.schedulePole(), model.schedule_side, model.play_threshold);
 }
 
-/// The model's predicted increments dyhat (T x n_y) for an input record.
-inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
-                                              " inputs, the model " + std::to_string(model.inputCount()));
-  const ModelRegressors reg = modelRegressors(model, u);
-  Eigen::MatrixXd dy(u.rows(), model.outputCount());
+/// The model's predicted increments dyhat (T x n_y) from regressors of its
+/// own structure (modelRegressors(model, u)), for reuse across coefficient sets.
+inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
+  require(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
+          "modelIncrements: the regressors were made for another model");
+  const auto T = static_cast<Eigen::Index>(reg.schedule.size());
+  Eigen::MatrixXd dy(T, model.outputCount());
   if (model.schedule_side == ScheduleSide::kInput) {
     for (int o = 0; o < model.outputCount(); ++o) dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * model.stackedCoefficients(o);
     return dy;
   }
-  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+  for (Eigen::Index k = 0; k < T; ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
     for (int o = 0; o < model.outputCount(); ++o) {
       double v = 0.0;
@@ -361,6 +362,13 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
     }
   }
   return dy;
+}
+
+/// The model's predicted increments dyhat (T x n_y) for an input record.
+inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
+                                              " inputs, the model " + std::to_string(model.inputCount()));
+  return modelIncrements(model, modelRegressors(model, u));
 }
 
 /// Input side: the filtered part of the output's level, T x n_y, so that the

@@ -33,11 +33,12 @@ std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd
 
 OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vector<Eigen::MatrixXd>& U,
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
-                                const CoefficientFitOptions& options, int iterations) {
+                                const CoefficientFitOptions& options, int iterations, const SampleWeights& weights) {
   require(model_in.schedule_side == ScheduleSide::kInput,
           "output drift: needs an input-side model (only its level is a function of the inputs)");
   require(U.size() == Y.size() && U.size() == t.size() && !U.empty(), "output drift: need matching records and times");
   require(iterations >= 1, "output drift: need at least one iteration");
+  checkSampleWeights(U, weights, "output drift");
   const int ny = model_in.outputCount();
   const bool tip = model_in.output_frame == OutputFrame::kTipCartesian;
   OutputDrift drift;
@@ -46,8 +47,8 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
   DioPwlObfModel model = model_in;
   for (int it = 0; it < iterations; ++it) {
     const std::vector<Eigen::MatrixXd> Yc = removeOutputDrift(Y, t, drift);
-    fitCoefficients(model, U, Yc, options);
-    fitOutputLevel(model, U, Yc);
+    fitCoefficients(model, U, Yc, options, weights);
+    fitOutputLevel(model, U, Yc, weights);
     // Residual and signature, model frame, with their means taken out per
     // output (the level absorbs any constant).
     std::vector<double> zz(static_cast<std::size_t>(ny), 0.0), zr(static_cast<std::size_t>(ny), 0.0);
@@ -59,17 +60,19 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
       const Eigen::MatrixXd level = modelLevels(model, U[r], modelIncrements(model, U[r]));
       const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
       for (Eigen::Index k = 0; k < ym.rows(); ++k) {
+        const double w = weights.empty() ? 1.0 : weights[r](k);
+        if (w == 0.0) continue;
         for (int o = 0; o < ny; ++o) {
           const auto oo = static_cast<std::size_t>(o);
           const double res = ym(k, o) - model.output_level[oo] - level(k, o);
           // A yaw of d deg turns (x, y) by d: dx = -y d, dy = x d (radians).
           const double z = !tip ? since(k) : (o == 0 ? -ym(k, 1) : ym(k, 0)) * kRadPerDeg * since(k);
-          zz[oo] += z * z;
-          zr[oo] += z * res;
-          sz[oo] += z;
-          sr[oo] += res;
+          zz[oo] += w * z * z;
+          zr[oo] += w * z * res;
+          sz[oo] += w * z;
+          sr[oo] += w * res;
         }
-        n += 1.0;
+        n += w;
       }
     }
     for (int o = 0; o < ny; ++o) {

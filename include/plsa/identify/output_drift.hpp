@@ -44,9 +44,11 @@ std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd
 /// second is buried in the sensor noise of 80 Hz increments.
 /// Empty records are skipped; data that cannot show a drift (a tip at the
 /// origin, no time span) give rate 0. Throws naming the problem (output-side
-/// model, mismatched records).
+/// model, mismatched records). `weights` (as in fitCoefficients) restricts
+/// the fits and the regression to the samples they weigh.
 OutputDrift estimateOutputDrift(const DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
-                                const CoefficientFitOptions& options = {}, int iterations = 3);
+                                const CoefficientFitOptions& options = {}, int iterations = 3,
+                                const SampleWeights& weights = {});
 
 }  // namespace plsa

@@ -177,6 +177,16 @@ TEST(PoleClustering, ComplexPairsAndBadInput) {
 
 namespace {
 // A DIO-PWL-OBF system with known coefficients, driven by a random staircase.
+template <class F>
+void expectThrowContaining(F f, const std::string& words) {
+  try {
+    f();
+    ADD_FAILURE() << "accepted; expected an error containing '" << words << "'";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
 DioPwlObfModel knownModel() {
   DioPwlObfModel m;
   m.inputs = {"u"};
@@ -223,6 +233,67 @@ TEST(CoefficientFit, RecoversKnownCoefficientsAndReportsEmptyRegions) {
   EXPECT_NE(rep.notes[0].find("too little data"), std::string::npos);
   EXPECT_EQ(partial.coefficients[1][0], partial.coefficients[0][0]);
   EXPECT_GT(partial.coefficients[1][0].norm(), 0.5);  // never silent zeros
+}
+
+// Two outputs (one thread each on the input side), noisy so that every subset
+// of the samples gives different coefficients.
+TEST(CoefficientFit, WeightsAndFoldSumsAgreeWithTheSamplesTheyStandFor) {
+  const DioPwlObfModel truth = knownModel();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> level(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  const int T = 3000;
+  Eigen::MatrixXd u(T, 1);
+  for (int k = 0; k < T; ++k) u(k, 0) = k % 40 == 0 ? level(rng) : u(std::max(0, k - 1), 0);
+  Eigen::MatrixXd y(T, 2);
+  y.col(0) = dioIntegrate(modelIncrements(truth, u)).col(0);
+  y.col(1) = 0.5 * y.col(0).array().square();
+  for (int k = 0; k < T; ++k) y.row(k) += Eigen::RowVector2d(noise(rng), noise(rng));
+  Eigen::VectorXi fold(T);
+  for (int k = 0; k < T; ++k) fold(k) = (k / 250) % 3;
+  for (const ScheduleSide side : {ScheduleSide::kOutput, ScheduleSide::kInput}) {
+    SCOPED_TRACE(side == ScheduleSide::kInput ? "input side" : "output side");
+    DioPwlObfModel m = truth;
+    m.outputs = {"y", "z"};
+    m.poles = {truth.poles[0], {PoleSet::real({0.8, 0.5})}};
+    m.schedule_side = side;
+    auto stacked = [](const DioPwlObfModel& x) {
+      Eigen::VectorXd c(2 * x.stackedCoefficients(0).size());
+      c << x.stackedCoefficients(0), x.stackedCoefficients(1);
+      return c;
+    };
+    // Weight 2 on a record is the record twice.
+    DioPwlObfModel twice = m, weighted = m;
+    fitCoefficients(twice, {u, u}, {y, y});
+    fitCoefficients(weighted, {u}, {y}, {}, {Eigen::VectorXd::Constant(T, 2.0)});
+    EXPECT_LT((stacked(twice) - stacked(weighted)).norm(), 1e-9 * stacked(twice).norm());
+    // Leaving a fold out of the sums is weighting it 0, and it changes the fit.
+    DioPwlObfModel all = m;
+    fitCoefficients(all, {u}, {y});
+    const CoefficientSums sums = coefficientSums(m, {modelRegressors(m, u)}, {y}, {fold}, 3);
+    DioPwlObfModel from_sums = m;
+    solveCoefficients(from_sums, sums, -1);
+    EXPECT_LT((stacked(from_sums) - stacked(all)).norm(), 1e-9 * stacked(all).norm());
+    for (int f = 0; f < 3; ++f) {
+      DioPwlObfModel left = m, zeroed = m;
+      solveCoefficients(left, sums, f);
+      fitCoefficients(zeroed, {u}, {y}, {}, {(fold.array() != f).cast<double>().matrix()});
+      EXPECT_LT((stacked(left) - stacked(zeroed)).norm(), 1e-9 * stacked(all).norm()) << "fold " << f;
+      EXPECT_GT((stacked(left) - stacked(all)).norm(), 1e-4 * stacked(all).norm()) << "fold " << f;
+      const int counted = left.region_fits[0].samples + left.region_fits[1].samples;
+      EXPECT_NEAR(counted, (fold.tail(T - 1).array() != f).count(), 1.0);
+    }
+    // Bad groups, folds and weights are named.
+    Eigen::VectorXi bad = fold;
+    bad(7) = 3;
+    EXPECT_THROW(coefficientSums(m, {modelRegressors(m, u)}, {y}, {bad}, 3), std::invalid_argument);
+    DioPwlObfModel x = m;
+    EXPECT_THROW(solveCoefficients(x, sums, 3), std::invalid_argument);
+    Eigen::VectorXd negative = Eigen::VectorXd::Ones(T);
+    negative(9) = -1.0;
+    EXPECT_THROW(fitCoefficients(x, {u}, {y}, {}, {negative}), std::invalid_argument);
+    EXPECT_THROW(fitCoefficients(x, {u}, {y}, {}, {Eigen::VectorXd::Ones(T - 1)}), std::invalid_argument);
+  }
 }
 
 TEST(Arx, RecoversAKnownArxSystem) {
@@ -483,6 +554,13 @@ TEST(Pipeline, SimulatedActuatorWithoutEffects) {
     EXPECT_GT(o.fit_k.at(40), 93.0) << o.name;
     EXPECT_GT(o.fit_k.at(80), 90.0) << o.name;
   }
+  // A bad cross-validation layout or chunk is named, not guessed around.
+  IdentifyOptions bad;
+  bad.cv_layout = "random";
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "layout 'random'");
+  bad.cv_layout = "interleaved";
+  bad.cv_chunk_s = 0.0;
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "chunks must last");
 }
 
 // All effects on, the paper's protocol as `plsa demo` runs it (seed 1). The
@@ -679,6 +757,13 @@ TEST(OutputDrift, EstimateFindsAKnownTrendAndToleratesUninformativeData) {
   // Every sample at one time: no trend can show.
   const OutputDrift flat = estimateOutputDrift(truth, {u}, {y}, {Eigen::VectorXd::Constant(u.rows(), 3.0)});
   EXPECT_EQ(flat.rate[0], 0.0);
+  // A late disturbance skews the trend unless its samples are weighted out.
+  Eigen::MatrixXd bumped = y;
+  bumped.bottomRows(300).array() += 2.0;
+  Eigen::VectorXd keep = Eigen::VectorXd::Ones(u.rows());
+  keep.tail(300).setZero();
+  EXPECT_GT(estimateOutputDrift(truth, {u}, {bumped}, {t}).rate[0], 1.5 * rate);
+  EXPECT_NEAR(estimateOutputDrift(truth, {u}, {bumped}, {t}, {}, 3, {keep}).rate[0], rate, 0.02 * rate);
 }
 
 namespace {

@@ -124,6 +124,9 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',');
   c->add_option("--levels", a->options.quantile_levels, "Grid levels per input (quantiles)")->check(CLI::Range(1, 12));
+  c->add_option("--cv-layout", a->options.cv_layout,
+                 "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)")
+      ->check(CLI::IsMember({"interleaved", "contiguous"}));
   c->add_option("--arx-na", a->arx_na, "ARX output lags");
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
   c->add_option("--json", a->json, "Write the fits as JSON");

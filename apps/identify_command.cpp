@@ -210,6 +210,13 @@ void addIdentifyCommands(CLI::App& app) {
                  "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
                  "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged")
       ->check(CLI::IsMember({"auto", "on", "off"}));
+  id->add_option("--cv-layout", a->options.cv_layout,
+                 "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
+                 "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "
+                 "contiguous: each log in three time blocks, each scored by a fit on the other two")
+      ->check(CLI::IsMember({"interleaved", "contiguous"}));
+  id->add_option("--cv-chunk", a->options.cv_chunk_s, "Seconds per interleaved cross-validation chunk (default 8)")
+      ->check(CLI::PositiveNumber);
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

@@ -340,13 +340,32 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
                                                                       c.slope);
       }
   };
-  // Blocked cross-validation: every log cut into contiguous blocks; each block
-  // is scored by a model fitted on all the others.
-  require(o.play_selection_folds >= 2, "identify: play selection needs at least 2 folds");
+  // Cross-validation folds (IdentifyOptions::cv_layout). Contiguous: every
+  // log cut into time blocks, each scored by a model fitted on the others.
+  // Interleaved: chunks dealt to the folds in turn, held-out rows weighted out.
+  require(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
+  require(o.cv_layout == "interleaved" || o.cv_layout == "contiguous",
+          "identify: cross-validation layout '" + o.cv_layout + "': expected interleaved or contiguous");
+  const bool interleaved = o.cv_layout == "interleaved";
+  require(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
+          "identify: cross-validation chunks must last a positive, finite number of seconds");
   std::vector<Eigen::MatrixXd> BU, BY;
   std::vector<Eigen::VectorXd> BT;
   std::vector<int> fold_of;
-  for (std::size_t r = 0; r < U.size(); ++r) {
+  // Contiguous blocks hold out a stretch of the experiment, often a part of
+  // the grid the other blocks never visit, so they score extrapolation and
+  // favour structures that extrapolate rather than fit; interleaved chunks
+  // leave every fold the whole grid.
+  std::vector<Eigen::VectorXi> fold_rows;  // interleaved: each sample's fold, per log
+  if (interleaved) {
+    const auto chunk = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(o.cv_chunk_s / dt)));
+    for (std::size_t r = 0; r < U.size(); ++r) {
+      Eigen::VectorXi f(U[r].rows());
+      for (Eigen::Index k = 0; k < f.size(); ++k) f(k) = static_cast<int>((k / chunk) % o.play_selection_folds);
+      fold_rows.push_back(f);
+    }
+  }
+  for (std::size_t r = 0; !interleaved && r < U.size(); ++r) {
     const Eigen::Index len = U[r].rows() / o.play_selection_folds;
     for (int f = 0; f < o.play_selection_folds; ++f) {
       const Eigen::Index b = f * len, n = f + 1 == o.play_selection_folds ? U[r].rows() - b : len;
@@ -361,14 +380,65 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   std::size_t best_structure = 0;
   rep.play_scores.clear();
   // Held-out fit of the model as configured now, averaged over outputs and
-  // blocks: 40 steps ahead, or (input side) simulated from the model's level.
+  // folds: 40 steps ahead, or (input side) simulated from the model's level.
   // Fits are always scored against the logged outputs; they are fitted to
   // FY, the logged ones until a sensor drift is kept, or, with
   // drift_per_fold, to each fold's own outputs less the drift estimated on them.
   enum class Score { kStepAhead, kSimulation };
-  std::vector<Eigen::MatrixXd> FY = BY;
+  std::vector<Eigen::MatrixXd> FY = BY, FYlog = Y;  // per block, per log
   bool drift_per_fold = false;
+  auto crossValidatedInterleaved = [&](Score what) {
+    const bool sim = what == Score::kSimulation;
+    const int key = sim ? 0 : o.play_selection_horizon;
+    // The regressors run over whole logs and do not depend on the fold: built
+    // once, summed once per fold, and each fold's fit is a solve.
+    std::vector<ModelRegressors> regs;
+    for (const Eigen::MatrixXd& u : U) regs.push_back(modelRegressors(model, u));
+    CoefficientSums sums;
+    if (!drift_per_fold) sums = coefficientSums(model, regs, FYlog, fold_rows, o.play_selection_folds);
+    double score = 0.0;
+    int n = 0;
+    for (int f = 0; f < o.play_selection_folds; ++f) {
+      SampleWeights W;
+      for (const Eigen::VectorXi& rows : fold_rows) W.push_back((rows.array() != f).cast<double>().matrix());
+      std::vector<Eigen::MatrixXd> TY = FYlog;
+      if (drift_per_fold) {
+        TY = removeOutputDrift(TY, times, estimateOutputDrift(model, U, TY, times, o.coefficients, 3, W));
+        fitCoefficients(model, U, TY, o.coefficients, W);
+      } else {
+        solveCoefficients(model, sums, f, o.coefficients);
+      }
+      std::vector<Eigen::MatrixXd> dys;
+      for (const ModelRegressors& reg : regs) dys.push_back(modelIncrements(model, reg));
+      if (sim) fitOutputLevel(model, U, TY, W, dys);
+      // One fit per output over every held-out row of the fold, all logs together.
+      std::vector<std::vector<double>> meas(static_cast<std::size_t>(no)), pred(static_cast<std::size_t>(no));
+      for (std::size_t r = 0; r < U.size(); ++r) {
+        if (U[r].rows() <= o.play_selection_horizon) continue;
+        const std::vector<std::map<int, AlignedPrediction>> p =
+            predictOutputs(model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r]);
+        for (int out_i = 0; out_i < no; ++out_i) {
+          const AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
+          for (Eigen::Index i = 0; i < a.values.size(); ++i)
+            if (fold_rows[r](a.first + i) == f) {
+              meas[static_cast<std::size_t>(out_i)].push_back(Y[r](a.first + i, out_i));
+              pred[static_cast<std::size_t>(out_i)].push_back(a.values(i));
+            }
+        }
+      }
+      for (int out_i = 0; out_i < no; ++out_i) {
+        const auto& m = meas[static_cast<std::size_t>(out_i)];
+        if (m.size() < 2) continue;
+        score += nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
+                          Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
+                                                            static_cast<Eigen::Index>(m.size())));
+        ++n;
+      }
+    }
+    return score / std::max(1, n);
+  };
   auto crossValidated = [&](Score what = Score::kStepAhead) {
+    if (interleaved) return crossValidatedInterleaved(what);
     double score = 0.0;
     int n = 0;
     for (int f = 0; f < o.play_selection_folds; ++f) {
@@ -433,7 +503,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;
     const bool chosen_input = model.schedule_side == ScheduleSide::kInput;
     std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
-                    "-step fit on held-out blocks: " +
+                    "-step fit on held-out " + std::string(interleaved ? "chunks" : "blocks") + ": " +
                     (chosen_input ? "input-side interpolated" : chosen_interp ? "interpolated" : "switched") +
                     " scheduling, play channels " + formatPlaySet(best_set) +
                     " (widths: fractions of each input's range; u: of its level). Scores (I interpolated, "
@@ -540,6 +610,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       rep.drift_taken_out = true;
       Yfit = removeOutputDrift(Y, times, drift);
       // Later stages fit to the outputs less the drift found on all of them.
+      FYlog = Yfit;
       for (std::size_t b = 0, r = 0; r < U.size(); ++r) {
         const Eigen::Index len = U[r].rows() / o.play_selection_folds;
         for (int f = 0; f < o.play_selection_folds; ++f, ++b)

@@ -81,7 +81,16 @@ struct IdentifyOptions {
   /// hardly moves a 40-step fit). Empty: no extra pole.
   std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
-  int play_selection_folds = 3;     ///< contiguous time blocks per training log
+  int play_selection_folds = 3;     ///< cross-validation folds
+  /// How the folds cut the training logs. "interleaved": chunks of
+  /// cv_chunk_s dealt to the folds in turn, so every fold's training part
+  /// still spans the whole experiment; the regressors run over whole logs and
+  /// a fold's chunks are weighted out of the fit (fitCoefficients' weights).
+  /// "contiguous": each log in play_selection_folds time blocks, each block
+  /// refitted from rest, so a held-out block is a stretch of the experiment
+  /// (a part of the grid) that the fit has not seen.
+  std::string cv_layout = "interleaved";
+  double cv_chunk_s = 8.0;
   std::function<void(const std::string&)> progress;  ///< one line per stage
 };
 

@@ -611,7 +611,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       Yfit = removeOutputDrift(Y, times, drift);
       // Later stages fit to the outputs less the drift found on all of them.
       FYlog = Yfit;
-      for (std::size_t b = 0, r = 0; r < U.size(); ++r) {
+      for (std::size_t b = 0, r = 0; !interleaved && r < U.size(); ++r) {
         const Eigen::Index len = U[r].rows() / o.play_selection_folds;
         for (int f = 0; f < o.play_selection_folds; ++f, ++b)
           FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());

@@ -59,15 +59,19 @@ void runIdentify(IdentifyArgs& a) {
                    a.outputs[static_cast<std::size_t>(pp.output)].c_str(), why.c_str());
   if (a.compare_poles) {
     // FKcM against fuzzy c-means, k-means and a global search on rho, same poles.
-    std::printf("%-22s %6s %12s %12s %12s %12s\n", "pair", "poles", "FKcM", "fuzzy c-m", "k-means", "global");
+    std::printf("%-22s %6s %12s %12s %12s %12s %12s\n", "pair", "poles", "FKcM", "FKcM+rho", "fuzzy c-m", "k-means",
+                "global");
     for (const auto& pp : report.pairs) {
       if (pp.identified.size() < 2) continue;
       ClusteringOptions co = o.clustering;
       co.centres = o.poles_per_pair;
+      co.refine_on_rho = false;
       const double f = fkcmClustering(pp.identified, co).rho, c = fuzzyCMeansClustering(pp.identified, co).rho;
+      co.refine_on_rho = true;
+      const double fr = fkcmClustering(pp.identified, co).rho;
       const double k = kMeansClustering(pp.identified, co).rho, g = globalRhoSearch(pp.identified, co).rho;
       const std::string name = a.inputs[static_cast<std::size_t>(pp.input)] + " -> " + a.outputs[static_cast<std::size_t>(pp.output)];
-      std::printf("%-22s %6zu %12.3e %12.3e %12.3e %12.3e\n", name.c_str(), pp.identified.size(), f, c, k, g);
+      std::printf("%-22s %6zu %12.3e %12.3e %12.3e %12.3e %12.3e\n", name.c_str(), pp.identified.size(), f, fr, c, k, g);
     }
   }
   saveModel(a.out, model);
@@ -145,6 +149,9 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")->check(CLI::Range(1, 6));
   id->add_option("--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global")
       ->check(CLI::IsMember({"fkcm", "fcm", "kmeans", "global"}));
+  id->add_option("--rho-refinement", a->options.clustering.refine_on_rho,
+                 "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
+                 "off: the paper's FKcM alone");
   id->add_option("--fuzziness", a->options.clustering.fuzziness, "FKcM fuzziness m > 1");
   id->add_option("--levels", a->options.quantile_levels, "Levels per input when the logs have no staircase")
       ->check(CLI::Range(1, 12));

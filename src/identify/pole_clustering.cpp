@@ -144,6 +144,48 @@ void epigraphConstraints(unsigned m, double* result, unsigned n, const double* x
   if (grad) std::fill(grad, grad + static_cast<std::size_t>(m) * n, 0.0);  // COBYLA ignores gradients
 }
 
+// g_k = sum_i log d(z_k, v_i) - t <= 0: the epigraph of log rho, the
+// Kolmogorov criterion that FKcM's fuzzy sum stands in for.
+void logRhoConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
+  const auto* e = static_cast<const EpigraphData*>(data);
+  const std::vector<double> v(x, x + n - 1);
+  for (unsigned k = 0; k < m; ++k) {
+    double s = 0.0;
+    for (const C& c : expand(*e->L, v)) s += std::log(std::max(poleDistance((*e->poles)[k], c), 1e-300));
+    result[k] = s - x[n - 1];
+  }
+  if (grad) std::fill(grad, grad + static_cast<std::size_t>(m) * n, 0.0);  // COBYLA ignores gradients
+}
+
+// min t over (centres, t) subject to constraint(k) <= t for every pole,
+// with COBYLA from (x, t0); returns the centres it ends on (x when COBYLA stops on round-off there).
+std::vector<double> epigraphMinimax(nlopt::mfunc constraints, EpigraphData& data, const std::vector<double>& lo,
+                                    const std::vector<double>& hi, const std::vector<double>& x, double t0,
+                                    double t_lower, double tol, double xtol, double* t_end) {
+  const auto n = static_cast<unsigned>(x.size() + 1);
+  nlopt::opt opt(nlopt::LN_COBYLA, n);
+  std::vector<double> lb = lo, ub = hi;
+  lb.push_back(t_lower);
+  ub.push_back(HUGE_VAL);
+  opt.set_lower_bounds(lb);
+  opt.set_upper_bounds(ub);
+  opt.set_min_objective(epigraphObjective, nullptr);
+  opt.add_inequality_mconstraint(constraints, &data, std::vector<double>(data.poles->size(), tol));
+  opt.set_xtol_abs(xtol);
+  opt.set_maxeval(4000);
+  std::vector<double> z = x;
+  z.push_back(t0);
+  double f = t0;
+  try {
+    opt.optimize(z, f);
+  } catch (const nlopt::roundoff_limited&) {
+    // COBYLA stopped on round-off: z holds its best point, which is what we want.
+  }
+  if (t_end) *t_end = f;
+  z.pop_back();
+  return z;
+}
+
 ClusteringResult finish(std::string method, const Layout& L, const std::vector<double>& x,
                         const std::vector<C>& poles, double objective, int iterations) {
   ClusteringResult r;
@@ -179,31 +221,13 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
       for (double& v : row) v = std::pow(v, o.fuzziness);
     // Centre update: min t s.t. sum_i mu_ik^m d(z_k, v_i) <= t (epigraph of the max).
     EpigraphData data{&L, &poles, &mum};
-    const auto n = static_cast<unsigned>(L.size() + 1);
-    nlopt::opt opt(nlopt::LN_COBYLA, n);
-    std::vector<double> lb = lo, ub = hi;
-    lb.push_back(0.0);
-    ub.push_back(HUGE_VAL);
-    opt.set_lower_bounds(lb);
-    opt.set_upper_bounds(ub);
-    opt.set_min_objective(epigraphObjective, nullptr);
-    opt.add_inequality_mconstraint(epigraphConstraints, &data, std::vector<double>(poles.size(), 1e-10));
-    opt.set_xtol_abs(1e-9);
-    opt.set_maxeval(4000);
-    std::vector<double> z = x;
     double worst = 0.0;
     for (std::size_t k = 0; k < poles.size(); ++k) {
       double s = 0.0;
       for (int i = 0; i < L.clusters(); ++i) s += mum[static_cast<std::size_t>(i)][k] * d[static_cast<std::size_t>(i)][k];
       worst = std::max(worst, s);
     }
-    z.push_back(worst);
-    try {
-      opt.optimize(z, objective);
-    } catch (const nlopt::roundoff_limited&) {
-      // COBYLA stopped on round-off: z holds its best point, which is what we want.
-    }
-    z.pop_back();
+    const std::vector<double> z = epigraphMinimax(epigraphConstraints, data, lo, hi, x, worst, 0.0, 1e-10, 1e-9, &objective);
     double moved = 0.0;
     for (std::size_t i = 0; i < x.size(); ++i) moved = std::max(moved, std::abs(z[i] - x[i]));
     x = z;
@@ -212,7 +236,17 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
       break;
     }
   }
-  return finish("FKcM", L, x, poles, objective, it);
+  if (o.refine_on_rho) {
+    // The fuzzy sum stands in for the Kolmogorov criterion max_k prod_i d(z_k, v_i),
+    // i.e. rho: a last minimax on it (epigraph of log rho) from FKcM's centres,
+    // kept only where it lowers rho.
+    EpigraphData data{&L, &poles, nullptr};
+    const std::vector<double> z = epigraphMinimax(logRhoConstraints, data, lo, hi, x,
+                                                  std::log(std::max(rhoOf(L, x, poles), 1e-300)), -HUGE_VAL, 1e-9,
+                                                  1e-10, nullptr);
+    if (rhoOf(L, z, poles) < rhoOf(L, x, poles)) x = z;
+  }
+  return finish(o.refine_on_rho ? "FKcM+rho" : "FKcM", L, x, poles, objective, it);
 }
 
 ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const ClusteringOptions& o) {

@@ -1,6 +1,7 @@
 // Step 5: choose OBF poles from the identified local poles. FKcM (Toth,
 // Heuberger, Van den Hof 2009): fuzzy memberships plus a minimax centre update
-// solved in epigraph form with NLopt. Fuzzy c-means, k-means and a global
+// solved in epigraph form with NLopt, by default ending with the same kind of
+// minimax on rho itself. Fuzzy c-means, k-means and a global
 // search on rho are here to judge it against (docs/pole-selection.md).
 #pragma once
 
@@ -19,6 +20,9 @@ struct ClusteringOptions {
   double tolerance = 1e-7;  ///< stop when no centre moves more than this
   std::uint64_t seed = 1;
   int global_evaluations = 40000;
+  /// FKcM: end with a minimax on rho itself (epigraph of log rho, NLopt
+  /// COBYLA) from its centres, kept only where it lowers rho.
+  bool refine_on_rho = true;
 };
 
 struct ClusteringResult {

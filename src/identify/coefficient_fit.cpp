@@ -142,37 +142,33 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
   }
 }
 
-CoefficientSums sumsOver(const DioPwlObfModel& model, const std::vector<const ModelRegressors*>& regs,
-                         const std::vector<Eigen::MatrixXd>& Y_logged, const SampleWeights& weights,
-                         const std::vector<Eigen::VectorXi>& group, int groups, const char* who) {
-  require(groups >= 1, std::string(who) + ": need at least one group");
-  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
-  CoefficientSums sums;
-  sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
-  for (std::size_t r = 0; r < Y.size(); ++r) {
-    const ModelRegressors& reg = *regs[r];
-    require(Y[r].cols() == model.outputCount() && static_cast<Eigen::Index>(reg.schedule.size()) == Y[r].rows(),
-            std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
-    require(Y[r].allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
-    if (!group.empty())
-      require(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
-              std::string(who) + ": record " + std::to_string(r) + " needs one group in [0, " +
-                  std::to_string(groups) + ") per sample");
-    accumulate(model, reg, Y[r], weights.empty() ? nullptr : &weights[r], group.empty() ? nullptr : &group[r], sums);
-  }
-  return sums;
+// A record's outputs (model frame) against the model and its sample count.
+void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::Index rows, std::size_t r,
+                 const char* who) {
+  require(Y.cols() == model.outputCount() && Y.rows() == rows,
+          std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
+  require(Y.allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
 }
 
 }  // namespace
 
 CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
-                                const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
+                                const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
                                 int groups) {
-  require(!regressors.empty() && regressors.size() == Y.size() && group.size() == Y.size(),
+  require(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
           "coefficientSums: need one regressor set, output record and group vector per record");
-  std::vector<const ModelRegressors*> regs;
-  for (const ModelRegressors& r : regressors) regs.push_back(&r);
-  return sumsOver(model, regs, Y, {}, group, groups, "coefficientSums");
+  require(groups >= 1, "coefficientSums: need at least one group");
+  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
+  CoefficientSums sums;
+  sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
+  for (std::size_t r = 0; r < Y.size(); ++r) {
+    checkRecord(model, Y[r], static_cast<Eigen::Index>(regressors[r].schedule.size()), r, "coefficientSums");
+    require(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
+            "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
+                ") per sample");
+    accumulate(model, regressors[r], Y[r], nullptr, &group[r], sums);
+  }
+  return sums;
 }
 
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
@@ -184,9 +180,9 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   sums.groups.assign(1, emptyGroup(model));
   const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
   for (std::size_t r = 0; r < U.size(); ++r) {
-    require(U[r].cols() == model.inputCount() && Ym[r].cols() == model.outputCount() && U[r].rows() == Ym[r].rows(),
+    require(U[r].cols() == model.inputCount(),
             "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
-    require(Ym[r].allFinite(), "fitCoefficients: record " + std::to_string(r) + " has NaN or Inf outputs");
+    checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
     const ModelRegressors reg = modelRegressors(model, U[r]);  // one record at a time: they are large
     accumulate(model, reg, Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
   }

@@ -834,19 +834,87 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_TRUE(rep_off.output_drift.rate.empty());
     EXPECT_FALSE(rep_off.drift_taken_out);
     EXPECT_TRUE(left.training_drift_per_s.empty());
-    const ValidationResult v = validateModel(taken, runs.val, {40}), w = validateModel(left, runs.val, {40});
+    // Simulated carrying the training run's yaw, so that steering shows what
+    // the drift did to the model's level.
+    const SimulationStart carry{0};
+    const ValidationResult v = validateModel(taken, runs.val, {40}, carry), w = validateModel(left, runs.val, {40}, carry);
     // When written, simulation as bending / steering: 95.6 / 76.4 taken out
     // against 93.5 / 75.3 left in. Steering stays low: the validation run's
     // own yaw drifts on.
     EXPECT_GT(v.outputs[0].fit_sim, w.outputs[0].fit_sim + 1.0);
     EXPECT_GT(v.outputs[1].fit_sim, w.outputs[1].fit_sim + 0.5);
     for (std::size_t i = 0; i < 2; ++i) EXPECT_GT(v.outputs[i].fit_k.at(40), w.outputs[i].fit_k.at(40) - 0.2) << v.outputs[i].name;
+    // Registering the validation run's yaw (the default) takes the standing
+    // part of steering's error out of both, so the two are close there
+    // (83.94 taken out, 83.73 left in, when written); bending cannot move.
+    const ValidationResult vr = validateModel(taken, runs.val, {40}), wr = validateModel(left, runs.val, {40});
+    EXPECT_GT(vr.outputs[1].fit_sim, v.outputs[1].fit_sim + 5.0);
+    EXPECT_GT(wr.outputs[1].fit_sim, w.outputs[1].fit_sim + 5.0);
+    EXPECT_NEAR(vr.outputs[1].fit_sim, wr.outputs[1].fit_sim, 1.0);
+    const Eigen::Index scored = runs.val.samples() - 400;  // after the 5 s registration window
+    EXPECT_LT((vr.outputs[0].simulated.tail(scored) - v.outputs[0].simulated.tail(scored)).cwiseAbs().maxCoeff(), 1e-9);
   }
   const DriftRuns still = yawDriftRuns(0.0);
   IdentifyReport rep;
   identifyModel({still.train}, fixedInputSide(OutputFrame::kTipCartesian), &rep);
   ASSERT_EQ(rep.output_drift.rate.size(), 2u);
   EXPECT_NEAR(rep.output_drift.rate[1], 0.0, 0.1 * rate);  // -0.00001 when written
+}
+
+// A tip_cartesian model simulates from its output level, so it carries the
+// training run's sensor yaw; a run whose sensor is turned about the segment
+// axis must be registered on its first samples (as simulation starts from the
+// measured y(0)), turning the steering only: bending, a magnitude, must not move.
+TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  ASSERT_FALSE(tip.output_level.empty());
+  io::Log turned = runs.val;
+  const double yaw = 3.0;
+  const int steer = turned.columnIndex("steer_deg"), bend = turned.columnIndex("bend_deg");
+  turned.data.col(steer).array() += yaw;
+  const SimulationStart none{0}, first{tip.sample_time_s}, window{0.5};  // 0.5 s: 40 samples
+  const ValidationResult base = validateModel(tip, runs.val, {40}, none);
+  const ValidationResult carried = validateModel(tip, turned, {40}, none);
+  const ValidationResult registered = validateModel(tip, turned, {40}, first);
+  const ValidationResult windowed = validateModel(tip, turned, {40}, window);
+  const ValidationResult by_default = validateModel(tip, turned, {40});  // 5 s
+  // Carried, the 3 deg are a standing error; registered, the fit is the
+  // unturned run's (within what the first sample's own error turns).
+  EXPECT_LT(carried.outputs[1].fit_sim, base.outputs[1].fit_sim - 5.0);
+  EXPECT_NEAR(registered.outputs[1].fit_sim, base.outputs[1].fit_sim, 1.0);
+  EXPECT_NEAR(windowed.outputs[1].fit_sim, base.outputs[1].fit_sim, 1.0);
+  EXPECT_GT(by_default.outputs[1].fit_sim, carried.outputs[1].fit_sim + 5.0);
+  EXPECT_TRUE(std::isnan(by_default.outputs[1].simulated(399)));
+  EXPECT_TRUE(std::isfinite(by_default.outputs[1].simulated(400)));
+  const Eigen::Index T = turned.samples();
+  const Eigen::VectorXd turn = registered.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1);
+  EXPECT_NEAR(turn.mean(), yaw, 0.3);
+  EXPECT_LT(turn.maxCoeff() - turn.minCoeff(), 1e-6);  // one rotation for the whole run
+  EXPECT_LT((registered.outputs[0].simulated.tail(T - 1) - carried.outputs[0].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
+            1e-9);
+  // The k-step predictions start from measurements and are untouched.
+  EXPECT_EQ(registered.outputs[1].fit_k.at(40), carried.outputs[1].fit_k.at(40));
+  // A window is registered on and not scored.
+  EXPECT_TRUE(std::isnan(windowed.outputs[1].simulated(39)));
+  EXPECT_TRUE(std::isfinite(windowed.outputs[1].simulated(40)));
+  // A tip on the axis at the start has no direction to register: the training yaw stays.
+  io::Log on_axis = turned;
+  on_axis.data(0, bend) = 0.0;
+  const ValidationResult kept = validateModel(tip, on_axis, {40}, first);
+  EXPECT_LT((kept.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1)).cwiseAbs().maxCoeff(), 1e-9);
+  // As logged there is no yaw to tell from the outputs: nothing changes.
+  const DioPwlObfModel logged = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
+  EXPECT_EQ(validateModel(logged, turned, {40}, first).outputs[1].fit_sim,
+            validateModel(logged, turned, {40}, none).outputs[1].fit_sim);
+  try {
+    validateModel(tip, turned, {40}, SimulationStart{static_cast<double>(T) * tip.sample_time_s});
+    ADD_FAILURE() << "accepted a registration window as long as the log";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("yaw registration window"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{-1.0}), std::invalid_argument);
+  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{std::nan("")}), std::invalid_argument);
 }
 
 namespace {

@@ -14,6 +14,10 @@
 namespace plsa {
 namespace {
 
+// Cross-validation scores rows of the training logs themselves, whose sensor
+// the model's level is referenced to: no yaw to register.
+constexpr SimulationStart kSameSession{0};
+
 std::string fmtPoles(const std::vector<std::complex<double>>& p) {
   std::ostringstream s;
   s.precision(4);
@@ -416,7 +420,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       for (std::size_t r = 0; r < U.size(); ++r) {
         if (U[r].rows() <= o.play_selection_horizon) continue;
         const std::vector<std::map<int, AlignedPrediction>> p =
-            predictOutputs(model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r]);
+            predictOutputs(model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
         for (int out_i = 0; out_i < no; ++out_i) {
           const AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
           for (Eigen::Index i = 0; i < a.values.size(); ++i)
@@ -457,7 +461,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
         if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
         const bool sim = what == Score::kSimulation;
         const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(
-            model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim);
+            model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim,
+            kSameSession);
         for (int out_i = 0; out_i < no; ++out_i, ++n)
           score += fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
       }

@@ -1,6 +1,9 @@
 #include "plsa/identify/validation.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
+#include <string>
 #include <tuple>
 #include <utility>
 
@@ -9,21 +12,52 @@
 namespace plsa {
 
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
-                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy) {
+                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
+                                             const SimulationStart& start) {
   require(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
               dy.rows() == u.rows(),
           "simulateModel: the record does not match the model's outputs");
+  require(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
+          "simulateModel: the yaw registration window must be finite and >= 0 s, got " +
+              std::to_string(start.yaw_registration_s));
   std::vector<AlignedPrediction> out;
   if (model.output_level.empty()) {
     for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
     return out;
   }
   require(u.rows() >= 2, "simulateModel: need at least two samples");
-  const Eigen::MatrixXd level = modelLevels(model, u, dy);
+  Eigen::MatrixXd level = modelLevels(model, u, dy);
+  for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
+  Eigen::Index first = 1;
+  const Eigen::Index n =
+      model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0
+          ? 0
+          : std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
+  if (n > 0) {
+    require(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
+                              " s, " + std::to_string(n) + " samples) leaves nothing of the " +
+                              std::to_string(u.rows()) + "-sample record to simulate");
+    // The rotation that best maps the predicted tip components onto the
+    // measured ones: atan2(sum of cross products, sum of dot products),
+    // which weighs each sample by how far the tip is from the axis.
+    double cross = 0.0, dot = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      cross += level(k, 0) * y(k, 1) - level(k, 1) * y(k, 0);
+      dot += level(k, 0) * y(k, 0) + level(k, 1) * y(k, 1);
+    }
+    // A tip on the axis in both has no direction to register: keep the training yaw.
+    if (std::hypot(cross, dot) > 1e-12 && std::isfinite(cross) && std::isfinite(dot)) {
+      const double a = std::atan2(cross, dot), c = std::cos(a), s = std::sin(a);
+      const Eigen::VectorXd x = level.col(0);
+      level.col(0) = c * x - s * level.col(1);
+      level.col(1) = s * x + c * level.col(1);
+    }
+    first = std::max<Eigen::Index>(1, n);
+  }
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;
-    p.first = 1;
-    p.values = level.col(o).tail(u.rows() - 1).array() + model.output_level[static_cast<std::size_t>(o)];
+    p.first = first;
+    p.values = level.col(o).tail(u.rows() - first);
     out.push_back(std::move(p));
   }
   return out;
@@ -47,13 +81,14 @@ std::pair<AlignedPrediction, AlignedPrediction> toTipAngles(const AlignedPredict
 
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
-                                                             bool with_simulation) {
-  return predictOutputs(model, u, y, horizons, with_simulation, modelIncrements(model, u));
+                                                             bool with_simulation, const SimulationStart& start) {
+  return predictOutputs(model, u, y, horizons, with_simulation, modelIncrements(model, u), start);
 }
 
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
-                                                             bool with_simulation, const Eigen::MatrixXd& dy) {
+                                                             bool with_simulation, const Eigen::MatrixXd& dy,
+                                                             const SimulationStart& start) {
   require(y.cols() == model.outputCount() && y.rows() == u.rows(),
           "predictOutputs: the record does not match the model's outputs");
   require(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
@@ -68,21 +103,22 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
           toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
   }
   if (with_simulation) {
-    const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy);
+    const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy, start);
     for (int o = 0; o < model.outputCount(); ++o) out[static_cast<std::size_t>(o)][0] = sims[static_cast<std::size_t>(o)];
     if (model.output_frame == OutputFrame::kTipCartesian)
       std::tie(out[0][0], out[1][0]) = toTipAngles(out[0][0], out[1][0], [&](Eigen::Index t, double previous) {
-        return t == sims[0].first ? y(0, 1) : previous;
+        return t == sims[0].first ? y(t - 1, 1) : previous;
       });
   }
   return out;
 }
 
-ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons) {
+ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
+                               const SimulationStart& start) {
   require(!horizons.empty(), "validate: no horizons given");
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
-  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons);
+  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
   ValidationResult res;
   res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.input_outside_range =
@@ -119,6 +155,7 @@ io::Log predictionLog(const ValidationResult& v) {
       log.columns.push_back(o.name + "_k" + std::to_string(k));
       first = std::max(first, k);
     }
+    while (first < o.simulated.size() && !std::isfinite(o.simulated(first))) ++first;  // a registration window
     log.columns.push_back(o.name + "_sim");
   }
   const Eigen::Index T = v.time.size() - first;

@@ -27,11 +27,31 @@ struct ValidationResult {
   double input_outside_range = 0.0;  ///< share of samples outside the model's training input range
 };
 
-/// Free simulation of every output from the inputs, for samples 1..T-1, in
-/// the model's output frame (y too): from the model's output_level when it
-/// has one, else from the first measured sample. `dy` is modelIncrements(model, u).
+/// How a free simulation takes up a run. A model with an output_level
+/// simulates from the inputs alone and so carries its training run's sensor
+/// state; in the tip_cartesian frame the sensor's yaw about the segment axis
+/// is part of that state, and no input can tell a new run's. As the
+/// method's simulation starts from the measured y(0), a tip_cartesian model
+/// registers the run's yaw on its first seconds (bending is untouched: a yaw
+/// turns the tip's direction, not its magnitude).
+struct SimulationStart {
+  /// Seconds at the run's start the yaw is registered on (least-squares
+  /// rotation of the predicted onto the measured tip components over them),
+  /// at least one sample when > 0; the simulation is scored after them. A
+  /// window, not the first sample: one sample registers the model's own error
+  /// at the starting state with the yaw (docs/identification.md, item 15).
+  /// 0: carry the training yaw. Only tip_cartesian models with an
+  /// output_level use it.
+  double yaw_registration_s = 5.0;
+};
+
+/// Free simulation of every output from the inputs, in the model's output
+/// frame (y too): from the model's output_level when it has one (its yaw
+/// registered as `start` says, from the first sample after the window),
+/// else from the first measured sample (samples 1..T-1). `dy` is modelIncrements(model, u).
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
-                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy);
+                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
+                                             const SimulationStart& start = {});
 
 /// Every output's predictions in the log's frame (y as logged): key k >= 1
 /// the k-step-ahead predictions, key 0 the free simulation when asked for.
@@ -39,14 +59,18 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
 /// angle its prediction starts from (simulation: of its own previous value).
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
-                                                             bool with_simulation = true);
+                                                             bool with_simulation = true,
+                                                             const SimulationStart& start = {});
 /// The same from increments already computed (`dy` = modelIncrements(model, u)).
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
-                                                             bool with_simulation, const Eigen::MatrixXd& dy);
+                                                             bool with_simulation, const Eigen::MatrixXd& dy,
+                                                             const SimulationStart& start = {});
 
-/// Throws naming the missing column or the bad horizon.
-ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons);
+/// Throws naming the missing column, the bad horizon or a registration window
+/// as long as the log.
+ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
+                               const SimulationStart& start = {});
 
 /// Measured vs predicted as a log: time_s, then per output <name>, <name>_k<h>..., <name>_sim,
 /// from the first sample every prediction covers.

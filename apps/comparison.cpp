@@ -19,8 +19,9 @@ Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
 }  // namespace
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
-                            const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
-  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(m, u, y, horizons);
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                            const SimulationStart& start) {
+  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(m, u, y, horizons, true, start);
   ModelPredictions out{name, {}};
   for (const auto& by_horizon : pred) {
     std::map<int, Eigen::VectorXd> byh;

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "plsa/identify/arx.hpp"
+#include "plsa/identify/validation.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa::app {
@@ -21,7 +22,8 @@ struct ModelPredictions {
 };
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
-                            const Eigen::MatrixXd& y, const std::vector<int>& horizons);
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                            const SimulationStart& start = {});
 ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons);
 

@@ -32,6 +32,7 @@ struct ValidateArgs {
   std::vector<int> horizons{40, 80};
   std::string json;
   std::string csv;
+  SimulationStart start;
 };
 
 std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required) {
@@ -78,12 +79,18 @@ void runIdentify(IdentifyArgs& a) {
   std::fprintf(stderr, "plsa identify: wrote %s\n", a.out.c_str());
 }
 
+std::string seconds(double s) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", s);
+  return b;
+}
+
 void runValidate(const ValidateArgs& a) {
   const DioPwlObfModel model = loadModel(a.model);
   std::vector<std::string> required = model.inputs;
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   const io::Log log = readLogs({a.log}, required).front();
-  const ValidationResult v = validateModel(model, log, a.horizons);
+  const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   if (v.input_outside_range > 0)
     std::fprintf(stderr, "plsa validate: warning: %.1f%% of samples lie outside the inputs' training range [%g, %g]\n",
                  100 * v.input_outside_range, model.input_min, model.input_max);
@@ -103,9 +110,16 @@ void runValidate(const ValidateArgs& a) {
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
-  // Say how the simulation started: the two differ when the log starts unsettled.
-  j["simulation_start"] = model.output_level.empty() ? "first measured sample" : "model output level";
-  std::printf("(sim from the %s)\n", model.output_level.empty() ? "first measured sample" : "model's output level");
+  // Say how the simulation started: the ways differ when the log starts unsettled.
+  const bool registered = !model.output_level.empty() && model.output_frame == OutputFrame::kTipCartesian &&
+                          a.start.yaw_registration_s > 0;
+  const std::string start =
+      model.output_level.empty() ? "first measured sample"
+      : registered ? "model output level, sensor yaw registered on the first " +
+                         seconds(a.start.yaw_registration_s) + " s (not scored)"
+                   : "model output level";
+  j["simulation_start"] = start;
+  std::printf("(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) {
     std::ofstream out(a.json);
     if (!out) throw std::runtime_error(a.json + ": cannot open for writing");
@@ -235,6 +249,16 @@ void addIdentifyCommands(CLI::App& app) {
   va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
   va->add_option("--json", v->json, "Write fits as JSON");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV");
+  va->add_option("--yaw-registration", v->start.yaw_registration_s,
+                 "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "
+                 "simulation, which is scored after them (default 5); 0 carries the training run's yaw")
+      ->check(CLI::Validator(
+          [](std::string& t) {
+            double x = NAN;
+            return parseNonNegative(t, x) ? std::string()
+                                          : "'" + t + "' is not a duration in seconds >= 0 (e.g. 5, or 0 for none)";
+          },
+          "SECONDS"));
   va->callback([v] { runValidate(*v); });
 }
 

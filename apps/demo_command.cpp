@@ -112,12 +112,13 @@ void runDemo(const DemoOptions& opt) {
   const std::string reg_s = fmt(SimulationStart{}.yaw_registration_s, "%g");
   std::vector<ModelPredictions> all = preds;
   all.push_back(predictDio("", model, Uv, Yv, horizons, training_yaw));
+  all.push_back(preds[1]);
   all.push_back(predictDio("", linear, Uv, Yv, horizons, training_yaw));
+  all.push_back(preds[3]);
   const auto fits_all = commonFits(all, Yv);
-  const std::vector<std::vector<std::map<int, double>>> fits(fits_all.begin(), fits_all.begin() + 4);
-  auto fitTrainingYaw = [&](std::size_t m, std::size_t o) {
-    return m == 0 ? fits_all[4][o].at(0) : m == 2 ? fits_all[5][o].at(0) : fits_all[m][o].at(0);
-  };
+  const std::size_t nm = preds.size();
+  const std::vector<std::vector<std::map<int, double>>> fits(fits_all.begin(), fits_all.begin() + nm);
+  auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return fits_all[nm + m][o].at(0); };
   std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; all models scored on the same samples, from %s s)\n",
               reg_s.c_str());
   std::printf("  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"

@@ -111,8 +111,7 @@ void runValidate(const ValidateArgs& a) {
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
   // Say how the simulation started: the ways differ when the log starts unsettled.
-  const bool registered = !model.output_level.empty() && model.output_frame == OutputFrame::kTipCartesian &&
-                          a.start.yaw_registration_s > 0;
+  const bool registered = yawRegistrationSamples(model, a.start) > 0;
   const std::string start =
       model.output_level.empty() ? "first measured sample"
       : registered ? "model output level, sensor yaw registered on the first " +

@@ -11,15 +11,22 @@
 
 namespace plsa {
 
+Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
+  require(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
+          "simulateModel: the yaw registration window must be finite and >= 0 s, got " +
+              std::to_string(start.yaw_registration_s));
+  if (model.output_level.empty() || model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0)
+    return 0;
+  return std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
+}
+
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                              const SimulationStart& start) {
   require(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
               dy.rows() == u.rows(),
           "simulateModel: the record does not match the model's outputs");
-  require(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
-          "simulateModel: the yaw registration window must be finite and >= 0 s, got " +
-              std::to_string(start.yaw_registration_s));
+  const Eigen::Index n = yawRegistrationSamples(model, start);
   std::vector<AlignedPrediction> out;
   if (model.output_level.empty()) {
     for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
@@ -29,10 +36,6 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   Eigen::MatrixXd level = modelLevels(model, u, dy);
   for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
   Eigen::Index first = 1;
-  const Eigen::Index n =
-      model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0
-          ? 0
-          : std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
   if (n > 0) {
     require(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
                               " s, " + std::to_string(n) + " samples) leaves nothing of the " +
@@ -52,7 +55,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
       level.col(0) = c * x - s * level.col(1);
       level.col(1) = s * x + c * level.col(1);
     }
-    first = std::max<Eigen::Index>(1, n);
+    first = n;
   }
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;

@@ -45,6 +45,12 @@ struct SimulationStart {
   double yaw_registration_s = 5.0;
 };
 
+/// How many samples at a run's start simulateModel registers the yaw on:
+/// 0 unless the model is tip_cartesian with an output_level and the window
+/// is > 0, else the window's samples, at least one. Throws for a window that
+/// is negative or not finite.
+Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start);
+
 /// Free simulation of every output from the inputs, in the model's output
 /// frame (y too): from the model's output_level when it has one (its yaw
 /// registered as `start` says, from the first sample after the window),

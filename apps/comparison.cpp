@@ -43,9 +43,9 @@ ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Ei
   return out;
 }
 
-std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<ModelPredictions>& models,
-                                                           const Eigen::MatrixXd& y) {
-  std::vector<std::vector<std::map<int, double>>> fits(models.size());
+std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
+                                                                  const Eigen::MatrixXd& y) {
+  std::vector<std::vector<std::map<int, CommonScore>>> scores(models.size());
   for (Eigen::Index o = 0; o < y.cols(); ++o) {
     for (const auto& [k, unused] : models[0].by_output[static_cast<std::size_t>(o)]) {
       (void)unused;
@@ -57,14 +57,16 @@ std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<Mod
         from = std::max(from, f);
       }
       const Eigen::Index n = y.rows() - from;
+      const Eigen::VectorXd measured = y.col(o).segment(from, n);
       for (std::size_t i = 0; i < models.size(); ++i) {
-        if (fits[i].size() <= static_cast<std::size_t>(o)) fits[i].resize(static_cast<std::size_t>(o) + 1);
-        fits[i][static_cast<std::size_t>(o)][k] =
-            nrmseFit(y.col(o).segment(from, n), models[i].by_output[static_cast<std::size_t>(o)].at(k).segment(from, n));
+        if (scores[i].size() <= static_cast<std::size_t>(o)) scores[i].resize(static_cast<std::size_t>(o) + 1);
+        const Eigen::VectorXd predicted = models[i].by_output[static_cast<std::size_t>(o)].at(k).segment(from, n);
+        scores[i][static_cast<std::size_t>(o)][k] = {nrmseFit(measured, predicted), rmsError(measured, predicted),
+                                                     spreadOf(measured)};
       }
     }
   }
-  return fits;
+  return scores;
 }
 
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

@@ -27,9 +27,16 @@ ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, co
 ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons);
 
-/// fits[model][output][horizon] over the samples every model predicts.
-std::vector<std::vector<std::map<int, double>>> commonFits(const std::vector<ModelPredictions>& models,
-                                                           const Eigen::MatrixXd& y);
+/// One model's score on one output and horizon.
+struct CommonScore {
+  double fit = 0.0;     ///< NRMSE fit %
+  double rms = 0.0;     ///< rms error, output units
+  double spread = 0.0;  ///< the measured output's standard deviation over the same samples
+};
+
+/// scores[model][output][horizon] over the samples every model predicts.
+std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
+                                                                  const Eigen::MatrixXd& y);
 
 /// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

@@ -74,7 +74,7 @@ void runCrossval(CrossvalArgs& a) {
     const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
     const std::vector<ModelPredictions> preds = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
                                                  predictArx("ARX", arx, uv, yv, a.horizons)};
-    const auto fits = commonFits(preds, yv);
+    const auto scores = commonScores(preds, yv);
     const std::string name = fs::path(files[hold]).stem().string();
     if (report.drift_taken_out) {
       std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
@@ -87,14 +87,20 @@ void runCrossval(CrossvalArgs& a) {
     for (std::size_t m = 0; m < preds.size(); ++m)
       for (std::size_t out = 0; out < a.outputs.size(); ++out) {
         std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), preds[m].name.c_str());
+        auto& jf = j["folds"][name][preds[m].name][a.outputs[out]];
         for (int k : a.horizons) {
-          std::printf(" %8.1f", fits[m][out].at(k));
-          sums[m][out][k] += fits[m][out].at(k);
-          j["folds"][name][preds[m].name][a.outputs[out]]["fit_k" + std::to_string(k)] = fits[m][out].at(k);
+          const CommonScore& sc = scores[m][out].at(k);
+          std::printf(" %8.1f", sc.fit);
+          sums[m][out][k] += sc.fit;
+          jf["fit_k" + std::to_string(k)] = sc.fit;
+          jf["rms_k" + std::to_string(k)] = sc.rms;
         }
-        std::printf(" %8.1f\n", fits[m][out].at(0));
-        sums[m][out][0] += fits[m][out].at(0);
-        j["folds"][name][preds[m].name][a.outputs[out]]["fit_sim"] = fits[m][out].at(0);
+        const CommonScore& sim = scores[m][out].at(0);
+        std::printf(" %8.1f\n", sim.fit);
+        sums[m][out][0] += sim.fit;
+        jf["fit_sim"] = sim.fit;
+        jf["rms_sim"] = sim.rms;
+        jf["std_sim"] = sim.spread;
       }
     std::fflush(stdout);
   }

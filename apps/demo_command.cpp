@@ -115,10 +115,10 @@ void runDemo(const DemoOptions& opt) {
   all.push_back(preds[1]);
   all.push_back(predictDio("", linear, Uv, Yv, horizons, training_yaw));
   all.push_back(preds[3]);
-  const auto fits_all = commonFits(all, Yv);
+  const auto scores_all = commonScores(all, Yv);
   const std::size_t nm = preds.size();
-  const std::vector<std::vector<std::map<int, double>>> fits(fits_all.begin(), fits_all.begin() + nm);
-  auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return fits_all[nm + m][o].at(0); };
+  const std::vector<std::vector<std::map<int, CommonScore>>> scores(scores_all.begin(), scores_all.begin() + nm);
+  auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return scores_all[nm + m][o].at(0).fit; };
   std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; all models scored on the same samples, from %s s)\n",
               reg_s.c_str());
   std::printf("  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
@@ -128,19 +128,30 @@ void runDemo(const DemoOptions& opt) {
   nlohmann::json j;
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o) {
-      const auto& f = fits[m][o];
+      const auto& f = scores[m][o];
       const double f_ty = fitTrainingYaw(m, o);
-      std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %20.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(), f.at(40),
-                  f.at(80), f.at(0), f_ty);
+      std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %20.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(),
+                  f.at(40).fit, f.at(80).fit, f.at(0).fit, f_ty);
       j["models"][preds[m].name][model.outputs[o]] = {
-          {"fit_k40", f.at(40)}, {"fit_k80", f.at(80)}, {"fit_sim", f.at(0)}, {"fit_sim_training_yaw", f_ty}};
+          {"fit_k40", f.at(40).fit}, {"fit_k80", f.at(80).fit}, {"fit_sim", f.at(0).fit},
+          {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms}, {"rms_k80", f.at(80).rms},
+          {"rms_sim", f.at(0).rms}};
     }
-  for (std::size_t o = 0; o < model.outputs.size(); ++o)
-    j["outputs"][model.outputs[o]] = {{"fit_k40", fits[0][o].at(40)},
-                                      {"fit_k80", fits[0][o].at(80)},
-                                      {"fit_sim", fits[0][o].at(0)},
-                                      {"fit_sim_training_yaw", fitTrainingYaw(0, o)}};
+  // A fit divides by the run's spread, and a run that hardly bends makes a
+  // small error a large miss: say both.
+  std::printf("  plsa's errors in degrees (rms; 40-step / 80-step / sim) against the measured spread (std):\n");
+  for (std::size_t o = 0; o < model.outputs.size(); ++o) {
+    const auto& f = scores[0][o];
+    std::printf("    %-10s %.3f / %.3f / %.3f deg rms, spread %.2f deg\n", model.outputs[o].c_str(), f.at(40).rms,
+                f.at(80).rms, f.at(0).rms, f.at(0).spread);
+    j["outputs"][model.outputs[o]] = {{"fit_k40", f.at(40).fit},   {"fit_k80", f.at(80).fit},
+                                      {"fit_sim", f.at(0).fit},    {"fit_sim_training_yaw", fitTrainingYaw(0, o)},
+                                      {"rms_k40", f.at(40).rms},   {"rms_k80", f.at(80).rms},
+                                      {"rms_sim", f.at(0).rms},    {"std_sim", f.at(0).spread}};
+  }
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
+  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in degrees; std_sim: the measured output's standard deviation "
+                    "over the scored samples";
   std::ofstream(path("fits.json")) << j.dump(2) << "\n";
 
   // 4. Report.
@@ -164,8 +175,16 @@ void runDemo(const DemoOptions& opt) {
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o)
       html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
-           << fmt(fits[m][o].at(40)) << "</td><td>" << fmt(fits[m][o].at(80)) << "</td><td>" << fmt(fits[m][o].at(0))
+           << fmt(scores[m][o].at(40).fit) << "</td><td>" << fmt(scores[m][o].at(80).fit) << "</td><td>" << fmt(scores[m][o].at(0).fit)
            << "</td><td>" << fmt(fitTrainingYaw(m, o)) << "</td></tr>";
+  html << "</table><p>The same errors in degrees (rms), against the spread each fit divides by:</p><table><tr>"
+       << "<th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>measured std</th></tr>";
+  for (std::size_t m = 0; m < preds.size(); ++m)
+    for (std::size_t o = 0; o < model.outputs.size(); ++o)
+      html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
+           << fmt(scores[m][o].at(40).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(80).rms, "%.3f")
+           << "</td><td>" << fmt(scores[m][o].at(0).rms, "%.3f") << "</td><td>"
+           << fmt(scores[m][o].at(0).spread, "%.2f") << "</td></tr>";
   html << "</table>";
   for (std::size_t o = 0; o < model.outputs.size(); ++o) {
     const auto& p = preds[0].by_output[o];

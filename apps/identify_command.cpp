@@ -107,9 +107,25 @@ void runValidate(const ValidateArgs& a) {
     std::printf(" %9.2f\n", o.fit_sim);
     j["outputs"][o.name]["fit_sim"] = o.fit_sim;
   }
+  // The same errors in the outputs' units, beside the spread the fit divides by.
+  std::printf("%-12s", "rms error");
+  for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());
+  std::printf(" %9s %12s\n", "sim", "measured std");
+  for (const auto& o : v.outputs) {
+    std::printf("%-12s", o.name.c_str());
+    for (int k : a.horizons) {
+      std::printf(" %9.4g", o.rms_k.at(k));
+      j["outputs"][o.name]["rms_k" + std::to_string(k)] = o.rms_k.at(k);
+    }
+    std::printf(" %9.4g %12.4g\n", o.rms_sim, o.spread_sim);
+    j["outputs"][o.name]["rms_sim"] = o.rms_sim;
+    j["outputs"][o.name]["std_sim"] = o.spread_sim;
+  }
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
+  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std_sim: the measured output's standard "
+                    "deviation over the simulation's scored samples";
   // Say how the simulation started: the ways differ when the log starts unsettled.
   const bool registered = yawRegistrationSamples(model, a.start) > 0;
   const std::string start =

@@ -88,6 +88,21 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
       ASSERT_TRUE(j["outputs"][out].contains(key)) << out << "." << key;
       EXPECT_TRUE(j["outputs"][out][key].is_number());
     }
+  // Errors in degrees beside the fits, and consistent with them for the
+  // simulation, whose spread is reported.
+  for (const std::string out : {"bend_deg", "steer_deg"}) {
+    const auto& o = j["outputs"][out];
+    for (const std::string key : {"rms_k40", "rms_k80", "rms_sim", "std_sim"}) {
+      ASSERT_TRUE(o.contains(key)) << out << "." << key;
+      EXPECT_GT(o[key].get<double>(), 0.0) << out << "." << key;
+    }
+    EXPECT_LT(o["rms_k40"].get<double>(), o["std_sim"].get<double>()) << out;
+    EXPECT_NEAR(o["fit_sim"].get<double>(),
+                100.0 * (1.0 - o["rms_sim"].get<double>() / o["std_sim"].get<double>()), 1e-6)
+        << out;
+  }
+  const std::string printed = slurp(file("stdout.txt"));
+  EXPECT_NE(printed.find("measured std"), std::string::npos) << printed;
   EXPECT_NE(slurp(file("pred.csv")).find("bend_deg_k40"), std::string::npos);
 }
 

@@ -135,12 +135,15 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     for (int k : horizons) {
       const AlignedPrediction& p = pred[static_cast<std::size_t>(o)].at(k);
       ov.fit_k[k] = fitOf(ov.measured, p);
+      ov.rms_k[k] = rmsErrorOf(ov.measured, p);
       Eigen::VectorXd full = Eigen::VectorXd::Constant(y.rows(), nan);
       full.segment(p.first, p.values.size()) = p.values;
       ov.predicted_k[k] = full;
     }
     const AlignedPrediction& s = pred[static_cast<std::size_t>(o)].at(0);
     ov.fit_sim = fitOf(ov.measured, s);
+    ov.rms_sim = rmsErrorOf(ov.measured, s);
+    ov.spread_sim = spreadOf(ov.measured.segment(s.first, s.values.size()));
     ov.simulated = Eigen::VectorXd::Constant(y.rows(), nan);
     ov.simulated.segment(s.first, s.values.size()) = s.values;
     res.outputs.push_back(std::move(ov));

@@ -60,4 +60,9 @@ inline double fitOf(const Eigen::Ref<const Eigen::VectorXd>& y, const AlignedPre
   return nrmseFit(y.segment(p.first, p.values.size()), p.values);
 }
 
+/// Root-mean-square error of an aligned prediction, in the output's units.
+inline double rmsErrorOf(const Eigen::Ref<const Eigen::VectorXd>& y, const AlignedPrediction& p) {
+  return rmsError(y.segment(p.first, p.values.size()), p.values);
+}
+
 }  // namespace plsa

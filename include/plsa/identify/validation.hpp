@@ -16,6 +16,9 @@ struct OutputValidation {
   std::string name;
   std::map<int, double> fit_k;  ///< horizon -> fit %
   double fit_sim = 0.0;
+  std::map<int, double> rms_k;  ///< horizon -> rms error, output units
+  double rms_sim = 0.0;
+  double spread_sim = 0.0;  ///< standard deviation of the measured output over the simulation's scored samples
   Eigen::VectorXd measured;
   std::map<int, Eigen::VectorXd> predicted_k;  ///< aligned with measured, NaN where undefined
   Eigen::VectorXd simulated;

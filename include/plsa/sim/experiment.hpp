@@ -28,7 +28,11 @@ struct ExperimentOptions {
   std::array<int, 2> grid_chambers = {1, 2};
   // joystick
   double joystick_duration_s = 60.0;
-  double joystick_min_bar = 0.19;  ///< inside the grid's range: validation, not extrapolation
+  /// The grid's range and 0.01 bar beyond it at either end: mostly
+  /// validation, with the little extrapolation a hand-driven path will do
+  /// (the demo's seeds 1 to 8 spend 4 to 13% of their samples outside 0.20
+  /// to 0.35 bar on one chamber or both).
+  double joystick_min_bar = 0.19;
   double joystick_max_bar = 0.36;
   double joystick_bandwidth_hz = 0.3;
   /// Unrecorded ramp and hold before a joystick run. Free simulation starts

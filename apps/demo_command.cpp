@@ -175,8 +175,8 @@ void runDemo(const DemoOptions& opt) {
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o)
       html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
-           << fmt(scores[m][o].at(40).fit) << "</td><td>" << fmt(scores[m][o].at(80).fit) << "</td><td>" << fmt(scores[m][o].at(0).fit)
-           << "</td><td>" << fmt(fitTrainingYaw(m, o)) << "</td></tr>";
+           << fmt(scores[m][o].at(40).fit) << "</td><td>" << fmt(scores[m][o].at(80).fit) << "</td><td>"
+           << fmt(scores[m][o].at(0).fit) << "</td><td>" << fmt(fitTrainingYaw(m, o)) << "</td></tr>";
   html << "</table><p>The same errors in degrees (rms), against the spread each fit divides by:</p><table><tr>"
        << "<th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>measured std</th></tr>";
   for (std::size_t m = 0; m < preds.size(); ++m)

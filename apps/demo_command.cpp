@@ -100,6 +100,8 @@ void runDemo(const DemoOptions& opt) {
   // 3. Validation on the joystick run.
   const std::vector<int> horizons = {40, 80};
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
+  std::printf("  the joystick run has an input outside its training range on %.1f%% of its samples\n",
+              100 * inputsOutsideTraining(model, Uv).any);
   const std::vector<ModelPredictions> preds = {
       predictDio("DIO-PWL-OBF (plsa)", model, Uv, Yv, horizons),
       predictDio("DIO-PWL-OBF as in the paper", paper, Uv, Yv, horizons),

@@ -865,6 +865,51 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
 // training run's sensor yaw; a run whose sensor is turned about the segment
 // axis must be registered on its first samples (as simulation starts from the
 // measured y(0)), turning the steering only: bending, a magnitude, must not move.
+TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  DioPwlObfModel m = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  // The grid moves two chambers over 0.20 to 0.35 bar and leaves the third at zero.
+  ASSERT_EQ(m.input_ranges.size(), 3u);
+  EXPECT_NEAR(m.input_ranges[0][0], 0.20, 0.005);
+  EXPECT_NEAR(m.input_ranges[1][1], 0.35, 0.005);
+  EXPECT_NEAR(m.input_ranges[2][1], 0.0, 1e-9);
+  EXPECT_EQ(modelFromJson(modelToJson(m)).input_ranges, m.input_ranges);
+  // The joystick goes 0.01 bar beyond the grid at either end.
+  const Eigen::MatrixXd u = runs.val.columnsOf(m.inputs);
+  Eigen::Index below = 0, any = 0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    bool out = false;
+    for (Eigen::Index c = 0; c < 3; ++c)
+      out = out || u(k, c) < m.input_ranges[static_cast<std::size_t>(c)][0] - 1e-9 ||
+            u(k, c) > m.input_ranges[static_cast<std::size_t>(c)][1] + 1e-9;
+    any += out;
+    below += u(k, 0) < 0.2 - 1e-9 || u(k, 1) < 0.2 - 1e-9;
+  }
+  ASSERT_GT(below, 0) << "the joystick run never goes below the grid";
+  const ValidationResult v = validateModel(m, runs.val, {40});
+  EXPECT_DOUBLE_EQ(v.input_outside_range, static_cast<double>(any) / static_cast<double>(u.rows()));
+  ASSERT_EQ(v.input_outside_each.size(), 3u);
+  EXPECT_GT(v.input_outside_each[0], 0.0);
+  EXPECT_GT(v.input_outside_each[1], 0.0);
+  EXPECT_EQ(v.input_outside_each[2], 0.0);
+  // Against the one range over all inputs ([0, 0.35]: the empty chamber's
+  // zero), the excursions below the grid go uncounted: what files from
+  // before input_ranges still get.
+  m.input_ranges.clear();
+  const ValidationResult old = validateModel(m, runs.val, {40});
+  EXPECT_LT(old.input_outside_range, v.input_outside_range);
+  // A malformed range is rejected by name.
+  nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+  j["input_ranges"] = {{0.2, 0.35}, {0.2, 0.35}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {0.35, 0.2}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {0.2}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {"low", 0.35}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+}
+
 TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const DriftRuns runs = yawDriftRuns(0.0);
   const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));

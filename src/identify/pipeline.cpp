@@ -296,6 +296,9 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   model.partition = partitions.back();
   model.input_min = all_u.minCoeff();
   model.input_max = all_u.maxCoeff();
+  model.input_ranges.clear();
+  for (Eigen::Index c = 0; c < all_u.cols(); ++c)
+    model.input_ranges.push_back({all_u.col(c).minCoeff(), all_u.col(c).maxCoeff()});
   {
     std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") + "): " +
                     std::to_string(model.partition.regionCount()) + " regions";

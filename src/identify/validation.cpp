@@ -116,6 +116,22 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   return out;
 }
 
+InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  require(u.cols() == static_cast<Eigen::Index>(model.inputs.size()), "inputsOutsideTraining: one column per input");
+  InputsOutsideTraining out;
+  if (u.rows() == 0) return out;
+  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> outside(u.rows(), u.cols());
+  for (Eigen::Index c = 0; c < u.cols(); ++c) {
+    const bool own = !model.input_ranges.empty();
+    const double lo = own ? model.input_ranges[static_cast<std::size_t>(c)][0] : model.input_min;
+    const double hi = own ? model.input_ranges[static_cast<std::size_t>(c)][1] : model.input_max;
+    outside.col(c) = (u.col(c).array() < lo - 1e-9) || (u.col(c).array() > hi + 1e-9);
+    out.each.push_back(static_cast<double>(outside.col(c).count()) / static_cast<double>(u.rows()));
+  }
+  out.any = static_cast<double>(outside.rowwise().any().count()) / static_cast<double>(u.rows());
+  return out;
+}
+
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start) {
   require(!horizons.empty(), "validate: no horizons given");
@@ -124,9 +140,9 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
   ValidationResult res;
   res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
-  res.input_outside_range =
-      static_cast<double>(((u.array() < model.input_min - 1e-9) || (u.array() > model.input_max + 1e-9)).rowwise().any().count()) /
-      static_cast<double>(u.rows());
+  const InputsOutsideTraining outside = inputsOutsideTraining(model, u);
+  res.input_outside_range = outside.any;
+  res.input_outside_each = outside.each;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;

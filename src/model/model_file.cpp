@@ -65,6 +65,11 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["outputs"] = m.outputs;
   j["units"] = {{"inputs", m.input_unit}, {"outputs", m.output_unit}};
   j["input_range"] = {limit(m.input_min), limit(m.input_max)};
+  if (!m.input_ranges.empty()) {
+    json ranges = json::array();
+    for (const auto& r : m.input_ranges) ranges.push_back({r[0], r[1]});
+    j["input_ranges"] = ranges;
+  }
   json poles = json::array();
   for (const auto& row : m.poles) {
     json r = json::array();
@@ -146,6 +151,11 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   if (range.size() != 2) bad(source, "'input_range' must have two entries");
   m.input_min = finiteOrInf(range[0]);
   m.input_max = finiteOrInf(range[1]);
+  if (j.contains("input_ranges"))
+    for (const auto& r : rd.array(j["input_ranges"], "input_ranges")) {
+      if (!r.is_array() || r.size() != 2) bad(source, "'input_ranges' entries must be [min, max]");
+      m.input_ranges.push_back({rd.number(r[0], "input_ranges[][0]"), rd.number(r[1], "input_ranges[][1]")});
+    }
   const json& poles = rd.array(rd.at(j, "poles", ""), "poles");
   for (std::size_t o = 0; o < poles.size(); ++o) {
     std::vector<PoleSet> row;

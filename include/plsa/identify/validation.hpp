@@ -27,8 +27,20 @@ struct OutputValidation {
 struct ValidationResult {
   std::vector<OutputValidation> outputs;
   Eigen::VectorXd time;
-  double input_outside_range = 0.0;  ///< share of samples outside the model's training input range
+  /// Share of samples with an input outside its training range (each
+  /// input's own when the model has input_ranges, else the range over all).
+  double input_outside_range = 0.0;
+  std::vector<double> input_outside_each;  ///< the same share per input
 };
+
+/// Share of the rows of `u` (columns: the model's inputs) with an input
+/// outside its training range, in all (`any`) and per input (`each`): each
+/// input's own range when the model has input_ranges, else the one over all.
+struct InputsOutsideTraining {
+  double any = 0.0;
+  std::vector<double> each;
+};
+InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
 
 /// How a free simulation takes up a run. A model with an output_level
 /// simulates from the inputs alone and so carries its training run's sensor

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -102,6 +103,11 @@ struct DioPwlObfModel {
   std::string output_unit = "deg";
   double input_min = -std::numeric_limits<double>::infinity();  ///< accepted input range
   double input_max = std::numeric_limits<double>::infinity();
+  /// Each input's own training range, [input][min, max]: what validation
+  /// counts extrapolation against (the range above spans all inputs, so a
+  /// chamber held at zero would hide another's excursions below its grid).
+  /// Empty in files written before it existed.
+  std::vector<std::array<double, 2>> input_ranges;
   std::vector<std::vector<PoleSet>> poles;  ///< [output][input]
   /// [input][channel] play half-widths: each input feeds one OBF bank per
   /// channel, through a play operator of that width (0 = the raw input, as in
@@ -168,6 +174,11 @@ struct DioPwlObfModel {
     require(!inputs.empty(), "model: no inputs");
     require(!outputs.empty(), "model: no outputs");
     require(input_min < input_max, "model: input_min must be below input_max");
+    require(input_ranges.empty() || input_ranges.size() == inputs.size(),
+            "model: input_ranges needs one [min, max] per input");
+    for (const auto& r : input_ranges)
+      require(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1],
+              "model: every input_ranges entry must be finite with min <= max");
     require(poles.size() == outputs.size(), "model: need one row of pole sets per output");
     require(input_play.size() == inputs.size(), "model: need one input_play list per input");
     for (const auto& ch : input_play) {

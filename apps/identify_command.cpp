@@ -91,19 +91,18 @@ void runValidate(const ValidateArgs& a) {
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   const io::Log log = readLogs({a.log}, required).front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
-  if (v.input_outside_range > 0) {
+  if (v.outside_training.any > 0) {
     std::string each;
     for (std::size_t c = 0; c < model.inputs.size(); ++c) {
-      if (v.input_outside_each[c] == 0) continue;
+      if (v.outside_training.each[c] == 0) continue;
       char b[160];
-      const bool own = !model.input_ranges.empty();
+      const auto [lo, hi] = model.trainingRange(c);
       std::snprintf(b, sizeof b, "%s%s outside [%g, %g] on %.1f%%", each.empty() ? "" : ", ", model.inputs[c].c_str(),
-                    own ? model.input_ranges[c][0] : model.input_min, own ? model.input_ranges[c][1] : model.input_max,
-                    100 * v.input_outside_each[c]);
+                    lo, hi, 100 * v.outside_training.each[c]);
       each += b;
     }
     std::fprintf(stderr, "plsa validate: warning: %.1f%% of samples have an input outside its training range (%s)\n",
-                 100 * v.input_outside_range, each.c_str());
+                 100 * v.outside_training.any, each.c_str());
   }
   std::printf("%-12s", "output");
   for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());

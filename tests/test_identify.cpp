@@ -887,17 +887,17 @@ TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
   }
   ASSERT_GT(below, 0) << "the joystick run never goes below the grid";
   const ValidationResult v = validateModel(m, runs.val, {40});
-  EXPECT_DOUBLE_EQ(v.input_outside_range, static_cast<double>(any) / static_cast<double>(u.rows()));
-  ASSERT_EQ(v.input_outside_each.size(), 3u);
-  EXPECT_GT(v.input_outside_each[0], 0.0);
-  EXPECT_GT(v.input_outside_each[1], 0.0);
-  EXPECT_EQ(v.input_outside_each[2], 0.0);
+  EXPECT_DOUBLE_EQ(v.outside_training.any, static_cast<double>(any) / static_cast<double>(u.rows()));
+  ASSERT_EQ(v.outside_training.each.size(), 3u);
+  EXPECT_GT(v.outside_training.each[0], 0.0);
+  EXPECT_GT(v.outside_training.each[1], 0.0);
+  EXPECT_EQ(v.outside_training.each[2], 0.0);
   // Against the one range over all inputs ([0, 0.35]: the empty chamber's
   // zero), the excursions below the grid go uncounted: what files from
   // before input_ranges still get.
   m.input_ranges.clear();
   const ValidationResult old = validateModel(m, runs.val, {40});
-  EXPECT_LT(old.input_outside_range, v.input_outside_range);
+  EXPECT_LT(old.outside_training.any, v.outside_training.any);
   // A malformed range is rejected by name.
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j["input_ranges"] = {{0.2, 0.35}, {0.2, 0.35}};

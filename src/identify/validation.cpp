@@ -122,9 +122,7 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
   if (u.rows() == 0) return out;
   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> outside(u.rows(), u.cols());
   for (Eigen::Index c = 0; c < u.cols(); ++c) {
-    const bool own = !model.input_ranges.empty();
-    const double lo = own ? model.input_ranges[static_cast<std::size_t>(c)][0] : model.input_min;
-    const double hi = own ? model.input_ranges[static_cast<std::size_t>(c)][1] : model.input_max;
+    const auto [lo, hi] = model.trainingRange(static_cast<std::size_t>(c));
     outside.col(c) = (u.col(c).array() < lo - 1e-9) || (u.col(c).array() > hi + 1e-9);
     out.each.push_back(static_cast<double>(outside.col(c).count()) / static_cast<double>(u.rows()));
   }
@@ -140,9 +138,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
   ValidationResult res;
   res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
-  const InputsOutsideTraining outside = inputsOutsideTraining(model, u);
-  res.input_outside_range = outside.any;
-  res.input_outside_each = outside.each;
+  res.outside_training = inputsOutsideTraining(model, u);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;

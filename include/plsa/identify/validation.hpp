@@ -24,15 +24,6 @@ struct OutputValidation {
   Eigen::VectorXd simulated;
 };
 
-struct ValidationResult {
-  std::vector<OutputValidation> outputs;
-  Eigen::VectorXd time;
-  /// Share of samples with an input outside its training range (each
-  /// input's own when the model has input_ranges, else the range over all).
-  double input_outside_range = 0.0;
-  std::vector<double> input_outside_each;  ///< the same share per input
-};
-
 /// Share of the rows of `u` (columns: the model's inputs) with an input
 /// outside its training range, in all (`any`) and per input (`each`): each
 /// input's own range when the model has input_ranges, else the one over all.
@@ -40,6 +31,14 @@ struct InputsOutsideTraining {
   double any = 0.0;
   std::vector<double> each;
 };
+
+struct ValidationResult {
+  std::vector<OutputValidation> outputs;
+  Eigen::VectorXd time;
+  InputsOutsideTraining outside_training;  ///< samples with an input outside its training range
+};
+
+/// InputsOutsideTraining of `u` (one column per model input).
 InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
 
 /// How a free simulation takes up a run. A model with an output_level

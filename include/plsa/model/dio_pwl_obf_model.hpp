@@ -168,6 +168,12 @@ struct DioPwlObfModel {
     return n;
   }
 
+  /// Input `input`'s training range: its own when the model has
+  /// input_ranges, else the one over all inputs.
+  std::array<double, 2> trainingRange(std::size_t input) const {
+    return input_ranges.empty() ? std::array<double, 2>{input_min, input_max} : input_ranges[input];
+  }
+
   /// Throws std::invalid_argument naming the first inconsistency.
   void validate() const {
     require(sample_time_s > 0 && std::isfinite(sample_time_s), "model: sample_time_s must be positive");

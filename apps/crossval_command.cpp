@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "comparison.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"
 
@@ -117,7 +117,7 @@ void runCrossval(CrossvalArgs& a) {
       std::printf(" %8.1f\n", v);
       j["mean"][names[m]][a.outputs[out]]["fit_sim"] = v;
     }
-  if (!a.json.empty()) std::ofstream(a.json) << j.dump(2) << "\n";
+  if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
 }
 
 }  // namespace

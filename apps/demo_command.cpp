@@ -6,7 +6,6 @@
 #include <sstream>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +14,7 @@
 
 #include "commands.hpp"
 #include "comparison.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/report/svg_chart.hpp"
@@ -154,7 +154,7 @@ void runDemo(const DemoOptions& opt) {
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
   j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in degrees; std_sim: the measured output's standard deviation "
                     "over the scored samples";
-  std::ofstream(path("fits.json")) << j.dump(2) << "\n";
+  writeTextFile(path("fits.json"), j.dump(2) + "\n", "fits file");
 
   // 4. Report.
   const Eigen::VectorXd t = val.column("time_s").array() - val.column("time_s")(0);
@@ -217,7 +217,7 @@ void runDemo(const DemoOptions& opt) {
   html << "<h2>Identification log</h2><pre>";
   for (const auto& l : report.lines) html << report::escape(l) << "\n";
   html << "</pre></body></html>\n";
-  std::ofstream(path("report.html")) << html.str();
+  writeTextFile(path("report.html"), html.str(), "HTML report");
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv} in %.1f s\n",
               opt.out_dir.c_str(), secs);

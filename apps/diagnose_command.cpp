@@ -2,12 +2,12 @@
 // `plsa diagnose-selfcheck` (the same, blind, on data with a withheld effect).
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
 #include "plsa/lcm/lcm_log.hpp"
@@ -26,12 +26,6 @@ struct DiagnoseArgs {
   diagnose::DiagnoseOptions options;
 };
 
-void writeFile(const std::filesystem::path& p, const std::string& text) {
-  std::ofstream f(p);
-  f << text;
-  if (!f) throw std::runtime_error("cannot write " + p.string());
-}
-
 void runDiagnose(DiagnoseArgs& a) {
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
@@ -48,9 +42,9 @@ void runDiagnose(DiagnoseArgs& a) {
   const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);
   std::filesystem::create_directories(a.out);
   const auto dir = std::filesystem::path(a.out);
-  writeFile(dir / "diagnosis.json", diagnose::toJson(d));
-  writeFile(dir / "report.html", diagnose::reportHtml(d));
-  writeFile(dir / "calibrated_sim.json", sim::simConfigToJson(d.final_config));
+  writeTextFile((dir / "diagnosis.json").string(), diagnose::toJson(d), "diagnosis");
+  writeTextFile((dir / "report.html").string(), diagnose::reportHtml(d), "HTML report");
+  writeTextFile((dir / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config), "calibrated simulator configuration");
   std::printf("%s\n", d.verdict.c_str());
   std::printf("where (held out, after nominal calibration):\n");
   for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());
@@ -83,7 +77,7 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
     j["labels"] = r.labels;
     j["confusion"] = r.confusion;
     j["targets_met"] = r.targets_met;
-    writeFile(a.out, j.dump(2));
+    writeTextFile(a.out, j.dump(2), "self-check results");
   }
   if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");
 }

@@ -1,13 +1,13 @@
 // `plsa identify` (logs -> model file) and `plsa validate` (model + log -> fits).
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/identify/validation.hpp"
 #include "plsa/lcm/lcm_log.hpp"
@@ -146,9 +146,7 @@ void runValidate(const ValidateArgs& a) {
   j["simulation_start"] = start;
   std::printf("(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) {
-    std::ofstream out(a.json);
-    if (!out) throw std::runtime_error(a.json + ": cannot open for writing");
-    out << j.dump(2) << "\n";
+    writeTextFile(a.json, j.dump(2) + "\n", "fits file");
   }
   if (!a.csv.empty()) io::writeCsvLog(a.csv, predictionLog(v));
 }

@@ -1,11 +1,11 @@
 // `plsa simulate`: run an experiment on the simulated actuator and write a log;
 // `plsa sim-config`: write the default simulator configuration to edit.
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/lcm/lcm_log.hpp"
 #include "plsa/sim/experiment.hpp"
 
@@ -71,9 +71,7 @@ void addSimulateCommands(CLI::App& app) {
   CLI::App* cfg = app.add_subcommand("sim-config", "Write the default simulator configuration (JSON)");
   cfg->add_option("--out", *path, "Output file")->required();
   cfg->callback([path] {
-    std::ofstream out(*path);
-    if (!out) throw std::runtime_error(*path + ": cannot open for writing");
-    out << sim::simConfigToJson(sim::SimConfig{}) << "\n";
+    writeTextFile(*path, sim::simConfigToJson(sim::SimConfig{}) + "\n", "simulator configuration");
   });
 }
 

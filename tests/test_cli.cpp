@@ -104,6 +104,11 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   const std::string printed = slurp(file("stdout.txt"));
   EXPECT_NE(printed.find("measured std"), std::string::npos) << printed;
   EXPECT_NE(slurp(file("pred.csv")).find("bend_deg_k40"), std::string::npos);
+  // An output that cannot be written is an error that names it, not a silent loss.
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --json " +
+                file("no_such_dir/fits.json")),
+            1);
+  EXPECT_NE(err_.find("no_such_dir/fits.json: cannot write the fits file"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {

@@ -261,11 +261,7 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
 }
 
 void saveModel(const std::string& path, const DioPwlObfModel& model) {
-  const std::string text = modelToJson(model);
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  out << text << "\n";
-  if (!out) throw std::runtime_error(path + ": write failed");
+  writeTextFile(path, modelToJson(model) + "\n", "model file");
 }
 
 DioPwlObfModel loadModel(const std::string& path) {

@@ -1,5 +1,5 @@
-// Reading a whole text file for the set-up loaders (models, configs, maps),
-// with an error that names the file and what it was meant to be.
+// Whole text files in and out for the set-up loaders (models, configs, maps)
+// and the tools' outputs, with errors that name the file and what it is.
 #pragma once
 
 #include <fstream>
@@ -16,6 +16,15 @@ inline std::string readTextFile(const std::string& path, const std::string& what
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+/// Writes `text` to `path`; throws std::runtime_error "PATH: cannot write the
+/// WHAT" if the file cannot be opened or the write fails, so no output is lost unsaid.
+inline void writeTextFile(const std::string& path, const std::string& text, const std::string& what) {
+  std::ofstream out(path);
+  if (out) out << text;
+  if (out) out.flush();
+  if (!out) throw std::runtime_error(path + ": cannot write the " + what);
 }
 
 }  // namespace plsa

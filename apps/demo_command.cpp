@@ -96,6 +96,9 @@ void runDemo(const DemoOptions& opt) {
   const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});
   const ArxModel arx = ArxModel::fit({Ut}, {Yt}, 4, 4);
   saveModel(path("model.json"), model);
+  // The baselines that are DIO models too, so that `plsa validate` can re-score them.
+  saveModel(path("baseline_paper.json"), paper);
+  saveModel(path("baseline_global_linear.json"), linear);
 
   // 3. Validation on the joystick run.
   const std::vector<int> horizons = {40, 80};
@@ -219,7 +222,8 @@ void runDemo(const DemoOptions& opt) {
   html << "</pre></body></html>\n";
   writeTextFile(path("report.html"), html.str(), "HTML report");
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv} in %.1f s\n",
+  std::printf("\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv,\n"
+              "    baseline_paper.json, baseline_global_linear.json} in %.1f s\n",
               opt.out_dir.c_str(), secs);
 }
 

@@ -13,7 +13,7 @@ namespace plsa {
 
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
   require(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
-          "simulateModel: the yaw registration window must be finite and >= 0 s, got " +
+          "SimulationStart: the yaw registration window must be finite and >= 0 s, got " +
               std::to_string(start.yaw_registration_s));
   if (model.output_level.empty() || model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0)
     return 0;

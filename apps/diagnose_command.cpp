@@ -44,7 +44,8 @@ void runDiagnose(DiagnoseArgs& a) {
   const auto dir = std::filesystem::path(a.out);
   writeTextFile((dir / "diagnosis.json").string(), diagnose::toJson(d), "diagnosis");
   writeTextFile((dir / "report.html").string(), diagnose::reportHtml(d), "HTML report");
-  writeTextFile((dir / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config), "calibrated simulator configuration");
+  writeTextFile((dir / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config),
+                "calibrated simulator configuration");
   std::printf("%s\n", d.verdict.c_str());
   std::printf("where (held out, after nominal calibration):\n");
   for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());

@@ -143,7 +143,8 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
     EXPECT_EQ(html.find(external), std::string::npos) << "the report loads " << external;
   // plsa's model and the global linear baseline, re-scored by validate with
   // the same start (yaw registered on 5 s, scored after): the same simulation fits.
-  for (const auto& [name, model] : {std::pair<std::string, std::string>{plsa, "model.json"}, {global, "baseline_global_linear.json"}}) {
+  using NamedFile = std::pair<std::string, std::string>;
+  for (const auto& [name, model] : {NamedFile{plsa, "model.json"}, NamedFile{global, "baseline_global_linear.json"}}) {
     ASSERT_EQ(run("validate --model " + file("demo/" + model) + " --log " + file("demo/validate_joystick.csv") +
                   " --horizons 40,80 --json " + file("v.json")),
               0)

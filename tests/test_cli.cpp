@@ -162,6 +162,13 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
 }
 
 TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
+  // A full disk is an error that names the file, for logs and for whole-text outputs.
+  if (fs::exists("/dev/full")) {
+    EXPECT_EQ(run("simulate --experiment joystick --duration 1 --seed 1 --out /dev/full"), 1);
+    EXPECT_NE(err_.find("/dev/full: write failed"), std::string::npos) << err_;
+    EXPECT_EQ(run("sim-config --out /dev/full"), 1);
+    EXPECT_NE(err_.find("/dev/full: cannot write the simulator configuration"), std::string::npos) << err_;
+  }
   std::ofstream(file("bad.csv")) << "time_s,p_1\n0,0.1\n0.0125,oops\n";
   EXPECT_EQ(run("identify --log " + file("bad.csv") + " --inputs p_1 --outputs p_1 --out " + file("m.json")), 1);
   EXPECT_NE(err_.find("bad.csv:3: column 'p_1': 'oops' is not a number"), std::string::npos) << err_;

@@ -155,6 +155,7 @@ void writeCsvLog(const std::string& path, const Log& log) {
     for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << shortest(log.data(r, c));
     out << '\n';
   }
+  out.flush();  // a buffered write can fail here, after the last insertion (as writeTextFile)
   if (!out) throw std::runtime_error(path + ": write failed");
 }
 

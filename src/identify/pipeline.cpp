@@ -18,7 +18,11 @@ namespace {
 // the model's level is referenced to: no yaw to register.
 constexpr SimulationStart kSameSession{0};
 
-std::string fmtPoles(const std::vector<std::complex<double>>& p) {
+// Printed in ascending order (the clustering returns centres in no particular order).
+std::string fmtPoles(std::vector<std::complex<double>> p) {
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) {
+    return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag();
+  });
   std::ostringstream s;
   s.precision(4);
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -155,6 +159,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   for (const auto& pp : rep.pairs)
     if (!pp.identified.empty()) needs_windows[static_cast<std::size_t>(pp.output)] = false;
   rep.used_windows = std::find(needs_windows.begin(), needs_windows.end(), true) != needs_windows.end();
+  rep.staircase = std::find(needs_windows.begin(), needs_windows.end(), false) != needs_windows.end();
+  rep.window_outputs.clear();
+  for (int out_i = 0; out_i < no; ++out_i)
+    if (needs_windows[static_cast<std::size_t>(out_i)]) rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
   if (rep.used_windows) {
     for (auto& pp : rep.pairs)
       if (needs_windows[static_cast<std::size_t>(pp.output)]) {
@@ -196,9 +204,18 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     usable += static_cast<int>(pp.identified.size());
     rejected += pp.rejected;
   }
-  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" +
-      (rep.used_windows ? " (no usable step responses: local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)" : "") +
-      ", " + std::to_string(usable) + " poles kept, " + std::to_string(rejected) + " fits rejected (unstable or badly determined)");
+  std::string windows_note;
+  if (rep.used_windows) {
+    windows_note = " (no usable step responses";
+    if (rep.staircase) {
+      windows_note += " for";
+      for (const auto& name : rep.window_outputs) windows_note += " " + name;
+    }
+    windows_note += ": local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)";
+  }
+  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windows_note + ", " +
+      std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
+      " fits rejected (unstable, badly determined or too small for the noise)");
 
   // Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
   DioPwlObfModel model;
@@ -250,7 +267,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // A designed staircase holds a few reference levels; measured data that
   // merely pauses holds hundreds: that is no grid, use quantiles instead.
   constexpr std::size_t kMaxDesignedLevels = 8;
-  bool designed = !rep.used_windows;
+  // One output too weak for its step fits does not make the staircase less designed.
+  bool designed = rep.staircase;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
   require(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "input" ||
               o.scheduling == "auto",

@@ -123,7 +123,11 @@ struct IdentifyReport {
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
   OutputDrift output_drift;     ///< the drift estimated on all training logs (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
-  bool used_windows = false;  ///< no staircase: poles from local windows
+  bool used_windows = false;  ///< some output's poles came from local windows (see window_outputs)
+  std::vector<std::string> window_outputs;  ///< outputs without a usable step response, fitted on windows
+  /// The logs hold a staircase: some output's poles came from its steps, so the
+  /// partition follows the reference levels (if few) rather than quantiles.
+  bool staircase = false;
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;
   std::vector<std::string> lines;  ///< everything the progress callback saw

@@ -961,6 +961,33 @@ TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
   expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
 }
 
+// A run logged at another rate, with a gap, or scored twice at one horizon is
+// named, not scored on the wrong time scale.
+TEST(Validation, RejectsAnotherSampleRateAGapAndARepeatedHorizon) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel m = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
+  ASSERT_NO_THROW(validateModel(m, runs.val, {40}));
+  const int time = runs.val.columnIndex("time_s");
+  io::Log faster = runs.val;
+  faster.data.col(time) *= 0.8;  // 100 Hz
+  expectThrowContaining([&] { validateModel(m, faster, {40}); }, "differs from the model's 0.0125");
+  io::Log nearly = runs.val;
+  nearly.data.col(time) *= 1.01;  // within the 2% a clock may be off
+  EXPECT_NO_THROW(validateModel(m, nearly, {40}));
+  io::Log gap = runs.val;
+  gap.data.col(time).tail(gap.samples() - 1000).array() += 3 * m.sample_time_s;  // three samples lost
+  try {
+    validateModel(m, gap, {40});
+    ADD_FAILURE() << "accepted a log with three samples lost";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("time gap of 0.05 s before data row 1001"), std::string::npos) << e.what();
+  }
+  io::Log dropped = runs.val;
+  dropped.data.col(time).tail(dropped.samples() - 1000).array() += m.sample_time_s;  // one, as the real arm's logs have
+  EXPECT_NO_THROW(validateModel(m, dropped, {40}));
+  expectThrowContaining([&] { validateModel(m, runs.val, {40, 80, 40}); }, "horizon 40 is given twice");
+}
+
 TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const DriftRuns runs = yawDriftRuns(0.0);
   const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -133,6 +134,17 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start) {
   require(!horizons.empty(), "validate: no horizons given");
+  for (std::size_t i = 0; i < horizons.size(); ++i)
+    require(std::find(horizons.begin(), horizons.begin() + static_cast<long>(i), horizons[i]) ==
+                horizons.begin() + static_cast<long>(i),
+            "validate: horizon " + std::to_string(horizons[i]) + " is given twice");
+  // A log at another rate would be scored on the wrong time scale without a word.
+  if (log.hasColumn("time_s")) {
+    const double dt = io::checkedSampleTime(log, "time_s", kValidationMaxGapFactor);
+    if (std::abs(dt - model.sample_time_s) > 0.02 * model.sample_time_s)
+      throw std::invalid_argument(log.source + ": sample time " + std::to_string(dt) + " s differs from the model's " +
+                                  std::to_string(model.sample_time_s) + " s; resample the log or identify at its rate");
+  }
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);

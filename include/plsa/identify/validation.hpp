@@ -87,8 +87,13 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start = {});
 
-/// Throws naming the missing column, the bad horizon or a registration window
-/// as long as the log.
+/// Sample-time gaps a validation log may have, in median sample times (as
+/// identification tolerates: a dropped sample or two).
+inline constexpr double kValidationMaxGapFactor = 2.5;
+
+/// Throws naming the missing column, the bad or repeated horizon, a registration
+/// window as long as the log, a time gap, or a sample time (from `time_s`, when
+/// the log has it) 2% or more off the model's.
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start = {});
 

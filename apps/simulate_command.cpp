@@ -29,17 +29,33 @@ void runSimulate(const SimulateOptions& o) {
     if (o.experiment == "joystick") {
       eo.joystick_duration_s = o.duration_s;
     } else {
-      // Spread the duration over the levels of the staircase or grid.
-      const sim::Experiment probe = sim::makeExperiment(o.experiment, eo);
-      const double levels = (probe.commands.rows() / eo.sample_rate_hz - eo.initial_rest_s) / eo.hold_s;
-      eo.hold_s = (o.duration_s - eo.initial_rest_s) / levels;
-      if (eo.hold_s <= 0) throw std::invalid_argument("--duration is too short for this experiment");
+      // Spread the duration over the levels of the staircase or grid: the
+      // recorded time is a fixed part (rest, first level) plus one hold per level.
+      auto recorded = [&](double hold_s) {
+        sim::ExperimentOptions probe = eo;
+        probe.hold_s = hold_s;
+        const sim::Experiment e = sim::makeExperiment(o.experiment, probe);
+        return static_cast<double>(e.commands.rows() - e.record_from) / eo.sample_rate_hz;
+      };
+      const double levels = (recorded(2 * eo.hold_s) - recorded(eo.hold_s)) / eo.hold_s;
+      const double fixed_s = recorded(eo.hold_s) - levels * eo.hold_s;
+      eo.hold_s = (o.duration_s - fixed_s) / levels;
+      if (eo.hold_s < 1.0 / eo.sample_rate_hz)
+        throw std::invalid_argument("--duration " + std::to_string(o.duration_s) + " s is too short for " + o.experiment +
+                                    ": it records " + std::to_string(fixed_s) + " s before its first step");
     }
   }
   const sim::Experiment ex = sim::makeExperiment(o.experiment, eo);
-  std::fprintf(stderr, "plsa simulate: %s, %.1f s at %.0f Hz (hold %.2f s per level), seed %llu\n",
-               ex.name.c_str(), ex.commands.rows() / eo.sample_rate_hz, eo.sample_rate_hz, eo.hold_s,
-               static_cast<unsigned long long>(o.seed));
+  // What is recorded, then the pre-roll that is simulated but not written.
+  const double recorded_s = static_cast<double>(ex.commands.rows() - ex.record_from) / eo.sample_rate_hz;
+  const double preroll_s = static_cast<double>(ex.record_from) / eo.sample_rate_hz;
+  char shape[64];
+  if (o.experiment == "joystick")
+    std::snprintf(shape, sizeof shape, "bandwidth %.2f Hz", eo.joystick_bandwidth_hz);
+  else
+    std::snprintf(shape, sizeof shape, "hold %.2f s per level", eo.hold_s);
+  std::fprintf(stderr, "plsa simulate: %s, %.1f s recorded at %.0f Hz after a %.1f s pre-roll (%s), seed %llu\n",
+               ex.name.c_str(), recorded_s, eo.sample_rate_hz, preroll_s, shape, static_cast<unsigned long long>(o.seed));
   sim::Actuator actuator(config, o.seed);
   io::Log log = sim::runExperiment(actuator, ex);
   log.metadata["seed"] = std::to_string(o.seed);
@@ -61,7 +77,7 @@ void addSimulateCommands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--experiment", o->experiment, "staircase1, grid2 or joystick")
       ->check(CLI::IsMember({"staircase1", "grid2", "joystick"}));
-  cmd->add_option("--duration", o->duration_s, "Total duration in seconds (default: the design's own)")
+  cmd->add_option("--duration", o->duration_s, "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s held at the start)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file");
   cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log")->required();

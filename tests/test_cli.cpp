@@ -54,6 +54,26 @@ TEST_F(Cli, SimulateIsDeterministicPerSeed) {
   EXPECT_GT(fs::file_size(file("s.lcmlog")), 1000u);
 }
 
+// --duration is what the log holds: the unrecorded pre-roll is not counted,
+// and too short a duration is refused by name.
+TEST_F(Cli, SimulateRecordsTheDurationAsked) {
+  const auto samples = [&](const std::string& path) {
+    std::istringstream in(slurp(path));
+    int rows = 0;
+    for (std::string l; std::getline(in, l);) rows += !l.empty() && l[0] != '#';
+    return rows - 1;  // the header
+  };
+  for (const std::string e : {"grid2", "staircase1"}) {
+    ASSERT_EQ(run("simulate --experiment " + e + " --duration 100 --out " + file(e + ".csv")), 0) << err_;
+    EXPECT_NEAR(samples(file(e + ".csv")), 8000, 40) << e;  // a hold rounds to whole samples
+    EXPECT_NE(err_.find(e + ", 100.0 s recorded at 80 Hz"), std::string::npos) << err_;
+  }
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --out " + file("j.csv")), 0) << err_;
+  EXPECT_EQ(samples(file("j.csv")), 1680);  // 1 s held at the start, then 20 s moving
+  EXPECT_EQ(run("simulate --experiment grid2 --duration 1 --out " + file("short.csv")), 1);
+  EXPECT_NE(err_.find("too short for grid2"), std::string::npos) << err_;
+}
+
 TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
   ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;

@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "comparison.hpp"
+#include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"
@@ -29,17 +30,15 @@ struct CrossvalArgs {
 };
 
 void runCrossval(CrossvalArgs& a) {
-  std::vector<std::string> files;
-  for (const auto& p : a.logs) {
-    if (fs::is_directory(p)) {
-      for (const auto& e : fs::directory_iterator(p))
-        if (e.path().extension() == ".csv" || e.path().extension() == ".lcmlog") files.push_back(e.path().string());
-    } else {
-      files.push_back(p);
-    }
-  }
+  std::vector<std::string> files = logPaths(a.logs, "crossval", true);
   std::sort(files.begin(), files.end());
   if (files.size() < 2) throw std::invalid_argument("crossval: need at least two logs (or a folder of them)");
+  requireHorizons(a.horizons, "crossval");
+  // Folds are named by file stem; two files of one stem would share a row and a JSON entry.
+  std::vector<std::string> fold_names;
+  for (const auto& f : files) fold_names.push_back(fs::path(f).stem().string());
+  for (std::size_t i = 0; i < files.size(); ++i)
+    if (std::count(fold_names.begin(), fold_names.end(), fold_names[i]) > 1) fold_names[i] = files[i];
   io::CsvReadOptions ro;
   ro.required = a.inputs;
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
@@ -75,7 +74,7 @@ void runCrossval(CrossvalArgs& a) {
     const std::vector<ModelPredictions> preds = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
                                                  predictArx("ARX", arx, uv, yv, a.horizons)};
     const auto scores = commonScores(preds, yv);
-    const std::string name = fs::path(files[hold]).stem().string();
+    const std::string& name = fold_names[hold];
     if (report.drift_taken_out) {
       std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
       for (std::size_t out = 0; out < a.outputs.size(); ++out) {

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/identify/validation.hpp"
@@ -39,7 +40,7 @@ std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::
   io::CsvReadOptions ro;
   ro.required = required;
   std::vector<io::Log> logs;
-  for (const auto& p : paths) logs.push_back(lcm::readLogFile(p, ro));
+  for (const auto& p : logPaths(paths, "identify", false)) logs.push_back(lcm::readLogFile(p, ro));
   return logs;
 }
 

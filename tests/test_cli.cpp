@@ -181,6 +181,31 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   EXPECT_EQ(nlohmann::json::parse(slurp(file("demo/baseline_paper.json")))["partition"]["scheduling"], "switched");
 }
 
+// A log given twice would be trained and scored on itself (crossval) or
+// weigh double (identify); a repeated horizon was averaged twice into the
+// means (crossval printed fits near 200%). Each is refused by name.
+TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
+  fs::create_directories(file("runs"));
+  for (const std::string seed : {"1", "2"})
+    ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed " + seed + " --out " + file("runs/j" + seed + ".csv")),
+              0)
+        << err_;
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --log " + file("runs/j1.csv")), 1);
+  EXPECT_NE(err_.find("crossval: " + file("runs/j1.csv") + " is given twice"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("runs/j1.csv") + " --log " + file("runs/../runs/j1.csv") + " --out " +
+                file("m.json")),
+            1);
+  EXPECT_NE(err_.find("is given twice (also as " + file("runs/j1.csv") + ")"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("m.json")));
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,12,1"), 1);
+  EXPECT_NE(err_.find("crossval: horizon 1 is given twice"), std::string::npos) << err_;
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 0"), 1);
+  EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
+  fs::create_directories(file("empty"));
+  EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
+  EXPECT_NE(err_.find("empty: no .csv or .lcmlog logs in this folder"), std::string::npos) << err_;
+}
+
 TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
   // A full disk is an error that names the file, for logs and for whole-text outputs.
   if (fs::exists("/dev/full")) {

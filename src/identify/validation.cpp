@@ -131,13 +131,19 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
   return out;
 }
 
-ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
-                               const SimulationStart& start) {
-  require(!horizons.empty(), "validate: no horizons given");
-  for (std::size_t i = 0; i < horizons.size(); ++i)
+void requireHorizons(const std::vector<int>& horizons, const std::string& tool) {
+  require(!horizons.empty(), tool + ": no horizons given");
+  for (std::size_t i = 0; i < horizons.size(); ++i) {
+    require(horizons[i] >= 1, tool + ": horizons must be >= 1, got " + std::to_string(horizons[i]));
     require(std::find(horizons.begin(), horizons.begin() + static_cast<long>(i), horizons[i]) ==
                 horizons.begin() + static_cast<long>(i),
-            "validate: horizon " + std::to_string(horizons[i]) + " is given twice");
+            tool + ": horizon " + std::to_string(horizons[i]) + " is given twice");
+  }
+}
+
+ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
+                               const SimulationStart& start) {
+  requireHorizons(horizons, "validate");
   // A log at another rate would be scored on the wrong time scale without a word.
   if (log.hasColumn("time_s")) {
     const double dt = io::checkedSampleTime(log, "time_s", kValidationMaxGapFactor);

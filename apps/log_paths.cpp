@@ -1,0 +1,41 @@
+#include "log_paths.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
+
+namespace plsa::app {
+
+std::vector<std::string> logPaths(const std::vector<std::string>& paths, const std::string& tool, bool folders) {
+  std::vector<std::string> files;
+  for (const auto& p : paths) {
+    if (folders && fs::is_directory(p)) {
+      std::vector<std::string> in;
+      for (const auto& e : fs::directory_iterator(p))
+        if (e.is_regular_file() && (e.path().extension() == ".csv" || e.path().extension() == ".lcmlog"))
+          in.push_back(e.path().string());
+      if (in.empty()) throw std::invalid_argument(tool + ": " + p + ": no .csv or .lcmlog logs in this folder");
+      std::sort(in.begin(), in.end());
+      files.insert(files.end(), in.begin(), in.end());
+    } else if (fs::is_regular_file(p) || fs::is_fifo(p)) {
+      files.push_back(p);
+    } else {
+      throw std::invalid_argument(tool + ": " + p + (fs::exists(p) ? ": not a log file" : ": no such file") +
+                                  (folders ? " or folder" : ""));
+    }
+  }
+  std::map<fs::path, std::string> seen;
+  for (const auto& f : files) {
+    const auto [at, fresh] = seen.emplace(fs::weakly_canonical(f), f);
+    if (!fresh)
+      throw std::invalid_argument(tool + ": " + f + " is given twice" +
+                                  (at->second == f ? std::string() : " (also as " + at->second + ")") +
+                                  "; each log may appear once");
+  }
+  return files;
+}
+
+}  // namespace plsa::app

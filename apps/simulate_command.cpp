@@ -41,8 +41,9 @@ void runSimulate(const SimulateOptions& o) {
       const double fixed_s = recorded(eo.hold_s) - levels * eo.hold_s;
       eo.hold_s = (o.duration_s - fixed_s) / levels;
       if (eo.hold_s < 1.0 / eo.sample_rate_hz)
-        throw std::invalid_argument("--duration " + std::to_string(o.duration_s) + " s is too short for " + o.experiment +
-                                    ": it records " + std::to_string(fixed_s) + " s before its first step");
+        throw std::invalid_argument("--duration " + std::to_string(o.duration_s) + " s is too short for " +
+                                    o.experiment + ": it records " + std::to_string(fixed_s) +
+                                    " s before its first step");
     }
   }
   const sim::Experiment ex = sim::makeExperiment(o.experiment, eo);
@@ -55,7 +56,8 @@ void runSimulate(const SimulateOptions& o) {
   else
     std::snprintf(shape, sizeof shape, "hold %.2f s per level", eo.hold_s);
   std::fprintf(stderr, "plsa simulate: %s, %.1f s recorded at %.0f Hz after a %.1f s pre-roll (%s), seed %llu\n",
-               ex.name.c_str(), recorded_s, eo.sample_rate_hz, preroll_s, shape, static_cast<unsigned long long>(o.seed));
+               ex.name.c_str(), recorded_s, eo.sample_rate_hz, preroll_s, shape,
+               static_cast<unsigned long long>(o.seed));
   sim::Actuator actuator(config, o.seed);
   io::Log log = sim::runExperiment(actuator, ex);
   log.metadata["seed"] = std::to_string(o.seed);
@@ -77,7 +79,9 @@ void addSimulateCommands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--experiment", o->experiment, "staircase1, grid2 or joystick")
       ->check(CLI::IsMember({"staircase1", "grid2", "joystick"}));
-  cmd->add_option("--duration", o->duration_s, "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s held at the start)")
+  cmd->add_option("--duration", o->duration_s,
+                  "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s "
+                  "held at the start)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file");
   cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log")->required();

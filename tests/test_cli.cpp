@@ -187,7 +187,8 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
 TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   fs::create_directories(file("runs"));
   for (const std::string seed : {"1", "2"})
-    ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed " + seed + " --out " + file("runs/j" + seed + ".csv")),
+    ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed " + seed + " --out " +
+                  file("runs/j" + seed + ".csv")),
               0)
         << err_;
   EXPECT_EQ(run("crossval --log " + file("runs") + " --log " + file("runs/j1.csv")), 1);

@@ -162,7 +162,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   rep.staircase = std::find(needs_windows.begin(), needs_windows.end(), false) != needs_windows.end();
   rep.window_outputs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
-    if (needs_windows[static_cast<std::size_t>(out_i)]) rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
+    if (needs_windows[static_cast<std::size_t>(out_i)])
+      rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
   if (rep.used_windows) {
     for (auto& pp : rep.pairs)
       if (needs_windows[static_cast<std::size_t>(pp.output)]) {

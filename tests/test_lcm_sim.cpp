@@ -21,6 +21,7 @@
 #include "plsa/eval/fit.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"
+#include "plsa/lcm/predictor_node.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -179,6 +180,28 @@ TEST_F(LcmSimTest, RealTimeModePublishesEverySampleAndStaysVentedWithoutCommands
 // plsa sim and plsa predict as separate processes: the published 40-step
 // predictions match an in-process predictor exactly and track what the
 // simulator later does.
+// A negative horizon sized a trajectory from it (a length error, not a
+// message); a repeated one was published twice. Both are refused before LCM opens.
+TEST(PredictorNode, RefusesABadOrRepeatedHorizonByName) {
+  const std::atomic<bool> stop{true};
+  const plsa::DioPwlObfModel model;
+  const auto expectRefusal = [&](std::vector<int> horizons, const std::string& words) {
+    plsa::lcm::PredictorNodeOptions o;
+    o.url = "udpm://239.255.76.67:7667?ttl=0";
+    o.horizons = std::move(horizons);
+    try {
+      plsa::lcm::runPredictorNode(model, o, stop);
+      ADD_FAILURE() << "accepted; expected '" << words << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  expectRefusal({-5, 40}, "horizons must be >= 1, got -5");
+  expectRefusal({0}, "horizons must be >= 1, got 0");
+  expectRefusal({40, 80, 40}, "horizon 40 is given twice");
+  expectRefusal({}, "no horizons");
+}
+
 TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   // A model of the default simulator, identified here.
   plsa::sim::ExperimentOptions eo;

@@ -11,6 +11,7 @@
 #include <plsa_lcm/prediction_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include "plsa/core/check.hpp"
 #include "plsa/predict/predictor.hpp"
 
 namespace plsa::lcm {
@@ -160,6 +161,14 @@ class PredictorNode {
 
 PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,
                                     const std::atomic<bool>& stop) {
+  // Before LCM is opened: a negative horizon would size a trajectory from it.
+  require(!options.horizons.empty(), "plsa predict: no horizons");
+  for (std::size_t i = 0; i < options.horizons.size(); ++i) {
+    const int h = options.horizons[i];
+    require(h >= 1, "plsa predict: horizons must be >= 1, got " + std::to_string(h));
+    require(std::count(options.horizons.begin(), options.horizons.begin() + static_cast<long>(i), h) == 0,
+            "plsa predict: horizon " + std::to_string(h) + " is given twice");
+  }
   PredictorNode node(model, options, stop);
   return node.run();
 }

@@ -26,7 +26,8 @@ struct PredictorNodeStats {
   std::int64_t rejected = 0;
 };
 
-/// Runs until `stop` is set. Throws std::invalid_argument if the model's
+/// Runs until `stop` is set. Throws std::invalid_argument for a horizon below 1
+/// or given twice (before LCM is opened), if the model's
 /// columns cannot be read from actuator-state messages (p_i, cmd_i,
 /// bend_deg, steer_deg), std::runtime_error if LCM cannot be set up.
 PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,

@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "comparison.hpp"
 #include "log_paths.hpp"
+#include "plsa/core/check.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"

@@ -131,16 +131,6 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
   return out;
 }
 
-void requireHorizons(const std::vector<int>& horizons, const std::string& tool) {
-  require(!horizons.empty(), tool + ": no horizons given");
-  for (std::size_t i = 0; i < horizons.size(); ++i) {
-    require(horizons[i] >= 1, tool + ": horizons must be >= 1, got " + std::to_string(horizons[i]));
-    require(std::find(horizons.begin(), horizons.begin() + static_cast<long>(i), horizons[i]) ==
-                horizons.begin() + static_cast<long>(i),
-            tool + ": horizon " + std::to_string(horizons[i]) + " is given twice");
-  }
-}
-
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start) {
   requireHorizons(horizons, "validate");

@@ -92,11 +92,10 @@ class PredictorNode {
   }
 
  private:
+  // runPredictorNode has checked the horizons.
   static PredictorOptions options(const PredictorNodeOptions& o) {
-    require(!o.horizons.empty(), "plsa predict: no horizons");
     PredictorOptions p;
     p.max_horizon = *std::max_element(o.horizons.begin(), o.horizons.end());
-    require(p.max_horizon >= 1, "plsa predict: horizons must be >= 1");
     return p;
   }
 
@@ -162,13 +161,7 @@ class PredictorNode {
 PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,
                                     const std::atomic<bool>& stop) {
   // Before LCM is opened: a negative horizon would size a trajectory from it.
-  require(!options.horizons.empty(), "plsa predict: no horizons");
-  for (std::size_t i = 0; i < options.horizons.size(); ++i) {
-    const int h = options.horizons[i];
-    require(h >= 1, "plsa predict: horizons must be >= 1, got " + std::to_string(h));
-    require(std::count(options.horizons.begin(), options.horizons.begin() + static_cast<long>(i), h) == 0,
-            "plsa predict: horizon " + std::to_string(h) + " is given twice");
-  }
+  requireHorizons(options.horizons, "plsa predict");
   PredictorNode node(model, options, stop);
   return node.run();
 }

@@ -87,10 +87,6 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start = {});
 
-/// Throws std::invalid_argument naming the tool unless the horizons are
-/// given, each >= 1 and each once (a repeat would be scored, and averaged, twice).
-void requireHorizons(const std::vector<int>& horizons, const std::string& tool);
-
 /// Sample-time gaps a validation log may have, in median sample times (as
 /// identification tolerates: a dropped sample or two).
 inline constexpr double kValidationMaxGapFactor = 2.5;

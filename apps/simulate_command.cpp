@@ -37,8 +37,9 @@ void runSimulate(const SimulateOptions& o) {
         const sim::Experiment e = sim::makeExperiment(o.experiment, probe);
         return static_cast<double>(e.commands.rows() - e.record_from) / eo.sample_rate_hz;
       };
-      const double levels = (recorded(2 * eo.hold_s) - recorded(eo.hold_s)) / eo.hold_s;
-      const double fixed_s = recorded(eo.hold_s) - levels * eo.hold_s;
+      const double at_hold = recorded(eo.hold_s);
+      const double levels = (recorded(2 * eo.hold_s) - at_hold) / eo.hold_s;
+      const double fixed_s = at_hold - levels * eo.hold_s;
       eo.hold_s = (o.duration_s - fixed_s) / levels;
       if (eo.hold_s < 1.0 / eo.sample_rate_hz)
         throw std::invalid_argument("--duration " + std::to_string(o.duration_s) + " s is too short for " +

@@ -107,7 +107,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   for (const auto& log : logs) {
     const double t = io::checkedSampleTime(log, "time_s", o.max_gap_factor);
     if (dt == 0.0) dt = t;
-    if (std::abs(t - dt) > 0.02 * dt)
+    if (!io::sameSampleTime(t, dt))
       throw std::invalid_argument(log.source + ": sample time " + std::to_string(t) + " s differs from the first log's " +
                                   std::to_string(dt) + " s");
     U.push_back(log.columnsOf(o.inputs));
@@ -158,12 +158,12 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   std::vector<bool> needs_windows(static_cast<std::size_t>(no), true);
   for (const auto& pp : rep.pairs)
     if (!pp.identified.empty()) needs_windows[static_cast<std::size_t>(pp.output)] = false;
-  rep.used_windows = std::find(needs_windows.begin(), needs_windows.end(), true) != needs_windows.end();
-  rep.staircase = std::find(needs_windows.begin(), needs_windows.end(), false) != needs_windows.end();
   rep.window_outputs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
     if (needs_windows[static_cast<std::size_t>(out_i)])
       rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
+  rep.used_windows = !rep.window_outputs.empty();
+  rep.staircase = rep.window_outputs.size() < o.outputs.size();
   if (rep.used_windows) {
     for (auto& pp : rep.pairs)
       if (needs_windows[static_cast<std::size_t>(pp.output)]) {

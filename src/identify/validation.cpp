@@ -136,8 +136,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   requireHorizons(horizons, "validate");
   // A log at another rate would be scored on the wrong time scale without a word.
   if (log.hasColumn("time_s")) {
-    const double dt = io::checkedSampleTime(log, "time_s", kValidationMaxGapFactor);
-    if (std::abs(dt - model.sample_time_s) > 0.02 * model.sample_time_s)
+    const double dt = io::checkedSampleTime(log, "time_s", io::kToleratedGapFactor);
+    if (!io::sameSampleTime(dt, model.sample_time_s))
       throw std::invalid_argument(log.source + ": sample time " + std::to_string(dt) + " s differs from the model's " +
                                   std::to_string(model.sample_time_s) + " s; resample the log or identify at its rate");
   }

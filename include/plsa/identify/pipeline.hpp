@@ -36,7 +36,7 @@ struct IdentifyOptions {
   /// blocked cross-validation; input side only without a direction split).
   std::string scheduling = "auto";
   double step_threshold = 0.005;  ///< a reference change above this is a step
-  double max_gap_factor = 2.5;    ///< tolerated sample-time gap (dropped samples)
+  double max_gap_factor = io::kToleratedGapFactor;  ///< tolerated sample-time gap (dropped samples)
   double window_s = 8.0;          ///< local windows when the log has no steps
   CoefficientFitOptions coefficients;
   /// Hysteresis memory: candidate sets of play channels. A channel's width is

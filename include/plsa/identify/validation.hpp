@@ -87,10 +87,6 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start = {});
 
-/// Sample-time gaps a validation log may have, in median sample times (as
-/// identification tolerates: a dropped sample or two).
-inline constexpr double kValidationMaxGapFactor = 2.5;
-
 /// Throws naming the missing column, the bad or repeated horizon, a registration
 /// window as long as the log, a time gap, or a sample time (from `time_s`, when
 /// the log has it) 2% or more off the model's.

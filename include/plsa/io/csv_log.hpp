@@ -3,6 +3,7 @@
 // files with the file, line and reason; nothing is silently skipped or filled.
 #pragma once
 
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -48,5 +49,15 @@ void writeCsvLog(const std::string& path, const Log& log);
 /// `max_gap_factor` times the median, naming the row and the gap.
 double checkedSampleTime(const Log& log, const std::string& time_column = "time_s",
                          double max_gap_factor = 1.5);
+
+/// The gap identification and validation tolerate, in sample times: a
+/// dropped sample or two, as the real arm's logs have.
+inline constexpr double kToleratedGapFactor = 2.5;
+
+/// Whether a log's sample time matches a reference one: within 2%, a clock's
+/// error, not another rate.
+inline bool sameSampleTime(double sample_time_s, double reference_s) {
+  return std::abs(sample_time_s - reference_s) <= 0.02 * reference_s;
+}
 
 }  // namespace plsa::io

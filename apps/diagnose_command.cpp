@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
@@ -32,7 +33,7 @@ void runDiagnose(DiagnoseArgs& a) {
   a.columns.pressures = a.pressures.size() == 1 && a.pressures[0] == "none" ? std::vector<std::string>{} : a.pressures;
   a.options.calibration.gap.map = a.columns.map;
   std::vector<diagnose::RunData> runs;
-  for (const auto& path : a.real) {
+  for (const auto& path : logPaths(a.real, "diagnose", false)) {
     io::CsvReadOptions ro;
     ro.required = a.columns.inputs;
     ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());

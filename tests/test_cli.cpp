@@ -293,6 +293,12 @@ TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
   }
   EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("psi.csv") + " --out " + file("d2")), 1);
   EXPECT_NE(err_.find("check --input-scale"), std::string::npos) << err_;
+  // One run twice would be both trained and held out on.
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
+                " --real " + file("a.csv") + " --out " + file("d3")),
+            1);
+  EXPECT_NE(err_.find("diagnose: " + file("a.csv") + " is given twice"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("d3")));
 }
 
 TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {

@@ -115,6 +115,16 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   DiagnoseOptions o = quick();
   o.candidates = {"friction"};
   EXPECT_THROW(runDiagnosis(allOff(), {recorded(allOff(), 20, 1)}, o), std::invalid_argument);
+  // One run twice, even under two names, would be its own held-out check.
+  RunData copy = recorded(allOff(), 20, 1);
+  copy.name = "copy_of_run1";
+  try {
+    runDiagnosis(allOff(), {recorded(allOff(), 20, 1), recorded(allOff(), 30, 2), copy}, quick());
+    ADD_FAILURE() << "a repeated run was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'run1' and 'copy_of_run1' hold the same samples"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {

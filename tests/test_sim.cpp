@@ -257,6 +257,10 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
   EXPECT_NE(error(R"({"deadzone": {"formulation": "round"}})").find("formulation 'round'"), std::string::npos);
   EXPECT_NE(error(R"({"bogus": {}})").find("unknown section 'bogus'"), std::string::npos);
   EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
+  // 0.75 p - 1 p^2 peaks at 0.375 bar, inside the 0.4 bar range; -0.9 peaks beyond it.
+  EXPECT_NE(error(R"({"elongation": {"quadratic": -1.0}})").find("stops rising at 0.375 bar"), std::string::npos);
+  EXPECT_EQ(error(R"({"elongation": {"quadratic": -0.9}})"), "accepted");
+  EXPECT_EQ(error(R"({"elongation": {"quadratic": -1.0}, "max_pressure_bar": 0.35})"), "accepted");
 }
 
 TEST(SimConfig, ParametersAreAddressableByModule) {

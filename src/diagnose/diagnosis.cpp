@@ -103,6 +103,13 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (runs.empty()) throw std::invalid_argument("diagnose: no real runs given");
+  // The same run twice would be held out and trained on: a held-out gap that holds nothing out.
+  for (std::size_t i = 0; i < runs.size(); ++i)
+    for (std::size_t j = i + 1; j < runs.size(); ++j)
+      if (runs[i].samples() == runs[j].samples() && runs[i].commands == runs[j].commands &&
+          runs[i].outputs == runs[j].outputs)
+        throw std::invalid_argument("diagnose: runs '" + runs[i].name + "' and '" + runs[j].name +
+                                    "' hold the same samples; each run may appear once");
   simulator.validate();
   std::vector<std::string> candidates = o.candidates;
   if (candidates.empty())

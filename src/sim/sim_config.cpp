@@ -148,6 +148,15 @@ void SimConfig::validate() const {
       throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " + list);
     }
   }
+  // A chamber that shortened under more pressure would bend the segment backwards: a typo, not a device.
+  const double a = elongation.strain_per_bar, q = elongation.quadratic;
+  if (a + 2.0 * q * max_pressure_bar <= 0.0) {
+    std::ostringstream msg;
+    msg << "sim config: elongation " << a << " p + " << q << " p^2 stops rising at " << -a / (2.0 * q)
+        << " bar, below max_pressure_bar = " << max_pressure_bar
+        << " (a chamber must lengthen with pressure up to the maximum)";
+    throw std::invalid_argument(msg.str());
+  }
   if (1.0 / sample_rate_hz < internal_step_s)
     throw std::invalid_argument("sim config: internal_step_s is longer than the sample period");
 }

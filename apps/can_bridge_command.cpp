@@ -20,7 +20,7 @@ void addCanBridgeCommand(CLI::App& app) {
   c->add_option("--profile", *profile, "Signal map (JSON; default: the built-in profile, docs/can.md)")
       ->check(CLI::ExistingFile);
   c->add_option("--url", o->url, "LCM URL (default: LCM_DEFAULT_URL)");
-  c->add_option("--rate", o->rate_hz, "Driver ticks and state messages per second")->check(CLI::PositiveNumber);
+  c->add_option("--rate", o->rate_hz, "Driver ticks and state messages per second (at most 1000)");
   c->add_option("--max-pressure", o->limits.max_pressure_bar, "Set-point clamp (bar)")->check(CLI::PositiveNumber);
   c->add_option("--max-rate", o->limits.max_rate_bar_per_s, "Set-point rate limit (bar/s)")->check(CLI::PositiveNumber);
   c->add_option("--sensor-timeout", o->limits.sensor_timeout_s, "Vent when no valid reading for this long (s)")
@@ -35,6 +35,7 @@ void addCanBridgeCommand(CLI::App& app) {
   c->add_option("--clear-channel", o->clear_channel, "Any message here clears a latched fault if its cause is gone");
   c->callback([o, iface, profile] {
     const can::SignalMap map = profile->empty() ? can::defaultSignalMap() : can::loadSignalMap(*profile);
+    lcm::checkCanBridgeOptions(*o, map);  // before the bus is opened
     std::vector<std::uint32_t> ids{map.message("pressure_sensor").id};
     if (const can::MessageLayout* tip = map.find("tip_angle")) ids.push_back(tip->id);
     auto transport = can::openTransport(*iface, ids);

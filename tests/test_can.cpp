@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "plsa/can/valve_driver.hpp"
 #include "plsa/testing/alloc_guard.hpp"
@@ -263,4 +264,34 @@ TEST_F(DriverTest, ShutdownVents) {
   driver.shutdown(0.31);
   EXPECT_EQ(driver.fault(), DriverFault::kShutdown);
   EXPECT_EQ(lastValveFrame(*valves, valve), (std::array<double, 3>{0, 0, 0}));
+}
+
+TEST(ValveDriverSetup, RefusesAClampTheSetPointSignalCannotCarry) {
+  auto bus = InProcessBus::create();
+  auto port = bus->connect();
+  const SignalMap map = defaultSignalMap();  // 16-bit unsigned at 1e-5 bar: 0 to 0.65535 bar
+  SafetyLimits limits;
+  limits.max_pressure_bar = 5.0;
+  try {
+    ValveDriver d(*port, map, limits, 0.0);
+    FAIL() << "a 5 bar clamp was accepted on a 0.65535 bar set-point signal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'setpoint_1'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("carries 0 to 0.65535 bar"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("clamp (5 bar)"), std::string::npos) << e.what();
+  }
+  limits.max_pressure_bar = 0.65;
+  EXPECT_NO_THROW(ValveDriver(*port, map, limits, 0.0));
+  // A signal whose range leaves out zero cannot vent.
+  SignalMap shifted = map;
+  for (auto& m : shifted.messages)
+    if (m.name == "valve_command") m.signals[1].offset = 0.1;
+  limits.max_pressure_bar = 0.4;
+  try {
+    ValveDriver d(*port, shifted, limits, 0.0);
+    FAIL() << "a set-point signal without 0 in its range was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'setpoint_2'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the vent (0)"), std::string::npos) << e.what();
+  }
 }

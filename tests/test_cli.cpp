@@ -315,3 +315,31 @@ TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {
   EXPECT_TRUE(j["cases"][2]["selected"].empty()) << "the null case claimed an effect";
   EXPECT_NE(slurp(file("stdout.txt")).find("confusion matrix"), std::string::npos);
 }
+
+TEST_F(Cli, CanBridgeRefusesOptionsTheBusCannotCarryBeforeOpeningIt) {
+  // memq:// keeps LCM in-process should a check ever let the bridge run.
+  const std::string base = "can-bridge --iface udp:7390:7391 --url memq:// --duration 0.2 ";
+  EXPECT_EQ(run(base + "--max-pressure 5"), 1);
+  EXPECT_NE(err_.find("signal 'setpoint_1' carries 0 to 0.65535 bar; the vent (0) and the set-point clamp (5 bar)"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(err_.find("clamp 5.000 bar"), std::string::npos) << "the bridge started: " << err_;
+  for (const std::string rate : {"1e6", "0", "-3", "nan"}) {
+    EXPECT_EQ(run(base + "--rate " + rate), 1) << rate;
+    EXPECT_NE(err_.find("--rate"), std::string::npos) << rate << ": " << err_;
+    EXPECT_NE(err_.find("is outside (0, 1000] Hz"), std::string::npos) << rate << ": " << err_;
+  }
+  // The same clamp on a profile with 1e-4 bar counts (0 to 6.5535 bar) is accepted and the bridge runs.
+  std::ofstream(file("wide.json")) << R"({"profile": "wide", "messages": [
+    {"name": "valve_command", "id": 256, "dlc": 8, "counter_byte": 6, "checksum_byte": 7, "signals": [
+      {"name": "s1", "byte": 0, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "s2", "byte": 2, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "s3", "byte": 4, "bits": 16, "endian": "little", "scale": 1e-4}]},
+    {"name": "pressure_sensor", "id": 512, "dlc": 8, "counter_byte": 6, "checksum_byte": 7, "signals": [
+      {"name": "p1", "byte": 0, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "p2", "byte": 2, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "p3", "byte": 4, "bits": 16, "endian": "little", "scale": 1e-4}]}]})";
+  EXPECT_EQ(run(base + "--max-pressure 5 --profile " + file("wide.json")), 0) << err_;
+  EXPECT_NE(err_.find("(profile wide)"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("clamp 5.000 bar"), std::string::npos) << err_;
+}

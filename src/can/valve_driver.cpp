@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace plsa::can {
@@ -18,6 +19,27 @@ const char* toString(DriverFault f) {
   return "unknown";
 }
 
+void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits) {
+  if (!(limits.max_pressure_bar > 0) || !(limits.max_rate_bar_per_s > 0) || !(limits.sensor_timeout_s > 0) ||
+      !(limits.command_timeout_s > 0))
+    throw std::invalid_argument("ValveDriver: every safety limit must be positive");
+  // A set-point the frame cannot carry is never sent: the valve would hold its last one instead.
+  for (const Signal& sig : map.message("valve_command").signals) {
+    MessageLayout one = map.message("valve_command");
+    one.signals = {sig};
+    CanFrame f;
+    const double vent = 0.0, top = limits.max_pressure_bar;
+    if (encodeFrame(one, &vent, 0, f) && encodeFrame(one, &top, 0, f)) continue;
+    const double raw_lo = sig.is_signed ? -std::ldexp(1.0, sig.bits - 1) : 0.0;
+    const double raw_hi = sig.is_signed ? std::ldexp(1.0, sig.bits - 1) - 1 : std::ldexp(1.0, sig.bits) - 1;
+    const double a = raw_lo * sig.scale + sig.offset, b = raw_hi * sig.scale + sig.offset;
+    std::ostringstream msg;
+    msg << "ValveDriver: valve_command signal '" << sig.name << "' carries " << std::min(a, b) << " to "
+        << std::max(a, b) << " bar; the vent (0) and the set-point clamp (" << top << " bar) must both fit it";
+    throw std::invalid_argument(msg.str());
+  }
+}
+
 ValveDriver::ValveDriver(CanTransport& transport, const SignalMap& map, const SafetyLimits& limits, double start_time_s)
     : transport_(transport),
       valve_(&map.message("valve_command")),
@@ -29,9 +51,7 @@ ValveDriver::ValveDriver(CanTransport& transport, const SignalMap& map, const Sa
     throw std::invalid_argument("ValveDriver: valve_command and pressure_sensor need three signals each");
   tip_ = map.find("tip_angle");
   if (tip_ && tip_->signals.size() != 2) throw std::invalid_argument("ValveDriver: tip_angle needs two signals (bend, steer)");
-  if (!(limits.max_pressure_bar > 0) || !(limits.max_rate_bar_per_s > 0) || !(limits.sensor_timeout_s > 0) ||
-      !(limits.command_timeout_s > 0))
-    throw std::invalid_argument("ValveDriver: every safety limit must be positive");
+  checkSafetyLimits(map, limits);
 }
 
 bool ValveDriver::command(double time_s, const std::array<double, 3>& setpoint) noexcept {

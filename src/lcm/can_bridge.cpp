@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <lcm/lcm-cpp.hpp>
 #include <plsa_lcm/actuator_state_t.hpp>
@@ -27,7 +29,6 @@ class CanBridge {
   CanBridge(const CanBridgeOptions& o, can::CanTransport& t, const can::SignalMap& map, const std::atomic<bool>& stop)
       : o_(o), transport_(t), stop_(stop), lcm_(o.url), start_(Clock::now()), driver_(t, map, o.limits, 0.0) {
     if (!lcm_.good()) throw std::runtime_error("plsa can-bridge: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
-    if (!(o.rate_hz > 0)) throw std::invalid_argument("plsa can-bridge: rate must be positive");
     lcm_.subscribe(o.command_channel, &CanBridge::onCommand, this);
     lcm_.subscribeFunction(o.clear_channel, &CanBridge::onClear, this);
   }
@@ -151,8 +152,22 @@ class CanBridge {
 
 }  // namespace
 
+void checkCanBridgeOptions(const CanBridgeOptions& o, const can::SignalMap& map) {
+  if (!(o.rate_hz > 0 && o.rate_hz <= kMaxCanBridgeRateHz)) {
+    std::ostringstream msg;
+    msg << "plsa can-bridge: --rate " << o.rate_hz << " Hz is outside (0, " << kMaxCanBridgeRateHz << "] Hz";
+    throw std::invalid_argument(msg.str());
+  }
+  try {
+    can::checkSafetyLimits(map, o.limits);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("plsa can-bridge: profile '" + map.profile + "': " + e.what());
+  }
+}
+
 CanBridgeStats runCanBridge(const CanBridgeOptions& options, can::CanTransport& transport, const can::SignalMap& map,
                             const std::atomic<bool>& stop) {
+  checkCanBridgeOptions(options, map);
   CanBridge bridge(options, transport, map, stop);
   return bridge.run();
 }

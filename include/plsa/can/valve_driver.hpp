@@ -19,6 +19,11 @@ struct SafetyLimits {
   double command_timeout_s = 0.25;  ///< commands stop for this long: fault
 };
 
+/// Throws std::invalid_argument unless every limit is positive and each
+/// valve_command signal can carry both the vent (0) and the clamp: a set-point
+/// a frame cannot encode is never sent, so the valve would hold its last one.
+void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits);
+
 enum class DriverFault { kNone, kStaleSensor, kCommandTimeout, kBusOff, kErrorPassive, kShutdown };
 const char* toString(DriverFault f);
 

@@ -24,6 +24,15 @@ struct CanBridgeOptions {
   std::string clear_channel = "PLSA_CLEAR_FAULT";  ///< any message here asks to clear a latched fault
 };
 
+/// One valve frame goes out per tick; above this rate they alone would take
+/// over an eighth of a 1 Mbit/s bus, for a device whose pneumatics settle in tens of ms.
+inline constexpr double kMaxCanBridgeRateHz = 1000.0;
+
+/// Throws std::invalid_argument naming the option at fault: a rate outside
+/// (0, kMaxCanBridgeRateHz], or safety limits the profile cannot carry
+/// (can::checkSafetyLimits). Call it before opening the bus.
+void checkCanBridgeOptions(const CanBridgeOptions& options, const can::SignalMap& map);
+
 struct CanBridgeStats {
   std::int64_t states = 0, commands = 0, rejected_commands = 0, faults = 0;
   can::DriverFault last_fault = can::DriverFault::kNone;
@@ -31,6 +40,7 @@ struct CanBridgeStats {
 
 /// Runs until `stop` is set or the duration passes; always leaves the
 /// chambers vented (driver shutdown) before it returns. Throws
+/// std::invalid_argument for bad options (checkCanBridgeOptions) and
 /// std::runtime_error if LCM cannot be set up.
 CanBridgeStats runCanBridge(const CanBridgeOptions& options, can::CanTransport& transport, const can::SignalMap& map,
                             const std::atomic<bool>& stop);

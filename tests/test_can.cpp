@@ -4,6 +4,7 @@
 #include <limits>
 #include <string>
 
+#include "plsa/can/simulated_valve_device.hpp"
 #include "plsa/can/valve_driver.hpp"
 #include "plsa/testing/alloc_guard.hpp"
 
@@ -294,4 +295,34 @@ TEST(ValveDriverSetup, RefusesAClampTheSetPointSignalCannotCarry) {
     EXPECT_NE(std::string(e.what()).find("'setpoint_2'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("the vent (0)"), std::string::npos) << e.what();
   }
+}
+
+TEST(SimulatedValveDevice, SensorSaturatesAtItsFullScaleInsteadOfFallingSilent) {
+  auto bus = InProcessBus::create();
+  auto driver_port = bus->connect(), device_port = bus->connect();
+  SignalMap map = defaultSignalMap();
+  for (auto& m : map.messages)
+    if (m.name == "pressure_sensor")
+      for (auto& s : m.signals) {
+        s.bits = 8;  // 0 to 0.51 bar: a narrower sensor than the valves
+        s.scale = 0.002;
+      }
+  map.validate();
+  plsa::sim::SimConfig config;
+  config.max_pressure_bar = 0.6;
+  SafetyLimits limits;
+  limits.max_pressure_bar = 0.6;
+  ValveDriver driver(*driver_port, map, limits, 0.0);
+  SimulatedValveDevice device(*device_port, map, config, 1);
+  const double dt = 1.0 / device.sampleRateHz();
+  for (int k = 1; k * dt <= 3.0; ++k) {
+    driver.command(k * dt, {0.6, 0.2, 0.0});
+    driver.tick(k * dt);
+    device.step();
+  }
+  EXPECT_EQ(driver.fault(), DriverFault::kNone) << toString(driver.fault());
+  EXPECT_NEAR(driver.pressures()[0], 0.51, 1e-9);  // full scale, while the chamber is near 0.6
+  EXPECT_NEAR(driver.pressures()[1], 0.2, 0.03);
+  EXPECT_GT(device.stats().saturated_readings, 0);
+  EXPECT_EQ(device.stats().send_failures, 0);
 }

@@ -1,5 +1,6 @@
 #include "plsa/can/signal_map.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -167,6 +168,13 @@ SignalMap defaultSignalMap() {
                   {{"bend_deg", 0, 16, true, true, 0.01, 0.0, "deg"}, {"steer_deg", 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
   map.validate();
   return map;
+}
+
+PhysicalRange physicalRange(const Signal& s) noexcept {
+  const double raw_lo = s.is_signed ? -std::ldexp(1.0, s.bits - 1) : 0.0;
+  const double raw_hi = s.is_signed ? std::ldexp(1.0, s.bits - 1) - 1 : std::ldexp(1.0, s.bits) - 1;
+  const double a = raw_lo * s.scale + s.offset, b = raw_hi * s.scale + s.offset;
+  return {std::min(a, b), std::max(a, b)};
 }
 
 bool encodeFrame(const MessageLayout& m, const double* values, std::uint8_t counter, CanFrame& out) noexcept {

@@ -1,6 +1,8 @@
 #include "plsa/can/simulated_valve_device.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <thread>
 
@@ -19,8 +21,15 @@ SimulatedValveDevice::SimulatedValveDevice(CanTransport& transport, const Signal
 }
 
 void SimulatedValveDevice::sendMessage(const MessageLayout& m, const double* values, std::uint8_t& counter) {
+  // A sensor reads full scale beyond its range; it does not fall silent.
+  double sent[MessageLayout::kMaxSignals];
+  for (std::size_t k = 0; k < m.signals.size(); ++k) {
+    const PhysicalRange r = physicalRange(m.signals[k]);
+    sent[k] = std::clamp(values[k], r.lo, r.hi);
+    if (std::isfinite(values[k]) && sent[k] != values[k]) ++stats_.saturated_readings;
+  }
   CanFrame f;
-  if (encodeFrame(m, values, counter++, f) && transport_.send(f) == TransportStatus::kOk)
+  if (encodeFrame(m, sent, counter++, f) && transport_.send(f) == TransportStatus::kOk)
     ++stats_.frames_sent;
   else
     ++stats_.send_failures;

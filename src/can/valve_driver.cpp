@@ -30,12 +30,9 @@ void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits) {
     CanFrame f;
     const double vent = 0.0, top = limits.max_pressure_bar;
     if (encodeFrame(one, &vent, 0, f) && encodeFrame(one, &top, 0, f)) continue;
-    const double raw_lo = sig.is_signed ? -std::ldexp(1.0, sig.bits - 1) : 0.0;
-    const double raw_hi = sig.is_signed ? std::ldexp(1.0, sig.bits - 1) - 1 : std::ldexp(1.0, sig.bits) - 1;
-    const double a = raw_lo * sig.scale + sig.offset, b = raw_hi * sig.scale + sig.offset;
+    const PhysicalRange r = physicalRange(sig);
     std::ostringstream msg;
-    msg << "ValveDriver: valve_command signal '" << sig.name << "' carries " << std::min(a, b) << " to "
-        << std::max(a, b) << " bar; the vent (0) and the set-point clamp (" << top << " bar) must both fit it";
+    msg << "ValveDriver: valve_command signal '" << sig.name << "' carries " << r.lo << " to " << r.hi << " bar; the vent (0) and the set-point clamp (" << top << " bar) must both fit it";
     throw std::invalid_argument(msg.str());
   }
 }

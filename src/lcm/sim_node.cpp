@@ -187,6 +187,8 @@ SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport
   });
   stats.commands_accepted = d.valve_frames;
   stats.commands_rejected = d.bad_valve_frames;
+  stats.sensor_frames_lost = d.send_failures;
+  stats.saturated_readings = d.saturated_readings;
   return stats;
 }
 

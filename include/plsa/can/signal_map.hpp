@@ -24,6 +24,12 @@ struct Signal {
   std::string unit;
 };
 
+/// The physical values a signal's raw field can carry, [lo, hi].
+struct PhysicalRange {
+  double lo = 0.0, hi = 0.0;
+};
+PhysicalRange physicalRange(const Signal& s) noexcept;
+
 struct MessageLayout {
   static constexpr int kMaxSignals = 8;
   std::string name;

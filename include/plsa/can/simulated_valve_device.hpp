@@ -17,6 +17,7 @@ namespace plsa::can {
 
 struct SimulatedDeviceStats {
   std::int64_t samples = 0, valve_frames = 0, bad_valve_frames = 0, frames_sent = 0, send_failures = 0;
+  std::int64_t saturated_readings = 0;  ///< values sent at the signal's full scale (sensor saturation)
 };
 
 class SimulatedValveDevice {
@@ -27,7 +28,7 @@ class SimulatedValveDevice {
 
   /// One sample: takes the valve frames that arrived, steps the actuator
   /// with the latest valid set-points (valves hold their last set-point),
-  /// sends the sensor frames.
+  /// sends the sensor frames, saturating readings at each signal's range.
   sim::ActuatorSample step();
 
   const std::array<double, 3>& setpoint() const noexcept { return setpoint_; }

@@ -31,6 +31,8 @@ struct SimNodeStats {
   std::int64_t commands_accepted = 0;
   std::int64_t commands_rejected = 0;
   std::int64_t vent_events = 0;
+  std::int64_t sensor_frames_lost = 0;  ///< behind CAN: sensor frames that could not be sent
+  std::int64_t saturated_readings = 0;  ///< behind CAN: readings sent at the signal's full scale
 };
 
 /// Runs until `stop` is set or the duration is reached; vents before it returns.

@@ -329,6 +329,15 @@ TEST_F(Cli, CanBridgeRefusesOptionsTheBusCannotCarryBeforeOpeningIt) {
     EXPECT_NE(err_.find("--rate"), std::string::npos) << rate << ": " << err_;
     EXPECT_NE(err_.find("is outside (0, 1000] Hz"), std::string::npos) << rate << ": " << err_;
   }
+  // The watchdogs act at ticks: fewer than two per timeout would stretch it.
+  EXPECT_EQ(run(base + "--rate 5"), 1);
+  EXPECT_NE(err_.find("--rate 5 Hz ticks every 0.2 s, but the --sensor-timeout of 0.1 s needs a tick at least every "
+                      "0.05 s (--rate 20 or more)"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(run(base + "--rate 5 --sensor-timeout 1 --command-timeout 0.3"), 1);
+  EXPECT_NE(err_.find("the --command-timeout of 0.3 s"), std::string::npos) << err_;
+  EXPECT_EQ(run(base + "--rate 5 --sensor-timeout 0.4 --command-timeout 0.4"), 0) << err_;
   // The same clamp on a profile with 1e-4 bar counts (0 to 6.5535 bar) is accepted and the bridge runs.
   std::ofstream(file("wide.json")) << R"({"profile": "wide", "messages": [
     {"name": "valve_command", "id": 256, "dlc": 8, "counter_byte": 6, "checksum_byte": 7, "signals": [

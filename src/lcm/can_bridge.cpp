@@ -2,6 +2,7 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -156,6 +157,16 @@ void checkCanBridgeOptions(const CanBridgeOptions& o, const can::SignalMap& map)
   if (!(o.rate_hz > 0 && o.rate_hz <= kMaxCanBridgeRateHz)) {
     std::ostringstream msg;
     msg << "plsa can-bridge: --rate " << o.rate_hz << " Hz is outside (0, " << kMaxCanBridgeRateHz << "] Hz";
+    throw std::invalid_argument(msg.str());
+  }
+  // The watchdogs act only at ticks: a vent comes up to two ticks after its timeout.
+  const double timeout = std::min(o.limits.sensor_timeout_s, o.limits.command_timeout_s);
+  if (timeout > 0 && o.rate_hz * timeout < 2.0) {
+    std::ostringstream msg;
+    msg << "plsa can-bridge: --rate " << o.rate_hz << " Hz ticks every " << 1.0 / o.rate_hz << " s, but the "
+        << (o.limits.sensor_timeout_s <= o.limits.command_timeout_s ? "--sensor-timeout" : "--command-timeout") << " of "
+        << timeout << " s needs a tick at least every " << timeout / 2 << " s (--rate " << 2.0 / timeout
+        << " or more) to vent in time";
     throw std::invalid_argument(msg.str());
   }
   try {

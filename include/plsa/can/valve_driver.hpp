@@ -35,7 +35,9 @@ struct DriverCounters {
 /// Three chambers; the signal map must have "valve_command" and
 /// "pressure_sensor" messages with three signals each, and may have a
 /// "tip_angle" message (bend_deg, steer_deg) from the tip sensor. Time is passed in
-/// (seconds, any monotonic clock), so the safety logic is testable.
+/// (seconds, any monotonic clock), so the safety logic is testable. The
+/// watchdogs act at tick(): tick at least twice per timeout, since a vent
+/// comes up to two tick periods after the timeout it enforces.
 /// command() and tick() never allocate or throw.
 class ValveDriver {
  public:

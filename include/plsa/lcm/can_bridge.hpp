@@ -29,7 +29,9 @@ struct CanBridgeOptions {
 inline constexpr double kMaxCanBridgeRateHz = 1000.0;
 
 /// Throws std::invalid_argument naming the option at fault: a rate outside
-/// (0, kMaxCanBridgeRateHz], or safety limits the profile cannot carry
+/// (0, kMaxCanBridgeRateHz], a rate below two ticks per sensor or command
+/// timeout (the watchdogs act at ticks, so a vent comes at most two ticks
+/// after its timeout), or safety limits the profile cannot carry
 /// (can::checkSafetyLimits). Call it before opening the bus.
 void checkCanBridgeOptions(const CanBridgeOptions& options, const can::SignalMap& map);
 

@@ -21,14 +21,14 @@ void addCanBridgeCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   c->add_option("--url", o->url, "LCM URL (default: LCM_DEFAULT_URL)");
   c->add_option("--rate", o->rate_hz, "Driver ticks and state messages per second (at most 1000)");
-  c->add_option("--max-pressure", o->limits.max_pressure_bar, "Set-point clamp (bar)")->check(CLI::PositiveNumber);
-  c->add_option("--max-rate", o->limits.max_rate_bar_per_s, "Set-point rate limit (bar/s)")->check(CLI::PositiveNumber);
+  c->add_option("--max-pressure", o->limits.max_pressure_bar, "Set-point clamp (bar)")->check(kPositive);
+  c->add_option("--max-rate", o->limits.max_rate_bar_per_s, "Set-point rate limit (bar/s)")->check(kPositive);
   c->add_option("--sensor-timeout", o->limits.sensor_timeout_s, "Vent when no valid reading for this long (s)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   c->add_option("--command-timeout", o->limits.command_timeout_s, "Vent when commands stop for this long (s)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   c->add_option("--duration", o->duration_s, "Stop after this many seconds (0: until signalled)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   c->add_option("--command-channel", o->command_channel, "Channel of pressure commands");
   c->add_option("--state-channel", o->state_channel, "Channel for actuator state");
   c->add_option("--status-channel", o->status_channel, "Channel for status");

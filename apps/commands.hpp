@@ -3,7 +3,26 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
 namespace plsa::app {
+
+/// Number checks with a short message (CLI11's own print the largest double in full).
+inline CLI::Validator finiteNumberAtLeast(double lo, bool strict) {
+  const std::string what = strict ? "a finite number above " : "a finite number at least ";
+  return CLI::Validator(
+      [lo, strict, what](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        const bool ok = !text.empty() && end && *end == '\0' && std::isfinite(v) && (strict ? v > lo : v >= lo);
+        return ok ? std::string() : "'" + text + "' is not " + what + CLI::detail::to_string(lo);
+      },
+      strict ? "POSITIVE" : "NONNEGATIVE");
+}
+inline const CLI::Validator kPositive = finiteNumberAtLeast(0.0, true);
+inline const CLI::Validator kNonNegative = finiteNumberAtLeast(0.0, false);
 
 void addDemoCommand(CLI::App& app);
 void addSimulateCommands(CLI::App& app);

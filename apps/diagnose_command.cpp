@@ -99,7 +99,7 @@ void addDiagnoseCommands(CLI::App& app) {
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');
   c->add_option("--pressures", a->pressures, "Measured chamber pressure columns, or 'none'")->delimiter(',');
-  c->add_option("--input-scale", a->columns.input_scale, "Bar per input unit")->check(CLI::PositiveNumber);
+  c->add_option("--input-scale", a->columns.input_scale, "Bar per input unit")->check(kPositive);
   c->add_option("--output-map", a->output_map,
                 "angles (outputs are bend, steer in deg) or affine (an unknown affine image of the bending vector, fitted)")
       ->check(CLI::IsMember({"angles", "affine"}));
@@ -113,7 +113,7 @@ void addDiagnoseCommands(CLI::App& app) {
   c->add_option("--evaluations", a->options.calibration.max_evaluations, "Simulator runs per calibration")
       ->check(CLI::Range(20, 100000));
   c->add_option("--margin", a->options.margin, "An effect must shrink the held-out gap by this many noise floors")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   c->add_option("--heldout-fraction", a->options.heldout_fraction, "With one run: the share held out at its end")
       ->check(CLI::Range(0.05, 0.95));
   c->add_option("--threads", a->options.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));

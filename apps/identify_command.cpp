@@ -261,7 +261,7 @@ void addIdentifyCommands(CLI::App& app) {
                  "contiguous: each log in three time blocks, each scored by a fit on the other two")
       ->check(CLI::IsMember({"interleaved", "contiguous"}));
   id->add_option("--cv-chunk", a->options.cv_chunk_s, "Seconds per interleaved cross-validation chunk (default 8)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

@@ -58,9 +58,9 @@ void addSimNodeCommand(CLI::App& app) {
   cmd->add_option("--seed", a->node.seed, "Noise seed");
   cmd->add_flag("--lockstep", a->node.lockstep, "Advance one sample per command instead of in real time");
   cmd->add_option("--command-timeout", a->node.command_timeout_s, "Vent when no command for this long (s)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   cmd->add_option("--duration", a->node.duration_s, "Stop after this many simulated seconds (0: run until signalled)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--command-channel", a->node.command_channel, "Channel of pressure commands");
   cmd->add_option("--state-channel", a->node.state_channel, "Channel of actuator state");
   cmd->add_option("--status-channel", a->node.status_channel, "Channel of status messages");

@@ -283,6 +283,21 @@ TEST(ValveDriverSetup, RefusesAClampTheSetPointSignalCannotCarry) {
   }
   limits.max_pressure_bar = 0.65;
   EXPECT_NO_THROW(ValveDriver(*port, map, limits, 0.0));
+  // An infinite timeout or rate would switch that protection off.
+  for (double SafetyLimits::*field : {&SafetyLimits::max_rate_bar_per_s, &SafetyLimits::sensor_timeout_s,
+                                      &SafetyLimits::command_timeout_s}) {
+    SafetyLimits off;
+    off.*field = std::numeric_limits<double>::infinity();
+    try {
+      ValveDriver d(*port, map, off, 0.0);
+      ADD_FAILURE() << "an infinite safety limit was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("is inf; every limit must be positive and finite"), std::string::npos)
+          << e.what();
+    }
+    off.*field = -1.0;
+    EXPECT_THROW(ValveDriver(*port, map, off, 0.0), std::invalid_argument);
+  }
   // A signal whose range leaves out zero cannot vent.
   SignalMap shifted = map;
   for (auto& m : shifted.messages)

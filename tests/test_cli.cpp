@@ -225,6 +225,14 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
   EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("ok.csv")), 1);
   EXPECT_NE(err_.find("missing field 'sample_time_s'"), std::string::npos) << err_;
   EXPECT_NE(run("simulate --experiment sine --out " + file("x.csv")), 0);
+  // Number options name the value and the bound in one short line.
+  for (const std::string bad : {"inf", "-1", "1e400", "abc"}) {
+    EXPECT_NE(run("simulate --experiment joystick --duration " + bad + " --out " + file("x.csv")), 0) << bad;
+    EXPECT_NE(err_.find("--duration: '" + bad + "' is not a finite number above 0\n"), std::string::npos) << err_;
+    EXPECT_LT(err_.size(), 200u) << err_;
+  }
+  EXPECT_NE(run("sim --duration -2"), 0);
+  EXPECT_NE(err_.find("--duration: '-2' is not a finite number at least 0\n"), std::string::npos) << err_;
   std::ofstream(file("steps.csv")) << "time_s,p_1,bend_deg\n0,0.1,1\n0.0125,0.2,2\n";
   EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --play 0.1,abc --out " +
                 file("m.json")),

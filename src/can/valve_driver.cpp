@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace plsa::can {
 
@@ -20,9 +22,15 @@ const char* toString(DriverFault f) {
 }
 
 void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits) {
-  if (!(limits.max_pressure_bar > 0) || !(limits.max_rate_bar_per_s > 0) || !(limits.sensor_timeout_s > 0) ||
-      !(limits.command_timeout_s > 0))
-    throw std::invalid_argument("ValveDriver: every safety limit must be positive");
+  // An infinite timeout or rate would switch that protection off.
+  const std::pair<const char*, double> named[] = {{"max_pressure_bar", limits.max_pressure_bar},
+                                                  {"max_rate_bar_per_s", limits.max_rate_bar_per_s},
+                                                  {"sensor_timeout_s", limits.sensor_timeout_s},
+                                                  {"command_timeout_s", limits.command_timeout_s}};
+  for (const auto& [name, value] : named)
+    if (!(value > 0) || !std::isfinite(value))
+      throw std::invalid_argument(std::string("ValveDriver: safety limit ") + name + " is " + std::to_string(value) +
+                                  "; every limit must be positive and finite");
   // A set-point the frame cannot carry is never sent: the valve would hold its last one instead.
   for (const Signal& sig : map.message("valve_command").signals) {
     MessageLayout one = map.message("valve_command");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -182,8 +183,10 @@ TEST(PoleClustering, ComplexPairsAndBadInput) {
   EXPECT_EQ(ok.size(), 3);
   EXPECT_THROW(fkcmClustering({C(1.2, 0)}, o), std::invalid_argument);
   EXPECT_THROW(fkcmClustering({}, o), std::invalid_argument);
-  o.fuzziness = 1.0;
-  EXPECT_THROW(fkcmClustering(poles, o), std::invalid_argument);
+  for (double m : {1.0, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    o.fuzziness = m;
+    EXPECT_THROW(fkcmClustering(poles, o), std::invalid_argument) << m;
+  }
 }
 
 namespace {

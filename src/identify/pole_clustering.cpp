@@ -28,7 +28,9 @@ Layout layoutOf(const ClusteringOptions& o) {
   require(o.centres >= 1, "pole clustering: need at least one centre");
   require(o.complex_pairs >= 0 && 2 * o.complex_pairs <= o.centres,
           "pole clustering: complex pairs must fit in the number of centres");
-  require(o.fuzziness > 1.0, "pole clustering: fuzziness m must be > 1");
+  // An infinite m weighs every pole alike (u^m -> 0): no clustering is left.
+  require(o.fuzziness > 1.0 && std::isfinite(o.fuzziness),
+          "pole clustering: fuzziness m must be finite and > 1, got " + std::to_string(o.fuzziness));
   return {o.centres - 2 * o.complex_pairs, o.complex_pairs};
 }
 

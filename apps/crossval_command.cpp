@@ -45,6 +45,14 @@ void runCrossval(CrossvalArgs& a) {
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
   std::vector<io::Log> logs;
   for (const auto& f : files) logs.push_back(lcm::readLogFile(f, ro));
+  // Every log is held out once; its longest horizon after ARX's lags must leave two samples to score.
+  const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
+  const int lags = std::max(a.arx_na, a.arx_nb);
+  for (std::size_t i = 0; i < logs.size(); ++i)
+    if (logs[i].samples() <= longest + lags)
+      throw std::invalid_argument("crossval: " + files[i] + ": " + std::to_string(logs[i].samples()) +
+                                  " samples are too few to score horizon " + std::to_string(longest) + " after ARX's " +
+                                  std::to_string(lags) + " lags (a fit needs 2 samples); give a shorter horizon");
   IdentifyOptions o = a.options;
   o.inputs = a.inputs;
   o.outputs = a.outputs;

@@ -129,6 +129,15 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
                 file("no_such_dir/fits.json")),
             1);
   EXPECT_NE(err_.find("no_such_dir/fits.json: cannot write the fits file"), std::string::npos) << err_;
+  // A horizon as long as the log leaves nothing to score: said in the tool's words, before any work.
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 40,100000"), 1);
+  EXPECT_NE(err_.find("val.lcmlog: 2480 samples leave 0 to score at horizon 100000 (a fit needs 2)"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 2479"), 1);
+  EXPECT_NE(err_.find("leave 1 to score at horizon 2479"), std::string::npos) << err_;
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 2478"), 0)
+      << err_;
 }
 
 // The README's main job end to end: every file it names, the fits the issue
@@ -200,6 +209,9 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_FALSE(fs::exists(file("m.json")));
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,12,1"), 1);
   EXPECT_NE(err_.find("crossval: horizon 1 is given twice"), std::string::npos) << err_;
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,477"), 1);
+  EXPECT_NE(err_.find("j1.csv: 480 samples are too few to score horizon 477 after ARX's 4 lags"), std::string::npos)
+      << err_;
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 0"), 1);
   EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
   fs::create_directories(file("empty"));

@@ -40,7 +40,8 @@ void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits) {
     if (encodeFrame(one, &vent, 0, f) && encodeFrame(one, &top, 0, f)) continue;
     const PhysicalRange r = physicalRange(sig);
     std::ostringstream msg;
-    msg << "ValveDriver: valve_command signal '" << sig.name << "' carries " << r.lo << " to " << r.hi << " bar; the vent (0) and the set-point clamp (" << top << " bar) must both fit it";
+    msg << "ValveDriver: valve_command signal '" << sig.name << "' carries " << r.lo << " to " << r.hi
+        << " bar; the vent (0) and the set-point clamp (" << top << " bar) must both fit it";
     throw std::invalid_argument(msg.str());
   }
 }

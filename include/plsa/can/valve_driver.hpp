@@ -19,7 +19,7 @@ struct SafetyLimits {
   double command_timeout_s = 0.25;  ///< commands stop for this long: fault
 };
 
-/// Throws std::invalid_argument unless every limit is positive and each
+/// Throws std::invalid_argument unless every limit is positive and finite, and each
 /// valve_command signal can carry both the vent (0) and the clamp: a set-point
 /// a frame cannot encode is never sent, so the valve would hold its last one.
 void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits);

@@ -27,8 +27,8 @@ void runSimCan(SimNodeArgs& a) {
                a.can.c_str(), map.profile.c_str(), a.node.config.sample_rate_hz, a.node.state_channel.c_str());
   const lcm::SimNodeStats s = lcm::runSimCanNode(a.node, *transport, map, stop);
   std::fprintf(stderr,
-               "plsa sim: stopped; %lld samples, %lld valve frames, %lld bad valve frames, %lld sensor frames not sent, "
-               "%lld readings saturated at the profile's full scale\n",
+               "plsa sim: stopped; %lld samples, %lld valve frames, %lld bad valve frames, "
+               "%lld sensor frames not sent, %lld readings saturated at the profile's full scale\n",
                static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),
                static_cast<long long>(s.commands_rejected), static_cast<long long>(s.sensor_frames_lost),
                static_cast<long long>(s.saturated_readings));

@@ -130,14 +130,14 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
             1);
   EXPECT_NE(err_.find("no_such_dir/fits.json: cannot write the fits file"), std::string::npos) << err_;
   // A horizon as long as the log leaves nothing to score: said in the tool's words, before any work.
-  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 40,100000"), 1);
+  const std::string validate = "validate --model " + file("model.json") + " --log " + file("val.lcmlog");
+  EXPECT_EQ(run(validate + " --horizons 40,100000"), 1);
   EXPECT_NE(err_.find("val.lcmlog: 2480 samples leave 0 to score at horizon 100000 (a fit needs 2)"),
             std::string::npos)
       << err_;
-  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 2479"), 1);
+  EXPECT_EQ(run(validate + " --horizons 2479"), 1);
   EXPECT_NE(err_.find("leave 1 to score at horizon 2479"), std::string::npos) << err_;
-  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --horizons 2478"), 0)
-      << err_;
+  EXPECT_EQ(run(validate + " --horizons 2478"), 0) << err_;
 }
 
 // The README's main job end to end: every file it names, the fits the issue

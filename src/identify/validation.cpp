@@ -144,8 +144,9 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   for (int k : horizons)
     if (log.samples() - k < 2)
       throw std::invalid_argument(log.source + ": " + std::to_string(log.samples()) + " samples leave " +
-                                  std::to_string(std::max<Eigen::Index>(0, log.samples() - k)) + " to score at horizon " +
-                                  std::to_string(k) + " (a fit needs 2); give a longer log or a shorter horizon");
+                                  std::to_string(std::max<Eigen::Index>(0, log.samples() - k)) +
+                                  " to score at horizon " + std::to_string(k) +
+                                  " (a fit needs 2); give a longer log or a shorter horizon");
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);

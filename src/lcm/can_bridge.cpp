@@ -164,7 +164,8 @@ void checkCanBridgeOptions(const CanBridgeOptions& o, const can::SignalMap& map)
   if (timeout > 0 && o.rate_hz * timeout < 2.0) {
     std::ostringstream msg;
     msg << "plsa can-bridge: --rate " << o.rate_hz << " Hz ticks every " << 1.0 / o.rate_hz << " s, but the "
-        << (o.limits.sensor_timeout_s <= o.limits.command_timeout_s ? "--sensor-timeout" : "--command-timeout") << " of "
+        << (o.limits.sensor_timeout_s <= o.limits.command_timeout_s ? "--sensor-timeout" : "--command-timeout")
+        << " of "
         << timeout << " s needs a tick at least every " << timeout / 2 << " s (--rate " << 2.0 / timeout
         << " or more) to vent in time";
     throw std::invalid_argument(msg.str());

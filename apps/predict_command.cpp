@@ -14,7 +14,7 @@ void addPredictCommand(CLI::App& app) {
   auto o = std::make_shared<lcm::PredictorNodeOptions>();
   CLI::App* c = app.add_subcommand("predict", "Publish n-step-ahead predictions of actuator state over LCM");
   c->add_option("--model", *model, "Model file")->required()->check(CLI::ExistingFile);
-  c->add_option("--horizons", o->horizons, "Horizons in samples")->delimiter(',');
+  c->add_option("--horizons", o->horizons, "Horizons in samples, up to 60 s of model time")->delimiter(',');
   c->add_option("--url", o->url, "LCM URL (default: LCM_DEFAULT_URL)");
   c->add_option("--state-channel", o->state_channel, "Channel of actuator state");
   c->add_option("--prediction-channel", o->prediction_channel, "Channel for predictions");

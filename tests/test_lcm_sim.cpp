@@ -181,7 +181,8 @@ TEST_F(LcmSimTest, RealTimeModePublishesEverySampleAndStaysVentedWithoutCommands
 // predictions match an in-process predictor exactly and track what the
 // simulator later does.
 // A negative horizon sized a trajectory from it (a length error, not a
-// message); a repeated one was published twice. Both are refused before LCM opens.
+// message); a repeated one was published twice; a huge one failed with
+// bad_alloc. All are refused before LCM opens.
 TEST(PredictorNode, RefusesABadOrRepeatedHorizonByName) {
   const std::atomic<bool> stop{true};
   const plsa::DioPwlObfModel model;
@@ -200,6 +201,8 @@ TEST(PredictorNode, RefusesABadOrRepeatedHorizonByName) {
   expectRefusal({0}, "horizons must be >= 1, got 0");
   expectRefusal({40, 80, 40}, "horizon 40 is given twice");
   expectRefusal({}, "no horizons");
+  expectRefusal({40, 4801}, "horizon 4801 (60.01 s) is beyond the 60 s published at most: 4800 samples at 0.0125 s");
+  expectRefusal({2000000000}, "horizon 2000000000");
 }
 
 TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {

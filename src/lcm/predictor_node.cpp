@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include <lcm/lcm-cpp.hpp>
@@ -160,8 +161,21 @@ class PredictorNode {
 
 PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,
                                     const std::atomic<bool>& stop) {
-  // Before LCM is opened: a negative horizon would size a trajectory from it.
+  // Before LCM is opened: a negative horizon would size a trajectory from it,
+  // a huge one allocate and publish megabytes every tick.
   requireHorizons(options.horizons, "plsa predict");
+  const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
+  // A sample time measured from a log is 1/80 s give or take rounding; the relative
+  // slack keeps 60 s at 80 Hz at 4800 samples.
+  const double steps = kMaxPublishedHorizonS / model.sample_time_s * (1 + 1e-9);
+  if (longest > steps) {
+    const int cap = static_cast<int>(std::floor(steps));
+    char msg[200];
+    std::snprintf(msg, sizeof msg,
+                  "plsa predict: horizon %d (%.4g s) is beyond the %g s published at most: %d samples at %g s",
+                  longest, longest * model.sample_time_s, kMaxPublishedHorizonS, cap, model.sample_time_s);
+    throw std::invalid_argument(msg);
+  }
   PredictorNode node(model, options, stop);
   return node.run();
 }

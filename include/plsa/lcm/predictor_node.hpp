@@ -12,6 +12,11 @@
 
 namespace plsa::lcm {
 
+/// Longest horizon the node publishes, in seconds of model time. Each tick
+/// sends the whole trajectory, and the predictor preallocates per step; far
+/// past a controller's horizon a typo would cost megabytes every tick.
+inline constexpr double kMaxPublishedHorizonS = 60.0;
+
 struct PredictorNodeOptions {
   std::string url;
   std::vector<int> horizons{40, 80};
@@ -26,8 +31,8 @@ struct PredictorNodeStats {
   std::int64_t rejected = 0;
 };
 
-/// Runs until `stop` is set. Throws std::invalid_argument for a horizon below 1
-/// or given twice (before LCM is opened), if the model's
+/// Runs until `stop` is set. Throws std::invalid_argument for a horizon below 1,
+/// given twice or longer than kMaxPublishedHorizonS (before LCM is opened), if the model's
 /// columns cannot be read from actuator-state messages (p_i, cmd_i,
 /// bend_deg, steer_deg), std::runtime_error if LCM cannot be set up.
 PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& options,

@@ -235,7 +235,7 @@ void addDemoCommand(CLI::App& app) {
   cmd->add_option("--out", opt->out_dir, "Folder for the model, fits and report");
   cmd->add_option("--config", opt->config, "Simulator configuration (default: built-in, all effects on)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--seed", opt->seed, "Seed of the simulated runs");
+  cmd->add_option("--seed", opt->seed, "Seed of the simulated runs")->check(kSeed);
   cmd->callback([opt] { runDemo(*opt); });
 }
 

@@ -129,7 +129,7 @@ void addDiagnoseCommands(CLI::App& app) {
       ->check(CLI::Range(1, 20));
   sc->add_flag("--no-pairs", s->no_pairs, "Skip the pairs of withheld effects");
   sc->add_option("--null", s->options.null_cases, "Null cases (nothing withheld)")->check(CLI::Range(0, 20));
-  sc->add_option("--seed", s->options.seed, "First seed");
+  sc->add_option("--seed", s->options.seed, "First seed")->check(kSeed);
   sc->add_option("--train-s", s->options.train_s, "Training run length (s)")->check(CLI::Range(10.0, 600.0));
   sc->add_option("--heldout-s", s->options.heldout_s, "Held-out run length (s)")->check(CLI::Range(10.0, 600.0));
   sc->add_option("--evaluations-per-parameter", s->options.diagnose.calibration.evaluations_per_parameter,

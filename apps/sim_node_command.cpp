@@ -55,7 +55,7 @@ void addSimNodeCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("sim", "Run the simulated actuator as an LCM node");
   cmd->add_option("--config", a->config, "Simulator configuration (JSON)")->check(CLI::ExistingFile);
   cmd->add_option("--url", a->node.url, "LCM URL (default: LCM_DEFAULT_URL)");
-  cmd->add_option("--seed", a->node.seed, "Noise seed");
+  cmd->add_option("--seed", a->node.seed, "Noise seed")->check(kSeed);
   cmd->add_flag("--lockstep", a->node.lockstep, "Advance one sample per command instead of in real time");
   cmd->add_option("--command-timeout", a->node.command_timeout_s, "Vent when no command for this long (s)")
       ->check(kPositive);

@@ -84,7 +84,7 @@ void addSimulateCommands(CLI::App& app) {
                   "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s "
                   "held at the start)")
       ->check(kPositive);
-  cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file");
+  cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file")->check(kSeed);
   cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log")->required();
   cmd->callback([o] { runSimulate(*o); });
 

@@ -243,6 +243,30 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
     EXPECT_NE(err_.find("--duration: '" + bad + "' is not a finite number above 0\n"), std::string::npos) << err_;
     EXPECT_LT(err_.size(), 200u) << err_;
   }
+  // A seed is digits: CLI11 read -3 as 2^64 - 3 and clamped an overlong one, each another run.
+  for (const std::string bad : {"-3", "18446744073709551616", "99999999999999999999999", "1.5", "0x10"}) {
+    EXPECT_NE(run("simulate --experiment joystick --duration 1 --seed " + bad + " --out " + file("x.csv")), 0) << bad;
+    EXPECT_NE(err_.find("--seed: '" + bad + "' is not a seed (a whole number from 0 to 18446744073709551615)"),
+              std::string::npos)
+        << err_;
+  }
+  for (const std::string& cmd :
+       std::vector<std::string>{"demo --seed -1 --out " + file("d"), "sim --seed -1", "diagnose-selfcheck --seed -1"}) {
+    EXPECT_NE(run(cmd), 0) << cmd;
+    EXPECT_NE(err_.find("--seed: '-1' is not a seed"), std::string::npos) << cmd << ": " << err_;
+  }
+  ASSERT_EQ(run("simulate --experiment joystick --duration 1 --seed 18446744073709551615 --out " + file("x.csv")), 0)
+      << err_;
+  EXPECT_NE(err_.find("seed 18446744073709551615\n"), std::string::npos) << err_;
+  // A mistyped duration is refused by its size, not by bad_alloc.
+  EXPECT_EQ(run("simulate --experiment joystick --duration 1e9 --out " + file("x.csv")), 1);
+  EXPECT_NE(err_.find("joystick: 1e+09 s at 80 Hz is 8e+10 samples, above the 10000000 one experiment holds "
+                      "(34.7 h at this rate); split it into several runs"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(run("simulate --experiment grid2 --duration 1e6 --out " + file("x.csv")), 1);
+  EXPECT_NE(err_.find("grid2: "), std::string::npos) << err_;
+  EXPECT_NE(err_.find("split it into several runs"), std::string::npos) << err_;
   EXPECT_NE(run("sim --duration -2"), 0);
   EXPECT_NE(err_.find("--duration: '-2' is not a finite number at least 0\n"), std::string::npos) << err_;
   std::ofstream(file("steps.csv")) << "time_s,p_1,bend_deg\n0,0.1,1\n0.0125,0.2,2\n";

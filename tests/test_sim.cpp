@@ -332,6 +332,34 @@ TEST(SimExperiments, ShapesAndDeterminism) {
   EXPECT_THROW(makeExperiment("sine", o), std::invalid_argument);
 }
 
+// Each time option is checked before it sizes anything: lround of an infinite
+// hold is undefined, and a zero bandwidth divided by zero in the joystick's filter.
+TEST(SimExperiments, RefusesTimesThatCannotBeBuiltByName) {
+  const auto expectRefusal = [](const std::string& name, ExperimentOptions o, const std::string& words) {
+    try {
+      makeExperiment(name, o);
+      ADD_FAILURE() << name << " accepted; expected '" << words << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+  };
+  ExperimentOptions o;
+  o.hold_s = std::numeric_limits<double>::infinity();
+  expectRefusal("grid2", o, "hold_s must be a finite number above 0");
+  o = {};
+  o.preroll_s = std::nan("");
+  expectRefusal("grid2", o, "preroll_s must be a finite number >= 0");
+  o = {};
+  o.joystick_bandwidth_hz = 0;
+  expectRefusal("joystick", o, "joystick_bandwidth_hz must be above 0 and at most half the sample rate");
+  o = {};
+  o.hold_s = 1e6;  // 28 holds: 2.8e7 s
+  expectRefusal("staircase1", o, "above the 10000000 one experiment holds");
+  o = {};
+  o.sample_rate_hz = 1e6;  // the default 60 s joystick, at a rate no rig samples at
+  expectRefusal("joystick", o, "joystick: 101 s at 1e+06 Hz is 1.01e+08 samples");
+}
+
 TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers) {
   // What the diagnosis self-check generates "real" data with: the same
   // phenomenon, a different law. Each alternative must differ from the

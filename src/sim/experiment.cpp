@@ -1,6 +1,7 @@
 #include "plsa/sim/experiment.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -10,10 +11,24 @@
 namespace plsa::sim {
 namespace {
 
+// Refuses an experiment longer than kMaxExperimentSamples before it is built:
+// a mistyped duration would otherwise die in bad_alloc (or lround overflow).
+void requireSamples(const char* name, double samples, double rate) {
+  if (samples <= static_cast<double>(kMaxExperimentSamples)) return;
+  char msg[240];
+  std::snprintf(msg, sizeof msg,
+                "%s: %.4g s at %g Hz is %.4g samples, above the %lld one experiment holds (%.1f h at this rate); "
+                "split it into several runs",
+                name, samples / rate, rate, samples, static_cast<long long>(kMaxExperimentSamples),
+                static_cast<double>(kMaxExperimentSamples) / rate / 3600.0);
+  throw std::invalid_argument(msg);
+}
+
 class CommandWriter {
  public:
-  explicit CommandWriter(double rate) : rate_(rate) {}
+  CommandWriter(const char* name, double rate) : name_(name), rate_(rate) {}
   void hold(const Eigen::RowVector3d& cmd, double seconds) {
+    requireSamples(name_, static_cast<double>(rows_.size()) + seconds * rate_, rate_);
     const auto n = static_cast<Eigen::Index>(std::lround(seconds * rate_));
     for (Eigen::Index k = 0; k < n; ++k) rows_.push_back(cmd);
   }
@@ -32,15 +47,19 @@ class CommandWriter {
   }
 
  private:
+  const char* name_;
   double rate_;
   std::vector<Eigen::RowVector3d> rows_;
   Eigen::Index record_from_ = 0;
 };
 
 void checkCommon(const ExperimentOptions& o) {
-  require(o.sample_rate_hz > 0, "experiment: sample_rate_hz must be positive");
-  require(o.hold_s > 0, "experiment: hold_s must be positive");
-  require(o.initial_rest_s >= 0, "experiment: initial_rest_s must be >= 0");
+  require(o.sample_rate_hz > 0 && std::isfinite(o.sample_rate_hz),
+          "experiment: sample_rate_hz must be a finite number above 0");
+  require(o.hold_s > 0 && std::isfinite(o.hold_s), "experiment: hold_s must be a finite number above 0");
+  require(o.initial_rest_s >= 0 && std::isfinite(o.initial_rest_s),
+          "experiment: initial_rest_s must be a finite number >= 0");
+  require(o.preroll_s >= 0 && std::isfinite(o.preroll_s), "experiment: preroll_s must be a finite number >= 0");
 }
 
 int chamberIndex(int chamber) {
@@ -55,7 +74,7 @@ Experiment staircaseExperiment(const ExperimentOptions& o) {
   require(o.staircase_steps >= 1, "staircase: need at least one step");
   require(o.staircase_max_bar > 0, "staircase: staircase_max_bar must be positive");
   const int c = chamberIndex(o.staircase_chamber);
-  CommandWriter w(o.sample_rate_hz);
+  CommandWriter w("staircase1", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
   w.hold(cmd, o.initial_rest_s);
   const int n = o.staircase_steps;
@@ -79,7 +98,7 @@ Experiment gridExperiment(const ExperimentOptions& o) {
   const int b = chamberIndex(o.grid_chambers[1]);
   require(a != b, "grid2: the two chambers must differ");
   const auto& L = o.grid_levels_bar;
-  CommandWriter w(o.sample_rate_hz);
+  CommandWriter w("grid2", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
   cmd(a) = L.front();
   cmd(b) = L.front();
@@ -113,11 +132,17 @@ Experiment gridExperiment(const ExperimentOptions& o) {
 
 Experiment joystickExperiment(const ExperimentOptions& o) {
   checkCommon(o);
-  require(o.joystick_duration_s > 0, "joystick: duration must be positive");
+  require(o.joystick_duration_s > 0 && std::isfinite(o.joystick_duration_s),
+          "joystick: duration must be a finite number above 0");
   require(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
           "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
+  require(o.joystick_preroll_s > 0 && std::isfinite(o.joystick_preroll_s),
+          "joystick: joystick_preroll_s must be a finite number above 0");
+  require(o.joystick_bandwidth_hz > 0 && o.joystick_bandwidth_hz <= o.sample_rate_hz / 2,
+          "joystick: joystick_bandwidth_hz must be above 0 and at most half the sample rate");
+  requireSamples("joystick", (o.joystick_preroll_s + 1.0 + o.joystick_duration_s) * o.sample_rate_hz,
+                 o.sample_rate_hz);
   const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
-  require(o.joystick_preroll_s > 0, "joystick: joystick_preroll_s must be positive");
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01;
   // Two passes of a critically damped second-order low-pass on white noise.
@@ -138,7 +163,7 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
     const double span = hi > lo ? hi - lo : 1.0;
     traj.col(ch) = ((x.array() - lo) / span * (o.joystick_max_bar - o.joystick_min_bar) + o.joystick_min_bar).matrix();
   }
-  CommandWriter w(o.sample_rate_hz);
+  CommandWriter w("joystick", o.sample_rate_hz);
   w.preroll(traj.row(0), o.joystick_preroll_s);
   w.hold(traj.row(0), 1.0);  // recorded: settled at the starting point
   const Eigen::MatrixXd head = w.matrix();

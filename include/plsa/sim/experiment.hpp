@@ -42,6 +42,9 @@ struct ExperimentOptions {
   std::uint64_t seed = 1;
 };
 
+/// Most samples (pre-roll included) one experiment holds: about 35 h at 80 Hz.
+inline constexpr std::int64_t kMaxExperimentSamples = 10'000'000;
+
 /// Command trajectory (samples x 3, bar) at the sample rate. Samples before
 /// `record_from` are a pre-roll: simulated to bring the actuator to its first
 /// operating point, not recorded (steering is undefined at rest).

@@ -58,7 +58,7 @@ class PredictorNode {
     for (const auto& n : model.inputs) in_.push_back(fieldFor(n));
     for (const auto& n : model.outputs) out_.push_back(fieldFor(n));
     names_ = model.outputs;
-    max_h_ = *std::max_element(o.horizons.begin(), o.horizons.end());
+    max_h_ = predictor_.maxHorizon();
     traj_.resize(max_h_, model.outputCount());
     plan_.resize(0, model.inputCount());
     u_.resize(model.inputCount());

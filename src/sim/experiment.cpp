@@ -140,7 +140,9 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
           "joystick: joystick_preroll_s must be a finite number above 0");
   require(o.joystick_bandwidth_hz > 0 && o.joystick_bandwidth_hz <= o.sample_rate_hz / 2,
           "joystick: joystick_bandwidth_hz must be above 0 and at most half the sample rate");
-  requireSamples("joystick", (o.joystick_preroll_s + 1.0 + o.joystick_duration_s) * o.sample_rate_hz,
+  constexpr double kSettledS = 1.0;  // recorded, held at the starting point before the path moves
+  // The trajectory is allocated before the writer sees it, so its length is checked here.
+  requireSamples("joystick", (o.joystick_preroll_s + kSettledS + o.joystick_duration_s) * o.sample_rate_hz,
                  o.sample_rate_hz);
   const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
   std::mt19937_64 rng(o.seed);
@@ -165,7 +167,7 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   }
   CommandWriter w("joystick", o.sample_rate_hz);
   w.preroll(traj.row(0), o.joystick_preroll_s);
-  w.hold(traj.row(0), 1.0);  // recorded: settled at the starting point
+  w.hold(traj.row(0), kSettledS);
   const Eigen::MatrixXd head = w.matrix();
   Experiment e{"joystick", Eigen::MatrixXd(head.rows() + n, 3), w.recordFrom()};
   e.commands.topRows(head.rows()) = head;

@@ -1,5 +1,6 @@
 #include "comparison.hpp"
 
+#include <cmath>
 #include <limits>
 
 #include "plsa/eval/dio_prediction.hpp"
@@ -32,12 +33,19 @@ ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, co
 }
 
 ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
-                            const Eigen::MatrixXd& y, const std::vector<int>& horizons) {
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                            const std::vector<double>& sim_drift_per_s, double sample_time_s) {
+  require(sim_drift_per_s.empty() || (static_cast<Eigen::Index>(sim_drift_per_s.size()) == y.cols() &&
+                                      std::isfinite(sample_time_s) && sample_time_s > 0),
+          "predictArx: need one drift rate per output and a sample time > 0");
   ModelPredictions out{name, {}};
   for (Eigen::Index o = 0; o < y.cols(); ++o) {
     std::map<int, Eigen::VectorXd> byh;
     for (int k : horizons) byh[k] = placed(m.kStepAhead(u, y.col(o), static_cast<int>(o), k), y.rows());
     byh[0] = placed(m.simulate(u, y.col(o), static_cast<int>(o)), y.rows());
+    if (!sim_drift_per_s.empty())
+      byh[0] += sim_drift_per_s[static_cast<std::size_t>(o)] * sample_time_s *
+                Eigen::VectorXd::LinSpaced(y.rows(), 0.0, static_cast<double>(y.rows() - 1));
     out.by_output.push_back(std::move(byh));
   }
   return out;

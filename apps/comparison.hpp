@@ -24,8 +24,11 @@ struct ModelPredictions {
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                             const SimulationStart& start = {});
+/// `sim_drift_per_s` (empty, or one rate per output): an output drift added to
+/// the simulation from the first sample, for an ARX fitted with it taken out.
 ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
-                            const Eigen::MatrixXd& y, const std::vector<int>& horizons);
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                            const std::vector<double>& sim_drift_per_s = {}, double sample_time_s = 0.0);
 
 /// One model's score on one output and horizon.
 struct CommonScore {

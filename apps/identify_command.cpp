@@ -86,6 +86,12 @@ std::string seconds(double s) {
   return b;
 }
 
+std::string rateText(double r) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", r);
+  return b;
+}
+
 void runValidate(const ValidateArgs& a) {
   const DioPwlObfModel model = loadModel(a.model);
   std::vector<std::string> required = model.inputs;
@@ -139,12 +145,15 @@ void runValidate(const ValidateArgs& a) {
                     "deviation over the simulation's scored samples";
   // Say how the simulation started: the ways differ when the log starts unsettled.
   const bool registered = yawRegistrationSamples(model, a.start) > 0;
-  const std::string start =
+  std::string start =
       model.output_level.empty() ? "first measured sample"
       : registered ? "model output level, sensor yaw registered on the first " +
                          seconds(a.start.yaw_registration_s) + " s (not scored)"
                    : "model output level";
+  const double yaw_rate = carriedYawRate(model, a.start);
+  if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
+  j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
   std::printf("(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) {
     writeTextFile(a.json, j.dump(2) + "\n", "fits file");
@@ -283,6 +292,9 @@ void addIdentifyCommands(CLI::App& app) {
                                           : "'" + t + "' is not a duration in seconds >= 0 (e.g. 5, or 0 for none)";
           },
           "SECONDS"));
+  va->add_flag("!--no-drift", v->start.carry_training_drift,
+               "tip_cartesian models with a training_output_drift: simulate without the sensor yaw drift the training "
+               "run showed (by default the simulation turns at that rate over the log)");
   va->callback([v] { runValidate(*v); });
 }
 

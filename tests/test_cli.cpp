@@ -171,17 +171,24 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   for (const std::string external : {"src=\"http", "href=\"http", "<script src", "<link"})
     EXPECT_EQ(html.find(external), std::string::npos) << "the report loads " << external;
   // plsa's model and the global linear baseline, re-scored by validate with
-  // the same start (yaw registered on 5 s, scored after): the same simulation fits.
+  // the same start (yaw registered on 5 s, scored after; the training drift
+  // carried, or not with --no-drift): the same simulation fits.
   using NamedFile = std::pair<std::string, std::string>;
   for (const auto& [name, model] : {NamedFile{plsa, "model.json"}, NamedFile{global, "baseline_global_linear.json"}}) {
-    ASSERT_EQ(run("validate --model " + file("demo/" + model) + " --log " + file("demo/validate_joystick.csv") +
-                  " --horizons 40,80 --json " + file("v.json")),
-              0)
-        << model << ": " << err_;
-    const auto v = nlohmann::json::parse(slurp(file("v.json")));
-    for (const std::string out : {"bend_deg", "steer_deg"})
-      EXPECT_NEAR(v["outputs"][out]["fit_sim"].get<double>(), fits["models"][name][out]["fit_sim"].get<double>(), 1e-6)
-          << model << " " << out;
+    const double drift = nlohmann::json::parse(slurp(file("demo/" + model)))["training_output_drift"]["rate_per_s"][1];
+    EXPECT_NE(drift, 0.0) << model;
+    for (const std::string flag : {"", " --no-drift"}) {
+      ASSERT_EQ(run("validate --model " + file("demo/" + model) + " --log " + file("demo/validate_joystick.csv") +
+                    " --horizons 40,80 --json " + file("v.json") + flag),
+                0)
+          << model << flag << ": " << err_;
+      const auto v = nlohmann::json::parse(slurp(file("v.json")));
+      const std::string key = flag.empty() ? "fit_sim" : "fit_sim_no_drift";
+      for (const std::string out : {"bend_deg", "steer_deg"})
+        EXPECT_NEAR(v["outputs"][out]["fit_sim"].get<double>(), fits["models"][name][out][key].get<double>(), 1e-6)
+            << model << flag << " " << out;
+      EXPECT_EQ(v["simulation_yaw_drift_deg_per_s"].get<double>(), flag.empty() ? drift : 0.0) << model << flag;
+    }
   }
   ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " + file("demo/validate_joystick.csv") +
                 " --horizons 40 --json " + file("v.json")),

@@ -898,15 +898,22 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_GT(v.outputs[0].fit_sim, w.outputs[0].fit_sim + 1.0);
     EXPECT_GT(v.outputs[1].fit_sim, w.outputs[1].fit_sim + 0.5);
     for (std::size_t i = 0; i < 2; ++i) EXPECT_GT(v.outputs[i].fit_k.at(40), w.outputs[i].fit_k.at(40) - 0.2) << v.outputs[i].name;
-    // Registering the validation run's yaw (the default) takes the standing
-    // part of steering's error out of both, so the two are close there
-    // (83.94 taken out, 83.73 left in, when written); bending cannot move.
-    const ValidationResult vr = validateModel(taken, runs.val, {40}), wr = validateModel(left, runs.val, {40});
+    // Registering the validation run's yaw without carrying the drift takes
+    // the standing part of steering's error out of both, so the two are close
+    // there (83.94 taken out, 83.73 left in, when written); bending cannot move.
+    const SimulationStart registered_only{5.0, false};
+    const ValidationResult vr = validateModel(taken, runs.val, {40}, registered_only),
+                           wr = validateModel(left, runs.val, {40}, registered_only);
     EXPECT_GT(vr.outputs[1].fit_sim, v.outputs[1].fit_sim + 5.0);
     EXPECT_GT(wr.outputs[1].fit_sim, w.outputs[1].fit_sim + 5.0);
     EXPECT_NEAR(vr.outputs[1].fit_sim, wr.outputs[1].fit_sim, 1.0);
     const Eigen::Index scored = runs.val.samples() - 400;  // after the 5 s registration window
     EXPECT_LT((vr.outputs[0].simulated.tail(scored) - v.outputs[0].simulated.tail(scored)).cwiseAbs().maxCoeff(), 1e-9);
+    // By default the model that took the drift out turns at it over the new
+    // run, whose sensor drifts on; the one that left it in has none to carry.
+    const ValidationResult vd = validateModel(taken, runs.val, {40}), wd = validateModel(left, runs.val, {40});
+    EXPECT_GT(vd.outputs[1].fit_sim, vr.outputs[1].fit_sim + 5.0);
+    EXPECT_EQ(wd.outputs[1].fit_sim, wr.outputs[1].fit_sim);
   }
   const DriftRuns still = yawDriftRuns(0.0);
   IdentifyReport rep;
@@ -999,7 +1006,8 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const double yaw = 3.0;
   const int steer = turned.columnIndex("steer_deg"), bend = turned.columnIndex("bend_deg");
   turned.data.col(steer).array() += yaw;
-  const SimulationStart none{0}, first{tip.sample_time_s}, window{0.5};  // 0.5 s: 40 samples
+  // The registration alone: without the training drift (tiny here, but a turn along the run).
+  const SimulationStart none{0}, first{tip.sample_time_s, false}, window{0.5, false};  // 0.5 s: 40 samples
   const ValidationResult base = validateModel(tip, runs.val, {40}, none);
   const ValidationResult carried = validateModel(tip, turned, {40}, none);
   const ValidationResult registered = validateModel(tip, turned, {40}, first);
@@ -1041,6 +1049,44 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   }
   EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{-1.0}), std::invalid_argument);
   EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{std::nan("")}), std::invalid_argument);
+}
+
+// A model fitted with the sensor's yaw drift taken out simulates a new run
+// turning at that rate (the default): steering's error no longer grows with
+// the run, and the turn is exactly the recorded rate, nothing else.
+TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
+  const double rate = 0.03;
+  const DriftRuns runs = yawDriftRuns(rate), still = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  ASSERT_EQ(tip.training_drift_per_s.size(), 2u);
+  ASSERT_NEAR(tip.training_drift_per_s[1], rate, 0.1 * rate);
+  const SimulationStart plain{5.0, false};
+  EXPECT_EQ(carriedYawRate(tip, SimulationStart{}), tip.training_drift_per_s[1]);
+  EXPECT_EQ(carriedYawRate(tip, plain), 0.0);
+  EXPECT_EQ(carriedYawRate(tip, SimulationStart{0}), 0.0);  // nothing to anchor the turn on
+  const ValidationResult carried = validateModel(tip, runs.val, {40}), left = validateModel(tip, runs.val, {40}, plain);
+  // The same model on a run whose sensor does not drift: what steering can reach.
+  const ValidationResult reach = validateModel(tip, still.val, {40}, plain);
+  EXPECT_GT(carried.outputs[1].fit_sim, left.outputs[1].fit_sim + 5.0);
+  EXPECT_NEAR(carried.outputs[1].fit_sim, reach.outputs[1].fit_sim, 2.0);
+  const Eigen::Index T = runs.val.samples(), n = T - 400;  // scored after the 5 s registration
+  const Eigen::VectorXd turn = carried.outputs[1].simulated.tail(n) - left.outputs[1].simulated.tail(n);
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 400, static_cast<double>(T - 1)) * tip.sample_time_s;
+  Eigen::MatrixXd A(n, 2);
+  A << t, Eigen::VectorXd::Ones(n);
+  const Eigen::Vector2d line = A.colPivHouseholderQr().solve(turn);
+  EXPECT_NEAR(line(0), tip.training_drift_per_s[1], 1e-9);
+  EXPECT_LT((A * line - turn).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((carried.outputs[0].simulated.tail(n) - left.outputs[0].simulated.tail(n)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(carried.outputs[1].fit_k.at(40), left.outputs[1].fit_k.at(40));
+  // As logged a trend has no registration to anchor it: nothing is carried.
+  IdentifyOptions o = fixedInputSide(OutputFrame::kAsLogged);
+  o.output_drift = "on";
+  const DioPwlObfModel logged = identifyModel({runs.train}, o);
+  ASSERT_FALSE(logged.training_drift_per_s.empty());
+  EXPECT_EQ(carriedYawRate(logged, SimulationStart{}), 0.0);
+  EXPECT_EQ(validateModel(logged, runs.val, {40}).outputs[1].fit_sim,
+            validateModel(logged, runs.val, {40}, plain).outputs[1].fit_sim);
 }
 
 namespace {

@@ -15,8 +15,9 @@ namespace plsa {
 namespace {
 
 // Cross-validation scores rows of the training logs themselves, whose sensor
-// the model's level is referenced to: no yaw to register.
-constexpr SimulationStart kSameSession{0};
+// the model's level is referenced to: no yaw to register, and the drift is
+// taken out of the rows about that run's own mean time.
+constexpr SimulationStart kSameSession{0, false};
 
 // Printed in ascending order (the clustering returns centres in no particular order).
 std::string fmtPoles(std::vector<std::complex<double>> p) {

@@ -21,6 +21,15 @@ Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const Simulatio
   return std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
 }
 
+double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start) {
+  // Only a registration anchors the turn on the new run; carrying the
+  // training yaw carries its sensor state, drift included, unchanged.
+  if (!start.carry_training_drift || yawRegistrationSamples(model, start) == 0 ||
+      model.training_drift_per_s.size() != 2)
+    return 0.0;
+  return model.training_drift_per_s[1];
+}
+
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                              const SimulationStart& start) {
@@ -36,6 +45,16 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   require(u.rows() >= 2, "simulateModel: need at least two samples");
   Eigen::MatrixXd level = modelLevels(model, u, dy);
   for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
+  if (const double yaw_rate = carriedYawRate(model, start); yaw_rate != 0.0) {
+    // Turned from the record's start; the registration below takes the turn's offset.
+    const double rate = yaw_rate * kRadPerDeg * model.sample_time_s;
+    for (Eigen::Index k = 0; k < level.rows(); ++k) {
+      const double c = std::cos(rate * static_cast<double>(k)), s = std::sin(rate * static_cast<double>(k));
+      const double x = level(k, 0);
+      level(k, 0) = c * x - s * level(k, 1);
+      level(k, 1) = s * x + c * level(k, 1);
+    }
+  }
   Eigen::Index first = 1;
   if (n > 0) {
     require(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +

@@ -57,6 +57,14 @@ struct SimulationStart {
   /// 0: carry the training yaw. Only tip_cartesian models with an
   /// output_level use it.
   double yaw_registration_s = 5.0;
+  /// Turn the simulated tip at the sensor yaw rate the training run showed
+  /// (training_drift_per_s) over the run, before registering: the model was
+  /// fitted with that drift taken out, and a new run's sensor drifts on (as a
+  /// gyro's bias does). On the simulator the training estimate (0.0245 deg/s)
+  /// is 4x nearer a new run's true rate (0.02) than no drift is
+  /// (docs/identification.md, item 16). Needs a registration to anchor the
+  /// turn. false: simulate the drift-free model.
+  bool carry_training_drift = true;
 };
 
 /// How many samples at a run's start simulateModel registers the yaw on:
@@ -64,6 +72,11 @@ struct SimulationStart {
 /// is > 0, else the window's samples, at least one. Throws for a window that
 /// is negative or not finite.
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start);
+
+/// The sensor yaw rate (deg/s) simulateModel turns the tip at: the model's
+/// training steering drift when `start` carries it and registers the yaw
+/// (yawRegistrationSamples > 0), else 0.
+double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start);
 
 /// Free simulation of every output from the inputs, in the model's output
 /// frame (y too): from the model's output_level when it has one (its yaw

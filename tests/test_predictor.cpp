@@ -245,6 +245,31 @@ TEST(Predictor, RejectsMismatchedModelsAtSetUp) {
   EXPECT_THROW((Predictor<5>{d.switched, bad}), std::invalid_argument);
 }
 
+// Options that would allocate a mode table of hundreds of gigabytes, or
+// silently switch a check off, are refused by name at setup.
+TEST(Predictor, RefusesOptionsItCannotHonour) {
+  const Data& d = data();
+  const auto message = [&](const PredictorOptions& o) {
+    try {
+      Predictor<5> p(d.switched, o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  PredictorOptions o;
+  o.max_horizon = std::numeric_limits<int>::max();
+  EXPECT_NE(message(o).find("max_horizon"), std::string::npos) << message(o);
+  o.max_horizon = kMaxPredictorHorizon;
+  EXPECT_EQ(message(o), "accepted");
+  o = {};
+  o.input_margin = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message(o).find("input_margin"), std::string::npos) << message(o);
+  o = {};
+  o.max_gap_factor = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message(o).find("max_gap_factor"), std::string::npos) << message(o);
+}
+
 // Two threads: one ticks, one swaps models. Every prediction must equal that
 // of the model the predictor says it used, exactly: a torn model would not.
 TEST(Predictor, HotSwapUnderLoadIsNeverTorn) {

@@ -52,8 +52,10 @@ double read(const plsa_lcm::actuator_state_t& m, const Field& f) {
 
 class PredictorNode {
  public:
-  PredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& o, const std::atomic<bool>& stop)
-      : o_(o), stop_(stop), lcm_(o.url), predictor_(model, options(o)) {
+  // `longest`: the longest of o.horizons, which runPredictorNode has checked.
+  PredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& o, int longest,
+                const std::atomic<bool>& stop)
+      : o_(o), stop_(stop), lcm_(o.url), predictor_(model, options(longest)) {
     if (!lcm_.good()) throw std::runtime_error("plsa predict: cannot open LCM");
     for (const auto& n : model.inputs) in_.push_back(fieldFor(n));
     for (const auto& n : model.outputs) out_.push_back(fieldFor(n));
@@ -93,10 +95,9 @@ class PredictorNode {
   }
 
  private:
-  // runPredictorNode has checked the horizons.
-  static PredictorOptions options(const PredictorNodeOptions& o) {
+  static PredictorOptions options(int longest) {
     PredictorOptions p;
-    p.max_horizon = *std::max_element(o.horizons.begin(), o.horizons.end());
+    p.max_horizon = longest;
     return p;
   }
 
@@ -176,7 +177,7 @@ PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const Predictor
                   longest, longest * model.sample_time_s, kMaxPublishedHorizonS, cap, model.sample_time_s);
     throw std::invalid_argument(msg);
   }
-  PredictorNode node(model, options, stop);
+  PredictorNode node(model, options, longest, stop);
   return node.run();
 }
 

@@ -45,6 +45,10 @@ inline const char* toString(PredictorStatus s) {
   return "unknown";
 }
 
+/// Largest predict() capacity: setup tabulates every mode's power sums up to
+/// it (100000 samples is about 21 min at 80 Hz, some 8 MB per output and input).
+inline constexpr int kMaxPredictorHorizon = 100000;
+
 struct PredictorOptions {
   int max_horizon = 400;         ///< capacity of predict(), preallocated
   double input_margin = 0.25;    ///< accepted inputs: model range widened by this share of it
@@ -285,9 +289,14 @@ class Predictor {
   static constexpr double kMaxModalCondition = 1e5;
 
   static PredictorOptions checked(const PredictorOptions& o) {
-    require(o.max_horizon >= 1, "Predictor: max_horizon must be >= 1");
-    require(o.input_margin >= 0, "Predictor: input_margin must be >= 0");
-    require(o.max_gap_factor > 1, "Predictor: max_gap_factor must be > 1");
+    require(o.max_horizon >= 1 && o.max_horizon <= kMaxPredictorHorizon,
+            "Predictor: max_horizon " + std::to_string(o.max_horizon) + " is outside 1.." +
+                std::to_string(kMaxPredictorHorizon) + " samples");
+    // Infinite values would switch the input-range or gap check off unannounced.
+    require(std::isfinite(o.input_margin) && o.input_margin >= 0,
+            "Predictor: input_margin must be finite and >= 0");
+    require(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
+            "Predictor: max_gap_factor must be finite and > 1");
     return o;
   }
 

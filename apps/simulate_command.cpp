@@ -28,6 +28,11 @@ void runSimulate(const SimulateOptions& o) {
   if (o.duration_s > 0) {
     if (o.experiment == "joystick") {
       eo.joystick_duration_s = o.duration_s;
+    } else if (o.experiment == "static_map") {
+      char msg[160];
+      std::snprintf(msg, sizeof msg, "--duration does not apply to static_map: it holds each of its %d x %d points %g s",
+                    eo.static_map_points, eo.static_map_points, eo.static_map_hold_s);
+      throw std::invalid_argument(msg);
     } else {
       // Spread the duration over the levels of the staircase or grid: the
       // recorded time is a fixed part (rest, first level) plus one hold per level.
@@ -54,6 +59,9 @@ void runSimulate(const SimulateOptions& o) {
   char shape[64];
   if (o.experiment == "joystick")
     std::snprintf(shape, sizeof shape, "bandwidth %.2f Hz", eo.joystick_bandwidth_hz);
+  else if (o.experiment == "static_map")
+    std::snprintf(shape, sizeof shape, "%d x %d points, hold %.0f s each", eo.static_map_points,
+                  eo.static_map_points, eo.static_map_hold_s);
   else
     std::snprintf(shape, sizeof shape, "hold %.2f s per level", eo.hold_s);
   std::fprintf(stderr, "plsa simulate: %s, %.1f s recorded at %.0f Hz after a %.1f s pre-roll (%s), seed %llu\n",
@@ -78,8 +86,10 @@ void addSimulateCommands(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("simulate", "Run an experiment on the simulated actuator, write a CSV log");
   cmd->add_option("--config", o->config, "Simulator configuration (JSON); default: built-in, all effects on")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--experiment", o->experiment, "staircase1, grid2 or joystick")
-      ->check(CLI::IsMember({"staircase1", "grid2", "joystick"}));
+  cmd->add_option("--experiment", o->experiment,
+                  "staircase1, grid2, joystick, or static_map (not the paper's: both grid chambers step together "
+                  "from 0.19 bar to each of 7 x 7 points over the grid's range and hold 40 s)")
+      ->check(CLI::IsMember({"staircase1", "grid2", "joystick", "static_map"}));
   cmd->add_option("--duration", o->duration_s,
                   "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s "
                   "held at the start)")

@@ -72,6 +72,8 @@ TEST_F(Cli, SimulateRecordsTheDurationAsked) {
   EXPECT_EQ(samples(file("j.csv")), 1680);  // 1 s held at the start, then 20 s moving
   EXPECT_EQ(run("simulate --experiment grid2 --duration 1 --out " + file("short.csv")), 1);
   EXPECT_NE(err_.find("too short for grid2"), std::string::npos) << err_;
+  EXPECT_EQ(run("simulate --experiment static_map --duration 100 --out " + file("map.csv")), 1);
+  EXPECT_NE(err_.find("--duration does not apply to static_map"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {

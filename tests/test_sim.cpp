@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <set>
 
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -332,6 +334,37 @@ TEST(SimExperiments, ShapesAndDeterminism) {
   EXPECT_THROW(makeExperiment("sine", o), std::invalid_argument);
 }
 
+// Both chambers step together from the base to every point of the map, once,
+// and come back to the base between points; the third chamber stays empty.
+TEST(SimExperiments, StaticMapVisitsEveryPointOnceFromTheBase) {
+  ExperimentOptions o;
+  o.static_map_points = 3;
+  const Experiment e = staticMapExperiment(o);
+  const auto rate = static_cast<Eigen::Index>(o.sample_rate_hz);
+  ASSERT_EQ(e.commands.rows() - e.record_from, 9 * (10 + 40) * rate);
+  EXPECT_EQ(e.commands.col(2).cwiseAbs().maxCoeff(), 0.0);
+  std::set<std::pair<double, double>> points;
+  for (int p = 0; p < 9; ++p) {
+    const Eigen::Index base = e.record_from + p * 50 * rate, at = base + 10 * rate;
+    for (Eigen::Index k = base; k < at; ++k) {
+      ASSERT_EQ(e.commands(k, 0), 0.19);
+      ASSERT_EQ(e.commands(k, 1), 0.19);
+    }
+    for (Eigen::Index k = at; k < at + 40 * rate; ++k) ASSERT_EQ(e.commands.row(k), e.commands.row(at));
+    points.insert({e.commands(at, 0), e.commands(at, 1)});
+  }
+  const std::set<std::pair<double, double>> expected = {
+      {0.20, 0.20}, {0.20, 0.275}, {0.20, 0.35}, {0.275, 0.20}, {0.275, 0.275},
+      {0.275, 0.35}, {0.35, 0.20}, {0.35, 0.275}, {0.35, 0.35}};
+  ASSERT_EQ(points.size(), 9u);
+  for (const auto& [pa, pb] : expected) {
+    bool found = false;
+    for (const auto& [qa, qb] : points) found = found || (std::abs(pa - qa) < 1e-12 && std::abs(pb - qb) < 1e-12);
+    EXPECT_TRUE(found) << pa << ", " << pb;
+  }
+  EXPECT_EQ(makeExperiment("static_map", o).commands, e.commands);
+}
+
 // Each time option is checked before it sizes anything: lround of an infinite
 // hold is undefined, and a zero bandwidth divided by zero in the joystick's filter.
 TEST(SimExperiments, RefusesTimesThatCannotBeBuiltByName) {
@@ -358,6 +391,18 @@ TEST(SimExperiments, RefusesTimesThatCannotBeBuiltByName) {
   o = {};
   o.sample_rate_hz = 1e6;  // the default 60 s joystick, at a rate no rig samples at
   expectRefusal("joystick", o, "joystick: 101 s at 1e+06 Hz is 1.01e+08 samples");
+  o = {};
+  o.static_map_hold_s = std::numeric_limits<double>::infinity();
+  expectRefusal("static_map", o, "static_map_hold_s must be a finite number above 0");
+  o = {};
+  o.static_map_points = 1;
+  expectRefusal("static_map", o, "static_map_points must be 2 to 100");
+  o = {};
+  o.static_map_base_bar = 0.25;
+  expectRefusal("static_map", o, "the base must not be above the grid's lowest level");
+  o = {};
+  o.static_map_points = 100;  // 10000 points of 50 s at 80 Hz
+  expectRefusal("static_map", o, "above the 10000000 one experiment holds");
 }
 
 TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers) {

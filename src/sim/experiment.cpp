@@ -175,11 +175,47 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   return e;
 }
 
+Experiment staticMapExperiment(const ExperimentOptions& o) {
+  checkCommon(o);
+  require(o.static_map_points >= 2 && o.static_map_points <= 100, "static_map: static_map_points must be 2 to 100");
+  require(std::isfinite(o.static_map_base_bar) && o.static_map_base_bar >= 0,
+          "static_map: static_map_base_bar must be a finite number >= 0");
+  require(o.static_map_base_s > 0 && std::isfinite(o.static_map_base_s),
+          "static_map: static_map_base_s must be a finite number above 0");
+  require(o.static_map_hold_s > 0 && std::isfinite(o.static_map_hold_s),
+          "static_map: static_map_hold_s must be a finite number above 0");
+  require(o.grid_levels_bar.size() >= 2 && o.grid_levels_bar.back() > o.grid_levels_bar.front(),
+          "static_map: the grid's levels must span a range");
+  const int a = chamberIndex(o.grid_chambers[0]);
+  const int b = chamberIndex(o.grid_chambers[1]);
+  require(a != b, "static_map: the two chambers must differ");
+  const double lo = o.grid_levels_bar.front(), hi = o.grid_levels_bar.back();
+  require(o.static_map_base_bar <= lo, "static_map: the base must not be above the grid's lowest level");
+  const int n = o.static_map_points;
+  requireSamples("static_map",
+                 (o.preroll_s + n * n * (o.static_map_base_s + o.static_map_hold_s)) * o.sample_rate_hz,
+                 o.sample_rate_hz);
+  CommandWriter w("static_map", o.sample_rate_hz);
+  Eigen::RowVector3d base = Eigen::RowVector3d::Zero();
+  base(a) = base(b) = o.static_map_base_bar;
+  w.preroll(base, o.preroll_s);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      Eigen::RowVector3d point = base;
+      point(a) = lo + (hi - lo) * i / (n - 1);
+      point(b) = lo + (hi - lo) * j / (n - 1);
+      w.hold(base, o.static_map_base_s);
+      w.hold(point, o.static_map_hold_s);
+    }
+  return {"static_map", w.matrix(), w.recordFrom()};
+}
+
 Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
   if (name == "staircase1") return staircaseExperiment(o);
   if (name == "grid2") return gridExperiment(o);
   if (name == "joystick") return joystickExperiment(o);
-  throw std::invalid_argument("unknown experiment '" + name + "' (choose staircase1, grid2 or joystick)");
+  if (name == "static_map") return staticMapExperiment(o);
+  throw std::invalid_argument("unknown experiment '" + name + "' (choose staircase1, grid2, joystick or static_map)");
 }
 
 io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {

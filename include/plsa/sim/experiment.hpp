@@ -1,6 +1,6 @@
 // Identification and validation experiments (paper Section V-A, Table I):
 // single-chamber staircases, the two-chamber reference-pressure grid with one
-// input moving at a time, and smooth joystick-like validation runs.
+// input moving at a time, smooth joystick-like validation runs, and a static map.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +26,12 @@ struct ExperimentOptions {
   // grid2 (paper: 0.20 to 0.35 bar, four levels per chamber)
   std::vector<double> grid_levels_bar = {0.20, 0.25, 0.30, 0.35};
   std::array<int, 2> grid_chambers = {1, 2};
+  // static_map: from a base below the grid, step both grid chambers together to
+  // each point of an n x n map over the grid's range and hold until settled.
+  int static_map_points = 7;
+  double static_map_base_bar = 0.19;
+  double static_map_base_s = 10.0;  ///< back at the base between points
+  double static_map_hold_s = 40.0;  ///< five time constants of the default creep
   // joystick
   double joystick_duration_s = 60.0;
   /// The grid's range and 0.01 bar beyond it at either end: mostly
@@ -57,7 +63,10 @@ struct Experiment {
 Experiment staircaseExperiment(const ExperimentOptions& o);
 Experiment gridExperiment(const ExperimentOptions& o);
 Experiment joystickExperiment(const ExperimentOptions& o);
-/// By name: "staircase1", "grid2" or "joystick"; throws naming the choices.
+/// Not the paper's: shows a model's settled error where the grid, which moves
+/// one chamber at a time, never goes (both chambers rising together).
+Experiment staticMapExperiment(const ExperimentOptions& o);
+/// By name: "staircase1", "grid2", "joystick" or "static_map"; throws naming the choices.
 Experiment makeExperiment(const std::string& name, const ExperimentOptions& o);
 
 /// Drives the actuator with the experiment and records the standard columns

@@ -87,9 +87,10 @@ void addSimulateCommands(CLI::App& app) {
   cmd->add_option("--config", o->config, "Simulator configuration (JSON); default: built-in, all effects on")
       ->check(CLI::ExistingFile);
   cmd->add_option("--experiment", o->experiment,
-                  "staircase1, grid2, joystick, or static_map (not the paper's: both grid chambers step together "
-                  "from 0.19 bar to each of 7 x 7 points over the grid's range and hold 40 s)")
-      ->check(CLI::IsMember({"staircase1", "grid2", "joystick", "static_map"}));
+                  "staircase1, grid2, joystick; not the paper's: grid2_joint (grid2, then both chambers moving "
+                  "at once along its diagonals) or static_map (both grid chambers step together from 0.19 bar to "
+                  "each of 7 x 7 points over the grid's range and hold 40 s)")
+      ->check(CLI::IsMember({"staircase1", "grid2", "grid2_joint", "joystick", "static_map"}));
   cmd->add_option("--duration", o->duration_s,
                   "Recorded duration in seconds (default: the design's own; joystick: its moving part, after 1 s "
                   "held at the start)")

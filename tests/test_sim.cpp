@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 
 #include "plsa/sim/actuator.hpp"
@@ -363,6 +365,48 @@ TEST(SimExperiments, StaticMapVisitsEveryPointOnceFromTheBase) {
     EXPECT_TRUE(found) << pa << ", " << pb;
   }
   EXPECT_EQ(makeExperiment("static_map", o).commands, e.commands);
+}
+
+// The grid exactly, then every diagonal step of its levels (both chambers a
+// level up or down at once, in the same or opposite directions) exactly once
+// each way; the third chamber stays empty.
+TEST(SimExperiments, GridJointAddsEveryDiagonalStepOnceEachWay) {
+  ExperimentOptions o;
+  const Experiment grid = gridExperiment(o);
+  const Experiment joint = gridJointExperiment(o);
+  ASSERT_GT(joint.commands.rows(), grid.commands.rows());
+  EXPECT_EQ(joint.record_from, grid.record_from);
+  EXPECT_EQ(joint.commands.topRows(grid.commands.rows()), grid.commands);
+  EXPECT_EQ(joint.commands.col(2).cwiseAbs().maxCoeff(), 0.0);
+  const auto& L = o.grid_levels_bar;
+  const auto level = [&](double bar) {
+    for (std::size_t i = 0; i < L.size(); ++i)
+      if (bar == L[i]) return static_cast<int>(i);
+    ADD_FAILURE() << bar << " bar is not a grid level";
+    return -100;
+  };
+  std::map<std::array<int, 4>, int> diagonal_moves;
+  const auto hold = static_cast<Eigen::Index>(o.hold_s * o.sample_rate_hz);
+  Eigen::Index since_change = hold;
+  for (Eigen::Index k = grid.commands.rows(); k < joint.commands.rows(); ++k) {
+    const int ia = level(joint.commands(k - 1, 0)), ja = level(joint.commands(k - 1, 1));
+    const int ib = level(joint.commands(k, 0)), jb = level(joint.commands(k, 1));
+    if (ia == ib && ja == jb) {
+      ++since_change;
+      continue;
+    }
+    EXPECT_EQ(since_change, hold) << "sample " << k;  // each point held hold_s
+    since_change = 1;
+    if (std::abs(ib - ia) == 1 && std::abs(jb - ja) == 1) ++diagonal_moves[{ia, ja, ib, jb}];
+  }
+  EXPECT_EQ(since_change, hold);
+  const int n = static_cast<int>(L.size());
+  ASSERT_EQ(diagonal_moves.size(), static_cast<std::size_t>(4 * (n - 1) * (n - 1)));
+  for (const auto& [move, count] : diagonal_moves) {
+    EXPECT_EQ(count, 1) << move[0] << "," << move[1] << " -> " << move[2] << "," << move[3];
+    EXPECT_TRUE(move[0] >= 0 && move[0] < n && move[1] >= 0 && move[1] < n);
+  }
+  EXPECT_EQ(makeExperiment("grid2_joint", o).commands, joint.commands);
 }
 
 // Each time option is checked before it sizes anything: lround of an infinite

@@ -5,6 +5,8 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "plsa/core/check.hpp"
 
@@ -89,7 +91,9 @@ Experiment staircaseExperiment(const ExperimentOptions& o) {
   return {"staircase1", w.matrix()};
 }
 
-Experiment gridExperiment(const ExperimentOptions& o) {
+namespace {
+
+Experiment gridWithOptionalJointPass(const ExperimentOptions& o, bool joint) {
   checkCommon(o);
   require(o.grid_levels_bar.size() >= 2, "grid2: need at least two levels per chamber");
   for (std::size_t i = 1; i < o.grid_levels_bar.size(); ++i)
@@ -98,7 +102,7 @@ Experiment gridExperiment(const ExperimentOptions& o) {
   const int b = chamberIndex(o.grid_chambers[1]);
   require(a != b, "grid2: the two chambers must differ");
   const auto& L = o.grid_levels_bar;
-  CommandWriter w("grid2", o.sample_rate_hz);
+  CommandWriter w(joint ? "grid2_joint" : "grid2", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
   cmd(a) = L.front();
   cmd(b) = L.front();
@@ -127,8 +131,41 @@ Experiment gridExperiment(const ExperimentOptions& o) {
       }
     }
   }
-  return {"grid2", w.matrix(), w.recordFrom()};
+  if (joint) {
+    // Out and back along each diagonal (both chambers a level up together) and
+    // each anti-diagonal (one up as the other goes down) with two nodes or more.
+    const int n = static_cast<int>(L.size());
+    auto walk = [&](const std::vector<std::pair<int, int>>& nodes) {
+      std::vector<std::pair<int, int>> path = nodes;
+      path.insert(path.end(), nodes.rbegin() + 1, nodes.rend());
+      for (const auto& [i, j] : path) {
+        if (cmd(a) == L[static_cast<std::size_t>(i)] && cmd(b) == L[static_cast<std::size_t>(j)]) continue;
+        cmd(a) = L[static_cast<std::size_t>(i)];
+        cmd(b) = L[static_cast<std::size_t>(j)];
+        w.hold(cmd, o.hold_s);
+      }
+    };
+    for (int d = -(n - 2); d <= n - 2; ++d) {
+      std::vector<std::pair<int, int>> nodes;
+      for (int i = 0; i < n; ++i)
+        if (i + d >= 0 && i + d < n) nodes.emplace_back(i, i + d);
+      walk(nodes);
+    }
+    for (int s = 1; s <= 2 * n - 3; ++s) {
+      std::vector<std::pair<int, int>> nodes;
+      for (int i = 0; i < n; ++i)
+        if (s - i >= 0 && s - i < n) nodes.emplace_back(i, s - i);
+      walk(nodes);
+    }
+  }
+  return {joint ? "grid2_joint" : "grid2", w.matrix(), w.recordFrom()};
 }
+
+}  // namespace
+
+Experiment gridExperiment(const ExperimentOptions& o) { return gridWithOptionalJointPass(o, false); }
+
+Experiment gridJointExperiment(const ExperimentOptions& o) { return gridWithOptionalJointPass(o, true); }
 
 Experiment joystickExperiment(const ExperimentOptions& o) {
   checkCommon(o);
@@ -215,7 +252,9 @@ Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
   if (name == "grid2") return gridExperiment(o);
   if (name == "joystick") return joystickExperiment(o);
   if (name == "static_map") return staticMapExperiment(o);
-  throw std::invalid_argument("unknown experiment '" + name + "' (choose staircase1, grid2, joystick or static_map)");
+  if (name == "grid2_joint") return gridJointExperiment(o);
+  throw std::invalid_argument("unknown experiment '" + name +
+                              "' (choose staircase1, grid2, grid2_joint, joystick or static_map)");
 }
 
 io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {

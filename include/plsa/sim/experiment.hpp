@@ -66,7 +66,10 @@ Experiment joystickExperiment(const ExperimentOptions& o);
 /// Not the paper's: shows a model's settled error where the grid, which moves
 /// one chamber at a time, never goes (both chambers rising together).
 Experiment staticMapExperiment(const ExperimentOptions& o);
-/// By name: "staircase1", "grid2", "joystick" or "static_map"; throws naming the choices.
+/// Not the paper's: grid2, then out and back along every diagonal and
+/// anti-diagonal of its levels, both chambers moving at once, as a joystick does.
+Experiment gridJointExperiment(const ExperimentOptions& o);
+/// By name: "staircase1", "grid2", "grid2_joint", "joystick" or "static_map"; throws naming the choices.
 Experiment makeExperiment(const std::string& name, const ExperimentOptions& o);
 
 /// Drives the actuator with the experiment and records the standard columns

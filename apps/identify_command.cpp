@@ -254,6 +254,12 @@ void addIdentifyCommands(CLI::App& app) {
                  "chamber's opening pressure), tried against zero by cross-validation; '0' alone counts from zero")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.95));
+  id->add_option("--play-softening", a->options.play_softening_candidates,
+                 "Candidate softenings of the play channels' level, x - s x^2 above the threshold, as fractions of "
+                 "the top level above it (0.2: the top level cut by 20%), tried against none with each threshold; "
+                 "default none")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.49));
   id->add_option("--slow-pole", a->options.slow_pole_candidates,
                  "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")

@@ -448,6 +448,24 @@ TEST(ModelFile, PlayThresholdRoundTripsAndIsChecked) {
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
 }
 
+TEST(ModelFile, PlaySofteningRoundTripsAndIsChecked) {
+  DioPwlObfModel m = knownModel();
+  m.play_softening = 0.8;
+  EXPECT_EQ(modelFromJson(modelToJson(m)).play_softening, 0.8);
+  nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+  j.erase("play_softening");  // written before the field existed: linear
+  EXPECT_EQ(modelFromJson(j.dump()).play_softening, 0.0);
+  j["play_softening"] = -0.5;
+  try {
+    modelFromJson(j.dump());
+    ADD_FAILURE() << "a negative softening was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("play_softening"), std::string::npos) << e.what();
+  }
+  j["play_softening"] = "soft";
+  EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
+}
+
 TEST(ModelFile, TrainingDriftRoundTripsAndIsChecked) {
   DioPwlObfModel m = knownModel();
   ASSERT_EQ(m.outputCount(), 1);
@@ -536,6 +554,13 @@ TEST(PlayChannel, RisingStartFollowsTheFirstRiseAndSlopeGrowsTheBand) {
   EXPECT_EQ(coupledLevel(0.3, 0.3 + 0.2, 0.0), 0.3);
   EXPECT_NEAR(coupledLevel(0.3, 0.3 + 0.2 + 0.0, 1.0), 0.3 - 0.3 * 0.2, 1e-15);
   EXPECT_NEAR(coupledLevel(-0.01, 0.2, 1.0), -0.01, 1e-15);  // an empty chamber is not pushed further
+  // Softening: x - s x^2 first, then the coupling on what is left; flat past the peak at 1/2s.
+  EXPECT_NEAR(coupledLevel(0.3, 0.3, 0.0, 1.0), 0.3 - 0.09, 1e-15);
+  EXPECT_NEAR(coupledLevel(0.3, 0.3 + 0.2, 1.0, 1.0), 0.21 - 0.21 * 0.2, 1e-15);
+  EXPECT_NEAR(coupledLevel(0.3, 0.3, 0.0, 2.0), 0.125, 1e-15);
+  EXPECT_EQ(coupledLevel(0.3, 0.3, 0.0, 2.0), coupledLevel(0.25, 0.25, 0.0, 2.0));
+  EXPECT_LT(coupledLevel(0.2, 0.2, 0.0, 2.0), coupledLevel(0.24, 0.24, 0.0, 2.0));
+  EXPECT_NEAR(coupledLevel(-0.01, 0.2, 1.0, 1.0), -0.01, 1e-15);
   // A threshold: levels count from it, zero below it; none passes negatives through.
   EXPECT_NEAR(levelAbove(0.3, 0.07), 0.23, 1e-15);
   EXPECT_EQ(levelAbove(0.05, 0.07), 0.0);

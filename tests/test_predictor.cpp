@@ -45,10 +45,11 @@ const Data& data() {
     o.play_candidates = {{0.1, PlayChannel(0.0, 0.12)}};
     o.play_coupling_candidates = {};
     out.interpolated = identifyModel({train}, o);
-    // ...coupled to the other inputs and counted from a threshold, so the
-    // predictor's channel levels are checked too.
+    // ...coupled to the other inputs, counted from a threshold and softened,
+    // so the predictor's channel levels are checked too.
     out.interpolated.play_coupling = 1.0;
     out.interpolated.play_threshold = 0.07;
+    out.interpolated.play_softening = 1.5;
     fitCoefficients(out.interpolated, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Scheduled through a lag: the predictor carries the lagged inputs, and a
     // held input keeps moving the schedule until the lag settles.

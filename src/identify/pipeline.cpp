@@ -575,46 +575,70 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   // Where the play channels count from, on the chosen model. A threshold moves
   // where a growing band starts and how much of a neighbour the coupling
-  // sees, so each one is tried with every growing set as well as the chosen one.
-  if (!o.play_threshold_candidates.empty()) {
+  // sees, so each one is tried with every growing set as well as the chosen
+  // one; each softening (none unless asked for) with each threshold, since
+  // both reshape the same level.
+  if (!o.play_threshold_candidates.empty() || !o.play_softening_candidates.empty()) {
     std::vector<std::vector<PlayChannel>> sets{best_set};
     for (const auto& set : o.play_candidates)
       if (set != best_set && std::any_of(set.begin(), set.end(), [](const PlayChannel& c) { return c.slope > 0; }))
         sets.push_back(set);
+    std::vector<double> thresholds{0.0}, softenings{0.0};
+    for (double d : o.play_threshold_candidates) {
+      require(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
+      if (d > 0) thresholds.push_back(d);
+    }
+    for (double f : o.play_softening_candidates) {
+      require(f >= 0 && f < 0.5,
+              "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
+      if (f > 0) softenings.push_back(f);
+    }
     // A neighbour's level now counts from the threshold: the chosen coupling
     // is kept as a fraction of the top level above it.
     const double coupling_fraction = best_coupling * top_level;
-    double best_threshold = 0.0;
-    rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, best_score});
-    for (double d : o.play_threshold_candidates) {
-      require(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
-      if (d == 0) continue;  // scored already
+    double best_threshold = 0.0, best_softening = 0.0;
+    rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, 0.0, best_score});
+    for (double d : thresholds) {
       model.play_threshold = d * top_level;
-      model.play_coupling = coupling_fraction / (top_level - model.play_threshold);
-      for (const auto& set : sets) {
-        applyPlay(set);
-        const double score = crossValidated();
-        rep.threshold_scores.push_back({set, d, coupling_fraction, score});
-        if (score > best_score + 1e-9) {
-          best_score = score;
-          best_set = set;
-          best_threshold = model.play_threshold;
-          best_coupling = model.play_coupling;
+      const double above = top_level - model.play_threshold;
+      model.play_coupling = coupling_fraction / above;
+      for (double f : softenings) {
+        if (d == 0 && f == 0) continue;  // scored already
+        model.play_softening = f / above;
+        for (const auto& set : sets) {
+          applyPlay(set);
+          const double score = crossValidated();
+          rep.threshold_scores.push_back({set, d, coupling_fraction, f, score});
+          if (score > best_score + 1e-9) {
+            best_score = score;
+            best_set = set;
+            best_threshold = model.play_threshold;
+            best_coupling = model.play_coupling;
+            best_softening = model.play_softening;
+          }
         }
       }
     }
     model.play_threshold = best_threshold;
     model.play_coupling = best_coupling;
+    model.play_softening = best_softening;
     applyPlay(best_set);
-    std::string s = "[5/5] play channels counted from a threshold (x top level; coupling x top level above it): ";
-    s += best_threshold > 0 ? "kept " + formatNumber(best_threshold / top_level) + " (" +
-                                  formatNumber(best_threshold) + " input units), coupling " +
-                                  formatNumber(best_coupling * (top_level - best_threshold)) + ", play " +
-                                  formatPlaySet(best_set)
-                            : std::string("none kept");
-    s += ". Scores (threshold/coupling{play}):";
+    const double above = top_level - best_threshold;
+    const bool softened = !o.play_softening_candidates.empty();
+    std::string s = softened ? "[5/5] play channels counted from a threshold and softened (x top level; coupling "
+                               "and softening x top level above it): "
+                             : "[5/5] play channels counted from a threshold (x top level; coupling x top level above "
+                               "it): ";
+    s += best_threshold > 0 || best_softening > 0
+             ? "kept " + formatNumber(best_threshold / top_level) + " (" + formatNumber(best_threshold) +
+                   " input units), coupling " + formatNumber(best_coupling * above) +
+                   (softened ? ", softening " + formatNumber(best_softening * above) : std::string()) + ", play " +
+                   formatPlaySet(best_set)
+             : std::string("none kept");
+    s += softened ? ". Scores (threshold/coupling/softening{play}):" : ". Scores (threshold/coupling{play}):";
     for (const auto& t : rep.threshold_scores)
-      s += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) + formatPlaySet(t.set) + "->" +
+      s += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) +
+           (softened ? "/" + formatNumber(t.softening) : std::string()) + formatPlaySet(t.set) + "->" +
            std::to_string(t.score).substr(0, 5);
     say(s);
   }

@@ -97,6 +97,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["play_start"] = m.play_start == PlayStart::kRising ? "rising" : "centred";
   j["play_coupling"] = m.play_coupling;
   j["play_threshold"] = m.play_threshold;
+  j["play_softening"] = m.play_softening;
   j["schedule_lag_s"] = m.schedule_lag_s;
   j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
   if (!m.output_level.empty()) j["output_level"] = m.output_level;
@@ -192,6 +193,7 @@ DioPwlObfModel modelFromJson(const std::string& text, const std::string& source)
   m.play_start = start == "rising" ? PlayStart::kRising : PlayStart::kCentred;
   m.play_coupling = j.contains("play_coupling") ? rd.number(j["play_coupling"], "play_coupling") : 0.0;
   m.play_threshold = j.contains("play_threshold") ? rd.number(j["play_threshold"], "play_threshold") : 0.0;
+  m.play_softening = j.contains("play_softening") ? rd.number(j["play_softening"], "play_softening") : 0.0;
   m.schedule_lag_s = j.contains("schedule_lag_s") ? rd.number(j["schedule_lag_s"], "schedule_lag_s") : 0.0;
   const std::string side = j.contains("schedule_side") ? rd.string(j["schedule_side"], "schedule_side") : "output";
   if (side != "output" && side != "input")

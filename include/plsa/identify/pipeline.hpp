@@ -67,6 +67,12 @@ struct IdentifyOptions {
   /// the threshold. A chamber that only stretches past an opening pressure.
   /// Empty: from zero.
   std::vector<double> play_threshold_candidates = {0.1, 0.2, 0.3};
+  /// Softenings of the channels' level (DioPwlObfModel::play_softening), as
+  /// fractions of the top level above the threshold (0.2: the top level is
+  /// cut by 20%, less below it), tried with each threshold above, every
+  /// growing set and none. Empty (default): linear levels. Not chosen by
+  /// default: docs/identification.md, nineteenth session.
+  std::vector<double> play_softening_candidates;
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
   /// taken out of the training outputs. "auto": kept if held-out simulation
@@ -115,6 +121,7 @@ struct IdentifyReport {
     std::vector<PlayChannel> set;
     double threshold;  ///< as given in the options (0: none)
     double coupling;   ///< as given in the options, of the top level above the threshold
+    double softening;  ///< as given in the options, of the top level above the threshold (0: none)
     double score;
   };
   std::vector<ThresholdScore> threshold_scores;

@@ -61,13 +61,20 @@ inline double playStartState(double u, const PlayChannel& ch, PlayStart start) n
   return start == PlayStart::kRising ? u - ch.halfWidth(u) : u;
 }
 
-/// What input j's play channels see: its level less kappa times its positive
-/// part times the other inputs' positive parts, `u_j - kappa u_j+ sum_k!=j u_k+`:
-/// a chamber's wall stiffened by its pressurised neighbours, to first order.
-/// kappa = 0 passes u_j through. `positive_sum` is sum_k max(0, u_k).
-inline double coupledLevel(double u_j, double positive_sum, double kappa) noexcept {
+/// What input j's play channels see: its positive level softened, `x - s x^2`
+/// (a wall whose strain saturates; flat past its peak at x = 1/2s, so it never
+/// falls as the input rises), then less kappa times that times the other
+/// inputs' positive parts: a chamber's wall stiffened by its pressurised
+/// neighbours, to first order. kappa = s = 0 passes u_j through.
+/// `positive_sum` is sum_k max(0, u_k).
+inline double coupledLevel(double u_j, double positive_sum, double kappa, double softening = 0.0) noexcept {
   const double own = std::max(0.0, u_j);
-  return u_j - kappa * own * (positive_sum - own);
+  double level = u_j;
+  if (softening > 0.0 && own > 0.0) {
+    const double x = std::min(own, 0.5 / softening);
+    level = x - softening * x * x;
+  }
+  return level - kappa * std::max(0.0, level) * (positive_sum - own);
 }
 
 /// An input's level counted from `threshold` (DioPwlObfModel::play_threshold):
@@ -120,6 +127,10 @@ struct DioPwlObfModel {
   /// chamber's wall only stretches once its pressure passes an opening
   /// threshold. 0 = the inputs as they are. Input units.
   double play_threshold = 0.0;
+  /// s of coupledLevel, 1/input unit: the level above the threshold softens to
+  /// x - s x^2 before the coupling and the play, as a strain that saturates
+  /// with pressure. 0 = linear (files written before it existed).
+  double play_softening = 0.0;
   /// The partition is looked up at the inputs through a first-order lag of
   /// this time constant (unit gain), 0 = at the raw inputs (the paper). The
   /// coefficients then follow the actuator's state rather than its command,
@@ -195,6 +206,7 @@ struct DioPwlObfModel {
     }
     require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
     require(std::isfinite(play_threshold) && play_threshold >= 0, "model: play_threshold must be finite and >= 0");
+    require(std::isfinite(play_softening) && play_softening >= 0, "model: play_softening must be finite and >= 0");
     require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     require(output_level.empty() || schedule_side == ScheduleSide::kInput,
             "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
@@ -264,7 +276,7 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
                                        const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
                                        PlayStart start = PlayStart::kRising, double coupling = 0.0,
                                        double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
-                                       double threshold = 0.0) {
+                                       double threshold = 0.0, double softening = 0.0) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -304,13 +316,13 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
   // Channel inputs: input j above the threshold (coupled to the others)
   // through each of its play channels.
   Eigen::MatrixXd coupled;
-  const bool shaped = coupling != 0.0 || threshold != 0.0;
+  const bool shaped = coupling != 0.0 || threshold != 0.0 || softening != 0.0;
   if (shaped) {
     coupled.resize(T, u.cols());
     for (Eigen::Index k = 0; k < T; ++k) {
       const double positive_sum = positiveSumAbove(u.row(k), threshold);
       for (Eigen::Index j = 0; j < u.cols(); ++j)
-        coupled(k, j) = coupledLevel(levelAbove(u(k, j), threshold), positive_sum, coupling);
+        coupled(k, j) = coupledLevel(levelAbove(u(k, j), threshold), positive_sum, coupling, softening);
     }
   }
   const Eigen::MatrixXd& level = shaped ? coupled : u;
@@ -350,10 +362,10 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
 }
 
 /// The regressors of `model`'s own structure (poles, partition, play, start,
-/// coupling, threshold, lag and side) for an input record.
+/// coupling, threshold, softening, lag and side) for an input record.
 inline ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   return modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
-                         model.schedulePole(), model.schedule_side, model.play_threshold);
+                         model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
 }
 
 /// The model's predicted increments dyhat (T x n_y) from regressors of its

@@ -146,7 +146,8 @@ class Predictor {
       const double positive_sum = positiveSumAbove(u_, s.threshold);
       for (std::size_t c = 0; c < s.play.size(); ++c)
         vc_(static_cast<Eigen::Index>(c)) =
-            playStartState(coupledLevel(levelAbove(u_(s.channel_input[c]), s.threshold), positive_sum, s.coupling),
+            playStartState(coupledLevel(levelAbove(u_(s.channel_input[c]), s.threshold), positive_sum, s.coupling,
+                                        s.softening),
                            s.play[c], s.play_start);
       dir_ = DirectionState{};
       if (s.input_side) nodeWeights(s, us_, node_w_);
@@ -264,6 +265,7 @@ class Predictor {
     PlayStart play_start = PlayStart::kRising;
     double coupling = 0.0;                          ///< coupledLevel's kappa
     double threshold = 0.0;                         ///< level the channels count from
+    double softening = 0.0;                         ///< coupledLevel's softening
     double schedule_pole = 0.0;                     ///< lag of the scheduling inputs, per sample
     // Input side: one copy of every bank per grid node, fed the increments of
     // the node's weight times the played input; `partition` is then the single
@@ -318,6 +320,7 @@ class Predictor {
     s->play_start = m.play_start;
     s->coupling = m.play_coupling;
     s->threshold = m.play_threshold;
+    s->softening = m.play_softening;
     s->schedule_pole = m.schedulePole();
     std::vector<std::vector<int>> channels_of(static_cast<std::size_t>(s->n_u));
     for (int j = 0; j < s->n_u; ++j)
@@ -572,7 +575,8 @@ class Predictor {
     const double positive_sum = s.coupling != 0.0 ? positiveSumAbove(u, s.threshold) : 0.0;  // unused when uncoupled
     for (std::size_t c = 0; c < s.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double ui = coupledLevel(levelAbove(u(s.channel_input[c]), s.threshold), positive_sum, s.coupling);
+      const double ui =
+          coupledLevel(levelAbove(u(s.channel_input[c]), s.threshold), positive_sum, s.coupling, s.softening);
       const double next = s.play[c].follow(ui, vc(cc));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;

@@ -260,6 +260,11 @@ void addIdentifyCommands(CLI::App& app) {
                  "default none")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.49));
+  id->add_option("--refine-play", a->options.play_refine_evaluations,
+                 "At most this many cross-validated fits spent refining the chosen threshold, coupling, softening "
+                 "and play channel size together (NLopt BOBYQA from the choice); kept if the held-out fit improves; "
+                 "default 0 (none)")
+      ->check(CLI::Range(0, 10000));
   id->add_option("--slow-pole", a->options.slow_pole_candidates,
                  "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")

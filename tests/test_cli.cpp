@@ -304,7 +304,8 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
             0);
   EXPECT_NE(err_.find("--output-frame"), std::string::npos) << err_;
   for (const std::string bad :
-       {"--play-threshold 1.5", "--play-threshold low", "--play-coupling -0.2", "--output-drift sometimes"}) {
+       {"--play-threshold 1.5", "--play-threshold low", "--play-coupling -0.2", "--output-drift sometimes",
+        "--refine-play -1", "--refine-play 20000", "--play-softening 0.5"}) {
     EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg " + bad + " --out " +
                   file("m.json")),
               0)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 
@@ -1202,6 +1203,72 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
   EXPECT_TRUE(rep.drift_taken_out);
   ASSERT_EQ(rep.output_drift.rate.size(), 2u);
   EXPECT_NEAR(rep.output_drift.rate[1], 0.02, 0.008);
+}
+
+// The joint refinement starts from the staged choice and may only keep a
+// point that scores higher on the held-out chunks, inside its box, within its
+// budget. From a structure without a threshold it must find the simulator's
+// deadzone (0.06 bar) from the score alone.
+TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
+  const io::Log& train = allEffectsRuns().train;
+  IdentifyOptions o;
+  o.output_frame = OutputFrame::kTipCartesian;
+  o.scheduling = "input";
+  o.play_candidates = {{PlayChannel(0.0, 0.16)}};
+  o.play_coupling_candidates = {0.3};
+  o.schedule_lag_candidates = {};
+  o.play_threshold_candidates = {};
+  o.slow_pole_candidates = {};
+  o.output_drift = "off";
+  IdentifyReport plain;
+  const DioPwlObfModel staged = identifyModel({train}, o, &plain);
+  EXPECT_EQ(plain.refine_evaluations, 0);
+  EXPECT_EQ(staged.play_threshold, 0.0);
+  EXPECT_EQ(staged.play_softening, 0.0);
+
+  o.play_refine_evaluations = 14;
+  IdentifyReport rep;
+  const DioPwlObfModel refined = identifyModel({train}, o, &rep);
+  EXPECT_GT(rep.refine_evaluations, 0);
+  EXPECT_LE(rep.refine_evaluations, 14);
+  EXPECT_EQ(rep.refine_start.threshold, 0.0);
+  EXPECT_NEAR(rep.refine_start.coupling, 0.3, 1e-12);
+  EXPECT_EQ(rep.refine_start.channel_scale, 1.0);
+  const auto& b = rep.refine_best;
+  std::printf("refined in %d scores: %.3f -> %.3f held out; threshold %.3f, coupling %.3f, softening %.3f, x%.3f\n",
+              rep.refine_evaluations, rep.refine_start.score, b.score, b.threshold, b.coupling, b.softening,
+              b.channel_scale);
+  EXPECT_GT(b.score, rep.refine_start.score + 0.3) << "start " << rep.refine_start.score;
+  EXPECT_GE(b.threshold, 0.0);
+  EXPECT_LE(b.threshold, 0.45);
+  EXPECT_LE(b.coupling, 0.6);
+  EXPECT_LE(b.softening, 0.45);
+  EXPECT_GE(b.channel_scale, 0.5);
+  EXPECT_LE(b.channel_scale, 2.0);
+  // The model carries the best point, in its own units (top level 0.35 bar).
+  const double top = 0.35;
+  EXPECT_NEAR(refined.play_threshold, b.threshold * top, 1e-9);
+  EXPECT_NEAR(refined.play_coupling * (top - refined.play_threshold), b.coupling, 1e-9);
+  EXPECT_NEAR(refined.play_softening * (top - refined.play_threshold), b.softening, 1e-9);
+  ASSERT_EQ(refined.input_play.size(), 3u);
+  EXPECT_NEAR(refined.input_play[0].at(0).slope, 0.16 * b.channel_scale, 1e-12);
+  EXPECT_GT(refined.play_threshold, 0.02);
+  EXPECT_LT(refined.play_threshold, 0.12);
+  const bool said = std::any_of(rep.lines.begin(), rep.lines.end(),
+                                [](const std::string& l) { return l.find("refined jointly") != std::string::npos; });
+  EXPECT_TRUE(said);
+
+  o.play_refine_evaluations = -1;
+  EXPECT_THROW(
+      {
+        try {
+          identifyModel({train}, o);
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("refinement evaluations"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      std::invalid_argument);
 }
 
 TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {

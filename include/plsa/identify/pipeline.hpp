@@ -73,6 +73,12 @@ struct IdentifyOptions {
   /// growing set and none. Empty (default): linear levels. Not chosen by
   /// default: docs/identification.md, nineteenth session.
   std::vector<double> play_softening_candidates;
+  /// Then, if > 0, at most this many held-out scores spent refining the
+  /// chosen threshold, coupling, softening and the chosen channels' size
+  /// together (NLopt BOBYQA, bounded, from the choice above): the stages
+  /// above pick one setting at a time from coarse sets. Kept only if the
+  /// held-out k-step fit improves. 0 (default): no refinement.
+  int play_refine_evaluations = 0;
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
   /// taken out of the training outputs. "auto": kept if held-out simulation
@@ -125,6 +131,14 @@ struct IdentifyReport {
     double score;
   };
   std::vector<ThresholdScore> threshold_scores;
+  /// The joint refinement (IdentifyOptions::play_refine_evaluations): its
+  /// start and the best it found, as fractions like the options', and the
+  /// channels' size as a factor of the chosen set's.
+  struct PlayRefinement {
+    double threshold = 0, coupling = 0, softening = 0, channel_scale = 1, score = 0;
+  };
+  PlayRefinement refine_start, refine_best;
+  int refine_evaluations = 0;  ///< held-out scores spent (0: stage not run)
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out

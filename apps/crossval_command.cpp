@@ -141,6 +141,13 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--cv-layout", a->options.cv_layout,
                  "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)")
       ->check(CLI::IsMember({"interleaved", "contiguous"}));
+  c->add_option("--play-softening", a->options.play_softening_candidates,
+                 "Candidate softenings of the play channels' level, as in identify; default none")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.49));
+  c->add_option("--refine-play", a->options.play_refine_evaluations,
+                "Fits spent refining threshold, coupling, softening and band together, as in identify; default 0")
+      ->check(CLI::Range(0, 10000));
   c->add_option("--arx-na", a->arx_na, "ARX output lags");
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
   c->add_option("--json", a->json, "Write the fits as JSON");

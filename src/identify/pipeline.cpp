@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <sstream>
 
 #include <nlopt.hpp>
@@ -679,9 +678,8 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     for (std::size_t i = 0; i < x.size(); ++i) x[i] = std::clamp(x[i], lo[i], hi[i]);
     rep.refine_start = {x[0], x[1], x[2], x[3], best_score};
     rep.refine_best = rep.refine_start;
-    struct Search {
-      std::function<double(const std::vector<double>&)> score;
-    } search{[&](const std::vector<double>& v) {
+    auto score = [&](std::vector<double> v) {
+      v.resize(4, 1.0);
       apply(v);
       const double sc = crossValidated();
       ++rep.refine_evaluations;
@@ -691,7 +689,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
             std::to_string(rep.refine_evaluations) + " of at most " + std::to_string(o.play_refine_evaluations) +
             " scores, best " + std::to_string(rep.refine_best.score).substr(0, 5));
       return std::isfinite(sc) ? sc : -1e6;
-    }};
+    };
     // The channel-size factor is fixed when the set has none: BOBYQA wants a
     // box with room in every dimension, so it then runs on the other three.
     const unsigned dims = any_channel ? 4u : 3u;
@@ -702,13 +700,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     opt.set_initial_step(std::vector<double>(step.begin(), step.begin() + dims));
     opt.set_maxeval(o.play_refine_evaluations);
     opt.set_xtol_abs(1e-3);
+    using Score = decltype(score);
+    // nlopt::opt wants a plain function pointer and a context.
     opt.set_max_objective(
-        [](const std::vector<double>& v, std::vector<double>&, void* data) {
-          std::vector<double> full = v;
-          full.resize(4, 1.0);
-          return static_cast<Search*>(data)->score(full);
-        },
-        &search);
+        [](const std::vector<double>& v, std::vector<double>&, void* data) { return (*static_cast<Score*>(data))(v); },
+        &score);
     std::vector<double> xs(x.begin(), x.begin() + dims);
     double f = 0.0;
     try {

@@ -74,26 +74,50 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
   }
   if (input_side) {
     // Every node's regressors side by side: one dense least-squares problem,
-    // summed over runs of samples in the same group. The outputs' problems
-    // are independent and the largest cost of identification: one thread each.
+    // the largest cost of identification. Over a tile of samples most nodes'
+    // regressors are negligible (ModelRegressors::live): each run of samples
+    // in one tile and group adds the Gram matrix of its live nodes' blocks,
+    // which changes no sum beyond rounding and cuts the work about twentyfold
+    // on a grid experiment. The outputs' problems are independent: one thread each.
+    const Eigen::Index tile = ModelRegressors::kTileRows;
     auto terms = [&](int out) {
       const auto oo = static_cast<std::size_t>(out);
+      const Eigen::MatrixXd& phi = reg.phi[oo];
+      const Eigen::Index width = model.regressorSize(out);
+      const auto nodes = static_cast<int>(phi.cols() / width);
+      std::vector<int> active;
+      Eigen::MatrixXd P, G;
+      Eigen::VectorXd dy, h;
       for (Eigen::Index a = 1; a < T;) {
         Eigen::Index e = a + 1;
-        while (e < T && groupOf(e) == groupOf(a)) ++e;
-        CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(a))];
+        while (e < T && e % tile != 0 && groupOf(e) == groupOf(a)) ++e;
         const Eigen::Index len = e - a;
-        Eigen::VectorXd dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
-        if (w) {
-          const Eigen::VectorXd root = w->segment(a, len).cwiseSqrt();
-          const Eigen::MatrixXd P = root.asDiagonal() * reg.phi[oo].middleRows(a, len);
-          dy.array() *= root.array();
-          g.J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
-          g.Jh[oo].noalias() += P.transpose() * dy;
-        } else {
-          const auto P = reg.phi[oo].middleRows(a, len);
-          g.J[oo].selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
-          g.Jh[oo].noalias() += P.transpose() * dy;
+        active.clear();
+        for (int node = 0; node < nodes; ++node)
+          if (reg.live.empty() || reg.live[oo](a / tile, node)) active.push_back(node);
+        if (!active.empty()) {
+          const auto m = static_cast<Eigen::Index>(active.size()) * width;
+          P.resize(len, m);
+          for (std::size_t i = 0; i < active.size(); ++i)
+            P.middleCols(static_cast<Eigen::Index>(i) * width, width) = phi.block(a, active[i] * width, len, width);
+          dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
+          if (w) {
+            const Eigen::VectorXd root = w->segment(a, len).cwiseSqrt();
+            P = root.asDiagonal() * P;
+            dy.array() *= root.array();
+          }
+          G.setZero(m, m);
+          G.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+          h.noalias() = P.transpose() * dy;
+          CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(a))];
+          // Active nodes ascend, so block (i, j), i >= j, lands in J's lower triangle.
+          for (std::size_t i = 0; i < active.size(); ++i) {
+            const Eigen::Index gi = static_cast<Eigen::Index>(i) * width, ji = active[i] * width;
+            g.Jh[oo].segment(ji, width) += h.segment(gi, width);
+            for (std::size_t j = 0; j <= i; ++j)
+              g.J[oo].block(ji, active[j] * width, width, width) +=
+                  G.block(gi, static_cast<Eigen::Index>(j) * width, width, width);
+          }
         }
         a = e;
       }

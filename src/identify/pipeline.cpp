@@ -419,13 +419,13 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   enum class Score { kStepAhead, kSimulation };
   std::vector<Eigen::MatrixXd> FY = BY, FYlog = Y;  // per block, per log
   bool drift_per_fold = false;
+  std::vector<ModelRegressors> regs(U.size());  // kept between scores: refilling beats reallocating
   auto crossValidatedInterleaved = [&](Score what) {
     const bool sim = what == Score::kSimulation;
     const int key = sim ? 0 : o.play_selection_horizon;
     // The regressors run over whole logs and do not depend on the fold: built
     // once, summed once per fold, and each fold's fit is a solve.
-    std::vector<ModelRegressors> regs;
-    for (const Eigen::MatrixXd& u : U) regs.push_back(modelRegressors(model, u));
+    for (std::size_t r = 0; r < U.size(); ++r) modelRegressors(model, U[r], regs[r]);
     CoefficientSums sums;
     if (!drift_per_fold) sums = coefficientSums(model, regs, FYlog, fold_rows, o.play_selection_folds);
     double score = 0.0;

@@ -7,8 +7,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -260,6 +263,13 @@ struct ModelRegressors {
   /// Input side: [output] the filters' settled states at the first sample
   /// (DC gain times the first weighted input), laid out as phi's columns.
   std::vector<Eigen::RowVectorXd> level0;
+  /// Input side: [output] for each tile of kTileRows samples and each node,
+  /// whether any of the node's regressors there exceeds the rounding of its
+  /// column's largest (machine epsilon times it). A node's regressors are zero
+  /// until the input first nears it and decay once it leaves, so most tiles
+  /// hold few live nodes; sums and products skip the rest. Empty: all live.
+  static constexpr Eigen::Index kTileRows = 256;
+  std::vector<Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>> live;
 };
 
 /// One input through a play channel, starting as `start` says.
@@ -271,17 +281,17 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
   return v;
 }
 
-/// `play` as in DioPwlObfModel::input_play; empty = one raw channel per input.
-inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
-                                       const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
-                                       PlayStart start = PlayStart::kRising, double coupling = 0.0,
-                                       double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
-                                       double threshold = 0.0, double softening = 0.0) {
+/// The regressors of a structure into `out`, whose storage is reused when its
+/// shapes already match (a long record's run to tens of megabytes). `play` as
+/// in DioPwlObfModel::input_play; empty = one raw channel per input.
+inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>>& poles,
+                           const PwlPartition& partition, const Eigen::MatrixXd& u,
+                           const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
+                           double schedule_pole, ScheduleSide side, double threshold, double softening) {
   require(!poles.empty(), "modelRegressors: no outputs");
   require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
   const auto n_u = static_cast<std::size_t>(u.cols());
-  ModelRegressors out;
   out.schedule.resize(static_cast<std::size_t>(T));
   DirectionState dir;
   Eigen::RowVectorXd du = Eigen::RowVectorXd::Zero(u.cols());
@@ -332,32 +342,100 @@ inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& 
     for (const PlayChannel& ch : list)
       channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, start));
   }
-  for (const auto& row : poles) {
-    require(row.size() == n_u, "modelRegressors: need one pole set per input");
+  for (const auto& row : poles) require(row.size() == n_u, "modelRegressors: need one pole set per input");
+  const int copies = side == ScheduleSide::kInput ? regions : 1;
+  out.phi.resize(poles.size());
+  out.level0.resize(side == ScheduleSide::kInput ? poles.size() : 0);
+  out.live.resize(side == ScheduleSide::kInput ? poles.size() : 0);
+  // The filters run on every node's copy at once, a state row per copy: the
+  // copies' recursions are independent, so the loop over them vectorises.
+  // The outputs' regressors are independent: one thread each.
+  auto fill = [&](std::size_t o) {
+    Eigen::MatrixXd x, next;
+    Eigen::VectorXd step_in(copies);  // each copy's input increment
+    const std::vector<PoleSet>& row = poles[o];
     int width = 0;
     for (std::size_t j = 0; j < n_u; ++j) width += row[j].size() * static_cast<int>(channels[j].size());
-    const int copies = side == ScheduleSide::kInput ? regions : 1;
-    Eigen::MatrixXd phi(T, width * copies);
-    Eigen::RowVectorXd level0 = Eigen::RowVectorXd::Zero(side == ScheduleSide::kInput ? width * copies : 0);
+    Eigen::MatrixXd& phi = out.phi[o];
+    phi.resize(T, width * copies);
+    if (side == ScheduleSide::kInput) out.level0[o].setZero(width * copies);
     int offset = 0;
-    Eigen::VectorXd f;
-    for (int r = 0; r < copies; ++r)
-      for (std::size_t j = 0; j < n_u; ++j)
-        for (const Eigen::VectorXd& v : channels[j]) {
-          ObfBank<> bank(row[j]);
-          const int n = bank.size();
-          f = side == ScheduleSide::kInput ? node_weight.col(r).cwiseProduct(v).eval() : v;
-          for (Eigen::Index k = 0; k < T; ++k) {
-            phi.block(k, offset, 1, n) = bank.state().transpose();
-            bank.step(k == 0 ? 0.0 : f(k) - f(k - 1));
+    for (std::size_t j = 0; j < n_u; ++j) {
+      const ObfBank<> bank(row[j]);
+      const int n = bank.size();
+      const Eigen::MatrixXd& A = bank.A();
+      const Eigen::VectorXd& B = bank.B();
+      const Eigen::RowVectorXd gain = bank.transfer(1.0).real().transpose();
+      for (const Eigen::VectorXd& v : channels[j]) {
+        // Input side: node r's filters see the channel weighted by the node.
+        auto f = [&](Eigen::Index k, int r) { return side == ScheduleSide::kInput ? node_weight(k, r) * v(k) : v(k); };
+        x.setZero(copies, n);
+        next.resize(copies, n);
+        // Raw loops: at five or six states Eigen's dynamic expressions cost more than the arithmetic.
+        double* now = x.data();
+        double* then = next.data();
+        double* const col0 = phi.data() + static_cast<Eigen::Index>(offset) * T;
+        for (Eigen::Index k = 0; k < T; ++k) {
+          for (int i = 0; i < n; ++i)
+            for (int r = 0; r < copies; ++r) col0[(static_cast<Eigen::Index>(r) * width + i) * T + k] = now[i * copies + r];
+          for (int r = 0; r < copies; ++r) step_in(r) = k == 0 ? 0.0 : f(k, r) - f(k - 1, r);
+          for (int i = 0; i < n; ++i) {
+            double* const to = then + i * copies;
+            for (int r = 0; r < copies; ++r) to[r] = B(i) * step_in(r);
+            for (int l = 0; l < n; ++l) {
+              const double a = A(i, l);
+              if (a == 0.0) continue;
+              const double* const from = now + l * copies;
+              for (int r = 0; r < copies; ++r) to[r] += a * from[r];
+            }
           }
-          if (side == ScheduleSide::kInput && T > 0)
-            level0.segment(offset, n) = bank.transfer(1.0).real().transpose() * f(0);
-          offset += n;
+          std::swap(now, then);
         }
-    out.phi.push_back(std::move(phi));
-    if (side == ScheduleSide::kInput) out.level0.push_back(std::move(level0));
-  }
+        if (side == ScheduleSide::kInput && T > 0)
+          for (int r = 0; r < copies; ++r) out.level0[o].segment(static_cast<Eigen::Index>(r) * width + offset, n) = gain * f(0, r);
+        offset += n;
+      }
+    }
+    if (side != ScheduleSide::kInput) return;
+    const Eigen::Index tile = ModelRegressors::kTileRows;
+    auto& live = out.live[o];
+    live.resize((T + tile - 1) / tile, copies);
+    if (T == 0) return;
+    const Eigen::RowVectorXd negligible = std::numeric_limits<double>::epsilon() * phi.cwiseAbs().colwise().maxCoeff();
+    for (Eigen::Index t = 0; t < live.rows(); ++t)
+      for (int r = 0; r < copies; ++r)
+        live(t, r) = (phi.block(t * tile, static_cast<Eigen::Index>(r) * width, std::min(tile, T - t * tile), width)
+                          .cwiseAbs()
+                          .colwise()
+                          .maxCoeff()
+                          .array() > negligible.segment(static_cast<Eigen::Index>(r) * width, width).array())
+                         .any();
+  };
+  std::vector<std::exception_ptr> failed(poles.size());
+  auto guarded = [&](std::size_t o) {
+    try {
+      fill(o);
+    } catch (...) {
+      failed[o] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> workers;
+  const bool threaded = T >= 2048;  // below that a thread costs more than it saves
+  for (std::size_t o = 1; o < poles.size() && threaded; ++o) workers.emplace_back(guarded, o);
+  for (std::size_t o = 0; o < (threaded ? 1 : poles.size()); ++o) guarded(o);
+  for (std::thread& t : workers) t.join();
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
+/// The same, returned.
+inline ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
+                                       const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
+                                       PlayStart start = PlayStart::kRising, double coupling = 0.0,
+                                       double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
+                                       double threshold = 0.0, double softening = 0.0) {
+  ModelRegressors out;
+  fillRegressors(out, poles, partition, u, play, start, coupling, schedule_pole, side, threshold, softening);
   return out;
 }
 
@@ -368,6 +446,12 @@ inline ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen:
                          model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
 }
 
+/// The same into `out`, reusing its storage.
+inline void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, ModelRegressors& out) {
+  fillRegressors(out, model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
+                 model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
+}
+
 /// The model's predicted increments dyhat (T x n_y) from regressors of its
 /// own structure (modelRegressors(model, u)), for reuse across coefficient sets.
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
@@ -376,7 +460,24 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelR
   const auto T = static_cast<Eigen::Index>(reg.schedule.size());
   Eigen::MatrixXd dy(T, model.outputCount());
   if (model.schedule_side == ScheduleSide::kInput) {
-    for (int o = 0; o < model.outputCount(); ++o) dy.col(o) = reg.phi[static_cast<std::size_t>(o)] * model.stackedCoefficients(o);
+    const Eigen::Index tile = ModelRegressors::kTileRows;
+    for (int o = 0; o < model.outputCount(); ++o) {
+      const auto oo = static_cast<std::size_t>(o);
+      const Eigen::VectorXd c = model.stackedCoefficients(o);
+      if (reg.live.empty()) {
+        dy.col(o) = reg.phi[oo] * c;
+        continue;
+      }
+      const Eigen::Index width = model.regressorSize(o);
+      dy.col(o).setZero();
+      for (Eigen::Index t = 0; t < reg.live[oo].rows(); ++t)
+        for (Eigen::Index r = 0; r < reg.live[oo].cols(); ++r)
+          if (reg.live[oo](t, r)) {
+            const Eigen::Index rows = std::min(tile, T - t * tile);
+            dy.col(o).segment(t * tile, rows).noalias() +=
+                reg.phi[oo].block(t * tile, r * width, rows, width) * c.segment(r * width, width);
+          }
+    }
     return dy;
   }
   for (Eigen::Index k = 0; k < T; ++k) {

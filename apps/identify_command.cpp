@@ -257,12 +257,13 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--play-softening", a->options.play_softening_candidates,
                  "Candidate softenings of the play channels' level, x - s x^2 above the threshold, as fractions of "
                  "the top level above it (0.2: the top level cut by 20%), tried against none with each threshold; "
-                 "default none")
+                 "input-side structures only; default none")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.49));
   id->add_option("--refine-play", a->options.play_refine_evaluations,
                  "At most this many cross-validated fits spent refining the chosen threshold, coupling, softening "
-                 "and play channel size together (NLopt BOBYQA from the choice); kept if the held-out fit improves; "
+                 "and play channel size together (NLopt BOBYQA from the choice; the stages that ran); kept if the "
+                 "held-out fit improves and held-out simulation does not fall; input-side structures only; "
                  "default 0 (none)")
       ->check(CLI::Range(0, 10000));
   id->add_option("--slow-pole", a->options.slow_pole_candidates,

@@ -1287,9 +1287,10 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
 }
 
 // The joint refinement starts from the staged choice and may only keep a
-// point that scores higher on the held-out chunks, inside its box, within its
-// budget. From a structure without a threshold it must find the simulator's
-// deadzone (0.06 bar) from the score alone.
+// point that scores higher on the held-out chunks, and simulates no worse on
+// them, inside its box, within its budget. From a structure without a
+// threshold it must find the simulator's deadzone (0.06 bar) from the score
+// alone. It refines only the stages that ran, and only on the input side.
 TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   const io::Log& train = allEffectsRuns().train;
   IdentifyOptions o;
@@ -1298,7 +1299,9 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   o.play_candidates = {{PlayChannel(0.0, 0.16)}};
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {};
-  o.play_threshold_candidates = {};
+  o.play_threshold_candidates = {0.0};  // the stages run, from zero and unsoftened
+  o.play_softening_candidates = {0.0};
+  o.play_refine_evaluations = 0;
   o.slow_pole_candidates = {};
   o.output_drift = "off";
   IdentifyReport plain;
@@ -1335,9 +1338,30 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   EXPECT_NEAR(refined.input_play[0].at(0).slope, 0.16 * b.channel_scale, 1e-12);
   EXPECT_GT(refined.play_threshold, 0.02);
   EXPECT_LT(refined.play_threshold, 0.12);
+  EXPECT_GT(rep.refine_simulation.first, 50.0) << "the staged choice's held-out simulation was not scored";
+  EXPECT_GE(rep.refine_simulation.second, rep.refine_simulation.first);
   const bool said = std::any_of(rep.lines.begin(), rep.lines.end(),
                                 [](const std::string& l) { return l.find("refined jointly") != std::string::npos; });
   EXPECT_TRUE(said);
+
+  // A stage turned off keeps its setting: without threshold candidates the
+  // threshold stays at zero while the rest is refined.
+  o.play_threshold_candidates = {};
+  IdentifyReport no_threshold;
+  const DioPwlObfModel kept_zero = identifyModel({train}, o, &no_threshold);
+  EXPECT_GT(no_threshold.refine_evaluations, 0);
+  EXPECT_EQ(kept_zero.play_threshold, 0.0);
+  EXPECT_EQ(no_threshold.refine_best.threshold, 0.0);
+  // The output side has no held-out simulation to guard it: not refined.
+  o.play_threshold_candidates = {0.0};
+  o.scheduling = "interpolated";
+  IdentifyReport output_side;
+  identifyModel({train}, o, &output_side);
+  EXPECT_EQ(output_side.refine_evaluations, 0);
+  EXPECT_TRUE(std::any_of(output_side.lines.begin(), output_side.lines.end(), [](const std::string& l) {
+    return l.find("input-side structures only") != std::string::npos;
+  }));
+  o.scheduling = "input";
 
   o.play_refine_evaluations = -1;
   EXPECT_THROW(

@@ -578,6 +578,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
     say(s);
   }
+  // Softening and the joint refinement shape the level by the held-out k-step
+  // score, which does not see what they do to a simulation; only an input-side
+  // model can be scored in held-out simulation, which guards the refinement.
+  // On the output side a softened level kept by the k-step score was seen to
+  // cost a clean plant's simulation points (docs/identification.md, twenty-first
+  // session), so neither runs there.
+  const bool input_side_chosen = model.schedule_side == ScheduleSide::kInput;
+  if (!input_side_chosen && (!o.play_softening_candidates.empty() || o.play_refine_evaluations > 0))
+    say("[5/5] softening and joint refinement: input-side structures only (output side chosen), skipped");
   // Where the play channels count from, on the chosen model. A threshold moves
   // where a growing band starts and how much of a neighbour the coupling
   // sees, so each one is tried with every growing set as well as the chosen
@@ -596,7 +605,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     for (double f : o.play_softening_candidates) {
       require(f >= 0 && f < 0.5,
               "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
-      if (f > 0) softenings.push_back(f);
+      if (f > 0 && input_side_chosen) softenings.push_back(f);
     }
     // A neighbour's level now counts from the threshold: the chosen coupling
     // is kept as a fraction of the top level above it.
@@ -629,7 +638,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     model.play_softening = best_softening;
     applyPlay(best_set);
     const double above = top_level - best_threshold;
-    const bool softened = !o.play_softening_candidates.empty();
+    const bool softened = softenings.size() > 1;
     std::string s = softened ? "[5/5] play channels counted from a threshold and softened (x top level; coupling "
                                "and softening x top level above it): "
                              : "[5/5] play channels counted from a threshold (x top level; coupling x top level above "
@@ -651,7 +660,20 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // simulator's own structure scores higher than any of their picks
   // (docs/identification.md, nineteenth session). A bounded local search
   // over all four from the pick, on the same held-out score.
-  if (o.play_refine_evaluations > 0) {
+  // Only the stages that ran are refined: a stage turned off (its candidates
+  // empty) keeps its setting, as does the channel size without a channel.
+  const bool any_channel = std::any_of(best_set.begin(), best_set.end(), [](const PlayChannel& c) {
+    return !c.passesThrough();
+  });
+  std::vector<std::size_t> refined_dims;  // of threshold, coupling, softening, channel size
+  if (!o.play_threshold_candidates.empty()) refined_dims.push_back(0);
+  if (!o.play_coupling_candidates.empty()) refined_dims.push_back(1);
+  if (!o.play_softening_candidates.empty()) refined_dims.push_back(2);
+  if (any_channel) refined_dims.push_back(3);
+  if (!input_side_chosen) refined_dims.clear();
+  if (o.play_refine_evaluations > 0 && refined_dims.empty() && input_side_chosen)
+    say("[5/5] joint refinement: nothing to refine (no threshold, coupling, softening or play channel in the search)");
+  if (o.play_refine_evaluations > 0 && !refined_dims.empty()) {
     const std::vector<PlayChannel> base_set = best_set;
     const double kept_threshold = model.play_threshold, kept_coupling = model.play_coupling,
                  kept_softening = model.play_softening;
@@ -670,16 +692,13 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const double above0 = top_level - model.play_threshold;
     std::vector<double> x{model.play_threshold / top_level, model.play_coupling * above0,
                           model.play_softening * above0, 1.0};
-    const bool any_channel = std::any_of(base_set.begin(), base_set.end(), [](const PlayChannel& c) {
-      return !c.passesThrough();
-    });
-    const std::vector<double> lo{0.0, 0.0, 0.0, any_channel ? 0.5 : 1.0};
-    const std::vector<double> hi{0.45, 0.6, 0.45, any_channel ? 2.0 : 1.0};
-    for (std::size_t i = 0; i < x.size(); ++i) x[i] = std::clamp(x[i], lo[i], hi[i]);
+    const std::vector<double> lo{0.0, 0.0, 0.0, 0.5}, hi{0.45, 0.6, 0.45, 2.0};
+    for (std::size_t i : refined_dims) x[i] = std::clamp(x[i], lo[i], hi[i]);
     rep.refine_start = {x[0], x[1], x[2], x[3], best_score};
     rep.refine_best = rep.refine_start;
-    auto score = [&](std::vector<double> v) {
-      v.resize(4, 1.0);
+    auto score = [&](const std::vector<double>& free) {
+      std::vector<double> v = x;
+      for (std::size_t i = 0; i < refined_dims.size(); ++i) v[refined_dims[i]] = free[i];
       apply(v);
       const double sc = crossValidated();
       ++rep.refine_evaluations;
@@ -690,22 +709,25 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
             " scores, best " + std::to_string(rep.refine_best.score).substr(0, 5));
       return std::isfinite(sc) ? sc : -1e6;
     };
-    // The channel-size factor is fixed when the set has none: BOBYQA wants a
-    // box with room in every dimension, so it then runs on the other three.
-    const unsigned dims = any_channel ? 4u : 3u;
-    nlopt::opt opt(nlopt::LN_BOBYQA, dims);
-    opt.set_lower_bounds(std::vector<double>(lo.begin(), lo.begin() + dims));
-    opt.set_upper_bounds(std::vector<double>(hi.begin(), hi.begin() + dims));
     const std::vector<double> step{0.05, 0.05, 0.05, 0.15};
-    opt.set_initial_step(std::vector<double>(step.begin(), step.begin() + dims));
+    std::vector<double> lo_free, hi_free, step_free, xs;
+    for (std::size_t i : refined_dims) {
+      lo_free.push_back(lo[i]);
+      hi_free.push_back(hi[i]);
+      step_free.push_back(step[i]);
+      xs.push_back(x[i]);
+    }
+    nlopt::opt opt(nlopt::LN_BOBYQA, static_cast<unsigned>(refined_dims.size()));
+    opt.set_lower_bounds(lo_free);
+    opt.set_upper_bounds(hi_free);
+    opt.set_initial_step(step_free);
     opt.set_maxeval(o.play_refine_evaluations);
     opt.set_xtol_abs(1e-3);
-    using Score = decltype(score);
+    using Objective = decltype(score);
     // nlopt::opt wants a plain function pointer and a context.
     opt.set_max_objective(
-        [](const std::vector<double>& v, std::vector<double>&, void* data) { return (*static_cast<Score*>(data))(v); },
+        [](const std::vector<double>& v, std::vector<double>&, void* data) { return (*static_cast<Objective*>(data))(v); },
         &score);
-    std::vector<double> xs(x.begin(), x.begin() + dims);
     double f = 0.0;
     try {
       opt.optimize(xs, f);
@@ -713,9 +735,21 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       // Stopped by round-off: the best point seen is still the answer.
     }
     const IdentifyReport::PlayRefinement& b = rep.refine_best;
-    if (b.score > best_score + 1e-9) {
-      best_score = b.score;
+    // Kept only if held-out simulation does not fall: a higher k-step score
+    // alone was seen to cost the simulation points (twentieth session).
+    bool keep = b.score > best_score + 1e-9;
+    if (keep) {
+      model.play_threshold = kept_threshold;
+      model.play_coupling = kept_coupling;
+      model.play_softening = kept_softening;
+      applyPlay(base_set);
+      rep.refine_simulation.first = crossValidated(Score::kSimulation);
       apply({b.threshold, b.coupling, b.softening, b.channel_scale});
+      rep.refine_simulation.second = crossValidated(Score::kSimulation);
+      keep = rep.refine_simulation.second >= rep.refine_simulation.first;
+    }
+    if (keep) {
+      best_score = b.score;
       best_set = scaled(b.channel_scale);
     } else {
       model.play_threshold = kept_threshold;
@@ -724,15 +758,25 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       applyPlay(base_set);
     }
     const IdentifyReport::PlayRefinement& s0 = rep.refine_start;
-    say("[5/5] refined jointly (" + std::to_string(rep.refine_evaluations) +
-        " held-out scores; threshold x top level, coupling and softening x top level above it, channels x the "
-        "chosen size): " +
-        (b.score > s0.score + 1e-9
-             ? "kept threshold " + formatNumber(b.threshold) + ", coupling " + formatNumber(b.coupling) +
-                   ", softening " + formatNumber(b.softening) + ", play " + formatPlaySet(best_set) + " (x" +
-                   formatNumber(b.channel_scale) + "): " + std::to_string(b.score).substr(0, 5) + " from " +
-                   std::to_string(s0.score).substr(0, 5)
-             : std::string("no better point than the choice above (") + std::to_string(s0.score).substr(0, 5) + ")"));
+    const char* const dim_names[] = {"threshold", "coupling", "softening", "channel size"};
+    std::string over;
+    for (std::size_t i : refined_dims) over += (over.empty() ? "" : ", ") + std::string(dim_names[i]);
+    say("[5/5] refined jointly (" + std::to_string(rep.refine_evaluations) + " held-out scores over " + over +
+        "; threshold x top level, coupling and softening x top level above it, channels x the chosen size): " +
+        (keep ? "kept threshold " + formatNumber(b.threshold) + ", coupling " + formatNumber(b.coupling) +
+                    ", softening " + formatNumber(b.softening) + ", play " + formatPlaySet(best_set) + " (x" +
+                    formatNumber(b.channel_scale) + "): " + std::to_string(b.score).substr(0, 5) + " from " +
+                    std::to_string(s0.score).substr(0, 5)
+         : b.score > s0.score + 1e-9
+             ? "best point (threshold " + formatNumber(b.threshold) + ", coupling " + formatNumber(b.coupling) +
+                   ", softening " + formatNumber(b.softening) + ", x" + formatNumber(b.channel_scale) + ", " +
+                   std::to_string(b.score).substr(0, 5) + " from " + std::to_string(s0.score).substr(0, 5) +
+                   ") not kept"
+             : std::string("no better point than the choice above (") + std::to_string(s0.score).substr(0, 5) + ")") +
+        (rep.refine_simulation.first != 0.0 || rep.refine_simulation.second != 0.0
+             ? "; held-out simulation " + std::to_string(rep.refine_simulation.second).substr(0, 5) + " against " +
+                   std::to_string(rep.refine_simulation.first).substr(0, 5)
+             : std::string()));
   }
   // A sensor drift, on an input-side model: estimated on each fold's training
   // blocks and taken out of them; kept if the held-out simulation, scored

@@ -70,14 +70,18 @@ struct IdentifyOptions {
   /// Softenings of the channels' level (DioPwlObfModel::play_softening), as
   /// fractions of the top level above the threshold (0.2: the top level is
   /// cut by 20%, less below it), tried with each threshold above, every
-  /// growing set and none. Empty (default): linear levels. Not chosen by
-  /// default: docs/identification.md, nineteenth session.
+  /// growing set and none. Empty (default): linear levels. Input-side
+  /// structures only (see play_refine_evaluations). Not chosen by default:
+  /// docs/identification.md, nineteenth and twenty-first sessions.
   std::vector<double> play_softening_candidates;
   /// Then, if > 0, at most this many held-out scores spent refining the
   /// chosen threshold, coupling, softening and the chosen channels' size
   /// together (NLopt BOBYQA, bounded, from the choice above): the stages
-  /// above pick one setting at a time from coarse sets. Kept only if the
-  /// held-out k-step fit improves. 0 (default): no refinement.
+  /// above pick one setting at a time from coarse sets. Only the stages that
+  /// ran (non-empty candidates; the size only with a channel) are refined.
+  /// Kept only if the held-out k-step fit improves and the held-out
+  /// simulation does not fall, so input-side structures only: the output side
+  /// has no held-out simulation. 0 (default): no refinement.
   int play_refine_evaluations = 0;
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
@@ -139,6 +143,10 @@ struct IdentifyReport {
   };
   PlayRefinement refine_start, refine_best;
   int refine_evaluations = 0;  ///< held-out scores spent (0: stage not run)
+  /// Held-out simulation fit of the staged choice and of the refined point,
+  /// scored when the refined point scored higher k steps ahead; it is kept
+  /// only if the second is not lower. Both 0: not scored.
+  std::pair<double, double> refine_simulation{0.0, 0.0};
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out

@@ -299,17 +299,20 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
     for (std::size_t out = 0; out < 2; ++out) {
       const Eigen::MatrixXd& Js = s_sparse.groups[static_cast<std::size_t>(g)].J[out];
       const Eigen::MatrixXd& Jd = s_dense.groups[static_cast<std::size_t>(g)].J[out];
-      const Eigen::MatrixXd diff = Eigen::MatrixXd(Js.triangularView<Eigen::Lower>()) - Eigen::MatrixXd(Jd.triangularView<Eigen::Lower>());
+      const Eigen::MatrixXd diff =
+          Eigen::MatrixXd(Js.triangularView<Eigen::Lower>()) - Eigen::MatrixXd(Jd.triangularView<Eigen::Lower>());
       EXPECT_LT(diff.cwiseAbs().maxCoeff(), 1e-12 * Jd.cwiseAbs().maxCoeff()) << "group " << g << ", output " << out;
       const Eigen::VectorXd& hs = s_sparse.groups[static_cast<std::size_t>(g)].Jh[out];
       const Eigen::VectorXd& hd = s_dense.groups[static_cast<std::size_t>(g)].Jh[out];
-      EXPECT_LT((hs - hd).cwiseAbs().maxCoeff(), 1e-12 * hd.cwiseAbs().maxCoeff()) << "group " << g << ", output " << out;
+      EXPECT_LT((hs - hd).cwiseAbs().maxCoeff(), 1e-12 * hd.cwiseAbs().maxCoeff())
+          << "group " << g << ", output " << out;
     }
   DioPwlObfModel a = m, b = m;
   solveCoefficients(a, s_sparse, -1);
   solveCoefficients(b, s_dense, -1);
   for (int out = 0; out < 2; ++out)
-    EXPECT_LT((a.stackedCoefficients(out) - b.stackedCoefficients(out)).norm(), 1e-9 * b.stackedCoefficients(out).norm());
+    EXPECT_LT((a.stackedCoefficients(out) - b.stackedCoefficients(out)).norm(),
+              1e-9 * b.stackedCoefficients(out).norm());
 
   // A used ModelRegressors, first filled from another record, refills to the fresh one.
   ModelRegressors reused = modelRegressors(m, Eigen::MatrixXd(u.topRows(T / 2).reverse()));
@@ -323,7 +326,8 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
   for (std::size_t k = 0; k < sparse.schedule.size(); ++k) {
     ASSERT_EQ(reused.schedule[k].count, sparse.schedule[k].count);
     for (int c = 0; c < sparse.schedule[k].count; ++c)
-      EXPECT_EQ(reused.schedule[k].weight[static_cast<std::size_t>(c)], sparse.schedule[k].weight[static_cast<std::size_t>(c)]);
+      EXPECT_EQ(reused.schedule[k].weight[static_cast<std::size_t>(c)],
+                sparse.schedule[k].weight[static_cast<std::size_t>(c)]);
   }
   const ModelRegressors empty = modelRegressors(m, Eigen::MatrixXd(0, 2));
   modelRegressors(m, Eigen::MatrixXd(0, 2), reused);

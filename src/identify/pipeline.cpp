@@ -726,7 +726,9 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     using Objective = decltype(score);
     // nlopt::opt wants a plain function pointer and a context.
     opt.set_max_objective(
-        [](const std::vector<double>& v, std::vector<double>&, void* data) { return (*static_cast<Objective*>(data))(v); },
+        [](const std::vector<double>& v, std::vector<double>&, void* data) {
+          return (*static_cast<Objective*>(data))(v);
+        },
         &score);
     double f = 0.0;
     try {

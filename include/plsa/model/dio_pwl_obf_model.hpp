@@ -377,7 +377,8 @@ inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<P
         double* const col0 = phi.data() + static_cast<Eigen::Index>(offset) * T;
         for (Eigen::Index k = 0; k < T; ++k) {
           for (int i = 0; i < n; ++i)
-            for (int r = 0; r < copies; ++r) col0[(static_cast<Eigen::Index>(r) * width + i) * T + k] = now[i * copies + r];
+            for (int r = 0; r < copies; ++r)
+              col0[(static_cast<Eigen::Index>(r) * width + i) * T + k] = now[i * copies + r];
           for (int r = 0; r < copies; ++r) step_in(r) = k == 0 ? 0.0 : f(k, r) - f(k - 1, r);
           for (int i = 0; i < n; ++i) {
             double* const to = then + i * copies;
@@ -392,7 +393,8 @@ inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<P
           std::swap(now, then);
         }
         if (side == ScheduleSide::kInput && T > 0)
-          for (int r = 0; r < copies; ++r) out.level0[o].segment(static_cast<Eigen::Index>(r) * width + offset, n) = gain * f(0, r);
+          for (int r = 0; r < copies; ++r)
+            out.level0[o].segment(static_cast<Eigen::Index>(r) * width + offset, n) = gain * f(0, r);
         offset += n;
       }
     }

@@ -666,17 +666,24 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     return !c.passesThrough();
   });
   std::vector<std::size_t> refined_dims;  // of threshold, coupling, softening, channel size
-  if (!o.play_threshold_candidates.empty()) refined_dims.push_back(0);
-  if (!o.play_coupling_candidates.empty()) refined_dims.push_back(1);
-  if (!o.play_softening_candidates.empty()) refined_dims.push_back(2);
-  if (any_channel) refined_dims.push_back(3);
-  if (!input_side_chosen) refined_dims.clear();
-  if (o.play_refine_evaluations > 0 && refined_dims.empty() && input_side_chosen)
+  if (input_side_chosen) {
+    if (!o.play_threshold_candidates.empty()) refined_dims.push_back(0);
+    if (!o.play_coupling_candidates.empty()) refined_dims.push_back(1);
+    if (!o.play_softening_candidates.empty()) refined_dims.push_back(2);
+    if (any_channel) refined_dims.push_back(3);
+  }
+  if (o.play_refine_evaluations > 0 && input_side_chosen && refined_dims.empty())
     say("[5/5] joint refinement: nothing to refine (no threshold, coupling, softening or play channel in the search)");
   if (o.play_refine_evaluations > 0 && !refined_dims.empty()) {
     const std::vector<PlayChannel> base_set = best_set;
     const double kept_threshold = model.play_threshold, kept_coupling = model.play_coupling,
                  kept_softening = model.play_softening;
+    auto restoreStaged = [&] {
+      model.play_threshold = kept_threshold;
+      model.play_coupling = kept_coupling;
+      model.play_softening = kept_softening;
+      applyPlay(base_set);
+    };
     auto scaled = [&](double k) {
       std::vector<PlayChannel> set = base_set;
       for (PlayChannel& c : set) c = PlayChannel(c.width * k, c.slope * k);
@@ -741,10 +748,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     // alone was seen to cost the simulation points (twentieth session).
     bool keep = b.score > best_score + 1e-9;
     if (keep) {
-      model.play_threshold = kept_threshold;
-      model.play_coupling = kept_coupling;
-      model.play_softening = kept_softening;
-      applyPlay(base_set);
+      restoreStaged();
       rep.refine_simulation.first = crossValidated(Score::kSimulation);
       apply({b.threshold, b.coupling, b.softening, b.channel_scale});
       rep.refine_simulation.second = crossValidated(Score::kSimulation);
@@ -754,10 +758,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       best_score = b.score;
       best_set = scaled(b.channel_scale);
     } else {
-      model.play_threshold = kept_threshold;
-      model.play_coupling = kept_coupling;
-      model.play_softening = kept_softening;
-      applyPlay(base_set);
+      restoreStaged();
     }
     const IdentifyReport::PlayRefinement& s0 = rep.refine_start;
     const char* const dim_names[] = {"threshold", "coupling", "softening", "channel size"};

@@ -739,6 +739,46 @@ TEST(Pipeline, SimulatedActuatorWithoutEffects) {
   expectThrowContaining([&] { identifyModel({train}, bad); }, "chunks must last");
 }
 
+// Stage 5 on a long log runs for minutes between its summary lines; with an
+// interval of 0 every held-out score prints where its stage is, so each
+// stage's count must run 1..N with N the candidates it tries.
+TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
+  sim::SimConfig c;
+  for (const auto& e : sim::effectNames()) c.setEffectEnabled(e, false);
+  sim::ExperimentOptions eo;
+  eo.seed = 3;
+  sim::Actuator a(c, 1);
+  const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
+  IdentifyOptions o;
+  o.scheduling = "input";
+  o.play_candidates = {{0.0}, {0.1}};  // no growing set: the threshold stage tries the chosen set only
+  o.play_coupling_candidates = {0.3};
+  o.schedule_lag_candidates = {0.2};
+  o.play_threshold_candidates = {0.2};
+  o.slow_pole_candidates = {5.0};
+  o.progress_interval_s = 0.0;
+  IdentifyReport rep;
+  identifyModel({train}, o, &rep);
+  std::vector<std::string> ticks;
+  for (const std::string& l : rep.lines)
+    if (l.rfind("[5/5] scoring ", 0) == 0) ticks.push_back(l.substr(14, l.find(" held-out") - 14));
+  const std::vector<std::string> expected{"play channels and scheduling: 1 of 2", "play channels and scheduling: 2 of 2",
+                                          "coupled play channels: 1 of 2",        "coupled play channels: 2 of 2",
+                                          "scheduling lags: 1 of 1",              "play thresholds: 1 of 1",
+                                          "sensor drift: 1 of 2",                 "sensor drift: 2 of 2",
+                                          "slow poles: 1 of 2",                   "slow poles: 2 of 2"};
+  EXPECT_EQ(ticks, expected);
+  // An interval longer than the run prints none.
+  o.progress_interval_s = 1e6;
+  IdentifyReport quiet;
+  identifyModel({train}, o, &quiet);
+  for (const std::string& l : quiet.lines) EXPECT_EQ(l.rfind("[5/5] scoring ", 0), std::string::npos) << l;
+  o.progress_interval_s = -1.0;
+  expectThrowContaining([&] { identifyModel({train}, o); }, "progress interval");
+  o.progress_interval_s = std::nan("");
+  expectThrowContaining([&] { identifyModel({train}, o); }, "progress interval");
+}
+
 // All effects on, the paper's protocol as `plsa demo` runs it (seed 1). The
 // level-growing, coupled play band and the rising start must hold their
 // gain over the paper's configuration (measured 93.8/94.3 at 40 steps and

@@ -1,6 +1,7 @@
 #include "plsa/identify/pipeline.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -90,13 +91,18 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   require(o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
           "identify: play refinement evaluations must be in 0..10000, got " +
               std::to_string(o.play_refine_evaluations));
+  require(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
+          "identify: the progress interval must be a finite number of seconds >= 0");
   require(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
           "identify: output drift '" + o.output_drift + "': expected auto, on or off");
   IdentifyReport local;
   IdentifyReport& rep = out ? *out : local;
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point last_line = Clock::now();
   auto say = [&](const std::string& line) {
     rep.lines.push_back(line);
     if (o.progress) o.progress(line);
+    last_line = Clock::now();
   };
 
   // Data and sample time; every log must agree.
@@ -469,7 +475,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
     return score / std::max(1, n);
   };
-  auto crossValidated = [&](Score what = Score::kStepAhead) {
+  auto crossValidatedOnce = [&](Score what) {
     if (interleaved) return crossValidatedInterleaved(what);
     double score = 0.0;
     int n = 0;
@@ -497,6 +503,27 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     }
     return score / std::max(1, n);
   };
+  // On long logs a held-out score takes seconds and a stage minutes: after
+  // progress_interval_s without a line, one says where the search is.
+  struct Scoring {
+    std::string stage;
+    int done = 0, total = 0;
+  } scoring;
+  auto beginScoring = [&](std::string stage, std::size_t total) {
+    scoring.stage = std::move(stage);
+    scoring.done = 0;
+    scoring.total = static_cast<int>(total);
+  };
+  auto crossValidated = [&](Score what = Score::kStepAhead) {
+    const double score = crossValidatedOnce(what);
+    ++scoring.done;
+    if (std::chrono::duration<double>(Clock::now() - last_line).count() >= o.progress_interval_s)
+      say("[5/5] scoring " + scoring.stage + ": " + std::to_string(scoring.done) +
+          (scoring.total > 0 ? " of " + std::to_string(scoring.total) : std::string()) + " held-out fits, last " +
+          std::to_string(score).substr(0, 5));
+    return score;
+  };
+  beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size());
   for (std::size_t pi = 0; pi < structures.size(); ++pi)
     for (const auto& set : o.play_candidates) {
       require(!set.empty(), "identify: a play channel set is empty");
@@ -514,6 +541,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // each coupling (a fraction of the largest training input level, inverted).
   double best_coupling = 0.0;
   const double top_level = std::max(1e-12, all_u.maxCoeff());
+  beginScoring("coupled play channels", o.play_coupling_candidates.size() * o.play_candidates.size());
   for (double c : o.play_coupling_candidates) {
     require(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
     applyStructure(structures[best_structure]);
@@ -560,6 +588,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   if (!o.schedule_lag_candidates.empty()) {
     double best_lag = 0.0;
     rep.schedule_lag_scores.emplace_back(0.0, best_score);
+    beginScoring("scheduling lags", o.schedule_lag_candidates.size());
     for (double lag : o.schedule_lag_candidates) {
       require(lag >= 0 && std::isfinite(lag), "identify: schedule lags must be finite and >= 0");
       model.schedule_lag_s = lag;
@@ -612,6 +641,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const double coupling_fraction = best_coupling * top_level;
     double best_threshold = 0.0, best_softening = 0.0;
     rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, 0.0, best_score});
+    beginScoring("play thresholds", thresholds.size() * softenings.size() * sets.size() - sets.size());
     for (double d : thresholds) {
       model.play_threshold = d * top_level;
       const double above = top_level - model.play_threshold;
@@ -702,6 +732,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const std::vector<double> lo{0.0, 0.0, 0.0, 0.5}, hi{0.45, 0.6, 0.45, 2.0};
     for (std::size_t i : refined_dims) x[i] = std::clamp(x[i], lo[i], hi[i]);
     rep.refine_start = {x[0], x[1], x[2], x[3], best_score};
+    beginScoring("the joint refinement", static_cast<std::size_t>(o.play_refine_evaluations));
     rep.refine_best = rep.refine_start;
     auto score = [&](const std::vector<double>& free) {
       std::vector<double> v = x;
@@ -742,12 +773,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       opt.optimize(xs, f);
     } catch (const nlopt::roundoff_limited&) {
       // Stopped by round-off: the best point seen is still the answer.
+    } catch (const std::runtime_error&) {
+      // NLopt gave up (e.g. a flat score around the start): the best point seen stands.
     }
     const IdentifyReport::PlayRefinement& b = rep.refine_best;
     // Kept only if held-out simulation does not fall: a higher k-step score
     // alone was seen to cost the simulation points (twentieth session).
     bool keep = b.score > best_score + 1e-9;
     if (keep) {
+      beginScoring("the refinement's simulation guard", 2);
       restoreStaged();
       rep.refine_simulation.first = crossValidated(Score::kSimulation);
       apply({b.threshold, b.coupling, b.softening, b.channel_scale});
@@ -786,6 +820,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // against the logged outputs, improves.
   std::vector<Eigen::MatrixXd> Yfit = Y;
   if (model.schedule_side == ScheduleSide::kInput && o.output_drift != "off") {
+    beginScoring("sensor drift", 2);
     const double without = crossValidated(Score::kSimulation);
     drift_per_fold = true;
     const double with = crossValidated(Score::kSimulation);
@@ -832,6 +867,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
         }
     };
     double best_tau = 0.0;
+    beginScoring("slow poles", o.slow_pole_candidates.size() + 1);
     double best_sim = crossValidated(Score::kSimulation);
     rep.slow_pole_scores.emplace_back(0.0, best_sim);
     for (double tau : o.slow_pole_candidates) {

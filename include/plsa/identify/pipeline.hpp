@@ -108,6 +108,10 @@ struct IdentifyOptions {
   std::string cv_layout = "interleaved";
   double cv_chunk_s = 8.0;
   std::function<void(const std::string&)> progress;  ///< one line per stage
+  /// Stage 5's held-out scores: after this long (s) without a line, one on
+  /// how far the stage is (long logs, where a stage takes minutes). 0: after
+  /// every score.
+  double progress_interval_s = 5.0;
 };
 
 struct PairPoles {

@@ -755,7 +755,7 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.2};
   o.play_threshold_candidates = {0.2};
-  o.slow_pole_candidates = {5.0};
+  o.slow_pole_candidates = {0.0, 5.0};  // 0 is "none", scored once
   o.progress_interval_s = 0.0;
   IdentifyReport rep;
   identifyModel({train}, o, &rep);

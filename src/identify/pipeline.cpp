@@ -867,7 +867,9 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
         }
     };
     double best_tau = 0.0;
-    beginScoring("slow poles", o.slow_pole_candidates.size() + 1);
+    beginScoring("slow poles", 1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(),
+                                                                           o.slow_pole_candidates.end(),
+                                                                           [](double tau) { return tau != 0; })));
     double best_sim = crossValidated(Score::kSimulation);
     rep.slow_pole_scores.emplace_back(0.0, best_sim);
     for (double tau : o.slow_pole_candidates) {

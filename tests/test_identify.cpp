@@ -432,7 +432,20 @@ TEST(ModelFile, RoundTripsAndNamesWhatIsWrong) {
     return std::string("accepted");
   };
   EXPECT_NE(error([](auto& j) { j.erase("sample_time_s"); }).find("missing field 'sample_time_s'"), std::string::npos);
-  EXPECT_NE(error([](auto& j) { j["version"] = 7; }).find("version 7 is not supported"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["version"] = 7; }).find("version 7 is newer than this build reads"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["version"] = 1.0; }).find("'version' must be an integer"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["extra"] = 1; }).find("unknown key 'extra'"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["regions"][0]["extra"] = 1; }).find("unknown key 'regions[0].extra'"),
+            std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["outputs"].push_back(j["outputs"][0]); }).find("twice"), std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["input_range"][0] = nullptr; }).find("'input_range[0]' must be a number"),
+            std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["input_range"][1] = "-inf"; }).find("'input_range[1]' must be a number or \"inf\""),
+            std::string::npos);
+  EXPECT_NE(error([](auto& j) { j["regions"][0]["samples"] = 1e300; }).find("'regions[0].samples' must be an integer"),
+            std::string::npos);
+  // Version 2 files carry every field: one left out is an error, not a default.
+  EXPECT_NE(error([](auto& j) { j.erase("play_start"); }).find("missing field 'play_start'"), std::string::npos);
   EXPECT_NE(error([](auto& j) { j["regions"][1]["coefficients"][0].push_back(1.0); }).find("expected 3"), std::string::npos);
   EXPECT_NE(error([](auto& j) { j["poles"][0][0][0] = {1.5, 0.0}; }).find(">= 1"), std::string::npos);
   EXPECT_NE(error([](auto& j) { j["partition"]["scheduling"] = "fuzzy"; }).find("'switched' or 'interpolated'"), std::string::npos);
@@ -478,7 +491,8 @@ TEST(ModelFile, OutputFrameRoundTripsAndIsChecked) {
   m.output_frame = OutputFrame::kTipCartesian;
   EXPECT_EQ(modelFromJson(modelToJson(m)).output_frame, OutputFrame::kTipCartesian);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
-  j.erase("output_frame");  // files from before the field: the logged frame
+  j.erase("output_frame");  // version 1 files from before the field: the logged frame
+  j["version"] = 1;
   EXPECT_EQ(modelFromJson(j.dump()).output_frame, OutputFrame::kAsLogged);
   j["output_frame"] = "polar";
   try {
@@ -510,6 +524,7 @@ TEST(ModelFile, PlayChannelsAndStartRoundTrip) {
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j.erase("play_start");
   j.erase("play_coupling");
+  j["version"] = 1;
   EXPECT_EQ(modelFromJson(j.dump()).play_start, PlayStart::kCentred);
   EXPECT_EQ(modelFromJson(j.dump()).play_coupling, 0.0);
   j["play_coupling"] = -1.0;
@@ -521,7 +536,8 @@ TEST(ModelFile, PlayThresholdRoundTripsAndIsChecked) {
   m.play_threshold = 0.07;
   EXPECT_EQ(modelFromJson(modelToJson(m)).play_threshold, 0.07);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
-  j.erase("play_threshold");  // written before the field existed: counted from zero
+  j.erase("play_threshold");  // version 1, written before the field existed: counted from zero
+  j["version"] = 1;
   EXPECT_EQ(modelFromJson(j.dump()).play_threshold, 0.0);
   j["play_threshold"] = -0.01;
   try {
@@ -539,7 +555,8 @@ TEST(ModelFile, PlaySofteningRoundTripsAndIsChecked) {
   m.play_softening = 0.8;
   EXPECT_EQ(modelFromJson(modelToJson(m)).play_softening, 0.8);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
-  j.erase("play_softening");  // written before the field existed: linear
+  j.erase("play_softening");  // version 1, written before the field existed: linear
+  j["version"] = 1;
   EXPECT_EQ(modelFromJson(j.dump()).play_softening, 0.0);
   j["play_softening"] = -0.5;
   try {
@@ -586,6 +603,8 @@ TEST(ModelFile, ScheduleLagRoundTripsAndOldFilesHaveNone) {
   EXPECT_NEAR(m.schedulePole(), std::exp(-m.sample_time_s / 0.4), 1e-15);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j.erase("schedule_lag_s");
+  j.erase("schedule_side");
+  j["version"] = 1;
   EXPECT_EQ(modelFromJson(j.dump()).schedule_lag_s, 0.0);
   EXPECT_EQ(modelFromJson(j.dump()).schedulePole(), 0.0);
   j["schedule_lag_s"] = -0.1;

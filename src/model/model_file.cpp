@@ -1,52 +1,24 @@
 #include "plsa/model/model_file.hpp"
 
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cstdint>
+#include <initializer_list>
 #include <sstream>
+#include <string_view>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
 #include "plsa/core/text_file.hpp"
+#include "plsa/io/strict_json.hpp"
 
 namespace plsa {
 namespace {
 
 using nlohmann::json;
 constexpr const char* kSchema = "plsa.dio_pwl_obf";
-
-[[noreturn]] void bad(const std::string& source, const std::string& why) {
-  throw std::invalid_argument(source + ": " + why);
-}
-
-// Checked access: every field read names its path when it is missing or mistyped.
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-  const json& at(const json& j, const std::string& key, const std::string& path) const {
-    if (!j.is_object() || !j.contains(key)) bad(source_, "missing field '" + path + key + "'");
-    return j.at(key);
-  }
-  double number(const json& j, const std::string& path) const {
-    if (!j.is_number()) bad(source_, "'" + path + "' must be a number");
-    return j.get<double>();
-  }
-  std::string string(const json& j, const std::string& path) const {
-    if (!j.is_string()) bad(source_, "'" + path + "' must be a string");
-    return j.get<std::string>();
-  }
-  const json& array(const json& j, const std::string& path) const {
-    if (!j.is_array()) bad(source_, "'" + path + "' must be an array");
-    return j;
-  }
-  const std::string& source() const { return source_; }
-
- private:
-  std::string source_;
-};
-
-double finiteOrInf(const json& j) {
-  if (j.is_string()) return j.get<std::string>() == "-inf" ? -INFINITY : INFINITY;
-  return j.get<double>();
-}
 
 json limit(double v) {
   if (std::isinf(v)) return v < 0 ? "-inf" : "inf";
@@ -128,138 +100,261 @@ std::string modelToJson(const DioPwlObfModel& m) {
   return j.dump(1);
 }
 
-DioPwlObfModel modelFromJson(const std::string& text, const std::string& source) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    bad(source, std::string("not valid JSON: ") + e.what());
-  }
-  const Reader rd(source);
-  if (rd.string(rd.at(j, "schema", ""), "schema") != kSchema) bad(source, "schema is not '" + std::string(kSchema) + "'");
-  const double version = rd.number(rd.at(j, "version", ""), "version");
-  if (version != DioPwlObfModel::kSchemaVersion)
-    bad(source, "schema version " + std::to_string(static_cast<int>(version)) + " is not supported (this build reads " +
-                    std::to_string(DioPwlObfModel::kSchemaVersion) + ")");
-  DioPwlObfModel m;
-  m.sample_time_s = rd.number(rd.at(j, "sample_time_s", ""), "sample_time_s");
-  for (const auto& s : rd.array(rd.at(j, "inputs", ""), "inputs")) m.inputs.push_back(rd.string(s, "inputs[]"));
-  for (const auto& s : rd.array(rd.at(j, "outputs", ""), "outputs")) m.outputs.push_back(rd.string(s, "outputs[]"));
-  const json& units = rd.at(j, "units", "");
-  m.input_unit = rd.string(rd.at(units, "inputs", "units."), "units.inputs");
-  m.output_unit = rd.string(rd.at(units, "outputs", "units."), "units.outputs");
-  const json& range = rd.array(rd.at(j, "input_range", ""), "input_range");
-  if (range.size() != 2) bad(source, "'input_range' must have two entries");
-  m.input_min = finiteOrInf(range[0]);
-  m.input_max = finiteOrInf(range[1]);
-  if (j.contains("input_ranges"))
-    for (const auto& r : rd.array(j["input_ranges"], "input_ranges")) {
-      if (!r.is_array() || r.size() != 2) bad(source, "'input_ranges' entries must be [min, max]");
-      m.input_ranges.push_back({rd.number(r[0], "input_ranges[][0]"), rd.number(r[1], "input_ranges[][1]")});
+namespace {
+
+// The keys each object of a model file may hold, by schema version 2; version
+// 1 files hold a subset of them.
+constexpr std::array<std::string_view, 21> kTopKeys = {
+    "schema",        "version",        "sample_time_s",  "inputs",         "outputs",
+    "units",         "input_range",    "input_ranges",   "poles",          "input_play",
+    "play_start",    "play_coupling",  "play_threshold", "play_softening", "schedule_lag_s",
+    "schedule_side", "output_level",   "training_output_drift", "output_frame", "partition",
+    "regions"};
+
+// Reads one model file. Version 2 requires every field it writes; version 1
+// gives the fields that did not exist yet the meaning they had then.
+class ModelReader {
+ public:
+  ModelReader(const json& j, std::string source) : j_(j), source_(std::move(source)) {}
+
+  DioPwlObfModel read() {
+    object(j_, "");
+    if (string(at(j_, "schema", ""), "schema") != kSchema) bad("schema is not '" + std::string(kSchema) + "'");
+    version_ = static_cast<int>(io::integerIn(at(j_, "version", ""), 1, 1'000'000, "version", source_));
+    if (version_ > DioPwlObfModel::kSchemaVersion)
+      bad("schema version " + std::to_string(version_) + " is newer than this build reads (1 to " +
+          std::to_string(DioPwlObfModel::kSchemaVersion) + "); update plsa");
+    io::requireKnownKeysIn(j_, kTopKeys, "", source_);
+    DioPwlObfModel m;
+    m.sample_time_s = number(at(j_, "sample_time_s", ""), "sample_time_s");
+    m.inputs = names("inputs");
+    m.outputs = names("outputs");
+    readUnits(m);
+    readRanges(m);
+    readPoles(m);
+    readPlay(m);
+    readSchedule(m);
+    readOutputs(m);
+    readPartition(m);
+    readRegions(m);
+    try {
+      m.validate();
+    } catch (const std::invalid_argument& e) {
+      bad(e.what());
     }
-  const json& poles = rd.array(rd.at(j, "poles", ""), "poles");
-  for (std::size_t o = 0; o < poles.size(); ++o) {
-    std::vector<PoleSet> row;
-    for (std::size_t i = 0; i < rd.array(poles[o], "poles[o]").size(); ++i) {
-      std::vector<std::complex<double>> list;
-      const std::string path = "poles[" + std::to_string(o) + "][" + std::to_string(i) + "]";
-      for (const auto& p : rd.array(poles[o][i], path)) {
-        if (!p.is_array() || p.size() != 2) bad(source, path + ": each pole is [re, im]");
-        list.emplace_back(rd.number(p[0], path), rd.number(p[1], path));
+    return m;
+  }
+
+ private:
+  [[noreturn]] void bad(const std::string& why) const { throw std::invalid_argument(source_ + ": " + why); }
+
+  const json& at(const json& j, const std::string& key, const std::string& path) const {
+    if (!j.is_object() || !j.contains(key)) bad("missing field '" + path + key + "'");
+    return j.at(key);
+  }
+  // Optional in version 1 (absent: `fallback`), required from version 2.
+  const json* optional(const std::string& key) const {
+    if (j_.contains(key)) return &j_.at(key);
+    if (version_ >= 2) bad("missing field '" + key + "'");
+    return nullptr;
+  }
+  void object(const json& j, const std::string& path) const {
+    if (!j.is_object()) bad("'" + (path.empty() ? std::string("the top level") : path) + "' must be an object");
+  }
+  double number(const json& j, const std::string& path) const { return io::finiteNumber(j, path, source_); }
+  std::string string(const json& j, const std::string& path) const {
+    if (!j.is_string()) bad("'" + path + "' must be a string");
+    return j.get<std::string>();
+  }
+  const json& array(const json& j, const std::string& path) const {
+    if (!j.is_array()) bad("'" + path + "' must be an array");
+    return j;
+  }
+  std::vector<double> numbers(const json& j, const std::string& path) const {
+    std::vector<double> out;
+    for (const auto& v : array(j, path)) out.push_back(number(v, path + "[]"));
+    return out;
+  }
+  // One of `allowed`, or `fallback` when the field is absent from a version 1 file.
+  std::string choice(const std::string& key, std::initializer_list<const char*> allowed, const char* fallback) const {
+    const json* v = optional(key);
+    const std::string s = v ? string(*v, key) : fallback;
+    std::string list;
+    std::size_t k = 0;
+    for (const char* a : allowed) {
+      if (s == a) return s;
+      list += std::string(k == 0 ? "" : k + 1 == allowed.size() ? " or " : ", ") + "'" + a + "'";
+      ++k;
+    }
+    bad("'" + key + "' must be " + list + ", not '" + s + "'");
+  }
+  double scalar(const std::string& key, double fallback) const {
+    const json* v = optional(key);
+    return v ? number(*v, key) : fallback;
+  }
+
+  std::vector<std::string> names(const std::string& key) const {
+    std::vector<std::string> out;
+    for (const auto& s : array(at(j_, key, ""), key)) {
+      out.push_back(string(s, key + "[]"));
+      if (out.back().empty()) bad("'" + key + "' has an empty name");
+      if (std::count(out.begin(), out.end(), out.back()) > 1) bad("'" + key + "' names '" + out.back() + "' twice");
+    }
+    return out;
+  }
+
+  void readUnits(DioPwlObfModel& m) const {
+    const json& units = at(j_, "units", "");
+    object(units, "units");
+    io::requireKnownKeys(units, {"inputs", "outputs"}, "units.", source_);
+    m.input_unit = string(at(units, "inputs", "units."), "units.inputs");
+    m.output_unit = string(at(units, "outputs", "units."), "units.outputs");
+  }
+
+  // A bound: a finite number, or the string "-inf" (lower) / "inf" (upper) for none.
+  double bound(const json& j, const std::string& path, bool lower) const {
+    if (j.is_string()) {
+      const std::string want = lower ? "-inf" : "inf";
+      if (j.get<std::string>() != want) bad("'" + path + "' must be a number or \"" + want + "\"");
+      return lower ? -INFINITY : INFINITY;
+    }
+    return number(j, path);
+  }
+
+  void readRanges(DioPwlObfModel& m) const {
+    const json& range = array(at(j_, "input_range", ""), "input_range");
+    if (range.size() != 2) bad("'input_range' must have two entries");
+    m.input_min = bound(range[0], "input_range[0]", true);
+    m.input_max = bound(range[1], "input_range[1]", false);
+    if (!j_.contains("input_ranges")) return;
+    for (const auto& r : array(j_.at("input_ranges"), "input_ranges")) {
+      if (!r.is_array() || r.size() != 2) bad("'input_ranges' entries must be [min, max]");
+      m.input_ranges.push_back({number(r[0], "input_ranges[][0]"), number(r[1], "input_ranges[][1]")});
+    }
+  }
+
+  void readPoles(DioPwlObfModel& m) const {
+    const json& poles = array(at(j_, "poles", ""), "poles");
+    for (std::size_t o = 0; o < poles.size(); ++o) {
+      std::vector<PoleSet> row;
+      const json& sets = array(poles[o], "poles[" + std::to_string(o) + "]");
+      for (std::size_t i = 0; i < sets.size(); ++i) {
+        std::vector<std::complex<double>> list;
+        const std::string path = "poles[" + std::to_string(o) + "][" + std::to_string(i) + "]";
+        for (const auto& p : array(sets[i], path)) {
+          if (!p.is_array() || p.size() != 2) bad(path + ": each pole is [re, im]");
+          list.emplace_back(number(p[0], path), number(p[1], path));
+        }
+        try {
+          row.emplace_back(list);
+        } catch (const std::invalid_argument& e) {
+          bad(path + ": " + e.what());
+        }
       }
-      try {
-        row.emplace_back(list);
-      } catch (const std::invalid_argument& e) {
-        bad(source, path + ": " + e.what());
+      m.poles.push_back(std::move(row));
+    }
+  }
+
+  void readPlay(DioPwlObfModel& m) const {
+    for (const auto& list : array(at(j_, "input_play", ""), "input_play")) {
+      std::vector<PlayChannel> channels;
+      for (const auto& v : array(list, "input_play[]")) {
+        if (v.is_object()) {
+          io::requireKnownKeys(v, {"width", "slope"}, "input_play[][].", source_);
+          channels.emplace_back(number(at(v, "width", "input_play[][]."), "input_play[][].width"),
+                                number(at(v, "slope", "input_play[][]."), "input_play[][].slope"));
+        } else {
+          channels.emplace_back(number(v, "input_play[][]"));
+        }
       }
+      m.input_play.push_back(std::move(channels));
     }
-    m.poles.push_back(std::move(row));
+    // Files from before the field existed started their bands centred.
+    m.play_start = choice("play_start", {"rising", "centred"}, "centred") == "rising" ? PlayStart::kRising
+                                                                                      : PlayStart::kCentred;
+    m.play_coupling = scalar("play_coupling", 0.0);
+    m.play_threshold = scalar("play_threshold", 0.0);
+    m.play_softening = scalar("play_softening", 0.0);
   }
-  for (const auto& list : rd.array(rd.at(j, "input_play", ""), "input_play")) {
-    std::vector<PlayChannel> channels;
-    for (const auto& v : rd.array(list, "input_play[]")) {
-      if (v.is_object())
-        channels.emplace_back(rd.number(rd.at(v, "width", "input_play[][]."), "input_play[][].width"),
-                              rd.number(rd.at(v, "slope", "input_play[][]."), "input_play[][].slope"));
-      else
-        channels.emplace_back(rd.number(v, "input_play[][]"));
-    }
-    m.input_play.push_back(std::move(channels));
+
+  void readSchedule(DioPwlObfModel& m) const {
+    m.schedule_lag_s = scalar("schedule_lag_s", 0.0);
+    m.schedule_side = choice("schedule_side", {"output", "input"}, "output") == "input" ? ScheduleSide::kInput
+                                                                                         : ScheduleSide::kOutput;
+    m.output_frame = outputFrameFromString(choice("output_frame", {"as_logged", "tip_cartesian"}, "as_logged"));
   }
-  // Files from before the field existed started their bands centred.
-  const std::string start = j.contains("play_start") ? rd.string(j["play_start"], "play_start") : "centred";
-  if (start != "rising" && start != "centred")
-    bad(source, "'play_start' must be 'rising' or 'centred', not '" + start + "'");
-  m.play_start = start == "rising" ? PlayStart::kRising : PlayStart::kCentred;
-  m.play_coupling = j.contains("play_coupling") ? rd.number(j["play_coupling"], "play_coupling") : 0.0;
-  m.play_threshold = j.contains("play_threshold") ? rd.number(j["play_threshold"], "play_threshold") : 0.0;
-  m.play_softening = j.contains("play_softening") ? rd.number(j["play_softening"], "play_softening") : 0.0;
-  m.schedule_lag_s = j.contains("schedule_lag_s") ? rd.number(j["schedule_lag_s"], "schedule_lag_s") : 0.0;
-  const std::string side = j.contains("schedule_side") ? rd.string(j["schedule_side"], "schedule_side") : "output";
-  if (side != "output" && side != "input")
-    bad(source, "'schedule_side' must be 'output' or 'input', not '" + side + "'");
-  m.schedule_side = side == "input" ? ScheduleSide::kInput : ScheduleSide::kOutput;
-  const std::string frame = j.contains("output_frame") ? rd.string(j["output_frame"], "output_frame") : "as_logged";
-  if (frame != "as_logged" && frame != "tip_cartesian")
-    bad(source, "'output_frame' must be 'as_logged' or 'tip_cartesian', not '" + frame + "'");
-  m.output_frame = outputFrameFromString(frame);
-  if (j.contains("output_level"))
-    for (const auto& v : rd.array(j["output_level"], "output_level")) m.output_level.push_back(rd.number(v, "output_level[]"));
-  if (j.contains("training_output_drift")) {
-    const json& d = j["training_output_drift"];
-    for (const auto& v : rd.array(rd.at(d, "rate_per_s", "training_output_drift."), "training_output_drift.rate_per_s"))
-      m.training_drift_per_s.push_back(rd.number(v, "training_output_drift.rate_per_s[]"));
+
+  void readOutputs(DioPwlObfModel& m) const {
+    if (j_.contains("output_level")) m.output_level = numbers(j_.at("output_level"), "output_level");
+    if (!j_.contains("training_output_drift")) return;
+    const json& d = j_.at("training_output_drift");
+    object(d, "training_output_drift");
+    io::requireKnownKeys(d, {"rate_per_s", "reference_time_s"}, "training_output_drift.", source_);
+    m.training_drift_per_s = numbers(at(d, "rate_per_s", "training_output_drift."), "training_output_drift.rate_per_s");
     m.training_drift_reference_s =
-        rd.number(rd.at(d, "reference_time_s", "training_output_drift."), "training_output_drift.reference_time_s");
+        number(at(d, "reference_time_s", "training_output_drift."), "training_output_drift.reference_time_s");
   }
-  const json& part = rd.at(j, "partition", "");
-  std::vector<int> sched;
-  for (const auto& v : rd.array(rd.at(part, "inputs", "partition."), "partition.inputs")) {
-    if (!v.is_number_integer()) bad(source, "'partition.inputs' must hold input indices");
-    sched.push_back(v.get<int>());
-  }
-  const std::string mode = rd.string(rd.at(part, "scheduling", "partition."), "partition.scheduling");
-  if (mode != "switched" && mode != "interpolated")
-    bad(source, "'partition.scheduling' must be 'switched' or 'interpolated', not '" + mode + "'");
-  const std::string key = mode == "interpolated" ? "levels" : "breakpoints";
-  std::vector<std::vector<double>> bps;
-  for (const auto& list : rd.array(rd.at(part, key, "partition."), "partition." + key)) {
-    std::vector<double> b;
-    for (const auto& v : rd.array(list, "partition." + key + "[]")) b.push_back(rd.number(v, "partition." + key + "[]"));
-    bps.push_back(std::move(b));
-  }
-  const json& split = rd.at(part, "direction_split", "partition.");
-  if (!split.is_boolean()) bad(source, "'partition.direction_split' must be true or false");
-  try {
-    const double thr = rd.number(rd.at(part, "direction_threshold", "partition."), "partition.direction_threshold");
-    m.partition = mode == "interpolated" ? PwlPartition::interpolated(sched, bps, split.get<bool>(), thr)
-                                         : PwlPartition(sched, bps, split.get<bool>(), thr);
-  } catch (const std::invalid_argument& e) {
-    bad(source, e.what());
-  }
-  const json& regions = rd.array(rd.at(j, "regions", ""), "regions");
-  for (std::size_t r = 0; r < regions.size(); ++r) {
-    const std::string path = "regions[" + std::to_string(r) + "].";
-    RegionFit fit;
-    fit.samples = static_cast<int>(rd.number(rd.at(regions[r], "samples", path), path + "samples"));
-    fit.fallback_from = static_cast<int>(rd.number(rd.at(regions[r], "fallback_from", path), path + "fallback_from"));
-    fit.note = rd.string(rd.at(regions[r], "note", path), path + "note");
-    std::vector<Eigen::VectorXd> coefs;
-    for (const auto& c : rd.array(rd.at(regions[r], "coefficients", path), path + "coefficients")) {
-      const json& arr = rd.array(c, path + "coefficients[]");
-      Eigen::VectorXd v(static_cast<Eigen::Index>(arr.size()));
-      for (std::size_t i = 0; i < arr.size(); ++i) v(static_cast<Eigen::Index>(i)) = rd.number(arr[i], path + "coefficients[]");
-      coefs.push_back(v);
+
+  void readPartition(DioPwlObfModel& m) const {
+    const json& part = at(j_, "partition", "");
+    object(part, "partition");
+    const std::string mode = string(at(part, "scheduling", "partition."), "partition.scheduling");
+    if (mode != "switched" && mode != "interpolated")
+      bad("'partition.scheduling' must be 'switched' or 'interpolated', not '" + mode + "'");
+    const std::string key = mode == "interpolated" ? "levels" : "breakpoints";
+    io::requireKnownKeys(part, {"inputs", "scheduling", key, "direction_split", "direction_threshold"}, "partition.",
+                         source_);
+    std::vector<int> sched;
+    for (const auto& v : array(at(part, "inputs", "partition."), "partition.inputs"))
+      sched.push_back(static_cast<int>(io::integerIn(v, 0, 1 << 20, "partition.inputs[]", source_)));
+    std::vector<std::vector<double>> bps;
+    for (const auto& list : array(at(part, key, "partition."), "partition." + key))
+      bps.push_back(numbers(list, "partition." + key + "[]"));
+    const json& split = at(part, "direction_split", "partition.");
+    if (!split.is_boolean()) bad("'partition.direction_split' must be true or false");
+    const double thr = number(at(part, "direction_threshold", "partition."), "partition.direction_threshold");
+    try {
+      m.partition = mode == "interpolated" ? PwlPartition::interpolated(sched, bps, split.get<bool>(), thr)
+                                           : PwlPartition(sched, bps, split.get<bool>(), thr);
+    } catch (const std::invalid_argument& e) {
+      bad(e.what());
     }
-    m.coefficients.push_back(std::move(coefs));
-    m.region_fits.push_back(fit);
   }
-  try {
-    m.validate();
-  } catch (const std::invalid_argument& e) {
-    bad(source, e.what());
+
+  void readRegions(DioPwlObfModel& m) const {
+    const json& regions = array(at(j_, "regions", ""), "regions");
+    if (regions.size() != static_cast<std::size_t>(m.partition.regionCount()))
+      bad(std::to_string(regions.size()) + " regions for a partition of " +
+          std::to_string(m.partition.regionCount()));
+    for (std::size_t r = 0; r < regions.size(); ++r) {
+      const std::string path = "regions[" + std::to_string(r) + "].";
+      object(regions[r], "regions[" + std::to_string(r) + "]");
+      io::requireKnownKeys(regions[r], {"samples", "fallback_from", "note", "coefficients"}, path, source_);
+      RegionFit fit;
+      fit.samples = static_cast<int>(io::integerIn(at(regions[r], "samples", path), 0, INT32_MAX, path + "samples", source_));
+      fit.fallback_from = static_cast<int>(
+          io::integerIn(at(regions[r], "fallback_from", path), -2, INT32_MAX, path + "fallback_from", source_));
+      fit.note = string(at(regions[r], "note", path), path + "note");
+      std::vector<Eigen::VectorXd> coefs;
+      for (const auto& c : array(at(regions[r], "coefficients", path), path + "coefficients")) {
+        const std::vector<double> v = numbers(c, path + "coefficients[]");
+        coefs.push_back(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+      }
+      m.coefficients.push_back(std::move(coefs));
+      m.region_fits.push_back(fit);
+    }
   }
-  return m;
+
+  const json& j_;
+  std::string source_;
+  int version_ = 0;
+};
+
+}  // namespace
+
+DioPwlObfModel modelFromJson(const std::string& text, const std::string& source) {
+  const json j = io::parseStrictJson(text, source);
+  return ModelReader(j, source).read();
 }
 
 void saveModel(const std::string& path, const DioPwlObfModel& model) {

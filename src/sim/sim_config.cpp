@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plsa/core/text_file.hpp"
+#include "plsa/io/strict_json.hpp"
 
 namespace plsa::sim {
 namespace {
@@ -162,19 +163,11 @@ void SimConfig::validate() const {
 }
 
 SimConfig simConfigFromJson(const std::string& text, const std::string& source) {
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw std::invalid_argument(source + ": not valid JSON: " + e.what());
-  }
+  const json j = io::parseStrictJson(text, source);
   if (!j.is_object()) throw std::invalid_argument(source + ": the top level must be an object");
   SimConfig c;
   auto table = fields(c);
-  auto number = [&](const json& v, const std::string& path) {
-    if (!v.is_number()) throw std::invalid_argument(source + ": " + path + " must be a number");
-    return v.get<double>();
-  };
+  auto number = [&](const json& v, const std::string& path) { return io::finiteNumber(v, path, source); };
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string key = it.key();
     if (it->is_object()) {

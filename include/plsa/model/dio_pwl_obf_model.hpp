@@ -104,7 +104,9 @@ double positiveSumAbove(const Eigen::MatrixBase<Derived>& u, double threshold) n
 enum class ScheduleSide { kOutput, kInput };
 
 struct DioPwlObfModel {
-  static constexpr int kSchemaVersion = 1;
+  /// Model files this build writes; it reads 1 (fields added since then take
+  /// the meaning they had before) and 2 (every field required, unknown keys refused).
+  static constexpr int kSchemaVersion = 2;
 
   double sample_time_s = 1.0 / 80.0;
   std::vector<std::string> inputs;   ///< column names of the inputs
@@ -193,6 +195,12 @@ struct DioPwlObfModel {
     require(sample_time_s > 0 && std::isfinite(sample_time_s), "model: sample_time_s must be positive");
     require(!inputs.empty(), "model: no inputs");
     require(!outputs.empty(), "model: no outputs");
+    for (const auto* names : {&inputs, &outputs})
+      for (auto at = names->begin(); at != names->end(); ++at)
+        require(std::find(names->begin(), at, *at) == at, "model: column '" + *at + "' is named twice");
+    for (const auto& in : inputs)
+      require(std::find(outputs.begin(), outputs.end(), in) == outputs.end(),
+              "model: column '" + in + "' is both an input and an output");
     require(input_min < input_max, "model: input_min must be below input_max");
     require(input_ranges.empty() || input_ranges.size() == inputs.size(),
             "model: input_ranges needs one [min, max] per input");

@@ -36,6 +36,10 @@ enum class Scheduling { kSwitched, kInterpolated };
 
 class PwlPartition {
  public:
+  /// Most cells a partition may have (a grid of 1024 x 1024 nodes): each holds
+  /// a coefficient block, and the predictor a filter bank per node.
+  static constexpr int kMaxRegions = 1 << 20;
+
   PwlPartition() = default;
 
   /// Interpolated scheduling: `levels[s]` are the grid nodes of input
@@ -50,6 +54,7 @@ class PwlPartition {
     p.cells_ = 1;
     p.strides_.clear();
     for (const auto& l : p.breakpoints_) {
+      require(l.size() <= static_cast<std::size_t>(kMaxRegions / p.cells_), regionLimitMessage());
       p.strides_.push_back(p.cells_);
       p.cells_ *= static_cast<int>(l.size());
     }
@@ -69,7 +74,8 @@ class PwlPartition {
     require(inputs_.size() == breakpoints_.size(), "PwlPartition: one breakpoint list per scheduling input");
     require(inputs_.size() <= static_cast<std::size_t>(DirectionState::kMaxInputs),
             "PwlPartition: at most 8 scheduling inputs");
-    require(direction_threshold_ >= 0, "PwlPartition: the direction threshold must be >= 0");
+    require(direction_threshold_ >= 0 && std::isfinite(direction_threshold_),
+            "PwlPartition: the direction threshold must be finite and >= 0");
     cells_ = 1;
     for (std::size_t s = 0; s < inputs_.size(); ++s) {
       require(inputs_[s] >= 0, "PwlPartition: scheduling input indices must be >= 0");
@@ -79,6 +85,7 @@ class PwlPartition {
         require(i == 0 || b[i] > b[i - 1], "PwlPartition: breakpoints of input " + std::to_string(inputs_[s]) +
                                                " must increase strictly");
       }
+      require(b.size() < static_cast<std::size_t>(kMaxRegions / cells_), regionLimitMessage());
       strides_.push_back(cells_);
       cells_ *= static_cast<int>(b.size()) + 1;
     }
@@ -86,6 +93,10 @@ class PwlPartition {
 
   /// The global linear model: one region.
   static PwlPartition single() { return PwlPartition({}, {}); }
+
+  static std::string regionLimitMessage() {
+    return "PwlPartition: more than " + std::to_string(kMaxRegions) + " cells";
+  }
 
   int cellCount() const noexcept { return cells_; }
   int regionCount() const noexcept { return cells_ * (direction_split_ ? (1 << inputs_.size()) : 1); }

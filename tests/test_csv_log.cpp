@@ -76,6 +76,48 @@ TEST_F(CsvLogTest, RejectsMalformedFilesWithLineAndReason) {
   expectError("time_s,y\n", "no data rows");
 }
 
+// What a spreadsheet, an interrupted recorder or a wrong path hands the reader.
+TEST_F(CsvLogTest, ByteOrderMarkCutLastLineBinaryAndEndlessLines) {
+  // A UTF-8 BOM once hid the time column, and with it every time check.
+  const auto bom = write("\xEF\xBB\xBFtime_s,y\n0,1\n0.1,2\n");
+  const auto log = plsa::io::readCsvLog(bom);
+  EXPECT_EQ(log.columns.front(), "time_s");
+  expectError("\xEF\xBB\xBFtime_s,y\n0.2,1\n0.1,2\n", ":3: time 0.1 is not after");
+  // A last line without its newline may be cut inside its last field: read, and said.
+  const auto cut = write("time_s,y\n0,1\n0.1,2.7");
+  const auto partial = plsa::io::readCsvLog(cut);
+  EXPECT_EQ(partial.samples(), 2);
+  ASSERT_EQ(partial.warnings.size(), 1u);
+  EXPECT_NE(partial.warnings[0].find(cut + ":3: the file ends without a newline"), std::string::npos)
+      << partial.warnings[0];
+  EXPECT_TRUE(plsa::io::readCsvLog(write("time_s,y\n0,1\n")).warnings.empty());
+  expectError(std::string("time_s,y\n0,\0\n", 12), ":2: NUL byte");
+  expectError("time_s,y\n" + std::string(plsa::io::kMaxCsvLineBytes + 10, '1'), ":2: line longer than 1 MiB");
+}
+
+TEST_F(CsvLogTest, WritesAtomicallyAndLeavesNoTemporaryFile) {
+  const auto path = write("old contents\n");
+  const auto before = fs::status(path).permissions();
+  plsa::io::Log log;
+  log.columns = {"time_s", "y"};
+  log.data = Eigen::MatrixXd::Ones(2, 2);
+  log.data(1, 0) = 2;
+  plsa::io::writeCsvLog(path, log);
+  EXPECT_EQ(plsa::io::readCsvLog(path).data, log.data);
+  EXPECT_EQ(fs::status(path).permissions(), before);
+  for (const auto& e : fs::directory_iterator(fs::path(path).parent_path()))
+    EXPECT_EQ(e.path().filename().string().find("." + fs::path(path).filename().string() + ".tmp"), std::string::npos)
+        << "left behind: " << e.path();
+  // A folder that does not exist: an error naming the file, and nothing written.
+  try {
+    plsa::io::writeCsvLog("/nonexistent-plsa-dir/x.csv", log);
+    FAIL() << "wrote into a folder that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-plsa-dir/x.csv: cannot write the log"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(CsvLogTest, RequiredColumnsAreChecked) {
   const auto path = write("time_s,u_1\n0,1\n");
   plsa::io::CsvReadOptions opt;

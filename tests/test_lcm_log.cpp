@@ -2,6 +2,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 
 #include "plsa/lcm/lcm_log.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -52,15 +54,13 @@ TEST(LcmLog, MalformedFilesAreClearErrors) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("no actuator-state messages on channel OTHER_CHANNEL"), std::string::npos);
   }
-  // Cut the file mid-event: the complete events still read, or it fails clearly.
+  // Cut the file mid-event (a recorder killed mid-write): the complete events read, and that is said.
   const auto size = fs::file_size(good);
   fs::resize_file(good, size - 10);
-  try {
-    const auto partial = plsa::lcm::readLcmLog(good);
-    EXPECT_EQ(partial.samples(), 2);
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(good), std::string::npos);
-  }
+  const auto partial = plsa::lcm::readLcmLog(good);
+  EXPECT_EQ(partial.samples(), 2);
+  ASSERT_EQ(partial.warnings.size(), 1u);
+  EXPECT_NE(partial.warnings[0].find("the log ends inside event 3"), std::string::npos) << partial.warnings[0];
   log.data(2, 0) = 0.01;  // time going backwards
   plsa::lcm::writeLcmLog(good, log);
   try {
@@ -71,4 +71,47 @@ TEST(LcmLog, MalformedFilesAreClearErrors) {
   }
   fs::remove(junk);
   fs::remove(good);
+}
+
+// Lengths in the file are checked against limits and what is left before
+// anything is allocated: an event data length of 0x7fffffff, or a logged
+// message with a huge chamber count, crashed liblcm's reader.
+TEST(LcmLog, HostileLengthsAreNamedErrorsAndLogsAreKnownByTheirMagicNumber) {
+  plsa::io::Log log;
+  log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
+  log.data = Eigen::MatrixXd::Zero(2, 9);
+  log.data.col(0) << 0.0125, 0.025;
+  const std::string path = tempPath("lcmlog-2026-11-25.00");  // lcm-logger's default name: no extension
+  plsa::lcm::writeLcmLog(path, log);
+  EXPECT_TRUE(plsa::lcm::isLcmLog(path));
+  EXPECT_EQ(plsa::lcm::readLogFile(path).samples(), 2);
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  auto errorOf = [](const std::string& b) {
+    std::istringstream in(b);
+    try {
+      plsa::lcm::readLcmLog(in, "x.lcmlog");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  auto patched = [&](std::size_t at, std::uint32_t v) {
+    std::string b = bytes;
+    for (int i = 0; i < 4; ++i) b[at + static_cast<std::size_t>(i)] = static_cast<char>(v >> (24 - 8 * i));
+    return b;
+  };
+  // Event header: sync word, event number, timestamp, channel length (byte 20), data length (byte 24).
+  EXPECT_NE(errorOf(patched(24, 0x7FFFFFFFu)).find("event 1 (byte 0): data length 2147483647 is above"),
+            std::string::npos);
+  EXPECT_NE(errorOf(patched(24, 0xFFFFFFFFu)).find("data length -1 is negative"), std::string::npos);
+  EXPECT_NE(errorOf(patched(20, 0x40000000u)).find("channel name length"), std::string::npos);
+  // The message's own chamber count: after the header (28), the channel (10), its fingerprint, utime and seq (24).
+  EXPECT_NE(errorOf(patched(28 + 10 + 24, 0x10000000u)).find("n_chambers = 268435456 is outside 0..16"),
+            std::string::npos);
+  EXPECT_NE(errorOf(patched(0, 0x12345678u)).find("no LCM sync word: not an LCM event log"), std::string::npos);
+  fs::remove(path);
 }

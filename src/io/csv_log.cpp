@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "plsa/core/text_file.hpp"
+
 namespace plsa::io {
 namespace {
 
@@ -66,20 +68,65 @@ Eigen::MatrixXd Log::columnsOf(const std::vector<std::string>& names) const {
   return out;
 }
 
+namespace {
+
+// Lines of at most kMaxCsvLineBytes; knows whether the last one ended in '\n'.
+class LineReader {
+ public:
+  LineReader(std::istream& in, const std::string& source) : in_(in), source_(source) {}
+
+  bool next(std::string& line) {
+    line.clear();
+    std::streambuf* buf = in_.rdbuf();
+    using traits = std::char_traits<char>;
+    for (auto got = buf ? buf->sbumpc() : traits::eof(); !traits::eq_int_type(got, traits::eof()); got = buf->sbumpc()) {
+      const char c = traits::to_char_type(got);
+      if (c == '\n') {
+        ++number_;
+        return true;
+      }
+      if (c == '\0') fail(source_, number_ + 1, "NUL byte: binary data, not a CSV log");
+      if (line.size() >= kMaxCsvLineBytes)
+        fail(source_, number_ + 1, "line longer than " + std::to_string(kMaxCsvLineBytes >> 20) + " MiB: not a CSV log");
+      line.push_back(c);
+    }
+    if (line.empty()) return false;
+    ++number_;
+    unterminated_ = true;
+    return true;
+  }
+  std::size_t number() const { return number_; }
+  bool lastLineUnterminated() const { return unterminated_; }
+
+ private:
+  std::istream& in_;
+  const std::string& source_;
+  std::size_t number_ = 0;
+  bool unterminated_ = false;
+};
+
+}  // namespace
+
 Log readCsvLog(const std::string& path, const CsvReadOptions& options) {
-  std::ifstream in(path);
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open for reading");
+  return readCsvLog(in, path, options);
+}
+
+Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& options) {
   Log log;
   log.source = path;
   std::vector<double> values;
   std::string line;
-  std::size_t lineno = 0;
+  LineReader lines(in, path);
   bool have_header = false;
   int time_col = -1;
   double last_time = -std::numeric_limits<double>::infinity();
   Eigen::Index rows = 0;
-  while (std::getline(in, line)) {
-    ++lineno;
+  while (lines.next(line)) {
+    const std::size_t lineno = lines.number();
+    // A UTF-8 byte-order mark (spreadsheets write one) would hide the first column's name.
+    if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
     const std::string t = trim(line);
     if (t.empty()) continue;
     if (t[0] == '#') {
@@ -133,8 +180,12 @@ Log readCsvLog(const std::string& path, const CsvReadOptions& options) {
     }
     ++rows;
   }
-  if (!have_header) fail(path, lineno, "no header line (expected comma-separated column names)");
-  if (rows == 0) fail(path, lineno, "no data rows after the header");
+  if (!have_header) fail(path, lines.number(), "no header line (expected comma-separated column names)");
+  if (rows == 0) fail(path, lines.number(), "no data rows after the header");
+  if (lines.lastLineUnterminated())
+    log.warnings.push_back(path + ":" + std::to_string(lines.number()) +
+                           ": the file ends without a newline; its last row may have been cut short (check its "
+                           "last value)");
   const auto cols = static_cast<Eigen::Index>(log.columns.size());
   log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       values.data(), rows, cols);
@@ -145,8 +196,7 @@ void writeCsvLog(const std::string& path, const Log& log) {
   if (static_cast<Eigen::Index>(log.columns.size()) != log.data.cols())
     throw std::invalid_argument("writeCsvLog: " + std::to_string(log.columns.size()) +
                                 " column names for " + std::to_string(log.data.cols()) + " columns");
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  std::ostringstream out;
   for (const auto& [k, v] : log.metadata) out << "# " << k << ": " << v << '\n';
   for (const auto& c : log.comments) out << "# " << c << '\n';
   for (std::size_t i = 0; i < log.columns.size(); ++i) out << (i ? "," : "") << log.columns[i];
@@ -155,8 +205,7 @@ void writeCsvLog(const std::string& path, const Log& log) {
     for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << shortest(log.data(r, c));
     out << '\n';
   }
-  out.flush();  // a buffered write can fail here, after the last insertion (as writeTextFile)
-  if (!out) throw std::runtime_error(path + ": write failed");
+  writeFileAtomically(path, out.str(), "log");
 }
 
 double checkedSampleTime(const Log& log, const std::string& time_column, double max_gap_factor) {

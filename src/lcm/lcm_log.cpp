@@ -1,11 +1,15 @@
 #include "plsa/lcm/lcm_log.hpp"
 
+#include <array>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
-#include <lcm/lcm-cpp.hpp>
-
+#include "plsa/core/text_file.hpp"
+#include "plsa/lcm/message_codec.hpp"
 #include "plsa/lcm/state_codec.hpp"
 
 namespace plsa::lcm {
@@ -14,62 +18,152 @@ namespace {
 const std::vector<std::string> kColumns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1",
                                            "p_2",    "p_3",   "bend_deg", "steer_deg"};
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+std::uint64_t bigEndian(const unsigned char* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
 }
+
+void putBigEndian(std::string& out, std::uint64_t v, int bytes) {
+  for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+}
+
+// One pass over the events; the caller turns the state messages into rows.
+class EventReader {
+ public:
+  EventReader(std::istream& in, std::string source, std::string channel)
+      : in_(in), source_(std::move(source)), channel_(std::move(channel)) {}
+
+  io::Log read() {
+    std::vector<double> values;
+    while (nextEvent()) {
+      if (!on_channel_) continue;
+      double row[9];
+      toRowChecked(row);
+      values.insert(values.end(), row, row + 9);
+    }
+    if (values.empty())
+      throw std::runtime_error(source_ + ": no actuator-state messages on channel " + channel_ + " (" +
+                               std::to_string(events_) + " events in all)");
+    io::Log log;
+    log.source = source_;
+    log.columns = kColumns;
+    const auto rows = static_cast<Eigen::Index>(values.size() / 9);
+    log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        values.data(), rows, 9);
+    log.metadata["source"] = "LCM event log, channel " + channel_;
+    log.metadata["events_on_other_channels"] = std::to_string(other_);
+    if (!cut_.empty()) log.warnings.push_back(cut_);
+    return log;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) const {
+    throw std::runtime_error(source_ + ": event " + std::to_string(events_) + " (byte " + std::to_string(start_) +
+                             "): " + why);
+  }
+
+  // Reads `n` bytes into `buf`; false (and a note) when the file ends first.
+  bool take(char* buf, std::size_t n) {
+    in_.read(buf, static_cast<std::streamsize>(n));
+    offset_ += static_cast<std::uint64_t>(in_.gcount());
+    return static_cast<std::size_t>(in_.gcount()) == n || cutShort();
+  }
+
+  // The file ended inside the current event: keep what came before, and say so.
+  bool cutShort() {
+    cut_ = "the log ends inside event " + std::to_string(events_) + " (byte " + std::to_string(start_) +
+           "), as a recording stopped mid-write does; the " + std::to_string(events_ - 1) +
+           " events before it are read";
+    return false;
+  }
+
+  bool skip(std::uint64_t n) {
+    while (n > 0) {
+      const auto step = static_cast<std::streamsize>(std::min<std::uint64_t>(n, 1 << 20));
+      in_.ignore(step);
+      offset_ += static_cast<std::uint64_t>(in_.gcount());
+      if (in_.gcount() != step) return cutShort();
+      n -= static_cast<std::uint64_t>(step);
+    }
+    return true;
+  }
+
+  // The next event's header and, on our channel, its data; false at the end.
+  bool nextEvent() {
+    start_ = offset_;
+    std::array<unsigned char, 28> head{};
+    in_.read(reinterpret_cast<char*>(head.data()), 4);
+    offset_ += static_cast<std::uint64_t>(in_.gcount());
+    if (in_.gcount() == 0) return false;
+    ++events_;
+    if (in_.gcount() < 4) return cutShort();
+    if (bigEndian(head.data(), 4) != kLcmLogSyncWord)
+      fail(events_ == 1 ? "no LCM sync word: not an LCM event log" : "no LCM sync word: the log is corrupt here");
+    if (!take(reinterpret_cast<char*>(head.data()) + 4, 24)) return false;
+    const auto channel_len = static_cast<std::int32_t>(bigEndian(head.data() + 20, 4));
+    const auto data_len = static_cast<std::int32_t>(bigEndian(head.data() + 24, 4));
+    if (channel_len < 1 || channel_len > kMaxChannelBytes)
+      fail("channel name length " + std::to_string(channel_len) + " is outside 1.." + std::to_string(kMaxChannelBytes));
+    if (data_len < 0) fail("data length " + std::to_string(data_len) + " is negative");
+    char name[kMaxChannelBytes];
+    if (!take(name, static_cast<std::size_t>(channel_len))) return false;
+    on_channel_ = channel_.compare(0, std::string::npos, name, static_cast<std::size_t>(channel_len)) == 0;
+    if (!on_channel_) {
+      ++other_;
+      return skip(static_cast<std::uint64_t>(data_len));
+    }
+    if (static_cast<std::size_t>(data_len) > kMaxMessageBytes)
+      fail("data length " + std::to_string(data_len) + " is above the " + std::to_string(kMaxMessageBytes >> 20) +
+           " MiB a message may have");
+    data_.resize(static_cast<std::size_t>(data_len));
+    return take(data_.data(), data_.size());
+  }
+
+  void toRowChecked(double row[9]) {
+    const std::string why = decodeMessage(data_.data(), data_.size(), message_);
+    if (!why.empty()) fail("on " + channel_ + ": " + why);
+    try {
+      toRow(message_, row);
+    } catch (const std::invalid_argument& e) {
+      fail(e.what());
+    }
+    for (int i = 0; i < 9; ++i)
+      if (!std::isfinite(row[i])) fail("field '" + kColumns[static_cast<std::size_t>(i)] + "' is NaN or Inf");
+    if (!(row[0] > last_time_))
+      fail("time " + std::to_string(row[0]) + " s is not after the previous state's " + std::to_string(last_time_));
+    last_time_ = row[0];
+  }
+
+  std::istream& in_;
+  std::string source_, channel_;
+  std::vector<char> data_;
+  plsa_lcm::actuator_state_t message_;
+  std::uint64_t offset_ = 0, start_ = 0;
+  long events_ = 0, other_ = 0;
+  bool on_channel_ = false;
+  double last_time_ = -INFINITY;
+  std::string cut_;
+};
 
 }  // namespace
 
+io::Log readLcmLog(std::istream& in, const std::string& source, const std::string& channel) {
+  return EventReader(in, source, channel).read();
+}
+
 io::Log readLcmLog(const std::string& path, const std::string& channel) {
-  ::lcm::LogFile file(path, "r");
-  if (!file.good()) throw std::runtime_error(path + ": cannot open as an LCM event log");
-  std::vector<double> values;
-  long other = 0;
-  long event_index = 0;
-  double last_time = -INFINITY;
-  while (const ::lcm::LogEvent* ev = file.readNextEvent()) {
-    ++event_index;
-    if (ev->channel != channel) {
-      ++other;
-      continue;
-    }
-    plsa_lcm::actuator_state_t m;
-    if (m.decode(ev->data, 0, ev->datalen) != ev->datalen)
-      throw std::runtime_error(path + ": event " + std::to_string(event_index) + " on " + channel +
-                               " is not a valid plsa_lcm.actuator_state_t (truncated or wrong type)");
-    double row[9];
-    try {
-      toRow(m, row);
-    } catch (const std::invalid_argument& e) {
-      throw std::runtime_error(path + ": event " + std::to_string(event_index) + ": " + e.what());
-    }
-    for (double v : row)
-      if (!std::isfinite(v))
-        throw std::runtime_error(path + ": event " + std::to_string(event_index) + " has a NaN or Inf field");
-    if (!(row[0] > last_time))
-      throw std::runtime_error(path + ": event " + std::to_string(event_index) + ": time " +
-                               std::to_string(row[0]) + " s is not after the previous state's");
-    last_time = row[0];
-    values.insert(values.end(), row, row + 9);
-  }
-  if (values.empty())
-    throw std::runtime_error(path + ": no actuator-state messages on channel " + channel + " (" +
-                             std::to_string(event_index) + " events in all)");
-  io::Log log;
-  log.source = path;
-  log.columns = kColumns;
-  const auto rows = static_cast<Eigen::Index>(values.size() / 9);
-  log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      values.data(), rows, 9);
-  log.metadata["source"] = "LCM event log, channel " + channel;
-  log.metadata["events_on_other_channels"] = std::to_string(other);
-  return log;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open as an LCM event log");
+  return readLcmLog(in, path, channel);
 }
 
 void writeLcmLog(const std::string& path, const io::Log& log, const std::string& channel) {
+  if (channel.empty() || channel.size() > static_cast<std::size_t>(kMaxChannelBytes))
+    throw std::invalid_argument("writeLcmLog: channel name must have 1 to " + std::to_string(kMaxChannelBytes) +
+                                " bytes");
   const Eigen::MatrixXd cols = log.columnsOf(kColumns);
-  ::lcm::LogFile file(path, "w");
-  if (!file.good()) throw std::runtime_error(path + ": cannot open for writing");
+  std::string bytes;
   std::vector<char> buf;
   for (Eigen::Index r = 0; r < cols.rows(); ++r) {
     plsa_lcm::actuator_state_t m;
@@ -85,24 +179,47 @@ void writeLcmLog(const std::string& path, const io::Log& log, const std::string&
     m.vented = 0;
     buf.resize(static_cast<std::size_t>(m.getEncodedSize()));
     m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-    ::lcm::LogEvent ev;
-    ev.eventnum = r;
-    ev.timestamp = m.utime;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(buf.size());
-    ev.data = buf.data();
-    if (file.writeEvent(&ev) != 0) throw std::runtime_error(path + ": write failed");
+    putBigEndian(bytes, kLcmLogSyncWord, 4);
+    putBigEndian(bytes, static_cast<std::uint64_t>(r), 8);
+    putBigEndian(bytes, static_cast<std::uint64_t>(m.utime), 8);
+    putBigEndian(bytes, channel.size(), 4);
+    putBigEndian(bytes, buf.size(), 4);
+    bytes += channel;
+    bytes.append(buf.data(), buf.size());
   }
+  writeFileAtomically(path, bytes, "LCM event log");
+}
+
+bool isLcmLog(std::istream& in) {
+  unsigned char head[4] = {};
+  return in.read(reinterpret_cast<char*>(head), 4) && bigEndian(head, 4) == kLcmLogSyncWord;
+}
+
+bool isLcmLog(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return isLcmLog(in);
 }
 
 io::Log readLogFile(const std::string& path, const io::CsvReadOptions& options) {
-  if (endsWith(path, ".lcmlog") || endsWith(path, ".lcm")) {
-    io::Log log = readLcmLog(path);
-    for (const auto& r : options.required)
-      if (!log.hasColumn(r)) throw std::runtime_error(path + ": LCM log has no column '" + r + "'");
-    return log;
+  // A pipe can be read once: take it whole (bounded), then look at its first bytes.
+  std::error_code ec;
+  const bool regular = std::filesystem::is_regular_file(path, ec);
+  std::istringstream piped;
+  if (!regular) piped.str(readTextFile(path, "log", kMaxPipedLogBytes));
+  std::ifstream file;
+  if (regular) {
+    file.open(path, std::ios::binary);
+    if (!file) throw std::runtime_error(path + ": cannot open for reading");
   }
-  return io::readCsvLog(path, options);
+  std::istream& in = regular ? static_cast<std::istream&>(file) : piped;
+  const bool lcm_log = isLcmLog(in);
+  in.clear();
+  in.seekg(0);
+  if (!lcm_log) return io::readCsvLog(in, path, options);
+  io::Log log = readLcmLog(in, path);
+  for (const auto& r : options.required)
+    if (!log.hasColumn(r)) throw std::runtime_error(path + ": LCM log has no column '" + r + "'");
+  return log;
 }
 
 }  // namespace plsa::lcm

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <istream>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,6 +20,9 @@ struct Log {
   Eigen::MatrixXd data;                        ///< samples x columns
   std::map<std::string, std::string> metadata; ///< from `# key: value` lines
   std::vector<std::string> comments;           ///< other `#` lines, without the '#'
+  /// What the reader accepted but a user should hear of (a last line without
+  /// its newline, a recording cut short); tools print these.
+  std::vector<std::string> warnings;
 
   Eigen::Index samples() const { return data.rows(); }
   bool hasColumn(const std::string& name) const;
@@ -37,12 +41,22 @@ struct CsvReadOptions {
   std::vector<std::string> required;
 };
 
+/// Longest line the reader takes: a log's rows are a few hundred bytes, and a
+/// file without line breaks (binary data, a wrong path) must not fill memory.
+inline constexpr std::size_t kMaxCsvLineBytes = std::size_t{1} << 20;
+
 /// Reads a log; throws std::runtime_error "FILE:LINE: reason" on any defect
 /// (missing file, no header, duplicate or missing column, ragged row, text or
-/// NaN/Inf in a number field, time not strictly increasing, no data rows).
+/// NaN/Inf in a number field, time not strictly increasing, no data rows, a
+/// NUL byte, a line above kMaxCsvLineBytes). A UTF-8 byte-order mark is
+/// skipped. A last line without its newline is read and warned of (it may
+/// have been cut inside its last field).
 Log readCsvLog(const std::string& path, const CsvReadOptions& options = {});
+/// The same from a stream; `source` names it in messages.
+Log readCsvLog(std::istream& in, const std::string& source, const CsvReadOptions& options = {});
 
-/// Writes metadata as `# key: value`, the header and rows at full precision.
+/// Writes metadata as `# key: value`, the header and rows at full precision,
+/// atomically (a temporary file renamed over `path`).
 void writeCsvLog(const std::string& path, const Log& log);
 
 /// Median sample time of the time column; throws if any step is more than

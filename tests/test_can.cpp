@@ -341,3 +341,102 @@ TEST(SimulatedValveDevice, SensorSaturatesAtItsFullScaleInsteadOfFallingSilent) 
   EXPECT_GT(device.stats().saturated_readings, 0);
   EXPECT_EQ(device.stats().send_failures, 0);
 }
+
+// A reading above the clamp plus the margin is a fault whatever sent it (a
+// failed regulator, or a frame that is not what it claims): the driver vents
+// and will not clear while it persists.
+TEST_F(DriverTest, OverpressureReadingVentsAndLatches) {
+  const std::array<double, 3> cmd{0.3, 0.0, 0.0};
+  for (int k = 1; k <= 30; ++k) tick(0.01 * k, &cmd);
+  ASSERT_EQ(driver.fault(), DriverFault::kNone);
+  sensor.send({0.6, 0.1, 0.1});  // spoofed: 0.6 bar, above 0.4 + 0.1
+  driver.command(0.31, cmd);
+  driver.tick(0.31);
+  EXPECT_EQ(driver.fault(), DriverFault::kOverPressure);
+  EXPECT_EQ(lastValveFrame(*valves, valve), (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(driver.counters().overpressure_readings, 1u);
+  EXPECT_FALSE(driver.clearFault(0.31)) << "cleared while the last reading is still above the limit";
+  auto out = tick(0.32, &cmd);  // readings back to 0.1 bar
+  EXPECT_EQ(out, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_TRUE(driver.clearFault(0.32));
+  // Just under the limit is no fault.
+  for (int k = 33; k <= 40; ++k) tick(0.01 * k, &cmd);
+  sensor.send({0.499, 0.1, 0.1});
+  driver.tick(0.41);
+  EXPECT_EQ(driver.fault(), DriverFault::kNone);
+}
+
+// On a bus-off controller nothing goes out: the driver does not claim a vent.
+TEST_F(DriverTest, BusOffSaysNoVentFrameCouldBeSent) {
+  const std::array<double, 3> cmd{0.2, 0, 0};
+  for (int k = 1; k <= 10; ++k) tick(0.01 * k, &cmd);
+  EXPECT_TRUE(driver.lastFrameSent());
+  bus->setBusState(BusState::kBusOff);
+  driver.tick(0.11);
+  EXPECT_EQ(driver.fault(), DriverFault::kBusOff);
+  EXPECT_FALSE(driver.lastFrameSent());
+  EXPECT_NE(std::string(toString(DriverFault::kBusOff)).find("a vent frame neither"), std::string::npos);
+  EXPECT_EQ(std::string(toString(DriverFault::kBusOff)).find(": vented"), std::string::npos);
+}
+
+// The valve controller's own watchdog: without valid valve frames for its
+// timeout it vents, as when the process driving it is killed outright.
+TEST(SimulatedValveDevice, VentsOnItsOwnAfterACommandSilence) {
+  auto bus = InProcessBus::create();
+  auto driver_port = bus->connect(), device_port = bus->connect();
+  const SignalMap map = defaultSignalMap();
+  ValveDriver driver(*driver_port, map, SafetyLimits{}, 0.0);
+  SimulatedValveDevice device(*device_port, map, plsa::sim::SimConfig{}, 1);
+  device.setCommandTimeout(0.25);
+  EXPECT_THROW(device.setCommandTimeout(0.0), std::invalid_argument);
+  const double dt = 1.0 / device.sampleRateHz();
+  int k = 1;
+  for (; k * dt <= 1.0; ++k) {
+    driver.command(k * dt, {0.3, 0.0, 0.0});
+    driver.tick(k * dt);
+    device.step();
+  }
+  EXPECT_NEAR(device.setpoint()[0], 0.3, 1e-4);
+  EXPECT_FALSE(device.ventedBySilence());
+  // The driver dies: no more frames. 0.2 s later the valves still hold, 0.3 s later they have vented.
+  const int dead = k;
+  for (; (k - dead) * dt < 0.2; ++k) device.step();
+  EXPECT_NEAR(device.setpoint()[0], 0.3, 1e-4);
+  for (; (k - dead) * dt < 0.3; ++k) device.step();
+  EXPECT_TRUE(device.ventedBySilence());
+  EXPECT_EQ(device.setpoint(), (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(device.stats().silence_vents, 1);
+}
+
+// Profiles that let two messages share an id or a signal name are refused;
+// what the driver cannot guard against (no counter or checksum, signals in
+// another order or unit) is named in warnings.
+TEST(SignalMap, RefusesAmbiguousProfilesAndWarnsOfUnguardedOnes) {
+  const std::string two = R"({"profile": "t", "messages": [
+    {"name": "valve_command", "id": 256, "dlc": 8, "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1e-5}]},
+    {"name": "pressure_sensor", "id": 256, "dlc": 8, "signals": [{"name": "b", "byte": 0, "bits": 16, "scale": 1e-5}]}]})";
+  EXPECT_NE(errorOf(two).find("id 256 is also message 'valve_command's"), std::string::npos) << errorOf(two);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1},
+                                   {"name": "a", "byte": 2, "bits": 16, "scale": 1})"))
+                .find("signal 'a' is named twice"),
+            std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1, "gain": 2})")).find("unknown key"),
+            std::string::npos);
+  EXPECT_NE(errorOf(R"({"profile": "t", "profile": "u", "messages": []})").find("given twice"), std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1e400})")).find("not valid JSON"),
+            std::string::npos);
+
+  EXPECT_TRUE(driverProfileWarnings(defaultSignalMap()).empty());
+  SignalMap bare = defaultSignalMap();
+  for (auto& m : bare.messages)
+    if (m.name == "valve_command") {
+      m.counter_byte = m.checksum_byte = -1;
+      std::swap(m.signals[0].name, m.signals[1].name);
+    }
+  bare.validate();
+  const std::vector<std::string> w = driverProfileWarnings(bare);
+  ASSERT_EQ(w.size(), 3u);
+  EXPECT_NE(w[0].find("no rolling counter"), std::string::npos) << w[0];
+  EXPECT_NE(w[1].find("no checksum"), std::string::npos) << w[1];
+  EXPECT_NE(w[2].find("taken by position, in this order: setpoint_2, setpoint_1, setpoint_3"), std::string::npos) << w[2];
+}

@@ -9,14 +9,19 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
+#include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 #include <plsa_lcm/actuator_state_t.hpp>
 #include <plsa_lcm/pressure_command_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include "plsa/can/valve_driver.hpp"
+#include "plsa/lcm/can_bridge.hpp"
 #include "support/child_process.hpp"
 #include "support/isolated_lcm_test.hpp"
+#include "support/lcm_bytes.hpp"
 
 using namespace std::chrono_literals;
 
@@ -121,6 +126,24 @@ TEST_F(CanBridgeTest, CommandsReachTheSimulatedValvesAndStopsVent) {
   EXPECT_GT(statusValue(*st, "counter_gaps"), 0.0);
   for (const auto& s : inbox_.bridge) EXPECT_LE(s.pressure_bar[0], 0.45) << "a corrupted reading got through";
 
+  // Hostile commands: a negative and a huge chamber count once killed the
+  // bridge with the valves pressurised. They are rejected and named; the
+  // bridge keeps its set-points and its state stream.
+  plsa_lcm::pressure_command_t probe;
+  probe.n_chambers = 3;
+  probe.pressure_bar = {0.25, 0.6, 0.0};
+  for (const std::uint32_t n : {0xFFFFFFFFu, 0x10000000u}) {
+    const std::string bad = plsa::test::withInt32(plsa::test::encoded(probe).substr(0, 28), 24, n);
+    lcm_->publish("BRIDGE_COMMAND", bad.data(), static_cast<unsigned>(bad.size()));
+    run(300ms, &step);
+  }
+  ASSERT_NE(lastStatusWith("n_chambers = -1 is outside 0..16"), nullptr) << "the malformed command was not named";
+  inbox_.bridge.clear();
+  run(500ms, &step);
+  ASSERT_GT(inbox_.bridge.size(), 20u) << "the bridge stopped publishing after a malformed command";
+  EXPECT_EQ(inbox_.bridge.back().vented, 0);
+  EXPECT_NEAR(inbox_.bridge.back().pressure_bar[0], 0.25, 0.03);
+
   // Commands stop: within the 0.25 s timeout (plus a tick) the driver vents and latches.
   inbox_.bridge.clear();
   run(1500ms, nullptr);
@@ -157,5 +180,83 @@ TEST_F(CanBridgeTest, CommandsReachTheSimulatedValvesAndStopsVent) {
   ASSERT_FALSE(inbox_.truth.empty());
   for (double c : inbox_.truth.back().command_bar) EXPECT_EQ(c, 0.0);
   EXPECT_LT(inbox_.truth.back().pressure_bar[0], 0.03);
+
+  // SIGKILL leaves no time to vent: the valve controller's own command
+  // timeout (0.5 s here) vents the chambers.
+  plsa::test::ChildProcess doomed({exe_, "can-bridge", "--iface", "udp:7200:7201", "--command-channel",
+                                   "BRIDGE_COMMAND", "--state-channel", "BRIDGE_STATE", "--status-channel",
+                                   "BRIDGE_STATUS"});
+  inbox_.bridge.clear();
+  ASSERT_TRUE(runUntil([&] { return !inbox_.bridge.empty(); }, 10s)) << "the second bridge published no state";
+  run(1500ms, &again);
+  ASSERT_FALSE(inbox_.truth.empty());
+  EXPECT_NEAR(inbox_.truth.back().command_bar[0], 0.2, 1e-3) << "the second bridge did not pressurise";
+  EXPECT_EQ(doomed.stop(SIGKILL), 128 + SIGKILL);
+  inbox_.truth.clear();
+  run(300ms, nullptr);
+  ASSERT_FALSE(inbox_.truth.empty());
+  EXPECT_NEAR(inbox_.truth.back().command_bar[0], 0.2, 1e-3) << "the valves should hold within their timeout";
+  run(1200ms, nullptr);
+  for (double c : inbox_.truth.back().command_bar) EXPECT_EQ(c, 0.0) << "the valves did not vent on their own";
+  EXPECT_LT(inbox_.truth.back().pressure_bar[0], 0.05);
   EXPECT_EQ(sim.stop(SIGTERM), 0);
+}
+
+namespace {
+
+// A transport that fails as a library might: its statistics throw on the
+// second call (the bridge's first periodic status), from inside the loop.
+class ThrowingTransport : public plsa::can::CanTransport {
+ public:
+  explicit ThrowingTransport(std::unique_ptr<plsa::can::CanTransport> inner) : inner_(std::move(inner)) {}
+  plsa::can::TransportStatus send(const plsa::can::CanFrame& f) override {
+    events.push_back(thrown_ ? "send after the error" : "send");
+    last = f;
+    return inner_->send(f);
+  }
+  plsa::can::TransportStatus receive(plsa::can::CanFrame& f, std::chrono::microseconds t) override {
+    return inner_->receive(f, t);
+  }
+  plsa::can::BusState busState() const override { return inner_->busState(); }
+  plsa::can::TransportStats stats() const override {
+    if (++stats_calls_ == 2) {
+      thrown_ = true;
+      throw std::runtime_error("transport statistics unavailable");
+    }
+    return inner_->stats();
+  }
+  std::vector<std::string> events;
+  plsa::can::CanFrame last;
+
+ private:
+  std::unique_ptr<plsa::can::CanTransport> inner_;
+  mutable int stats_calls_ = 0;
+  mutable bool thrown_ = false;
+};
+
+}  // namespace
+
+// An exception escaping the bridge's loop leaves through its vent: a vent
+// frame is the last thing it sends, and the error still reaches the caller.
+TEST_F(CanBridgeTest, AnErrorEscapingTheLoopSendsAVentFrameFirst) {
+  auto bus = plsa::can::InProcessBus::create();
+  ThrowingTransport transport(bus->connect());
+  const plsa::can::SignalMap map = plsa::can::defaultSignalMap();
+  plsa::lcm::CanBridgeOptions o;
+  o.limits.sensor_timeout_s = 10;  // no sensor on this bus: keep that fault out of the way
+  o.command_channel = "THROWING_COMMAND";
+  std::atomic<bool> stop{false};
+  try {
+    plsa::lcm::runCanBridge(o, transport, map, stop);
+    FAIL() << "the error did not reach the caller";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "transport statistics unavailable");
+  }
+  ASSERT_FALSE(transport.events.empty());
+  EXPECT_EQ(transport.events.back(), "send after the error");
+  double values[8];
+  int counter = -1;
+  ASSERT_NE(plsa::can::decodeFrame(map.message("valve_command"), transport.last, values, counter),
+            plsa::can::DecodeStatus::kBadChecksum);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(values[i], 0.0);
 }

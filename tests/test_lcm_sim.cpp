@@ -21,12 +21,14 @@
 #include "plsa/eval/fit.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/lcm/lcm_log.hpp"
+#include "plsa/lcm/message_codec.hpp"
 #include "plsa/lcm/predictor_node.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "support/child_process.hpp"
+#include "support/lcm_bytes.hpp"
 #include "support/isolated_lcm_test.hpp"
 
 namespace fs = std::filesystem;
@@ -34,14 +36,18 @@ using namespace std::chrono_literals;
 
 namespace {
 
+// The test listens on channels it also sends hostile bytes to: it decodes with
+// the checked decoders too, and keeps only what they accept.
 struct Inbox {
   std::vector<plsa_lcm::actuator_state_t> states;
   std::vector<plsa_lcm::status_t> statuses;
-  void onState(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
-    states.push_back(*m);
+  void onState(const lcm::ReceiveBuffer* b, const std::string&) {
+    plsa_lcm::actuator_state_t m;
+    if (plsa::lcm::decodeMessage(b->data, b->data_size, m).empty()) states.push_back(m);
   }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::status_t* m) {
-    statuses.push_back(*m);
+  void onStatus(const lcm::ReceiveBuffer* b, const std::string&) {
+    plsa_lcm::status_t m;
+    if (plsa::lcm::decodeMessage(b->data, b->data_size, m).empty()) statuses.push_back(m);
   }
 };
 
@@ -69,6 +75,17 @@ class LcmSimTest : public plsa::test::IsolatedLcmTest {
     c.n_chambers = 3;
     c.pressure_bar = {p[0], p[1], p[2]};
     lcm_->publish("PLSA_COMMAND", &c);
+  }
+
+  void publishRaw(const std::string& channel, const std::string& bytes) {
+    lcm_->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  }
+
+  static std::string encodedCommand() {
+    plsa_lcm::pressure_command_t c{};
+    c.n_chambers = 3;
+    c.pressure_bar = {0.1, 0.1, 0.1};
+    return plsa::test::encoded(c);
   }
 
   bool sawSource(const std::string& source) const {
@@ -160,6 +177,13 @@ TEST_F(LcmSimTest, RejectsMalformedCommandsAndKeepsRunning) {
   ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s));
   send({std::numeric_limits<double>::quiet_NaN(), 0, 0}, 0);
   ASSERT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::VENTED, "rejected a command"); }, 2s));
+  // Hostile bytes: the counts that killed the node (a length error, then 2 GiB and SIGSEGV).
+  for (const std::uint32_t n : {0xFFFFFFFFu, 0x10000000u}) {
+    std::this_thread::sleep_for(250ms);  // rejections are reported at most every 200 ms
+    publishRaw("PLSA_COMMAND", plsa::test::withInt32(encodedCommand().substr(0, 28), 24, n));
+  }
+  ASSERT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::VENTED, "n_chambers = 268435456"); }, 2s));
+  EXPECT_TRUE(sawStatus(plsa_lcm::status_t::VENTED, "n_chambers = -1 is outside 0..16"));
   EXPECT_TRUE(inbox_.states.empty()) << "a rejected command must not advance the simulation";
   send({0.9, 0, 0}, 1);  // above the limit: clamped, not rejected
   ASSERT_TRUE(waitFor([&] { return !inbox_.states.empty(); }, 2s));
@@ -211,6 +235,78 @@ TEST(PredictorNode, RefusesABadOrRepeatedHorizonByName) {
   expectRefusal({2000000000}, "horizon 2000000000");
 }
 
+namespace {
+
+// A small valid model of the state message's columns (no identification needed).
+plsa::DioPwlObfModel handMadeModel() {
+  plsa::DioPwlObfModel m;
+  m.inputs = {"p_1", "p_2", "p_3"};
+  m.outputs = {"bend_deg", "steer_deg"};
+  m.input_min = 0.0;
+  m.input_max = 0.4;
+  for (int o = 0; o < 2; ++o) m.poles.push_back(std::vector<plsa::PoleSet>(3, plsa::PoleSet::real({0.9, 0.7})));
+  m.input_play.assign(3, {plsa::PlayChannel(0.0)});
+  m.coefficients = {{Eigen::VectorXd::Constant(6, 0.5), Eigen::VectorXd::Constant(6, 0.25)}};
+  m.region_fits = {{100, -1, ""}};
+  return m;
+}
+
+// Collects the predictions a node publishes.
+struct PredictionSink {
+  std::vector<plsa_lcm::prediction_t> received;
+  void on(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::prediction_t* m) { received.push_back(*m); }
+};
+
+}  // namespace
+
+// Malformed state messages are counted and named, never a crash; one state
+// stamped at INT64_MAX microseconds once stopped every later prediction while
+// the status said "running": now the node restarts and says so.
+TEST_F(LcmSimTest, PredictorNodeSurvivesHostileStatesAndRecoversFromAJumpInTime) {
+  const fs::path model_path = fs::temp_directory_path() / ("plsa_hostile_model_" + std::to_string(::getpid()) + ".json");
+  plsa::saveModel(model_path.string(), handMadeModel());
+  PredictionSink sink;
+  std::vector<plsa_lcm::prediction_t>& predictions = sink.received;
+  lcm_->subscribe("PLSA_PREDICTION", &PredictionSink::on, &sink);
+  plsa::test::ChildProcess pred({exe_, "predict", "--model", model_path.string(), "--horizons", "5"});
+  ASSERT_TRUE(waitFor([&] { return sawSource("plsa predict"); }, 30s)) << "plsa predict never said it was running";
+  std::int64_t seq = 0;
+  auto sendState = [&](std::int64_t utime) {
+    const plsa_lcm::actuator_state_t s = plsa::test::stateMessage(utime, seq++);
+    lcm_->publish("PLSA_STATE", &s);
+    const std::int64_t want = s.seq;
+    return waitFor([&] { return !predictions.empty() && predictions.back().state_seq == want; }, 3s);
+  };
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(sendState(12500 * (k + 1))) << k;
+  // A negative chamber count, a huge one, and bytes of the wrong type.
+  const std::string bytes = plsa::test::encoded(plsa::test::stateMessage(12500 * 6, 99));
+  publishRaw("PLSA_STATE", plsa::test::withInt32(bytes, 24, 0xFFFFFFFEu));
+  publishRaw("PLSA_STATE", plsa::test::withInt32(bytes, 24, 0x10000000u));
+  publishRaw("PLSA_STATE", encodedCommand());
+  // One state far in the future: accepted as a gap; then the clock comes back.
+  ASSERT_TRUE(sendState(std::numeric_limits<std::int64_t>::max()));
+  int predicted_after = 0;
+  for (int k = 6; k < 12; ++k) predicted_after += sendState(12500 * (k + 1)) ? 1 : 0;
+  EXPECT_GE(predicted_after, 6 - (plsa::kClockStepSamples - 1))
+      << "the node did not recover from the jump in time";
+  // Its last status, sent as it stops, counts everything.
+  inbox_.statuses.clear();
+  EXPECT_EQ(pred.stop(SIGTERM), 0);
+  fs::remove(model_path);
+  ASSERT_TRUE(waitFor([&] { return sawSource("plsa predict"); }, 3s)) << "no final status";
+  const plsa_lcm::status_t* last = nullptr;
+  for (const auto& s : inbox_.statuses)
+    if (s.source == "plsa predict") last = &s;
+  const auto value = [&](const std::string& name) {
+    for (std::size_t i = 0; i < last->names.size(); ++i)
+      if (last->names[i] == name) return last->values[i];
+    return -1.0;
+  };
+  EXPECT_EQ(value("rejected_malformed"), 3);
+  EXPECT_EQ(value("rejected_time"), plsa::kClockStepSamples - 1);
+  EXPECT_EQ(value("restarts"), 2);  // the jump ahead, then the clock stepping back
+}
+
 TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   // A model of the default simulator, identified here.
   plsa::sim::ExperimentOptions eo;
@@ -228,12 +324,9 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), model);
 
-  std::vector<plsa_lcm::prediction_t> predictions;
-  struct Sink {
-    std::vector<plsa_lcm::prediction_t>* out;
-    void on(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::prediction_t* m) { out->push_back(*m); }
-  } sink{&predictions};
-  lcm_->subscribe("PLSA_PREDICTION", &Sink::on, &sink);
+  PredictionSink sink;
+  std::vector<plsa_lcm::prediction_t>& predictions = sink.received;
+  lcm_->subscribe("PLSA_PREDICTION", &PredictionSink::on, &sink);
   plsa::test::ChildProcess sim({exe_, "sim", "--lockstep", "--seed", "3", "--command-timeout", "2"});
   plsa::test::ChildProcess pred({exe_, "predict", "--model", model_path.string(), "--horizons", "40"});
   // The node subscribes before its run loop starts, which publishes a status

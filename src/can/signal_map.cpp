@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plsa/core/text_file.hpp"
+#include "plsa/io/strict_json.hpp"
 
 namespace plsa::can {
 namespace {
@@ -58,8 +59,18 @@ const MessageLayout& SignalMap::message(const std::string& name) const {
 }
 
 void SignalMap::validate() const {
-  for (const auto& m : messages) {
+  for (auto at = messages.begin(); at != messages.end(); ++at) {
+    const MessageLayout& m = *at;
     const std::string where = "signal map '" + profile + "', message '" + m.name + "': ";
+    for (auto before = messages.begin(); before != at; ++before) {
+      if (before->name == m.name) throw std::invalid_argument(where + "a message of this name comes earlier");
+      if (before->id == m.id)
+        throw std::invalid_argument(where + "id " + std::to_string(m.id) + " is also message '" + before->name +
+                                    "'s: one frame would be read as both");
+    }
+    for (auto s = m.signals.begin(); s != m.signals.end(); ++s)
+      if (std::find_if(m.signals.begin(), s, [&](const Signal& t) { return t.name == s->name; }) != s)
+        throw std::invalid_argument(where + "signal '" + s->name + "' is named twice");
     if (m.id > 0x7FF) throw std::invalid_argument(where + "id above 11 bits");
     if (m.dlc < 0 || m.dlc > 8) throw std::invalid_argument(where + "dlc must be 0..8");
     if (m.signals.empty() || m.signals.size() > static_cast<std::size_t>(MessageLayout::kMaxSignals))
@@ -103,36 +114,46 @@ long long integerField(const nlohmann::json& j, const char* key, long long lo, l
 
 SignalMap signalMapFromJson(const std::string& text, const std::string& source) {
   using nlohmann::json;
-  json j;
-  try {
-    j = json::parse(text);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers too large
-    throw std::invalid_argument(source + ": not valid JSON: " + e.what());
-  }
+  const json j = io::parseStrictJson(text, source);
   SignalMap map;
   try {
+    if (!j.is_object()) throw std::invalid_argument("the top level must be an object");
+    io::requireKnownKeys(j, {"profile", "messages"}, "", source);
     map.profile = j.at("profile").get<std::string>();
-    for (const auto& jm : j.at("messages")) {
+    const json& messages = j.at("messages");
+    if (!messages.is_array() || messages.size() > kMaxMessages)
+      throw std::invalid_argument("'messages' must be an array of at most " + std::to_string(kMaxMessages));
+    for (const auto& jm : messages) {
+      if (!jm.is_object()) throw std::invalid_argument("each of 'messages' must be an object");
       MessageLayout m;
       m.name = jm.at("name").get<std::string>();
       const std::string where = "message '" + m.name + "': ";
+      io::requireKnownKeys(jm, {"name", "id", "dlc", "counter_byte", "checksum_byte", "signals"},
+                           "messages[" + m.name + "].", source);
       const nlohmann::json none = -1;
       m.id = static_cast<std::uint32_t>(integerField(jm, "id", 0, 0x7FF, where));
       m.dlc = static_cast<int>(integerField(jm, "dlc", 0, 8, where));
       m.counter_byte = static_cast<int>(integerField(jm, "counter_byte", -1, 7, where, &none));
       m.checksum_byte = static_cast<int>(integerField(jm, "checksum_byte", -1, 7, where, &none));
-      for (const auto& js : jm.at("signals")) {
+      const json& signals = jm.at("signals");
+      if (!signals.is_array() || signals.size() > static_cast<std::size_t>(MessageLayout::kMaxSignals))
+        throw std::invalid_argument(where + "'signals' must be an array of at most " +
+                                    std::to_string(MessageLayout::kMaxSignals));
+      for (const auto& js : signals) {
+        if (!js.is_object()) throw std::invalid_argument(where + "each signal must be an object");
         Signal s;
         s.name = js.at("name").get<std::string>();
-        s.byte = static_cast<int>(integerField(js, "byte", 0, 7, where + "signal '" + s.name + "': "));
-        s.bits = static_cast<int>(integerField(js, "bits", 8, 32, where + "signal '" + s.name + "': "));
+        const std::string at = where + "signal '" + s.name + "': ";
+        io::requireKnownKeys(js, {"name", "byte", "bits", "endian", "signed", "scale", "offset", "unit"},
+                             "messages[" + m.name + "].signals[" + s.name + "].", source);
+        s.byte = static_cast<int>(integerField(js, "byte", 0, 7, at));
+        s.bits = static_cast<int>(integerField(js, "bits", 8, 32, at));
         const std::string endian = js.value("endian", "little");
-        if (endian != "little" && endian != "big")
-          throw std::invalid_argument("signal '" + s.name + "': endian must be 'little' or 'big'");
+        if (endian != "little" && endian != "big") throw std::invalid_argument(at + "endian must be 'little' or 'big'");
         s.little_endian = endian == "little";
         s.is_signed = js.value("signed", false);
-        s.scale = js.at("scale").get<double>();
-        s.offset = js.value("offset", 0.0);
+        s.scale = io::finiteNumber(js.at("scale"), at + "scale", source);
+        s.offset = js.contains("offset") ? io::finiteNumber(js.at("offset"), at + "offset", source) : 0.0;
         s.unit = js.value("unit", "");
         m.signals.push_back(s);
       }
@@ -141,7 +162,8 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
   } catch (const json::exception& e) {
     throw std::invalid_argument(source + ": " + e.what());
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(source + ": " + e.what());
+    const std::string what = e.what();
+    throw std::invalid_argument(what.rfind(source + ": ", 0) == 0 ? what : source + ": " + what);
   }
   try {
     map.validate();
@@ -149,6 +171,37 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
     throw std::invalid_argument(source + ": " + e.what());
   }
   return map;
+}
+
+std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
+  std::vector<std::string> out;
+  const std::pair<const char*, std::vector<std::string>> expected[] = {
+      {"valve_command", {"setpoint_1", "setpoint_2", "setpoint_3"}},
+      {"pressure_sensor", {"pressure_1", "pressure_2", "pressure_3"}},
+      {"tip_angle", {"bend_deg", "steer_deg"}}};
+  for (const auto& [name, signals] : expected) {
+    const MessageLayout* m = map.find(name);
+    if (!m) continue;
+    const std::string where = "signal map '" + map.profile + "', message '" + name + "': ";
+    if (m->counter_byte < 0)
+      out.push_back(where + "no rolling counter: a lost or replayed frame cannot be detected");
+    if (m->checksum_byte < 0)
+      out.push_back(where + "no checksum: a corrupted frame would be applied as it reads");
+    std::string names, want;
+    bool same = m->signals.size() == signals.size();
+    for (std::size_t i = 0; i < m->signals.size(); ++i) {
+      names += (i ? ", " : "") + m->signals[i].name;
+      same = same && i < signals.size() && m->signals[i].name == signals[i];
+    }
+    for (std::size_t i = 0; i < signals.size(); ++i) want += (i ? ", " : "") + signals[i];
+    if (!same)
+      out.push_back(where + "signals are taken by position, in this order: " + names + " (documented names: " +
+                    want + "); check chamber " + (std::string(name) == "tip_angle" ? "and angle " : "") + "order");
+    const std::string unit = std::string(name) == "tip_angle" ? "deg" : "bar";
+    for (const Signal& s : m->signals)
+      if (s.unit != unit) out.push_back(where + "signal '" + s.name + "' is in '" + s.unit + "'; plsa reads " + unit);
+  }
+  return out;
 }
 
 SignalMap loadSignalMap(const std::string& path) {

@@ -20,6 +20,12 @@ SimulatedValveDevice::SimulatedValveDevice(CanTransport& transport, const Signal
   if (tip_ && tip_->signals.size() != 2) throw std::invalid_argument("simulated device: tip_angle needs two signals (bend, steer)");
 }
 
+void SimulatedValveDevice::setCommandTimeout(double seconds) {
+  if (!(seconds > 0) || !std::isfinite(seconds))
+    throw std::invalid_argument("simulated device: the command timeout must be positive and finite");
+  command_timeout_s_ = seconds;
+}
+
 void SimulatedValveDevice::sendMessage(const MessageLayout& m, const double* values, std::uint8_t& counter) {
   // A sensor reads full scale beyond its range; it does not fall silent.
   double sent[MessageLayout::kMaxSignals];
@@ -47,7 +53,16 @@ sim::ActuatorSample SimulatedValveDevice::step() {
     }
     ++stats_.valve_frames;
     for (std::size_t i = 0; i < 3; ++i) setpoint_[i] = values[i];
+    samples_since_command_ = 0;
+    silent_ = false;
   }
+  // The controller's own watchdog: silence beyond the timeout vents, whatever came last.
+  const double silence = static_cast<double>(samples_since_command_++) / actuator_.config().sample_rate_hz;
+  if (!silent_ && silence > command_timeout_s_) {
+    silent_ = true;
+    ++stats_.silence_vents;
+  }
+  if (silent_) setpoint_ = {0.0, 0.0, 0.0};
   const sim::ActuatorSample s = actuator_.step(setpoint_);
   double p[3];
   for (std::size_t i = 0; i < 3; ++i) p[i] = std::max(0.0, s.pressure_bar[i]);  // gauge sensors read no vacuum

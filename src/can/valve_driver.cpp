@@ -14,9 +14,12 @@ const char* toString(DriverFault f) {
     case DriverFault::kNone: return "no fault";
     case DriverFault::kStaleSensor: return "no valid pressure reading within the sensor timeout: vented";
     case DriverFault::kCommandTimeout: return "commands stopped for longer than the command timeout: vented";
-    case DriverFault::kBusOff: return "CAN controller is bus-off: vented";
+    case DriverFault::kBusOff:
+      return "CAN controller is bus-off: no frame can be sent, a vent frame neither; the valves rely on their own "
+             "command timeout";
     case DriverFault::kErrorPassive: return "CAN controller is error-passive: vented";
     case DriverFault::kShutdown: return "shut down: vented";
+    case DriverFault::kOverPressure: return "a chamber reads above the overpressure limit: vented";
   }
   return "unknown";
 }
@@ -26,7 +29,8 @@ void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits) {
   const std::pair<const char*, double> named[] = {{"max_pressure_bar", limits.max_pressure_bar},
                                                   {"max_rate_bar_per_s", limits.max_rate_bar_per_s},
                                                   {"sensor_timeout_s", limits.sensor_timeout_s},
-                                                  {"command_timeout_s", limits.command_timeout_s}};
+                                                  {"command_timeout_s", limits.command_timeout_s},
+                                                  {"overpressure_margin_bar", limits.overpressure_margin_bar}};
   for (const auto& [name, value] : named)
     if (!(value > 0) || !std::isfinite(value))
       throw std::invalid_argument(std::string("ValveDriver: safety limit ") + name + " is " + std::to_string(value) +
@@ -108,6 +112,11 @@ void ValveDriver::tick(double time_s) noexcept {
     ++counters_.sensor_frames;
     for (std::size_t i = 0; i < 3; ++i) pressure_[i] = values[i];
     last_sensor_ = time_s;
+    for (double p : pressure_)
+      if (p > limits_.overpressureBar()) {
+        ++counters_.overpressure_readings;
+        latch(DriverFault::kOverPressure);
+      }
   }
   switch (transport_.busState()) {
     case BusState::kBusOff: latch(DriverFault::kBusOff); break;
@@ -132,7 +141,9 @@ bool ValveDriver::clearFault(double time_s) noexcept {
   const bool fresh_sensor = time_s - last_sensor_ <= limits_.sensor_timeout_s;
   const bool bus_ok = transport_.busState() == BusState::kActive;
   const bool commands_ok = !have_command_ || time_s - last_command_ <= limits_.command_timeout_s;
-  if (!fresh_sensor || !bus_ok || !commands_ok) return false;
+  bool pressure_ok = true;
+  for (double p : pressure_) pressure_ok = pressure_ok && p <= limits_.overpressureBar();
+  if (!fresh_sensor || !bus_ok || !commands_ok || !pressure_ok) return false;
   fault_ = DriverFault::kNone;
   output_ = {0.0, 0.0, 0.0};  // resume from vented, ramping under the rate limit
   return true;
@@ -147,11 +158,13 @@ void ValveDriver::shutdown(double time_s) noexcept {
 
 void ValveDriver::send() noexcept {
   CanFrame f;
+  last_send_ok_ = false;
   if (!encodeFrame(*valve_, output_.data(), valve_counter_++, f)) {
     ++counters_.send_failures;
     return;
   }
-  if (transport_.send(f) == TransportStatus::kOk)
+  last_send_ok_ = transport_.send(f) == TransportStatus::kOk;
+  if (last_send_ok_)
     ++counters_.valve_frames;
   else
     ++counters_.send_failures;

@@ -15,6 +15,8 @@
 #include <plsa_lcm/pressure_command_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include "plsa/lcm/message_codec.hpp"
+
 namespace plsa::lcm {
 namespace {
 
@@ -29,12 +31,52 @@ class CanBridge {
  public:
   CanBridge(const CanBridgeOptions& o, can::CanTransport& t, const can::SignalMap& map, const std::atomic<bool>& stop)
       : o_(o), transport_(t), stop_(stop), lcm_(o.url), start_(Clock::now()), driver_(t, map, o.limits, 0.0) {
-    if (!lcm_.good()) throw std::runtime_error("plsa can-bridge: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
+    // Vent first: valves left holding by an earlier bridge that was killed start safe.
+    driver_.tick(now());
+    if (!lcm_.good()) {
+      driver_.shutdown(now());
+      throw std::runtime_error("plsa can-bridge: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
+    }
     lcm_.subscribe(o.command_channel, &CanBridge::onCommand, this);
-    lcm_.subscribeFunction(o.clear_channel, &CanBridge::onClear, this);
+    lcm_.subscribe(o.clear_channel, &CanBridge::onClear, this);
   }
 
+  // Whatever ends the bridge, a vent frame goes out first.
+  ~CanBridge() {
+    if (!vented_on_exit_) driver_.shutdown(now());
+  }
+  CanBridge(const CanBridge&) = delete;
+  CanBridge& operator=(const CanBridge&) = delete;
+
   CanBridgeStats run() {
+    try {
+      loop();
+    } catch (const std::exception& e) {
+      ventOnExit(std::string("stopped by an error: ") + e.what());
+      throw;
+    } catch (...) {
+      ventOnExit("stopped by an unknown error");
+      throw;
+    }
+    ventOnExit("stopped");
+    return stats_;
+  }
+
+ private:
+  void ventOnExit(const std::string& why) noexcept {
+    driver_.shutdown(now());
+    vented_on_exit_ = true;
+    try {
+      publishState();
+      publishStatus(plsa_lcm::status_t::STOPPED,
+                    driver_.lastFrameSent() ? why + "; vent frame sent to every chamber"
+                                            : why + "; the vent frame could NOT be sent (bus-off or transport "
+                                                    "failure): the valves rely on their own command timeout");
+    } catch (...) {  // the vent frame is out; a report that cannot be sent changes nothing
+    }
+  }
+
+  void loop() {
     publishStatus(plsa_lcm::status_t::VENTED, "started; chambers vented until the first command");
     const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / o_.rate_hz));
     auto next = Clock::now();
@@ -58,13 +100,8 @@ class CanBridge {
         last_status = Clock::now();
       }
     }
-    driver_.shutdown(now());
-    publishState();
-    publishStatus(plsa_lcm::status_t::STOPPED, "stopped; vent frame sent to every chamber");
-    return stats_;
   }
 
- private:
   double now() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
 
   void pump(Clock::time_point deadline) {
@@ -80,26 +117,41 @@ class CanBridge {
     }
   }
 
-  void onCommand(const ::lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::pressure_command_t* m) {
+  // Raw bytes: decoded by the checked decoder, never by lcm-gen's alone.
+  void onCommand(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    std::string why = decodeMessage(rbuf->data, rbuf->data_size, command_);
     std::array<double, 3> p{};
-    bool ok = m->n_chambers == 3 && m->pressure_bar.size() == 3;
-    for (std::size_t i = 0; ok && i < 3; ++i) p[i] = m->pressure_bar[i];
-    if (!ok || !driver_.command(now(), p)) {
+    if (why.empty() && command_.n_chambers != 3)
+      why = "n_chambers = " + std::to_string(command_.n_chambers) + ", this actuator has 3";
+    for (std::size_t i = 0; why.empty() && i < 3; ++i) p[i] = command_.pressure_bar[i];
+    if (why.empty() && !driver_.command(now(), p)) why = "a chamber pressure is NaN or Inf";
+    if (!why.empty()) {
       ++stats_.rejected_commands;
-      publishStatus(plsa_lcm::status_t::OK, "rejected a command: need 3 finite chamber pressures");
+      reportRejection("rejected a command on " + channel + ": " + why);
       return;
     }
     ++stats_.commands;
   }
 
-  static void onClear(const ::lcm::ReceiveBuffer*, const std::string&, CanBridge* self) {
-    if (self->driver_.fault() == can::DriverFault::kNone) return;
-    const std::string why = can::toString(self->driver_.fault());
-    if (self->driver_.clearFault(self->now())) {
-      self->reported_ = can::DriverFault::kNone;
-      self->publishStatus(plsa_lcm::status_t::OK, "fault cleared (was: " + why + ")");
+  // A flood of bad messages must not become a flood of status messages: one
+  // report per 200 ms, the rest counted (rejected_commands).
+  void reportRejection(const std::string& why) {
+    const auto t = Clock::now();
+    if (t - last_rejection_report_ < std::chrono::milliseconds(200)) return;
+    last_rejection_report_ = t;
+    publishStatus(driver_.fault() == can::DriverFault::kNone ? plsa_lcm::status_t::OK : plsa_lcm::status_t::FAULT,
+                  why);
+  }
+
+  // Any message on the clear channel asks; its bytes are not read.
+  void onClear(const ::lcm::ReceiveBuffer*, const std::string&) {
+    if (driver_.fault() == can::DriverFault::kNone) return;
+    const std::string why = can::toString(driver_.fault());
+    if (driver_.clearFault(now())) {
+      reported_ = can::DriverFault::kNone;
+      publishStatus(plsa_lcm::status_t::OK, "fault cleared (was: " + why + ")");
     } else {
-      self->publishStatus(plsa_lcm::status_t::FAULT, "fault not cleared, its cause remains: " + why);
+      publishStatus(plsa_lcm::status_t::FAULT, "fault not cleared, its cause remains: " + why);
     }
   }
 
@@ -115,7 +167,8 @@ class CanBridge {
     m.steer_deg = driver_.hasTipAngle() ? driver_.tipAngle()[1] : nan;
     for (auto& row : m.sensor_rotation)
       for (double& v : row) v = nan;  // the bus carries angles, not the rotation
-    m.vented = driver_.fault() != can::DriverFault::kNone ? 1 : 0;
+    // Vented only if the vent frame went out: a bus-off controller sends nothing.
+    m.vented = driver_.fault() != can::DriverFault::kNone && driver_.lastFrameSent() ? 1 : 0;
     lcm_.publish(o_.state_channel, &m);
   }
 
@@ -129,14 +182,15 @@ class CanBridge {
     s.message = message;
     s.names = {"sensor_frames", "tip_frames",      "bad_length",   "bad_checksum",    "counter_gaps",
                "valve_frames",  "send_failures",   "commands",     "rejected_commands", "rx_overflows",
-               "back_pressure", "malformed_frames", "bus_state",   "faults"};
+               "back_pressure", "malformed_frames", "bus_state",   "faults", "overpressure_readings"};
     s.values = {static_cast<double>(c.sensor_frames), static_cast<double>(c.tip_frames),
                 static_cast<double>(c.bad_length),    static_cast<double>(c.bad_checksum),
                 static_cast<double>(c.counter_gaps),  static_cast<double>(c.valve_frames),
                 static_cast<double>(c.send_failures), static_cast<double>(stats_.commands),
                 static_cast<double>(stats_.rejected_commands), static_cast<double>(t.overflows),
                 static_cast<double>(t.back_pressure), static_cast<double>(t.malformed),
-                static_cast<double>(transport_.busState()), static_cast<double>(stats_.faults)};
+                static_cast<double>(transport_.busState()), static_cast<double>(stats_.faults),
+                static_cast<double>(c.overpressure_readings)};
     s.n_values = static_cast<int32_t>(s.names.size());
     lcm_.publish(o_.status_channel, &s);
   }
@@ -149,6 +203,9 @@ class CanBridge {
   can::ValveDriver driver_;
   can::DriverFault reported_ = can::DriverFault::kNone;
   CanBridgeStats stats_;
+  plsa_lcm::pressure_command_t command_;
+  Clock::time_point last_rejection_report_{};
+  bool vented_on_exit_ = false;
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <poll.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/core/check.hpp"
+#include "plsa/lcm/message_codec.hpp"
 #include "plsa/predict/predictor.hpp"
 
 namespace plsa::lcm {
@@ -101,14 +103,28 @@ class PredictorNode {
     return p;
   }
 
-  void onState(const ::lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
+  // Raw bytes: decoded by the checked decoder, never by lcm-gen's alone.
+  void onState(const ::lcm::ReceiveBuffer* rbuf, const std::string&) {
     ++stats_.states;
     const auto t0 = Clock::now();
+    const std::string why = decodeMessage(rbuf->data, rbuf->data_size, state_);
+    if (!why.empty()) {
+      ++stats_.rejected;
+      ++malformed_;
+      last_problem_ = why;
+      return;
+    }
+    const plsa_lcm::actuator_state_t* m = &state_;
     for (std::size_t j = 0; j < in_.size(); ++j) u_(static_cast<Eigen::Index>(j)) = read(*m, in_[j]);
     for (std::size_t o = 0; o < out_.size(); ++o) y_(static_cast<Eigen::Index>(o)) = read(*m, out_[o]);
     const PredictorStatus st = predictor_.update(static_cast<double>(m->utime) * 1e-6, u_, y_);
-    if (st != PredictorStatus::kOk && st != PredictorStatus::kTimeGap) {
+    if (st == PredictorStatus::kTimeGap || st == PredictorStatus::kClockStepBack) {
+      ++restarts_;
+      last_problem_ = toString(st);
+    }
+    if (!accepted(st)) {
       ++stats_.rejected;
+      ++rejected_by_[-static_cast<int>(st) % kReasons];
       last_problem_ = toString(st);
       return;
     }
@@ -133,11 +149,28 @@ class PredictorNode {
     plsa_lcm::status_t s;
     s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
     s.source = "plsa predict";
-    s.state = plsa_lcm::status_t::OK;  // rejected samples are counted and named, not a fault
-    s.message = last_problem_.empty() ? "running" : "running; last rejected sample: " + last_problem_;
-    s.names = {"states", "predictions", "rejected", "latency_p50_us", "latency_p99_us", "latency_max_us"};
+    // Rates over the time since the last status: what a monitor alarms on.
+    const auto now = Clock::now();
+    const double dt = std::max(1e-3, std::chrono::duration<double>(now - last_status_).count());
+    const double states_per_s = static_cast<double>(stats_.states - states_at_status_) / dt;
+    const double rejected_per_s = static_cast<double>(stats_.rejected - rejected_at_status_) / dt;
+    last_status_ = now;
+    states_at_status_ = stats_.states;
+    rejected_at_status_ = stats_.rejected;
+    s.state = rejected_per_s > 0 ? plsa_lcm::status_t::FAULT : plsa_lcm::status_t::OK;
+    s.message = last_problem_.empty()            ? "running"
+                : rejected_per_s > 0             ? "rejecting samples; last: " + last_problem_
+                                                 : "running; last rejected or restarted: " + last_problem_;
+    s.names = {"states", "predictions", "rejected", "latency_p50_us", "latency_p99_us", "latency_max_us",
+               "states_per_s", "rejected_per_s", "rejected_malformed", "rejected_not_finite",
+               "rejected_out_of_range", "rejected_time", "restarts"};
     s.values = {static_cast<double>(stats_.states), static_cast<double>(stats_.predictions),
-                static_cast<double>(stats_.rejected), q(0.5), q(0.99), n ? sorted_[n - 1] : 0.0};
+                static_cast<double>(stats_.rejected), q(0.5), q(0.99), n ? sorted_[n - 1] : 0.0, states_per_s,
+                rejected_per_s, static_cast<double>(malformed_),
+                static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kNotFinite)]),
+                static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kInputOutOfRange)]),
+                static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kTimeNotIncreasing)]),
+                static_cast<double>(restarts_)};
     s.n_values = static_cast<int32_t>(s.names.size());
     lcm_.publish(o_.status_channel, &s);
   }
@@ -156,6 +189,12 @@ class PredictorNode {
   std::vector<plsa_lcm::prediction_t> msgs_;
   std::string last_problem_;
   PredictorNodeStats stats_;
+  plsa_lcm::actuator_state_t state_;
+  static constexpr int kReasons = 8;
+  std::array<std::int64_t, kReasons> rejected_by_{};  // by -PredictorStatus
+  std::int64_t malformed_ = 0, restarts_ = 0;
+  Clock::time_point last_status_ = Clock::now();
+  std::int64_t states_at_status_ = 0, rejected_at_status_ = 0;
 };
 
 }  // namespace

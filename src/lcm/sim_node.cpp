@@ -12,6 +12,7 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/can/simulated_valve_device.hpp"
+#include "plsa/lcm/message_codec.hpp"
 #include "plsa/lcm/state_codec.hpp"
 #include "plsa/sim/actuator.hpp"
 
@@ -32,29 +33,48 @@ class SimNode {
   }
 
   SimNodeStats run() {
-    publishStatus(plsa_lcm::status_t::VENTED, "started; chambers vented until the first command");
-    if (o_.lockstep)
-      runLockstep();
-    else
-      runRealtime();
-    // Leave the device safe: vent and say so.
-    command_ = {0, 0, 0};
-    publishState(actuator_.vent(), true);
-    publishStatus(plsa_lcm::status_t::STOPPED, "stopped; chambers vented");
+    try {
+      publishStatus(plsa_lcm::status_t::VENTED, "started; chambers vented until the first command");
+      if (o_.lockstep)
+        runLockstep();
+      else
+        runRealtime();
+    } catch (const std::exception& e) {
+      ventOnExit(std::string("stopped by an error: ") + e.what() + "; chambers vented");
+      throw;
+    }
+    ventOnExit("stopped; chambers vented");
     return stats_;
   }
 
  private:
-  void onCommand(const ::lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::pressure_command_t* m) {
-    bool ok = m->n_chambers == 3 && m->pressure_bar.size() == 3;
-    for (double p : m->pressure_bar) ok = ok && std::isfinite(p);
-    if (!ok) {
+  // Leave the device safe, and say so.
+  void ventOnExit(const std::string& why) {
+    command_ = {0, 0, 0};
+    vented_ = true;
+    publishState(actuator_.vent(), true);
+    publishStatus(plsa_lcm::status_t::STOPPED, why);
+  }
+
+  // Raw bytes: decoded by the checked decoder, never by lcm-gen's alone.
+  void onCommand(const ::lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    std::string why = decodeMessage(rbuf->data, rbuf->data_size, message_);
+    if (why.empty() && message_.n_chambers != 3)
+      why = "n_chambers = " + std::to_string(message_.n_chambers) + ", this actuator has 3";
+    for (std::size_t i = 0; why.empty() && i < 3; ++i)
+      if (!std::isfinite(message_.pressure_bar[i])) why = "pressure_bar[" + std::to_string(i) + "] is NaN or Inf";
+    if (!why.empty()) {
       ++stats_.commands_rejected;
-      publishStatus(vented_ ? plsa_lcm::status_t::VENTED : plsa_lcm::status_t::OK,
-                    "rejected a command: need 3 finite chamber pressures");
+      const auto t = Clock::now();
+      if (t - last_rejection_report_ >= std::chrono::milliseconds(200)) {  // a flood is counted, not echoed
+        last_rejection_report_ = t;
+        publishStatus(vented_ ? plsa_lcm::status_t::VENTED : plsa_lcm::status_t::OK,
+                      "rejected a command on " + channel + ": " + why);
+      }
       return;
     }
     ++stats_.commands_accepted;
+    const plsa_lcm::pressure_command_t* m = &message_;
     command_ = {m->pressure_bar[0], m->pressure_bar[1], m->pressure_bar[2]};
     last_command_ = Clock::now();
     have_command_ = true;
@@ -165,6 +185,8 @@ class SimNode {
   bool fresh_command_ = false;
   bool vented_ = true;
   SimNodeStats stats_;
+  plsa_lcm::pressure_command_t message_;
+  Clock::time_point last_rejection_report_{};
 };
 
 }  // namespace
@@ -179,6 +201,7 @@ SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport
   ::lcm::LCM lcm(o.url);
   if (!lcm.good()) throw std::runtime_error("plsa sim: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
   can::SimulatedValveDevice device(transport, map, o.config, o.seed);
+  device.setCommandTimeout(o.command_timeout_s);
   SimNodeStats stats;
   const can::SimulatedDeviceStats d = can::runSimulatedDevice(device, stop, o.duration_s, [&](const sim::ActuatorSample& s) {
     const bool vented = device.setpoint() == std::array<double, 3>{0, 0, 0};
@@ -189,6 +212,7 @@ SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport
   stats.commands_rejected = d.bad_valve_frames;
   stats.sensor_frames_lost = d.send_failures;
   stats.saturated_readings = d.saturated_readings;
+  stats.vent_events = d.silence_vents;
   return stats;
 }
 

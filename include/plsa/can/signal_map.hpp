@@ -55,8 +55,19 @@ struct SignalMap {
   void validate() const;
 };
 
+/// Most messages a signal map may describe.
+inline constexpr std::size_t kMaxMessages = 64;
+
+/// Parses a profile: unknown and duplicate keys, duplicate message names, ids
+/// or signal names, and out-of-range numbers are errors naming the source and field.
 SignalMap signalMapFromJson(const std::string& text, const std::string& source = "<json>");
 SignalMap loadSignalMap(const std::string& path);
+/// What a valve/sensor profile allows that the driver cannot guard against:
+/// no counter or checksum on a message it reads or writes, signals in an order
+/// or unit other than the documented ones (they are taken by position).
+/// Empty for the default profile. Tools print these before they start.
+std::vector<std::string> driverProfileWarnings(const SignalMap& map);
+
 /// The documented default profile (docs/can.md): valves 0x100, sensors 0x200.
 SignalMap defaultSignalMap();
 

@@ -18,7 +18,13 @@ namespace plsa::can {
 struct SimulatedDeviceStats {
   std::int64_t samples = 0, valve_frames = 0, bad_valve_frames = 0, frames_sent = 0, send_failures = 0;
   std::int64_t saturated_readings = 0;  ///< values sent at the signal's full scale (sensor saturation)
+  std::int64_t silence_vents = 0;       ///< times the device vented on its own after a command silence
 };
+
+/// How long a valve controller holds its last set-point without a valid valve
+/// frame before it vents on its own, as hardware controllers do: what keeps
+/// the chambers safe when the process driving them is killed outright.
+inline constexpr double kDefaultDeviceCommandTimeoutS = 0.5;
 
 class SimulatedValveDevice {
  public:
@@ -27,9 +33,17 @@ class SimulatedValveDevice {
   SimulatedValveDevice(CanTransport& transport, const SignalMap& map, const sim::SimConfig& config, std::uint64_t seed);
 
   /// One sample: takes the valve frames that arrived, steps the actuator
-  /// with the latest valid set-points (valves hold their last set-point),
-  /// sends the sensor frames, saturating readings at each signal's range.
+  /// with the latest valid set-points (valves hold their last set-point for
+  /// up to the command timeout, then vent), sends the sensor frames,
+  /// saturating readings at each signal's range.
   sim::ActuatorSample step();
+
+  /// Seconds without a valid valve frame after which the valves vent on their
+  /// own (default kDefaultDeviceCommandTimeoutS); throws std::invalid_argument
+  /// unless positive and finite.
+  void setCommandTimeout(double seconds);
+  /// Whether the valves are vented because commands fell silent.
+  bool ventedBySilence() const noexcept { return silent_; }
 
   const std::array<double, 3>& setpoint() const noexcept { return setpoint_; }
   const SimulatedDeviceStats& stats() const noexcept { return stats_; }
@@ -45,6 +59,9 @@ class SimulatedValveDevice {
   sim::Actuator actuator_;
   std::array<double, 3> setpoint_{};
   int valve_counter_ = -1;
+  double command_timeout_s_ = kDefaultDeviceCommandTimeoutS;
+  std::int64_t samples_since_command_ = 0;
+  bool silent_ = true;  // vented until the first valid frame
   std::uint8_t sensor_counter_ = 0, tip_counter_ = 0;
   SimulatedDeviceStats stats_;
 };

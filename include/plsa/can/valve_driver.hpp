@@ -17,6 +17,11 @@ struct SafetyLimits {
   double max_rate_bar_per_s = 2.0;
   double sensor_timeout_s = 0.1;   ///< no valid reading for this long: fault
   double command_timeout_s = 0.25;  ///< commands stop for this long: fault
+  /// A valid reading above max_pressure_bar + this is a fault (a failed valve
+  /// or regulator, or a frame that is not what it claims): the clamp keeps
+  /// set-points at max_pressure_bar, so nothing commanded reads above it.
+  double overpressure_margin_bar = 0.1;
+  double overpressureBar() const noexcept { return max_pressure_bar + overpressure_margin_bar; }
 };
 
 /// Throws std::invalid_argument unless every limit is positive and finite, and each
@@ -24,12 +29,13 @@ struct SafetyLimits {
 /// a frame cannot encode is never sent, so the valve would hold its last one.
 void checkSafetyLimits(const SignalMap& map, const SafetyLimits& limits);
 
-enum class DriverFault { kNone, kStaleSensor, kCommandTimeout, kBusOff, kErrorPassive, kShutdown };
+enum class DriverFault { kNone, kStaleSensor, kCommandTimeout, kBusOff, kErrorPassive, kShutdown, kOverPressure };
 const char* toString(DriverFault f);
 
 struct DriverCounters {
   std::uint64_t sensor_frames = 0, bad_length = 0, bad_checksum = 0, counter_gaps = 0, other_frames = 0;
   std::uint64_t rejected_commands = 0, valve_frames = 0, send_failures = 0, tip_frames = 0;
+  std::uint64_t overpressure_readings = 0;
 };
 
 /// Three chambers; the signal map must have "valve_command" and
@@ -56,6 +62,9 @@ class ValveDriver {
   DriverFault fault() const noexcept { return fault_; }
   const std::array<double, 3>& pressures() const noexcept { return pressure_; }
   const std::array<double, 3>& output() const noexcept { return output_; }  ///< last set-points sent
+  /// Whether the last valve frame reached the transport: after a fault, whether
+  /// the vent was actually sent (not on a bus-off controller).
+  bool lastFrameSent() const noexcept { return last_send_ok_; }
   const DriverCounters& counters() const noexcept { return counters_; }
   /// Tip sensor (bend, steer in degrees) when the profile has it and a valid frame came.
   bool hasTipAngle() const noexcept { return have_tip_; }
@@ -78,6 +87,7 @@ class ValveDriver {
   bool have_command_ = false;
   int sensor_counter_ = -1;
   std::uint8_t valve_counter_ = 0;
+  bool last_send_ok_ = false;
   DriverFault fault_ = DriverFault::kNone;
   DriverCounters counters_;
 };

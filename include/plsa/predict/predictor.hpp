@@ -19,13 +19,15 @@
 
 namespace plsa {
 
-/// Results of the real-time calls: 0 is OK, negative values name the problem.
+/// Results of the real-time calls: 0 is OK; positive values accepted the
+/// sample and say what else happened; negative values rejected it (state kept).
 enum class PredictorStatus : int {
   kOk = 0,
+  kTimeGap = 1,             ///< time jumped ahead: the filters restarted at rest at this sample
+  kClockStepBack = 2,       ///< time went back for kClockStepSamples samples in a row: restarted at rest
   kNotFinite = -1,          ///< a NaN or Inf in the sample: rejected, state kept
   kInputOutOfRange = -2,    ///< an input outside the accepted range: rejected, state kept
   kTimeNotIncreasing = -3,  ///< time did not advance: rejected, state kept
-  kTimeGap = -4,            ///< time jumped: the filters restarted at rest at this sample
   kHorizonTooLong = -5,     ///< horizon above the capacity set at construction
   kBadShape = -6,           ///< plan or output buffer of the wrong size
   kNotReady = -7,           ///< predict() before the first accepted sample
@@ -38,12 +40,23 @@ inline const char* toString(PredictorStatus s) {
     case PredictorStatus::kInputOutOfRange: return "input outside the accepted range";
     case PredictorStatus::kTimeNotIncreasing: return "time did not increase";
     case PredictorStatus::kTimeGap: return "time gap: filters restarted";
+    case PredictorStatus::kClockStepBack: return "clock stepped back: filters restarted";
     case PredictorStatus::kHorizonTooLong: return "horizon above capacity";
     case PredictorStatus::kBadShape: return "buffer of the wrong size";
     case PredictorStatus::kNotReady: return "no sample yet";
   }
   return "unknown";
 }
+
+/// Whether a status means the sample was taken (possibly with a restart).
+inline bool accepted(PredictorStatus s) noexcept { return static_cast<int>(s) >= 0; }
+
+/// Samples in a row, each later than the one before but all before the last
+/// accepted time, after which the clock is taken to have stepped back (a wall
+/// clock set back, or one sample stamped far in the future before them): the
+/// filters restart at rest at the third. One stale or duplicated sample is
+/// rejected; a clock that stands still never restarts anything.
+inline constexpr int kClockStepSamples = 3;
 
 /// Largest predict() capacity: setup tabulates every mode's power sums up to it
 /// (100000 samples, about 21 min at 80 Hz: 8 MB per output for 2 inputs of 5 poles).
@@ -133,8 +146,14 @@ class Predictor {
     }
     PredictorStatus status = PredictorStatus::kOk;
     if (samples_ > 0) {
-      if (!(time_s > t_)) return PredictorStatus::kTimeNotIncreasing;
-      if (time_s - t_ > options_.max_gap_factor * s.sample_time) {
+      if (!(time_s > t_)) {
+        // Count samples behind the last accepted time that advance among themselves.
+        behind_ = behind_ > 0 && time_s > behind_time_ ? behind_ + 1 : 1;
+        behind_time_ = time_s;
+        if (behind_ < kClockStepSamples) return PredictorStatus::kTimeNotIncreasing;
+        samples_ = 0;
+        status = PredictorStatus::kClockStepBack;
+      } else if (time_s - t_ > options_.max_gap_factor * s.sample_time) {
         samples_ = 0;  // restart at rest from this sample, as after construction
         status = PredictorStatus::kTimeGap;
       }
@@ -155,6 +174,7 @@ class Predictor {
       steer_reference_ = s.frame == OutputFrame::kTipCartesian ? y[1] : 0.0;
       t_ = time_s;
       samples_ = 1;
+      behind_ = 0;
       return status;
     }
     if (options_.simulate) {  // the increment predicted for this sample, before it is consumed
@@ -172,6 +192,7 @@ class Predictor {
     if (s.frame == OutputFrame::kTipCartesian) steer_reference_ = y[1];
     t_ = time_s;
     ++samples_;
+    behind_ = 0;
     return status;
   }
 
@@ -618,6 +639,8 @@ class Predictor {
   std::vector<Eigen::VectorXd> mode_coef_;  // per output, modal held-input path
   DirectionState dir_;
   double t_ = 0.0;
+  int behind_ = 0;             // samples in a row behind t_, each after the one before
+  double behind_time_ = 0.0;
   double steer_reference_ = 0.0;  // tip_cartesian: the last measured steering angle
   std::int64_t samples_ = 0;
 };

@@ -27,6 +27,9 @@ void addCanBridgeCommand(CLI::App& app) {
       ->check(kPositive);
   c->add_option("--command-timeout", o->limits.command_timeout_s, "Vent when commands stop for this long (s)")
       ->check(kPositive);
+  c->add_option("--overpressure-margin", o->limits.overpressure_margin_bar,
+                 "Vent and latch a fault when a chamber reads this far above --max-pressure (bar)")
+      ->check(kPositive);
   c->add_option("--duration", o->duration_s, "Stop after this many seconds (0: until signalled)")
       ->check(kNonNegative);
   c->add_option("--command-channel", o->command_channel, "Channel of pressure commands");
@@ -36,6 +39,7 @@ void addCanBridgeCommand(CLI::App& app) {
   c->callback([o, iface, profile] {
     const can::SignalMap map = profile->empty() ? can::defaultSignalMap() : can::loadSignalMap(*profile);
     lcm::checkCanBridgeOptions(*o, map);  // before the bus is opened
+    for (const auto& w : can::driverProfileWarnings(map)) std::fprintf(stderr, "plsa can-bridge: warning: %s\n", w.c_str());
     std::vector<std::uint32_t> ids{map.message("pressure_sensor").id};
     if (const can::MessageLayout* tip = map.find("tip_angle")) ids.push_back(tip->id);
     auto transport = can::openTransport(*iface, ids);

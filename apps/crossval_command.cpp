@@ -44,7 +44,8 @@ void runCrossval(CrossvalArgs& a) {
   ro.required = a.inputs;
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
   std::vector<io::Log> logs;
-  for (const auto& f : files) logs.push_back(lcm::readLogFile(f, ro));
+  refuseOverwritingInputs(a.json, "--json", files, "plsa crossval");
+  for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
   // Every log is held out once; its longest horizon after ARX's lags must leave two samples to score.
   const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
   const int lags = std::max(a.arx_na, a.arx_nb);

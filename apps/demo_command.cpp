@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "log_paths.hpp"
 #include "comparison.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
@@ -47,6 +48,9 @@ void runDemo(const DemoOptions& opt) {
               effects.empty() ? "none" : effects.c_str());
   fs::create_directories(opt.out_dir);
   auto path = [&](const std::string& f) { return (fs::path(opt.out_dir) / f).string(); };
+  for (const char* f : {"train_grid2.csv", "validate_joystick.csv", "model.json", "baseline_paper.json",
+                        "baseline_global_linear.json", "fits.json", "report.html"})
+    refuseOverwritingInputs(path(f), "--out", {opt.config}, "plsa demo");
 
   // 1. Experiments (paper Table I, step 3; validation run as in its Section VI).
   sim::ExperimentOptions eo;

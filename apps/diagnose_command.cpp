@@ -28,6 +28,10 @@ struct DiagnoseArgs {
 };
 
 void runDiagnose(DiagnoseArgs& a) {
+  std::vector<std::string> inputs = a.real;
+  inputs.push_back(a.sim);
+  for (const char* name : {"diagnosis.json", "report.html", "calibrated_sim.json"})
+    refuseOverwritingInputs((std::filesystem::path(a.out) / name).string(), "--out", inputs, "plsa diagnose");
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
   a.columns.pressures = a.pressures.size() == 1 && a.pressures[0] == "none" ? std::vector<std::string>{} : a.pressures;
@@ -37,7 +41,7 @@ void runDiagnose(DiagnoseArgs& a) {
     io::CsvReadOptions ro;
     ro.required = a.columns.inputs;
     ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());
-    runs.push_back(diagnose::runFromLog(lcm::readLogFile(path, ro), a.columns, config.max_pressure_bar));
+    runs.push_back(diagnose::runFromLog(readLogWithWarnings(path, ro, "diagnose"), a.columns, config.max_pressure_bar));
   }
   a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);

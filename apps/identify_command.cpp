@@ -11,7 +11,6 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/identify/validation.hpp"
-#include "plsa/lcm/lcm_log.hpp"
 #include "plsa/model/model_file.hpp"
 
 namespace plsa::app {
@@ -36,11 +35,12 @@ struct ValidateArgs {
   SimulationStart start;
 };
 
-std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required) {
+std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
+                              const std::string& tool) {
   io::CsvReadOptions ro;
   ro.required = required;
   std::vector<io::Log> logs;
-  for (const auto& p : logPaths(paths, "identify", false)) logs.push_back(lcm::readLogFile(p, ro));
+  for (const auto& p : logPaths(paths, tool, false)) logs.push_back(readLogWithWarnings(p, ro, tool));
   return logs;
 }
 
@@ -52,7 +52,8 @@ void runIdentify(IdentifyArgs& a) {
   o.progress = [](const std::string& line) { std::fprintf(stderr, "plsa identify: %s\n", line.c_str()); };
   std::vector<std::string> required = a.inputs;
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
-  const auto logs = readLogs(a.logs, required);
+  refuseOverwritingInputs(a.out, "--out", a.logs, "plsa identify");
+  const auto logs = readLogs(a.logs, required, "identify");
   IdentifyReport report;
   const DioPwlObfModel model = identifyModel(logs, o, &report);
   for (const auto& pp : report.pairs)
@@ -93,10 +94,14 @@ std::string rateText(double r) {
 }
 
 void runValidate(const ValidateArgs& a) {
+  for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}})
+    refuseOverwritingInputs(out, option, {a.model, a.log}, "plsa validate");
+  refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
   const DioPwlObfModel model = loadModel(a.model);
   std::vector<std::string> required = model.inputs;
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
-  const io::Log log = readLogs({a.log}, required).front();
+  required.push_back("time_s");  // the sample rate and gaps are checked against the model's
+  const io::Log log = readLogs({a.log}, required, "validate").front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   if (v.outside_training.any > 0) {
     std::string each;
@@ -283,6 +288,9 @@ void addIdentifyCommands(CLI::App& app) {
       ->check(CLI::IsMember({"interleaved", "contiguous"}));
   id->add_option("--cv-chunk", a->options.cv_chunk_s, "Seconds per interleaved cross-validation chunk (default 8)")
       ->check(kPositive);
+  id->add_flag("!--keep-outliers", a->options.refuse_outliers,
+               "Fit samples that lie more than 50 times the width of their column's 1-99% band from its median "
+               "(by default such a glitch is an error naming its row)");
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });

@@ -39,3 +39,41 @@ std::vector<std::string> logPaths(const std::vector<std::string>& paths, const s
 }
 
 }  // namespace plsa::app
+
+#include <cstdio>
+#include <system_error>
+
+#include "plsa/lcm/lcm_log.hpp"
+
+namespace plsa::app {
+
+namespace {
+
+bool sameFile(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) {
+    const bool same = fs::equivalent(a, b, ec);
+    if (!ec) return same;
+  }
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+}  // namespace
+
+void refuseOverwritingInputs(const std::string& output, const std::string& option,
+                             const std::vector<std::string>& inputs, const std::string& tool) {
+  if (output.empty()) return;
+  for (const auto& in : inputs)
+    if (!in.empty() && sameFile(output, in))
+      throw std::invalid_argument(tool + ": " + option + " " + output + " is " +
+                                  (in == output ? std::string("an input") : "the input " + in) +
+                                  "; plsa never writes over what it reads (choose another output path)");
+}
+
+io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool) {
+  io::Log log = lcm::readLogFile(path, options);
+  for (const auto& w : log.warnings) std::fprintf(stderr, "plsa %s: warning: %s\n", tool.c_str(), w.c_str());
+  return log;
+}
+
+}  // namespace plsa::app

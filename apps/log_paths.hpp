@@ -14,3 +14,18 @@ namespace plsa::app {
 std::vector<std::string> logPaths(const std::vector<std::string>& paths, const std::string& tool, bool folders);
 
 }  // namespace plsa::app
+
+#include "plsa/io/csv_log.hpp"
+
+namespace plsa::app {
+
+/// Throws std::invalid_argument naming both when writing `output` (given as
+/// `option`) would overwrite one of `inputs` (the same path, a link to it, or
+/// the same file under another name): outputs never replace what was read.
+void refuseOverwritingInputs(const std::string& output, const std::string& option,
+                             const std::vector<std::string>& inputs, const std::string& tool);
+
+/// Reads a log (CSV or LCM event log), printing its warnings as "TOOL: warning: ...".
+io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);
+
+}  // namespace plsa::app

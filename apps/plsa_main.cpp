@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plsa: error: %s\n", e.what());
     return 1;
+  } catch (...) {
+    std::fprintf(stderr, "plsa: error: an unknown exception stopped the tool\n");
+    return 1;
   }
   return 0;
 }

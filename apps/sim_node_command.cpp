@@ -21,6 +21,7 @@ struct SimNodeArgs {
 
 void runSimCan(SimNodeArgs& a) {
   const can::SignalMap map = a.profile.empty() ? can::defaultSignalMap() : can::loadSignalMap(a.profile);
+  for (const auto& w : can::driverProfileWarnings(map)) std::fprintf(stderr, "plsa sim: warning: %s\n", w.c_str());
   auto transport = can::openTransport(a.can, {map.message("valve_command").id});
   const std::atomic<bool>& stop = stopOnSignals();
   std::fprintf(stderr, "plsa sim: behind CAN (%s, profile %s) at %.0f Hz; true state on LCM channel %s\n",
@@ -28,10 +29,11 @@ void runSimCan(SimNodeArgs& a) {
   const lcm::SimNodeStats s = lcm::runSimCanNode(a.node, *transport, map, stop);
   std::fprintf(stderr,
                "plsa sim: stopped; %lld samples, %lld valve frames, %lld bad valve frames, "
-               "%lld sensor frames not sent, %lld readings saturated at the profile's full scale\n",
+               "%lld sensor frames not sent, %lld readings saturated at the profile's full scale, "
+               "%lld vents after a command silence\n",
                static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),
                static_cast<long long>(s.commands_rejected), static_cast<long long>(s.sensor_frames_lost),
-               static_cast<long long>(s.saturated_readings));
+               static_cast<long long>(s.saturated_readings), static_cast<long long>(s.vent_events));
 }
 
 void runSimNodeCommand(SimNodeArgs& a) {
@@ -57,7 +59,7 @@ void addSimNodeCommand(CLI::App& app) {
   cmd->add_option("--url", a->node.url, "LCM URL (default: LCM_DEFAULT_URL)");
   cmd->add_option("--seed", a->node.seed, "Noise seed")->check(kSeed);
   cmd->add_flag("--lockstep", a->node.lockstep, "Advance one sample per command instead of in real time");
-  cmd->add_option("--command-timeout", a->node.command_timeout_s, "Vent when no command for this long (s)")
+  cmd->add_option("--command-timeout", a->node.command_timeout_s, "Vent when no command (behind CAN: no valid valve frame) for this long (s)")
       ->check(kPositive);
   cmd->add_option("--duration", a->node.duration_s, "Stop after this many simulated seconds (0: run until signalled)")
       ->check(kNonNegative);

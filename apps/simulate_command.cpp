@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/lcm/lcm_log.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -21,6 +22,7 @@ struct SimulateOptions {
 };
 
 void runSimulate(const SimulateOptions& o) {
+  refuseOverwritingInputs(o.out, "--out", {o.config}, "plsa simulate");
   const sim::SimConfig config = o.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(o.config);
   sim::ExperimentOptions eo;
   eo.sample_rate_hz = config.sample_rate_hz;

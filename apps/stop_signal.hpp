@@ -1,4 +1,5 @@
-// SIGINT/SIGTERM -> a stop flag that long-running nodes poll.
+// SIGINT, SIGTERM, SIGHUP (terminal closed) and SIGQUIT -> a stop flag that
+// long-running nodes poll, so each ends through its own vent-and-report path.
 #pragma once
 
 #include <atomic>
@@ -13,8 +14,7 @@ inline const std::atomic<bool>& stopOnSignals() {
     struct sigaction sa {};
     sa.sa_handler = [](int) { stop.store(true); };
     sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
-    sigaction(SIGTERM, &sa, nullptr);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGQUIT}) sigaction(sig, &sa, nullptr);
     return true;
   }();
   (void)installed;

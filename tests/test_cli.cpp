@@ -239,7 +239,7 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
   // A full disk is an error that names the file, for logs and for whole-text outputs.
   if (fs::exists("/dev/full")) {
     EXPECT_EQ(run("simulate --experiment joystick --duration 1 --seed 1 --out /dev/full"), 1);
-    EXPECT_NE(err_.find("/dev/full: write failed"), std::string::npos) << err_;
+    EXPECT_NE(err_.find("/dev/full: cannot write the log: No space left on device"), std::string::npos) << err_;
     EXPECT_EQ(run("sim-config --out /dev/full"), 1);
     EXPECT_NE(err_.find("/dev/full: cannot write the simulator configuration"), std::string::npos) << err_;
   }
@@ -412,4 +412,88 @@ TEST_F(Cli, CanBridgeRefusesOptionsTheBusCannotCarryBeforeOpeningIt) {
   EXPECT_EQ(run(base + "--max-pressure 5 --profile " + file("wide.json")), 0) << err_;
   EXPECT_NE(err_.find("(profile wide)"), std::string::npos) << err_;
   EXPECT_NE(err_.find("clamp 5.000 bar"), std::string::npos) << err_;
+}
+
+namespace {
+
+// A small valid model of p_1, p_2 -> bend_deg (schema version 2), as text.
+std::string smallModelJson(double first_coefficient) {
+  nlohmann::json j = nlohmann::json::parse(R"({"schema": "plsa.dio_pwl_obf", "version": 2, "sample_time_s": 0.0125,
+    "inputs": ["p_1", "p_2"], "outputs": ["bend_deg"], "units": {"inputs": "bar", "outputs": "deg"},
+    "input_range": [0.0, 0.4], "poles": [[[[0.5, 0.0], [0.8, 0.0]], [[0.6, 0.1], [0.6, -0.1]]]],
+    "input_play": [[0.0], [0.0]], "play_start": "rising", "play_coupling": 0.0, "play_threshold": 0.0,
+    "play_softening": 0.0, "schedule_lag_s": 0.0, "schedule_side": "output", "output_frame": "as_logged",
+    "partition": {"inputs": [], "scheduling": "switched", "breakpoints": [], "direction_split": false,
+                  "direction_threshold": 0.001},
+    "regions": [{"samples": 100, "fallback_from": -1, "note": "", "coefficients": [[0.1, 0.2, 0.3, 0.4]]}]})");
+  j["regions"][0]["coefficients"][0][0] = first_coefficient;
+  return j.dump(1);
+}
+
+}  // namespace
+
+// Files a careless user or an attacker hands the tools: each ends in an error
+// that names the file and the reason, and no output replaces an input.
+TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.csv")), 0) << err_;
+  std::ofstream(file("m.json")) << smallModelJson(0.1);
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --horizons 40"), 0) << err_;
+  const std::string log_before = slurp(file("j.csv")), model_before = slurp(file("m.json"));
+
+  // Zero samples once ended in SIGSEGV.
+  EXPECT_EQ(run("simulate --experiment joystick --duration 0.006 --out " + file("x.csv")), 1);
+  EXPECT_NE(err_.find("joystick: a duration of 0.006 s is under two samples at 80 Hz"), std::string::npos) << err_;
+  // An endless file as a model grew without bound.
+  EXPECT_EQ(run("validate --model /dev/zero --log " + file("j.csv")), 1);
+  EXPECT_NE(err_.find("/dev/zero: the model file is larger than 64 MiB"), std::string::npos) << err_;
+
+  // Outputs never replace inputs: the training log, the model, the validation log.
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --out " + file("j.csv")), 1);
+  EXPECT_NE(err_.find("--out " + file("j.csv") + " is an input"), std::string::npos) << err_;
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --json " + file("m.json")), 1);
+  EXPECT_NE(err_.find("plsa never writes over what it reads"), std::string::npos) << err_;
+  fs::create_symlink(file("j.csv"), file("link.csv"));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --csv " + file("link.csv")), 1);
+  EXPECT_NE(err_.find("is the input " + file("j.csv")), std::string::npos) << err_;
+  EXPECT_EQ(run("simulate --config " + file("m.json") + " --experiment joystick --out " + file("m.json")), 1);
+  EXPECT_EQ(slurp(file("j.csv")), log_before);
+  EXPECT_EQ(slurp(file("m.json")), model_before);
+
+  // Validation needs the time column: without it no rate or gap could be checked.
+  {
+    std::ifstream in(file("j.csv"));
+    std::ofstream out(file("untimed.csv"));
+    for (std::string line; std::getline(in, line);) {
+      if (line[0] == '#') continue;
+      out << line.substr(line.find(',') + 1) << "\n";
+    }
+  }
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("untimed.csv")), 1);
+  EXPECT_NE(err_.find("untimed.csv:1: header has no column 'time_s'"), std::string::npos) << err_;
+
+  // A score that is no number is an error, not a table of -inf.
+  std::ofstream(file("huge.json")) << smallModelJson(1e300);
+  EXPECT_EQ(run("validate --model " + file("huge.json") + " --log " + file("j.csv") + " --horizons 40"), 1);
+  EXPECT_NE(err_.find("is -inf: the model's predictions reach"), std::string::npos) << err_;
+
+  // One glitch of 1e6 deg in the training data: refused by row and column.
+  {
+    std::ifstream in(file("j.csv"));
+    std::ofstream out(file("spike.csv"));
+    int data_row = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line[0] != '#' && line[0] != 't' && ++data_row == 500) line = line.substr(0, line.rfind(',', line.rfind(',') - 1)) + ",1e6," + line.substr(line.rfind(',') + 1);
+      out << line << "\n";
+    }
+  }
+  EXPECT_EQ(run("identify --log " + file("spike.csv") + " --out " + file("spike.json")), 1);
+  EXPECT_NE(err_.find("spike.csv: data row 500, column 'bend_deg': 1e+06 lies"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("--keep-outliers"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("spike.json")));
+
+  // lcm-logger's own file names have no extension: the magic number tells.
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.lcmlog")), 0) << err_;
+  fs::rename(file("j.lcmlog"), file("lcmlog-2026-11-25.00"));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("lcmlog-2026-11-25.00") + " --horizons 40"), 0)
+      << err_;
 }

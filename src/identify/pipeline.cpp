@@ -84,6 +84,28 @@ std::vector<double> quantileBreakpoints(std::vector<double> values, int levels) 
   return b;
 }
 
+std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names) {
+  for (const auto& name : names) {
+    const Eigen::VectorXd x = log.column(name);
+    if (x.size() < 3) continue;
+    std::vector<double> sorted(x.data(), x.data() + x.size());
+    std::sort(sorted.begin(), sorted.end());
+    auto quantile = [&](double q) { return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))]; };
+    const double median = quantile(0.5), band = quantile(0.99) - quantile(0.01);
+    if (!(band > 0)) continue;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {
+      const double bands = std::abs(x(k) - median) / band;
+      if (bands <= kGrossOutlierBands) continue;
+      std::ostringstream msg;
+      msg << log.source << ": data row " << k + 1 << ", column '" << name << "': " << x(k) << " lies " << bands
+          << " times the width of the column's 1-99% band (" << quantile(0.01) << " to " << quantile(0.99)
+          << ") from its median " << median;
+      return msg.str();
+    }
+  }
+  return {};
+}
+
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
   require(!logs.empty(), "identify: no logs given");
   require(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
@@ -117,6 +139,14 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   require(reference.size() == o.inputs.size(), "identify: need one reference column per input");
   for (const auto& log : logs) {
+    if (o.refuse_outliers) {
+      std::vector<std::string> columns = o.inputs;
+      columns.insert(columns.end(), o.outputs.begin(), o.outputs.end());
+      const std::string outlier = grossOutlier(log, columns);
+      if (!outlier.empty())
+        throw std::invalid_argument(outlier + ": a glitch would shape the whole model; remove the sample (or "
+                                    "identify with --keep-outliers)");
+    }
     const double t = io::checkedSampleTime(log, "time_s", o.max_gap_factor);
     if (dt == 0.0) dt = t;
     if (!io::sameSampleTime(t, dt))

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -150,6 +151,22 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
   return out;
 }
 
+namespace {
+
+// A fit or error that is not a number is no score: say what went wrong instead.
+void requireFiniteScore(double value, const std::string& what, const std::string& output,
+                        const AlignedPrediction& p, const std::string& source) {
+  if (std::isfinite(value)) return;
+  const double largest = p.values.size() ? p.values.cwiseAbs().maxCoeff() : 0.0;
+  std::ostringstream msg;
+  msg << source << ": the " << what << " of '" << output << "' is " << value << ": the model's predictions reach "
+      << largest << ", beyond what a score can be computed on; the model is unusable on this log "
+      << "(was it identified on data with a gross outlier?)";
+  throw std::runtime_error(msg.str());
+}
+
+}  // namespace
+
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start) {
   requireHorizons(horizons, "validate");
@@ -181,6 +198,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
       const AlignedPrediction& p = pred[static_cast<std::size_t>(o)].at(k);
       ov.fit_k[k] = fitOf(ov.measured, p);
       ov.rms_k[k] = rmsErrorOf(ov.measured, p);
+      requireFiniteScore(ov.fit_k[k], std::to_string(k) + "-step fit", ov.name, p, log.source);
+      requireFiniteScore(ov.rms_k[k], std::to_string(k) + "-step rms error", ov.name, p, log.source);
       Eigen::VectorXd full = Eigen::VectorXd::Constant(y.rows(), nan);
       full.segment(p.first, p.values.size()) = p.values;
       ov.predicted_k[k] = full;
@@ -188,6 +207,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     const AlignedPrediction& s = pred[static_cast<std::size_t>(o)].at(0);
     ov.fit_sim = fitOf(ov.measured, s);
     ov.rms_sim = rmsErrorOf(ov.measured, s);
+    requireFiniteScore(ov.fit_sim, "simulation fit", ov.name, s, log.source);
+    requireFiniteScore(ov.rms_sim, "simulation rms error", ov.name, s, log.source);
     ov.spread_sim = spreadOf(ov.measured.segment(s.first, s.values.size()));
     ov.simulated = Eigen::VectorXd::Constant(y.rows(), nan);
     ov.simulated.segment(s.first, s.values.size()) = s.values;

@@ -182,6 +182,12 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   requireSamples("joystick", (o.joystick_preroll_s + kSettledS + o.joystick_duration_s) * o.sample_rate_hz,
                  o.sample_rate_hz);
   const auto n = static_cast<Eigen::Index>(std::lround(o.joystick_duration_s * o.sample_rate_hz));
+  if (n < 2) {
+    char msg[160];
+    std::snprintf(msg, sizeof msg, "joystick: a duration of %g s is under two samples at %g Hz (at least %g s)",
+                  o.joystick_duration_s, o.sample_rate_hz, 1.5 / o.sample_rate_hz);
+    throw std::invalid_argument(msg);
+  }
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01;
   // Two passes of a critically damped second-order low-pass on white noise.

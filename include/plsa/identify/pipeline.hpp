@@ -15,6 +15,16 @@
 
 namespace plsa {
 
+/// A value of a training column this far from the column's median, in
+/// widths of its 1-99% band, is taken for a glitch, not a measurement.
+inline constexpr double kGrossOutlierBands = 50.0;
+
+/// The first sample of `names` in `log` that lies more than
+/// kGrossOutlierBands band widths from its column's median, as
+/// "FILE: data row R, column 'C': V lies N band widths from ..."; empty when
+/// there is none (or a column's band has no width).
+std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names);
+
 struct IdentifyOptions {
   std::vector<std::string> inputs = {"p_1", "p_2", "p_3"};
   std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
@@ -37,6 +47,8 @@ struct IdentifyOptions {
   std::string scheduling = "auto";
   double step_threshold = 0.005;  ///< a reference change above this is a step
   double max_gap_factor = io::kToleratedGapFactor;  ///< tolerated sample-time gap (dropped samples)
+  /// Refuse training data with a gross outlier (grossOutlier()); false fits them as they are.
+  bool refuse_outliers = true;
   double window_s = 8.0;          ///< local windows when the log has no steps
   CoefficientFitOptions coefficients;
   /// Hysteresis memory: candidate sets of play channels. A channel's width is

@@ -184,6 +184,17 @@ TEST_F(LcmSimTest, RejectsMalformedCommandsAndKeepsRunning) {
   }
   ASSERT_TRUE(waitFor([&] { return sawStatus(plsa_lcm::status_t::VENTED, "n_chambers = 268435456"); }, 2s));
   EXPECT_TRUE(sawStatus(plsa_lcm::status_t::VENTED, "n_chambers = -1 is outside 0..16"));
+  // A flood is counted, not echoed: 50 malformed commands at once, a status or two.
+  std::this_thread::sleep_for(250ms);
+  inbox_.statuses.clear();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 50; ++i) publishRaw("PLSA_COMMAND", encodedCommand().substr(0, 27));
+  const bool quick = std::chrono::steady_clock::now() - t0 < 150ms;
+  waitFor([] { return false; }, 500ms);
+  int echoed = 0;
+  for (const auto& s : inbox_.statuses) echoed += s.message.find("rejected a command") != std::string::npos;
+  EXPECT_GE(echoed, 1);
+  if (quick) EXPECT_LE(echoed, 2) << "each malformed command was echoed";
   EXPECT_TRUE(inbox_.states.empty()) << "a rejected command must not advance the simulation";
   send({0.9, 0, 0}, 1);  // above the limit: clamped, not rejected
   ASSERT_TRUE(waitFor([&] { return !inbox_.states.empty(); }, 2s));

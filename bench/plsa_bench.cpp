@@ -18,11 +18,13 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <map>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "plsa/core/text_file.hpp"
 #include "plsa/predict/predictor.hpp"
 
 namespace {
@@ -165,7 +167,7 @@ void report(const std::string& name, const Stats& s) {
 
 void writeJson(const std::string& path) {
   if (path.empty()) return;
-  std::ofstream out(path);
+  std::ostringstream out;
   out << "{\n  \"latency_ns\": {";
   bool first = true;
   for (const auto& [k, s] : g_results) {
@@ -180,6 +182,7 @@ void writeJson(const std::string& path) {
     first = false;
   }
   out << "\n  }\n}\n";
+  plsa::writeTextFile(path, out.str(), "benchmark results");
 }
 
 template <int NP>

@@ -194,7 +194,9 @@ TEST_F(LcmSimTest, RejectsMalformedCommandsAndKeepsRunning) {
   int echoed = 0;
   for (const auto& s : inbox_.statuses) echoed += s.message.find("rejected a command") != std::string::npos;
   EXPECT_GE(echoed, 1);
-  if (quick) EXPECT_LE(echoed, 2) << "each malformed command was echoed";
+  if (quick) {
+    EXPECT_LE(echoed, 2) << "each malformed command was echoed";
+  }
   EXPECT_TRUE(inbox_.states.empty()) << "a rejected command must not advance the simulation";
   send({0.9, 0, 0}, 1);  // above the limit: clamped, not rejected
   ASSERT_TRUE(waitFor([&] { return !inbox_.states.empty(); }, 2s));

@@ -341,6 +341,49 @@ TEST(Predictor, HotSwapUnderLoadIsNeverTorn) {
   EXPECT_GT(used_b, 0);
 }
 
+// A swap to a model with other poles carries each bank's state x = V z from
+// the old eigenbasis into the new one; the banks stepped as state-space
+// filters carry x as it is. Both must then predict the same, before and
+// after the swap, for swaps between modal models and to and from a model
+// that has no modal form.
+TEST(Predictor, SwapToOtherPolesCarriesTheFilterStates) {
+  const Data& d = data();
+  for (const DioPwlObfModel* start : {&d.input_side, &d.lagged}) {
+    DioPwlObfModel other = *start;  // other poles, the same structure
+    for (auto& row : other.poles)
+      for (auto& ps : row) {
+        std::vector<double> p;
+        for (const auto& z : ps.poles()) p.push_back(0.97 * z.real());
+        ps = PoleSet::real(p);
+      }
+    DioPwlObfModel clustered = *start;  // no modal form: near-equal poles
+    for (auto& row : clustered.poles)
+      for (auto& ps : row) ps = PoleSet::real({0.9, 0.900001, 0.8, 0.6, 0.3});
+    PredictorOptions banks;
+    banks.modal = false;
+    Predictor<5> modal(*start), reference(*start, banks);
+    ASSERT_TRUE(modal.heldPathIsModal());
+    ASSERT_FALSE(reference.heldPathIsModal());
+    Eigen::MatrixXd a(40, 2), b(40, 2);
+    double worst = 0.0;
+    for (Eigen::Index t = 0; t + 40 < d.u.rows(); ++t) {
+      if (t == 300) modal.install(other), reference.install(other);
+      if (t == 500) modal.install(clustered), reference.install(clustered);
+      if (t == 700) modal.install(*start), reference.install(*start);
+      ASSERT_EQ(modal.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+      ASSERT_EQ(reference.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+      if (t == 300) {
+        EXPECT_EQ(modal.modelId(), 1u);
+      }
+      ASSERT_EQ(modal.predict(40, d.u.middleRows(t + 1, 39), a), PredictorStatus::kOk);
+      ASSERT_EQ(reference.predict(40, d.u.middleRows(t + 1, 39), b), PredictorStatus::kOk);
+      worst = std::max(worst, (a - b).cwiseAbs().maxCoeff());
+    }
+    EXPECT_EQ(modal.modelId(), 3u);
+    EXPECT_LT(worst, 1e-9) << "the modal and the state-space forms part at a swap";
+  }
+}
+
 TEST(Predictor, TipFrameKeepsSteeringOnTheMeasuredBranch) {
   // Steering measured around 180 deg (the run's angles turned by 120): atan2
   // alone would answer near -180 for half the predictions.

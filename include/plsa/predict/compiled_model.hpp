@@ -1,0 +1,112 @@
+// A model compiled for the real-time predictor: immutable, built once at
+// set-up (compileModel), shared by any number of predictors and installed
+// into a running one by swapping a pointer (pinocchio's Model, where the
+// predictor's own state is the Data).
+//
+// Two forms. The modal form serves every model whose filter banks have real,
+// distinct poles with well-conditioned eigenbases (what identification
+// produces): each bank's state is kept in its eigenbasis, z = V^-1 x, so a
+// step is one multiply-add per state, and the copies of a bank (its play
+// channels and, on the input side, its grid nodes) share their modes. A
+// prediction merges the copies into one state per mode, zeta = sum M z, with
+// M the coefficients carried into the eigenbasis; the horizon then runs on
+// the modes alone. Any other model (complex or repeated poles, clustered
+// ones) keeps its banks' state-space form and steps them.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/model/dio_pwl_obf_model.hpp"
+#include "plsa/predict/predictor_options.hpp"
+
+namespace plsa {
+
+using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// The model's filter banks in their eigenbases. Mode q is (input j, output
+/// o, pole i), numbered q = (j * outputs + o) * poles + i. Each mode has one
+/// state per copy k of its bank: k = node * channels(j) + channel; the states
+/// of mode q are z[offset[q], offset[q + 1]).
+struct ModalForm {
+  Eigen::VectorXd lambda;        ///< [modes] the pole
+  Eigen::VectorXd beta;          ///< [modes] (V^-1 B) of the mode's bank
+  std::vector<int> offset;       ///< [modes + 1] first state of each mode
+  /// [regions] x [states]: the coefficient of each state in modal
+  /// coordinates, per region (one row on the input side).
+  RowMajorMatrix coefficient;
+  /// Input side, per input j: [nodes * channels(j)] x [outputs * poles], the
+  /// same coefficients transposed so a node's contribution to all of j's
+  /// modes is one contiguous row.
+  std::vector<RowMajorMatrix> by_copy;
+  /// [outputs] x [modes]: 1 where the mode belongs to the output (dy = sum).
+  Eigen::MatrixXd mode_output;
+  /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s.
+  std::vector<Eigen::MatrixXd> power_sum;
+  std::vector<std::vector<int>> modes_of_output;
+  /// [o * inputs + j]: the eigenbasis V and its inverse of bank (o, j), to
+  /// carry states across a model swap.
+  std::vector<Eigen::MatrixXd> basis, basis_inverse;
+};
+
+/// The banks as state-space filters (any model): bank b runs x <- A x + B d.
+/// Banks are numbered output-major, then node, input, channel: b =
+/// ((o * nodes + r) * ... ) as `bank_output`, `bank_node`, `bank_input` and
+/// `bank_channel` say; the coefficients of bank b are the segment
+/// `coefficient_offset[b]` of its output's (stacked) coefficient vector.
+struct StateSpaceForm {
+  std::vector<Eigen::MatrixXd> A;  ///< [o * inputs + j]
+  std::vector<Eigen::VectorXd> B;  ///< [o * inputs + j]
+  /// All poles real: each bank runs as its cascade of first-order all-pass
+  /// sections (about 4 flops a section instead of a dense row).
+  bool cascade = false;
+  std::vector<Eigen::VectorXd> xi, gain;  ///< [o * inputs + j]
+  std::vector<int> bank_output, bank_node, bank_input, bank_channel, coefficient_offset;
+  std::vector<std::vector<Eigen::VectorXd>> coefficient;  ///< [region][output]
+};
+
+struct CompiledModel {
+  int n_u = 0, n_y = 0;
+  int poles = 0;  ///< per bank (every bank has as many)
+  int nodes = 1;  ///< copies of each bank: the grid nodes on the input side, else 1
+  int banks = 0;  ///< outputs x nodes x channels
+  OutputFrame frame = OutputFrame::kAsLogged;
+  double sample_time = 0.0;
+  double accept_min = 0.0, accept_max = 0.0;
+  bool input_side = false;
+  PwlPartition partition;       ///< the coefficients' schedule (one region on the input side)
+  PwlPartition node_partition;  ///< input side: the grid whose nodes weigh the inputs
+  std::vector<PlayChannel> play;           ///< per channel
+  std::vector<int> channel_input;          ///< per channel: its input
+  std::vector<int> first_channel;          ///< [inputs + 1]: input j's channels are [first, first + 1)
+  PlayStart play_start = PlayStart::kRising;
+  double coupling = 0.0, threshold = 0.0, softening = 0.0;
+  double schedule_pole = 0.0;  ///< the scheduling inputs' lag, per sample
+  std::vector<double> pole_values;  ///< [o][j][i], to tell whether two models share their bases
+  int max_horizon = 0;
+
+  bool modal = false;
+  ModalForm modal_form;
+  StateSpaceForm state_space;
+
+  int channels(int input) const noexcept {
+    return first_channel[static_cast<std::size_t>(input) + 1] - first_channel[static_cast<std::size_t>(input)];
+  }
+  /// Filter states: banks x poles in either form.
+  int states() const noexcept { return banks * poles; }
+};
+
+/// Validates `model` and builds its compiled form for predictors whose
+/// options are `options` (the horizon capacity sizes the tables). Throws
+/// std::invalid_argument naming what is wrong.
+std::shared_ptr<const CompiledModel> compileModel(const DioPwlObfModel& model, const PredictorOptions& options);
+
+/// Whether a predictor running `a` can adopt `b`: the same inputs, outputs,
+/// banks, channels, partitions and output frame (the poles and coefficients
+/// may differ).
+bool sameStructure(const CompiledModel& a, const CompiledModel& b);
+
+}  // namespace plsa

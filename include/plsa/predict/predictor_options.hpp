@@ -1,0 +1,61 @@
+// What the real-time predictor is asked for and what it answers: options
+// (set-up) and status codes (every real-time call).
+#pragma once
+
+namespace plsa {
+
+/// Results of the real-time calls: 0 is OK; positive values accepted the
+/// sample and say what else happened; negative values rejected it (state kept).
+enum class PredictorStatus : int {
+  kOk = 0,
+  kTimeGap = 1,             ///< time jumped ahead: the filters restarted at rest at this sample
+  kClockStepBack = 2,       ///< time went back for kClockStepSamples samples in a row: restarted at rest
+  kNotFinite = -1,          ///< a NaN or Inf in the sample: rejected, state kept
+  kInputOutOfRange = -2,    ///< an input outside the accepted range: rejected, state kept
+  kTimeNotIncreasing = -3,  ///< time did not advance: rejected, state kept
+  kHorizonTooLong = -5,     ///< horizon above the capacity set at construction
+  kBadShape = -6,           ///< plan or output buffer of the wrong size
+  kNotReady = -7,           ///< predict() before the first accepted sample
+};
+
+inline const char* toString(PredictorStatus s) {
+  switch (s) {
+    case PredictorStatus::kOk: return "ok";
+    case PredictorStatus::kTimeGap: return "time gap: filters restarted";
+    case PredictorStatus::kClockStepBack: return "clock stepped back: filters restarted";
+    case PredictorStatus::kNotFinite: return "sample has NaN or Inf";
+    case PredictorStatus::kInputOutOfRange: return "input outside the accepted range";
+    case PredictorStatus::kTimeNotIncreasing: return "time did not increase";
+    case PredictorStatus::kHorizonTooLong: return "horizon above capacity";
+    case PredictorStatus::kBadShape: return "buffer of the wrong size";
+    case PredictorStatus::kNotReady: return "no sample yet";
+  }
+  return "unknown";
+}
+
+/// Whether a status means the sample was taken (possibly with a restart).
+inline bool accepted(PredictorStatus s) noexcept { return static_cast<int>(s) >= 0; }
+
+/// Samples in a row, each later than the one before but all before the last
+/// accepted time, after which the clock is taken to have stepped back (a wall
+/// clock set back, or one sample stamped far in the future before them): the
+/// filters restart at rest at the third. One stale or duplicated sample is
+/// rejected; a clock that stands still never restarts anything.
+inline constexpr int kClockStepSamples = 3;
+
+/// Largest predict() capacity: set-up tabulates every mode's power sums up to
+/// it (100000 samples, about 21 min at 80 Hz; 800 KB per mode).
+inline constexpr int kMaxPredictorHorizon = 100000;
+
+struct PredictorOptions {
+  int max_horizon = 400;         ///< capacity of predict(), preallocated
+  double input_margin = 0.25;    ///< accepted inputs: model range widened by this share of it
+  double max_gap_factor = 2.5;   ///< a time step above this many sample times is a gap
+  bool simulate = false;         ///< free simulation: the output is never reset to a measurement
+  /// Run in modal form when the model allows it (false: always step the banks
+  /// as state-space filters, the slower reference the modal form is checked
+  /// and measured against).
+  bool modal = true;
+};
+
+}  // namespace plsa

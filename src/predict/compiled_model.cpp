@@ -1,0 +1,223 @@
+#include "plsa/predict/compiled_model.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "plsa/core/check.hpp"
+#include "plsa/obf/obf_bank.hpp"
+
+namespace plsa {
+namespace {
+
+// Largest condition number of an eigenbasis the modal form uses: prediction
+// error grows with it, and 1e5 keeps it near 1e-11.
+constexpr double kMaxModalCondition = 1e5;
+
+void checkOptions(const PredictorOptions& o) {
+  require(o.max_horizon >= 1 && o.max_horizon <= kMaxPredictorHorizon,
+          "Predictor: max_horizon " + std::to_string(o.max_horizon) + " is outside 1.." +
+              std::to_string(kMaxPredictorHorizon) + " samples");
+  // Infinite values would switch the input-range or gap check off unannounced.
+  require(std::isfinite(o.input_margin) && o.input_margin >= 0, "Predictor: input_margin must be finite and >= 0");
+  require(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
+          "Predictor: max_gap_factor must be finite and > 1");
+}
+
+// Stage 1: what every form shares.
+void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledModel& c) {
+  c.n_u = m.inputCount();
+  c.n_y = m.outputCount();
+  c.frame = m.output_frame;
+  c.sample_time = m.sample_time_s;
+  c.max_horizon = o.max_horizon;
+  const double span = m.input_max - m.input_min;
+  c.accept_min = std::isfinite(span) ? m.input_min - o.input_margin * span : -INFINITY;
+  c.accept_max = std::isfinite(span) ? m.input_max + o.input_margin * span : INFINITY;
+  c.input_side = m.schedule_side == ScheduleSide::kInput;
+  c.partition = c.input_side ? PwlPartition::single() : m.partition;
+  c.node_partition = m.partition;
+  c.nodes = c.input_side ? m.partition.regionCount() : 1;
+  c.play_start = m.play_start;
+  c.coupling = m.play_coupling;
+  c.threshold = m.play_threshold;
+  c.softening = m.play_softening;
+  c.schedule_pole = m.schedulePole();
+  c.first_channel.push_back(0);
+  for (int j = 0; j < c.n_u; ++j) {
+    for (const PlayChannel& r : m.input_play[static_cast<std::size_t>(j)]) {
+      c.play.push_back(r);
+      c.channel_input.push_back(j);
+    }
+    c.first_channel.push_back(static_cast<int>(c.play.size()));
+  }
+  c.poles = m.poles[0][0].size();
+  for (int oo = 0; oo < c.n_y; ++oo)
+    for (int j = 0; j < c.n_u; ++j) {
+      const PoleSet& ps = m.poles[static_cast<std::size_t>(oo)][static_cast<std::size_t>(j)];
+      require(ps.size() == c.poles, "Predictor: every filter bank needs the same number of poles");
+      for (const auto& p : ps.poles()) c.pole_values.push_back(p.real()), c.pole_values.push_back(p.imag());
+    }
+  c.banks = c.n_y * c.nodes * static_cast<int>(c.play.size());
+}
+
+// Stage 2: the banks as state-space filters, in coefficient order.
+void compileStateSpace(const DioPwlObfModel& m, CompiledModel& c) {
+  StateSpaceForm& s = c.state_space;
+  bool all_real = true;
+  for (int o = 0; o < c.n_y; ++o)
+    for (int j = 0; j < c.n_u; ++j) {
+      const PoleSet& ps = m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)];
+      const ObfBank<> bank(ps);
+      s.A.push_back(bank.A());
+      s.B.push_back(bank.B());
+      const bool real = ps.sections().size() == static_cast<std::size_t>(ps.size());  // no conjugate pair
+      Eigen::VectorXd xi = Eigen::VectorXd::Zero(ps.size()), gain = Eigen::VectorXd::Zero(ps.size());
+      for (int i = 0; i < ps.size() && real; ++i) {
+        xi(i) = ps.sections()[static_cast<std::size_t>(i)].pole.real();
+        gain(i) = std::sqrt(1.0 - xi(i) * xi(i));
+      }
+      all_real = all_real && real;
+      s.xi.push_back(xi);
+      s.gain.push_back(gain);
+    }
+  s.cascade = all_real;
+  for (int o = 0; o < c.n_y; ++o) {
+    const int per_region = m.regressorSize(o);
+    for (int r = 0; r < c.nodes; ++r)
+      for (int j = 0; j < c.n_u; ++j)
+        for (int ch = c.first_channel[static_cast<std::size_t>(j)]; ch < c.first_channel[static_cast<std::size_t>(j) + 1];
+             ++ch) {
+          s.bank_output.push_back(o);
+          s.bank_node.push_back(r);
+          s.bank_input.push_back(j);
+          s.bank_channel.push_back(ch);
+          s.coefficient_offset.push_back(r * per_region + ch * c.poles);
+        }
+  }
+  s.coefficient = m.coefficients;
+  if (c.input_side) {  // the nodes' coefficients stacked in bank order, as one region
+    std::vector<Eigen::VectorXd> stacked;
+    for (int o = 0; o < c.n_y; ++o) stacked.push_back(m.stackedCoefficients(o));
+    s.coefficient = {stacked};
+  }
+}
+
+// The eigenbasis of bank (o, j), or an empty matrix when it has none fit to
+// use (a conjugate or repeated pole, or an ill-conditioned basis).
+Eigen::MatrixXd eigenbasis(const StateSpaceForm& s, std::size_t group, int n) {
+  if (!s.cascade) return {};
+  const Eigen::VectorXd& lambda = s.xi[group];
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < i; ++k)
+      if (lambda(i) == lambda(k)) return {};  // a Jordan block, no eigenbasis
+  const Eigen::MatrixXd& A = s.A[group];
+  if (!A.triangularView<Eigen::StrictlyUpper>().toDenseMatrix().isZero(0.0)) return {};
+  // A is lower triangular with the poles on its diagonal: each eigenvector by forward substitution.
+  Eigen::MatrixXd v = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    v(k, k) = 1.0;
+    for (Eigen::Index i = k + 1; i < n; ++i)
+      v(i, k) = A.row(i).segment(k, i - k).dot(v.col(k).segment(k, i - k)) / (lambda(k) - A(i, i));
+    v.col(k).normalize();
+  }
+  const Eigen::MatrixXd vinv = v.inverse();
+  if (!vinv.allFinite() || v.norm() * vinv.norm() > kMaxModalCondition) return {};
+  if ((v * lambda.asDiagonal() * vinv - A).cwiseAbs().maxCoeff() > 1e-9) return {};  // guards the algebra
+  return v;
+}
+
+// Stage 3 (when every bank allows): the modal form.
+void compileModal(CompiledModel& c) {
+  const StateSpaceForm& s = c.state_space;
+  const int n = c.poles, Q = c.n_u * c.n_y * n;
+  ModalForm f;
+  for (std::size_t g = 0; g < s.A.size(); ++g) {
+    Eigen::MatrixXd v = eigenbasis(s, g, n);
+    if (v.size() == 0) return;
+    f.basis_inverse.push_back(v.inverse());
+    f.basis.push_back(std::move(v));
+  }
+  f.lambda.resize(Q);
+  f.beta.resize(Q);
+  f.offset.assign(1, 0);
+  for (int j = 0; j < c.n_u; ++j)
+    for (int o = 0; o < c.n_y; ++o) {
+      const auto g = static_cast<std::size_t>(o * c.n_u + j);
+      const Eigen::VectorXd beta = f.basis_inverse[g] * s.B[g];
+      for (int i = 0; i < n; ++i) {
+        const int q = (j * c.n_y + o) * n + i;
+        f.lambda(q) = s.xi[g](i);
+        f.beta(q) = beta(i);
+        f.offset.push_back(f.offset.back() + c.nodes * c.channels(j));
+      }
+    }
+  // Each bank's coefficients, carried into its eigenbasis (V^T c), go to its states.
+  const auto regions = static_cast<Eigen::Index>(s.coefficient.size());
+  f.coefficient = RowMajorMatrix::Zero(regions, f.offset.back());
+  for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
+    const int o = s.bank_output[b], j = s.bank_input[b], r = s.bank_node[b];
+    const int k = r * c.channels(j) + (s.bank_channel[b] - c.first_channel[static_cast<std::size_t>(j)]);
+    const Eigen::MatrixXd& v = f.basis[static_cast<std::size_t>(o * c.n_u + j)];
+    for (Eigen::Index m = 0; m < regions; ++m) {
+      const Eigen::VectorXd modal =
+          v.transpose() * s.coefficient[static_cast<std::size_t>(m)][static_cast<std::size_t>(o)].segment(
+                              s.coefficient_offset[b], n);
+      for (int i = 0; i < n; ++i) f.coefficient(m, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k) = modal(i);
+    }
+  }
+  if (c.input_side)
+    for (int j = 0; j < c.n_u; ++j) {
+      RowMajorMatrix t(c.nodes * c.channels(j), c.n_y * n);
+      for (int o = 0; o < c.n_y; ++o)
+        for (int i = 0; i < n; ++i)
+          for (Eigen::Index k = 0; k < t.rows(); ++k)
+            t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k);
+      f.by_copy.push_back(std::move(t));
+    }
+  f.mode_output = Eigen::MatrixXd::Zero(c.n_y, Q);
+  f.modes_of_output.resize(static_cast<std::size_t>(c.n_y));
+  for (int q = 0; q < Q; ++q) {
+    const int o = q / n % c.n_y;
+    f.mode_output(o, q) = 1.0;
+    f.modes_of_output[static_cast<std::size_t>(o)].push_back(q);
+  }
+  for (const auto& modes : f.modes_of_output) {
+    Eigen::MatrixXd sum(c.max_horizon, static_cast<Eigen::Index>(modes.size()));
+    for (std::size_t t = 0; t < modes.size(); ++t) {
+      const double lambda = f.lambda(modes[t]);
+      double power = 1.0, acc = 0.0;
+      for (int h = 0; h < c.max_horizon; ++h) {
+        acc += power;
+        sum(h, static_cast<Eigen::Index>(t)) = acc;
+        power = std::abs(power * lambda) < 1e-200 ? 0.0 : power * lambda;  // no subnormal powers
+      }
+    }
+    f.power_sum.push_back(std::move(sum));
+  }
+  c.modal_form = std::move(f);
+  c.modal = true;
+}
+
+}  // namespace
+
+std::shared_ptr<const CompiledModel> compileModel(const DioPwlObfModel& model, const PredictorOptions& options) {
+  checkOptions(options);
+  model.validate();
+  auto c = std::make_shared<CompiledModel>();
+  compileCommon(model, options, *c);
+  compileStateSpace(model, *c);
+  if (options.modal) compileModal(*c);
+  return c;
+}
+
+bool sameStructure(const CompiledModel& a, const CompiledModel& b) {
+  return a.n_u == b.n_u && a.n_y == b.n_y && a.poles == b.poles && a.nodes == b.nodes && a.banks == b.banks &&
+         a.frame == b.frame && a.input_side == b.input_side && a.first_channel == b.first_channel &&
+         a.state_space.coefficient.size() == b.state_space.coefficient.size() &&
+         a.partition.inputs() == b.partition.inputs() && a.partition.scheduling() == b.partition.scheduling() &&
+         a.partition.directionSplit() == b.partition.directionSplit() &&
+         a.node_partition.inputs() == b.node_partition.inputs() &&
+         a.node_partition.regionCount() == b.node_partition.regionCount() && a.max_horizon == b.max_horizon;
+}
+
+}  // namespace plsa

@@ -1,132 +1,43 @@
-// plsa-bench: latency of the real-time predictor.
-//   plsa-bench                       Google Benchmark runs
+// plsa-bench: latency of the real-time predictor on the models users run.
 //   plsa-bench --latency [--calls N] [--json FILE]
-//                                    p50/p99/p99.9/max per call, fixed vs dynamic
-//                                    vs a naive allocating baseline, 1-3 chambers,
-//                                    and N independent 3-chamber segments
+//       per call p50/p99.9 of update and predict on models identified by plsa
+//       itself (the demo's and its structural variants, 1-3 chambers, input and
+//       output side, with and without lag, slow pole, tip frame), against a
+//       straightforward dynamic implementation of the same model; after a
+//       125 s hold; 100 segments of the demo's model per tick; and the
+//       synthetic output-side models of earlier benchmarks.
 //   plsa-bench --loop SECONDS [--segments N] [--json FILE]
-//                                    80 Hz loop on absolute deadlines (clock_nanosleep,
-//                                    mlockall when permitted): wake-up jitter and misses
-// Models are synthetic (random stable poles, random coefficients) with the
-// structure of an identified one: interpolated 4x4 grid, 5 poles per pair.
+//       an 80 Hz loop on absolute deadlines (clock_nanosleep) with SCHED_FIFO
+//       and locked, pre-faulted memory where permitted: wake-up jitter, work
+//       per tick and deadline misses, N segments of the demo's model.
+//   plsa-bench                        Google Benchmark runs of single calls
 #include <benchmark/benchmark.h>
+#include <malloc.h>
+#include <sched.h>
 #include <sys/mman.h>
 #include <time.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <map>
+#include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "identified_models.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/predict/predictor.hpp"
+#include "straightforward_predictor.hpp"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// Poles spread like identified ones (FKcM centres about 0.02 apart in 0.84..0.95),
-// or, with `clustered`, drawn uniformly from 0.85..0.99 where near-equal
-// poles make the held path fall back from modal coordinates to the cascade.
-plsa::DioPwlObfModel syntheticModel(int chambers, int outputs, int poles, std::uint64_t seed, bool clustered = false,
-                                    bool input_side = false) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uniform_pole(0.85, 0.99), jitter(-0.005, 0.005), coef(-1.0, 1.0);
-  plsa::DioPwlObfModel m;
-  for (int j = 0; j < chambers; ++j) m.inputs.push_back("p_" + std::to_string(j + 1));
-  for (int o = 0; o < outputs; ++o) m.outputs.push_back("y_" + std::to_string(o + 1));
-  m.input_min = 0.0;
-  m.input_max = 0.4;
-  m.poles.assign(static_cast<std::size_t>(outputs), {});
-  for (int o = 0; o < outputs; ++o)
-    for (int j = 0; j < chambers; ++j) {
-      std::vector<double> p;
-      for (int i = 0; i < poles; ++i)
-        p.push_back(clustered ? uniform_pole(rng) : 0.84 + 0.11 * i / std::max(1, poles - 1) + jitter(rng));
-      m.poles[static_cast<std::size_t>(o)].push_back(plsa::PoleSet::real(p));
-    }
-  m.input_play.assign(static_cast<std::size_t>(chambers), {0.01});
-  const int sched = std::min(chambers, 2);
-  std::vector<int> inputs;
-  std::vector<std::vector<double>> levels;
-  for (int s = 0; s < sched; ++s) {
-    inputs.push_back(s);
-    levels.push_back({0.2, 0.25, 0.3, 0.35});
-  }
-  m.partition = plsa::PwlPartition::interpolated(inputs, levels);
-  if (input_side) m.schedule_side = plsa::ScheduleSide::kInput;  // a bank per grid node: 16x the filters
-  m.coefficients.assign(static_cast<std::size_t>(m.partition.regionCount()), {});
-  for (auto& region : m.coefficients)
-    for (int o = 0; o < outputs; ++o) {
-      Eigen::VectorXd c(m.regressorSize(o));
-      for (Eigen::Index i = 0; i < c.size(); ++i) c(i) = coef(rng);
-      region.push_back(c);
-    }
-  m.region_fits.assign(m.coefficients.size(), plsa::RegionFit{});
-  m.validate();
-  return m;
-}
-
-// The straightforward implementation the fast path is measured against:
-// one dense state-space of all banks, dynamic sizes, a fresh trajectory and
-// temporaries on every call.
-class NaivePredictor {
- public:
-  explicit NaivePredictor(const plsa::DioPwlObfModel& m) : m_(m) {
-    int n = 0;
-    for (int o = 0; o < m.outputCount(); ++o) n += m.regressorSize(o);
-    A_ = Eigen::MatrixXd::Zero(n, n);
-    B_ = Eigen::MatrixXd::Zero(n, m.inputCount());
-    int off = 0;
-    for (int o = 0; o < m.outputCount(); ++o)
-      for (int j = 0; j < m.inputCount(); ++j) {
-        const plsa::ObfBank<> bank(m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)]);
-        A_.block(off, off, bank.size(), bank.size()) = bank.A();
-        B_.block(off, j, bank.size(), 1) = bank.B();
-        off += bank.size();
-      }
-    x_ = Eigen::VectorXd::Zero(n);
-    u_ = Eigen::VectorXd::Zero(m.inputCount());
-  }
-  void update(const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
-    x_ = A_ * x_ + B_ * (u - u_);
-    u_ = u;
-    y_ = y;
-  }
-  std::vector<Eigen::VectorXd> predict(int horizon) const {
-    std::vector<Eigen::VectorXd> traj;
-    Eigen::VectorXd x = x_, y = y_;
-    for (int h = 0; h < horizon; ++h) {
-      plsa::ScheduleBlend b;
-      m_.partition.blend(u_, plsa::DirectionState{}, b);
-      Eigen::VectorXd dy = Eigen::VectorXd::Zero(m_.outputCount());
-      int off = 0;
-      for (int o = 0; o < m_.outputCount(); ++o) {
-        const int n = m_.regressorSize(o);
-        for (int k = 0; k < b.count; ++k)
-          dy(o) += b.weight[static_cast<std::size_t>(k)] *
-                   m_.coefficients[static_cast<std::size_t>(b.region[static_cast<std::size_t>(k)])][static_cast<std::size_t>(o)]
-                       .dot(x.segment(off, n));
-        off += n;
-      }
-      y = y + dy;
-      traj.push_back(y);
-      x = A_ * x;  // held input: no further input change
-    }
-    return traj;
-  }
-
- private:
-  plsa::DioPwlObfModel m_;
-  Eigen::MatrixXd A_, B_;
-  Eigen::VectorXd x_, u_, y_;
-};
+using plsa::bench::BenchModel;
 
 struct Stats {
   double p50 = 0, p99 = 0, p999 = 0, max = 0;
@@ -136,13 +47,6 @@ Stats stats(std::vector<double>& ns) {
   std::sort(ns.begin(), ns.end());
   auto at = [&](double q) { return ns[std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size())))]; };
   return {at(0.5), at(0.99), at(0.999), ns.back()};
-}
-
-// Drives inputs around the grid so scheduling switches regions.
-Eigen::VectorXd inputAt(int k, int chambers) {
-  Eigen::VectorXd u(chambers);
-  for (int j = 0; j < chambers; ++j) u(j) = 0.275 + 0.09 * std::sin(0.003 * k * (j + 1) + j);
-  return u;
 }
 
 template <class F>
@@ -159,10 +63,15 @@ Stats timeCalls(long calls, F&& f) {
 std::map<std::string, Stats> g_results;
 std::map<std::string, double> g_figures;
 
+void say(const std::string& line) {
+  std::printf("%s\n", line.c_str());
+  std::fflush(stdout);
+}
+
 void report(const std::string& name, const Stats& s) {
   g_results[name] = s;
-  std::printf("  %-46s p50 %9.0f ns  p99 %9.0f ns  p99.9 %9.0f ns  max %10.0f ns\n", name.c_str(), s.p50, s.p99, s.p999,
-              s.max);
+  std::printf("  %-58s p50 %9.0f ns  p99.9 %9.0f ns  max %10.0f ns\n", name.c_str(), s.p50, s.p999, s.max);
+  std::fflush(stdout);
 }
 
 void writeJson(const std::string& path) {
@@ -185,106 +94,240 @@ void writeJson(const std::string& path) {
   plsa::writeTextFile(path, out.str(), "benchmark results");
 }
 
-template <int NP>
-void latencyFor(const std::string& tag, int chambers, long calls, bool with_naive, bool clustered = false,
-                bool input_side = false, int poles = 5, bool tip_frame = false) {
-  plsa::DioPwlObfModel m = syntheticModel(chambers, 2, poles, 7, clustered, input_side);
-  if (tip_frame) m.output_frame = plsa::OutputFrame::kTipCartesian;
+// The driving run: inputs and outputs of the simulator's joystick run, looped.
+struct Drive {
+  Eigen::MatrixXd u, y;
+  double dt = 0.0125;
+  Eigen::Index rows() const { return u.rows(); }
+};
+
+// Both implementations fed the same run must predict the same (planned input).
+double disagreement(const plsa::DioPwlObfModel& m, const Drive& d) {
+  plsa::Predictor<> fast(m);
+  plsa::bench::StraightforwardPredictor slow(m);
+  Eigen::MatrixXd out(80, m.outputCount());
+  double worst = 0.0;
+  for (Eigen::Index t = 0; t < 1600; ++t) {
+    fast.update(static_cast<double>(t) * d.dt, d.u.row(t), d.y.row(t));
+    slow.update(d.u.row(t).transpose(), d.y.row(t).transpose());
+    if (t % 50 != 49) continue;
+    const Eigen::MatrixXd plan = d.u.middleRows(t + 1, 79);
+    fast.predict(80, plan, out);
+    worst = std::max(worst, (out - slow.predict(80, plan)).cwiseAbs().maxCoeff());
+    fast.predict(80, Eigen::MatrixXd(0, m.inputCount()), out);
+    worst = std::max(worst, (out - slow.predict(80, Eigen::MatrixXd(0, m.inputCount()))).cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+void measureModel(const BenchModel& bm, const Drive& d, long calls) {
+  const plsa::DioPwlObfModel& m = bm.model;
+  const std::string tag = bm.name;
+  std::printf("%s: %s\n", tag.c_str(), bm.structure.c_str());
+  const double agree = disagreement(m, d);
+  g_figures[tag + ": largest difference to the straightforward implementation"] = agree;
+  std::printf("  predictions agree with the straightforward implementation to %.2g (output units)\n", agree);
   plsa::PredictorOptions po;
   po.max_horizon = 400;
-  plsa::Predictor<NP> p(m, po);
-  std::printf("  %s: held-input path %s\n", tag.c_str(), p.heldPathIsModal() ? "modal" : "cascade");
-  Eigen::MatrixXd out(400, 2);
-  const Eigen::MatrixXd plan(0, chambers);
-  Eigen::Vector2d y(10.0, 20.0);
-  for (int k = 0; k < 1000; ++k) p.update(k * 0.0125, inputAt(k, chambers), y);  // warm
-  long tick = 1000;
-  std::vector<Eigen::VectorXd> inputs;
-  for (int k = 0; k < 4096; ++k) inputs.push_back(inputAt(k, chambers));
-  report(tag + " update", timeCalls(calls, [&](long i) {
-           p.update(static_cast<double>(tick++) * 0.0125, inputs[static_cast<std::size_t>(i & 4095)], y);
+  plsa::Predictor<> p(m, po);
+  std::printf("  form: %s\n", p.heldPathIsModal() ? "modal" : "state-space banks");
+  Eigen::MatrixXd out(400, m.outputCount()), plan(79, m.inputCount());
+  const Eigen::MatrixXd hold(0, m.inputCount());
+  const Eigen::Index T = d.rows() - 80;
+  long tick = 0;
+  auto feed = [&] {
+    const Eigen::Index t = tick % T;
+    p.update(static_cast<double>(tick++) * d.dt, d.u.row(t), d.y.row(t));
+    return t;
+  };
+  for (int k = 0; k < 2000; ++k) feed();
+  report(tag + ": update", timeCalls(calls, [&](long) { feed(); }));
+  const long predicts = std::max(1000L, calls / 2);
+  report(tag + ": predict 80, input held, moving", timeCalls(predicts, [&](long i) {
+           if ((i & 3) == 0) feed();
+           p.predict(80, hold, out);
+           benchmark::DoNotOptimize(out.data());
          }));
-  for (int h : {1, 40, 80, 400}) {
-    const long n = h == 400 ? calls / 10 : calls;
-    report(tag + " predict " + std::to_string(h), timeCalls(n, [&](long i) {
-             if ((i & 15) == 0) p.update(static_cast<double>(tick++) * 0.0125, inputs[static_cast<std::size_t>(i & 4095)], y);
-             p.predict(h, plan, out);
-             benchmark::DoNotOptimize(out.data());
-           }));
-  }
-  {
-    // A planned (changing) input: every step runs the cascade and the schedule.
-    Eigen::MatrixXd planned(79, chambers);
-    for (int h = 0; h < 79; ++h) planned.row(h) = inputAt(3 * h, chambers).transpose();
-    report(tag + " predict 80, planned input", timeCalls(calls / 10, [&](long i) {
-             if ((i & 15) == 0) p.update(static_cast<double>(tick++) * 0.0125, inputs[static_cast<std::size_t>(i & 4095)], y);
-             p.predict(80, planned, out);
-             benchmark::DoNotOptimize(out.data());
-           }));
-  }
-  if (with_naive) {
-    NaivePredictor naive(m);
-    const Eigen::VectorXd yv = y;
-    const Stats s = timeCalls(calls / 10, [&](long i) {
-      if ((i & 15) == 0) naive.update(inputs[static_cast<std::size_t>(i & 4095)], yv);
-      auto traj = naive.predict(80);
-      benchmark::DoNotOptimize(traj.data());
+  report(tag + ": predict 80, planned input", timeCalls(predicts, [&](long i) {
+           if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
+           p.predict(80, plan, out);
+           benchmark::DoNotOptimize(out.data());
+         }));
+  report(tag + ": predict 400, input held, moving", timeCalls(predicts / 4, [&](long i) {
+           if ((i & 3) == 0) feed();
+           p.predict(400, hold, out);
+           benchmark::DoNotOptimize(out.data());
+         }));
+  // A robot at rest for 125 s: the held input's schedule settles, its modes decay.
+  const Eigen::VectorXd rest_u = d.u.row(tick % T).transpose(), rest_y = d.y.row(tick % T).transpose();
+  for (int k = 0; k < 10000; ++k) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
+  g_figures[tag + ": subnormal states after a 125 s hold"] = p.subnormalStates();
+  for (int h : {80, 400}) {
+    const Stats s = timeCalls(predicts / (h / 80), [&](long i) {
+      if ((i & 3) == 0) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
+      p.predict(h, hold, out);
+      benchmark::DoNotOptimize(out.data());
     });
-    report(tag + " predict 80, naive dynamic baseline", s);
-    g_figures[tag + " predict80 speedup over naive (p50)"] = s.p50 / g_results[tag + " predict 80"].p50;
-    std::printf("  %-46s %.1fx faster at p50\n", (tag + " predict 80 vs naive").c_str(),
-                g_figures[tag + " predict80 speedup over naive (p50)"]);
+    report(tag + ": predict " + std::to_string(h) + ", after a 125 s hold", s);
+    g_figures[tag + ": predict " + std::to_string(h) + " after a hold, p99.9/p50"] = s.p999 / s.p50;
   }
+  // The straightforward implementation of the same model, same run.
+  plsa::bench::StraightforwardPredictor slow(m);
+  for (Eigen::Index t = 0; t < 2000; ++t) slow.update(d.u.row(t % T).transpose(), d.y.row(t % T).transpose());
+  const long slow_calls = std::max(200L, calls / 100);
+  long slow_tick = 2000;
+  const Stats slow_planned = timeCalls(slow_calls, [&](long) {
+    const Eigen::Index t = slow_tick++ % T;
+    slow.update(d.u.row(t).transpose(), d.y.row(t).transpose());
+    const Eigen::MatrixXd traj = slow.predict(80, d.u.middleRows(t + 1, 79));
+    benchmark::DoNotOptimize(traj.data());
+  });
+  report(tag + ": straightforward update + predict 80, planned", slow_planned);
+  const Stats slow_held = timeCalls(slow_calls, [&](long) {
+    const Eigen::Index t = slow_tick++ % T;
+    slow.update(d.u.row(t).transpose(), d.y.row(t).transpose());
+    const Eigen::MatrixXd traj = slow.predict(80, Eigen::MatrixXd(0, m.inputCount()));
+    benchmark::DoNotOptimize(traj.data());
+  });
+  report(tag + ": straightforward update + predict 80, held", slow_held);
+  const double upd = g_results[tag + ": update"].p50;
+  g_figures[tag + ": speed-up over straightforward, planned (p50)"] =
+      slow_planned.p50 / (upd + g_results[tag + ": predict 80, planned input"].p50);
+  g_figures[tag + ": speed-up over straightforward, held (p50)"] =
+      slow_held.p50 / (upd + g_results[tag + ": predict 80, input held, moving"].p50);
+  std::printf("  speed-up over the straightforward implementation (update + predict 80, p50): planned %.0fx, held %.0fx\n",
+              g_figures[tag + ": speed-up over straightforward, planned (p50)"],
+              g_figures[tag + ": speed-up over straightforward, held (p50)"]);
+}
+
+// N segments, each its own compiled copy of the demo's model: update and
+// predict 80 (input held) for all of them per tick.
+void measureSegments(const plsa::DioPwlObfModel& m, const Drive& d, int n, long ticks) {
+  std::vector<std::unique_ptr<plsa::Predictor<>>> segs;
+  for (int s = 0; s < n; ++s) segs.push_back(std::make_unique<plsa::Predictor<>>(m));
+  Eigen::MatrixXd out(80, m.outputCount());
+  const Eigen::MatrixXd hold(0, m.inputCount());
+  const Eigen::Index T = d.rows();
+  long tick = 0;
+  const Stats st = timeCalls(ticks, [&](long) {
+    const Eigen::Index t = tick % T;
+    for (auto& s : segs) {
+      s->update(static_cast<double>(tick) * d.dt, d.u.row(t), d.y.row(t));
+      s->predict(80, hold, out);
+    }
+    ++tick;
+  });
+  const std::string name = std::to_string(n) + " segments of the demo's model: update + predict 80 per tick";
+  report(name, st);
+  g_figures[std::to_string(n) + " segments: p99.9 share of the 12.5 ms period"] = st.p999 / 12.5e6;
+  std::printf("  p99.9 is %.1f%% of the 12.5 ms period\n", 100.0 * st.p999 / 12.5e6);
+}
+
+// Synthetic output-side models as in earlier benchmarks (5 poles per pair
+// spread like FKcM centres, 4x4 interpolated grid), for continuity.
+plsa::DioPwlObfModel syntheticModel(int chambers, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> jitter(-0.005, 0.005), coef(-1.0, 1.0);
+  plsa::DioPwlObfModel m;
+  for (int j = 0; j < chambers; ++j) m.inputs.push_back("p_" + std::to_string(j + 1));
+  m.outputs = {"y_1", "y_2"};
+  m.input_min = 0.0;
+  m.input_max = 0.4;
+  m.poles.assign(2, {});
+  for (int o = 0; o < 2; ++o)
+    for (int j = 0; j < chambers; ++j) {
+      std::vector<double> p;
+      for (int i = 0; i < 5; ++i) p.push_back(0.84 + 0.11 * i / 4.0 + jitter(rng));
+      m.poles[static_cast<std::size_t>(o)].push_back(plsa::PoleSet::real(p));
+    }
+  m.input_play.assign(static_cast<std::size_t>(chambers), {0.01});
+  std::vector<int> inputs;
+  std::vector<std::vector<double>> levels;
+  for (int s = 0; s < std::min(chambers, 2); ++s) {
+    inputs.push_back(s);
+    levels.push_back({0.2, 0.25, 0.3, 0.35});
+  }
+  m.partition = plsa::PwlPartition::interpolated(inputs, levels);
+  m.coefficients.assign(static_cast<std::size_t>(m.partition.regionCount()), {});
+  for (auto& region : m.coefficients)
+    for (int o = 0; o < 2; ++o) {
+      Eigen::VectorXd c(m.regressorSize(o));
+      for (Eigen::Index i = 0; i < c.size(); ++i) c(i) = coef(rng);
+      region.push_back(c);
+    }
+  m.region_fits.assign(m.coefficients.size(), plsa::RegionFit{});
+  m.validate();
+  return m;
+}
+
+Drive syntheticDrive(int chambers) {
+  Drive d;
+  d.u.resize(8000, chambers);
+  d.y.resize(8000, 2);
+  for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
+    for (int j = 0; j < chambers; ++j) d.u(k, j) = 0.275 + 0.09 * std::sin(0.003 * static_cast<double>(k) * (j + 1) + j);
+    d.y.row(k) << 10.0 + std::sin(0.01 * static_cast<double>(k)), 20.0;
+  }
+  return d;
 }
 
 void runLatency(long calls) {
-  std::printf("plsa-bench latency: %ld calls each (predict 400: %ld), synthetic models, 5 poles per pair unless named, 2 outputs\n",
-              calls, calls / 10);
-  latencyFor<5>("2 chambers, fixed", 2, calls, true);
-  latencyFor<Eigen::Dynamic>("2 chambers, dynamic", 2, calls, false);
-  latencyFor<5>("1 chamber, fixed", 1, calls, false);
-  latencyFor<5>("3 chambers, fixed", 3, calls, false);
-  latencyFor<5>("3 chambers, fixed, clustered poles", 3, calls, false, true);
-  latencyFor<5>("3 chambers, fixed, input side", 3, calls / 4, false, false, true);
-  // As identified now: input side with a slow pole (6 per bank), any-size predictor.
-  latencyFor<Eigen::Dynamic>("3 chambers, dynamic, input side, 6 poles", 3, calls / 4, false, false, true, 6);
-  // The demo's model: the same, on the tip direction's components (a conversion each way).
-  latencyFor<Eigen::Dynamic>("3 chambers, dynamic, input side, 6 poles, tip frame", 3, calls / 4, false, false, true, 6,
-                             true);
-  // N independent 3-chamber segments, each updated and predicted 40 steps per tick.
-  for (int n : {1, 10, 50, 100}) {
-    std::vector<std::unique_ptr<plsa::Predictor<5>>> segs;
-    for (int s = 0; s < n; ++s) segs.push_back(std::make_unique<plsa::Predictor<5>>(syntheticModel(3, 2, 5, 100 + s)));
-    Eigen::MatrixXd out(40, 2);
-    const Eigen::MatrixXd plan(0, 3);
-    const Eigen::Vector2d y(1.0, 2.0);
-    long tick = 0;
-    const long ticks = std::max<long>(200, calls / (20L * n));
-    const Stats st = timeCalls(ticks, [&](long) {
-      const Eigen::VectorXd u = inputAt(static_cast<int>(tick), 3);
-      for (auto& s : segs) {
-        s->update(static_cast<double>(tick) * 0.0125, u, y);
-        s->predict(40, plan, out);
-      }
-      ++tick;
-    });
-    report(std::to_string(n) + " segments: update + predict 40 per tick", st);
-    g_figures[std::to_string(n) + " segments p99.9 share of 12.5 ms period"] = st.p999 / 12.5e6;
+  std::printf("plsa-bench latency: %ld calls per line (predict: %ld), p50 and p99.9 of each call\n", calls,
+              std::max(1000L, calls / 2));
+  const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, say);
+  const plsa::io::Log run = plsa::bench::drivingRun(1);
+  for (const BenchModel& bm : models) {
+    Drive d;
+    d.u = run.columnsOf(bm.model.inputs);
+    d.y = run.columnsOf(bm.model.outputs);
+    measureModel(bm, d, calls);
+  }
+  Drive d;
+  d.u = run.columnsOf(models.front().model.inputs);
+  d.y = run.columnsOf(models.front().model.outputs);
+  for (int n : {1, 10, 100}) measureSegments(models.front().model, d, n, std::max(2000L, calls / (10L * n)));
+  for (int chambers : {2, 3}) {
+    const plsa::DioPwlObfModel m = syntheticModel(chambers, 7);
+    measureModel({"synthetic, " + std::to_string(chambers) + " chambers", plsa::bench::describe(m), m},
+                 syntheticDrive(chambers), calls);
   }
 }
 
+// Real-time set-up: SCHED_FIFO, locked memory, pre-faulted stack and heap.
+std::string realTimeSetUp() {
+  std::string said;
+  sched_param sp{};
+  sp.sched_priority = 50;
+  if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0)
+    said += "SCHED_FIFO priority 50";
+  else
+    said += std::string("SCHED_FIFO not permitted (") + std::strerror(errno) + "), normal scheduling";
+  mallopt(M_TRIM_THRESHOLD, -1);  // freed heap stays mapped and faulted in
+  mallopt(M_MMAP_MAX, 0);
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0)
+    said += ", memory locked";
+  else
+    said += std::string(", mlockall not permitted (") + std::strerror(errno) + ")";
+  volatile char stack[256 * 1024];
+  for (std::size_t i = 0; i < sizeof stack; i += 4096) stack[i] = 0;
+  return said + ", stack pre-faulted";
+}
+
 void runLoop(double seconds, int segments) {
-  const bool locked = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
-  std::vector<std::unique_ptr<plsa::Predictor<5>>> segs;
-  for (int s = 0; s < segments; ++s) segs.push_back(std::make_unique<plsa::Predictor<5>>(syntheticModel(3, 2, 5, 200 + s)));
-  Eigen::MatrixXd out(80, 2);
-  const Eigen::MatrixXd plan(0, 3);
-  const Eigen::Vector2d y(1.0, 2.0);
+  const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, say);
+  const plsa::io::Log run = plsa::bench::drivingRun(1);
+  const plsa::DioPwlObfModel& m = models.front().model;
+  std::vector<std::unique_ptr<plsa::Predictor<>>> segs;
+  for (int s = 0; s < segments; ++s) segs.push_back(std::make_unique<plsa::Predictor<>>(m));
+  const Eigen::MatrixXd u = run.columnsOf(m.inputs), y = run.columnsOf(m.outputs);
+  Eigen::MatrixXd out(80, m.outputCount());
+  const Eigen::MatrixXd hold(0, m.inputCount());
   const long period_ns = 12'500'000;
   const long ticks = static_cast<long>(seconds * 80.0);
   std::vector<double> jitter, work;
   jitter.reserve(static_cast<std::size_t>(ticks));
   work.reserve(static_cast<std::size_t>(ticks));
+  const std::string setup = realTimeSetUp();
   long misses = 0;
   timespec next{};
   clock_gettime(CLOCK_MONOTONIC, &next);
@@ -298,10 +341,10 @@ void runLoop(double seconds, int segments) {
     timespec woke{};
     clock_gettime(CLOCK_MONOTONIC, &woke);
     jitter.push_back(static_cast<double>((woke.tv_sec - next.tv_sec) * 1'000'000'000L + (woke.tv_nsec - next.tv_nsec)));
-    const Eigen::VectorXd u = inputAt(static_cast<int>(k), 3);
+    const Eigen::Index t = k % u.rows();
     for (auto& s : segs) {
-      s->update(static_cast<double>(k) * 0.0125, u, y);
-      s->predict(80, plan, out);
+      s->update(static_cast<double>(k) * 0.0125, u.row(t), y.row(t));
+      s->predict(80, hold, out);
     }
     timespec done{};
     clock_gettime(CLOCK_MONOTONIC, &done);
@@ -309,59 +352,33 @@ void runLoop(double seconds, int segments) {
     work.push_back(elapsed - jitter.back());
     if (elapsed > static_cast<double>(period_ns)) ++misses;
   }
-  std::printf("plsa-bench loop: %ld ticks at 80 Hz, %d segments (update + predict 80 each), mlockall %s\n", ticks,
-              segments, locked ? "on" : "not permitted");
+  std::printf("plsa-bench loop: %ld ticks at 80 Hz, %d segments of the demo's model (update + predict 80 each); %s\n",
+              ticks, segments, setup.c_str());
   report("loop wake-up jitter", stats(jitter));
   report("loop work per tick", stats(work));
   g_figures["loop deadline misses"] = static_cast<double>(misses);
   std::printf("  deadline misses: %ld of %ld\n", misses, ticks);
 }
 
-void BM_PredictorUpdate(benchmark::State& state) {
-  plsa::Predictor<5> p(syntheticModel(2, 2, 5, 7));
-  const Eigen::Vector2d y(1.0, 2.0);
+void BM_DemoUpdate(benchmark::State& state) {
+  static const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, [](const std::string&) {});
+  plsa::Predictor<> p(models.front().model);
+  const Eigen::Vector3d u(0.25, 0.3, 0.0);
+  const Eigen::Vector2d y(10.0, 40.0);
   long k = 0;
   for (auto _ : state) {
-    p.update(static_cast<double>(k) * 0.0125, inputAt(static_cast<int>(k), 2), y);
-    ++k;
+    p.update(static_cast<double>(k++) * 0.0125, u, y);
   }
 }
-BENCHMARK(BM_PredictorUpdate)->Name("Predictor<5>::update (2 chambers, 2 outputs)");
-
-void BM_PredictorPredict(benchmark::State& state) {
-  plsa::Predictor<5> p(syntheticModel(2, 2, 5, 7));
-  const Eigen::Vector2d y(1.0, 2.0);
-  for (int k = 0; k < 100; ++k) p.update(k * 0.0125, inputAt(k, 2), y);
-  Eigen::MatrixXd out(400, 2);
-  const Eigen::MatrixXd plan(0, 2);
-  const int h = static_cast<int>(state.range(0));
-  for (auto _ : state) {
-    p.predict(h, plan, out);
-    benchmark::DoNotOptimize(out.data());
-  }
-}
-BENCHMARK(BM_PredictorPredict)->Name("Predictor<5>::predict (2 chambers, 2 outputs)")->Arg(1)->Arg(40)->Arg(80)->Arg(400);
-
-template <int N>
-void BM_ObfBankStep(benchmark::State& state) {
-  plsa::ObfBank<N> bank(plsa::PoleSet::real({0.981, 0.969, 0.964, 0.957, 0.945}));
-  double u = 0.1;
-  for (auto _ : state) {
-    bank.step(u);
-    u = -u;
-    benchmark::DoNotOptimize(bank.state().data());
-  }
-}
-BENCHMARK_TEMPLATE(BM_ObfBankStep, 5)->Name("ObfBank<5>::step");
-BENCHMARK_TEMPLATE(BM_ObfBankStep, Eigen::Dynamic)->Name("ObfBank<Dynamic>::step (5 poles)");
+BENCHMARK(BM_DemoUpdate)->Name("Predictor<>::update (the demo's model)");
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string json;
-  long calls = 1'000'000;
+  long calls = 200'000;
   double loop_s = 0;
-  int segments = 1;
+  int segments = 100;
   bool latency = false;
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {

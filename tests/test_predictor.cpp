@@ -384,6 +384,22 @@ TEST(Predictor, SwapToOtherPolesCarriesTheFilterStates) {
   }
 }
 
+// A robot at rest for 125 s: every filter state decays toward zero. None may
+// end as a subnormal number (they slow arithmetic down by orders of
+// magnitude), and predictions stay those of a fresh predictor at rest.
+TEST(Predictor, LongHoldLeavesNoSubnormalState) {
+  const Data& d = data();
+  Predictor<5> p(d.input_side);
+  for (Eigen::Index t = 0; t < 400; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+  const Eigen::Vector3d u = d.u.row(399).transpose();
+  const Eigen::Vector2d y = d.y.row(399).transpose();
+  for (int k = 400; k < 10400; ++k) ASSERT_EQ(p.update(k * d.dt, u, y), PredictorStatus::kOk);
+  EXPECT_EQ(p.subnormalStates(), 0);
+  Eigen::MatrixXd out(80, 2);
+  ASSERT_EQ(p.predict(80, Eigen::MatrixXd(0, 3), out), PredictorStatus::kOk);
+  EXPECT_LT((out.rowwise() - y.transpose()).cwiseAbs().maxCoeff(), 1e-6) << "a settled hold predicts no motion";
+}
+
 TEST(Predictor, TipFrameKeepsSteeringOnTheMeasuredBranch) {
   // Steering measured around 180 deg (the run's angles turned by 120): atan2
   // alone would answer near -180 for half the predictions.

@@ -37,6 +37,15 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
   c.partition = c.input_side ? PwlPartition::single() : m.partition;
   c.node_partition = m.partition;
   c.nodes = c.input_side ? m.partition.regionCount() : 1;
+  if (c.input_side) {
+    c.node_grid.inputs = m.partition.inputs();
+    c.node_grid.levels = m.partition.breakpoints();
+    int stride = 1;
+    for (const auto& l : c.node_grid.levels) {
+      c.node_grid.strides.push_back(stride);
+      stride *= static_cast<int>(l.size());
+    }
+  }
   c.play_start = m.play_start;
   c.coupling = m.play_coupling;
   c.threshold = m.play_threshold;
@@ -165,20 +174,25 @@ void compileModal(CompiledModel& c) {
       for (int i = 0; i < n; ++i) f.coefficient(m, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k) = modal(i);
     }
   }
-  if (c.input_side)
+  if (c.input_side) {
+    f.block = (c.n_y * n + 3) / 4 * 4;
+    f.merged_lambda = Eigen::VectorXd::Zero(c.n_u * f.block);
+    f.merged_beta = Eigen::VectorXd::Zero(c.n_u * f.block);
     for (int j = 0; j < c.n_u; ++j) {
-      RowMajorMatrix t(c.nodes * c.channels(j), c.n_y * n);
+      RowMajorMatrix t = RowMajorMatrix::Zero(c.nodes * c.channels(j), f.block);
       for (int o = 0; o < c.n_y; ++o)
-        for (int i = 0; i < n; ++i)
-          for (Eigen::Index k = 0; k < t.rows(); ++k)
-            t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k);
+        for (int i = 0; i < n; ++i) {
+          const int q = (j * c.n_y + o) * n + i, slot = j * f.block + o * n + i;
+          f.merged_lambda(slot) = f.lambda(q);
+          f.merged_beta(slot) = f.beta(q);
+          for (Eigen::Index k = 0; k < t.rows(); ++k) t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
+        }
       f.by_copy.push_back(std::move(t));
     }
-  f.mode_output = Eigen::MatrixXd::Zero(c.n_y, Q);
+  }
   f.modes_of_output.resize(static_cast<std::size_t>(c.n_y));
   for (int q = 0; q < Q; ++q) {
     const int o = q / n % c.n_y;
-    f.mode_output(o, q) = 1.0;
     f.modes_of_output[static_cast<std::size_t>(o)].push_back(q);
   }
   for (const auto& modes : f.modes_of_output) {

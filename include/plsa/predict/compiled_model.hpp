@@ -38,12 +38,14 @@ struct ModalForm {
   /// [regions] x [states]: the coefficient of each state in modal
   /// coordinates, per region (one row on the input side).
   RowMajorMatrix coefficient;
-  /// Input side, per input j: [nodes * channels(j)] x [outputs * poles], the
-  /// same coefficients transposed so a node's contribution to all of j's
-  /// modes is one contiguous row.
+  /// Input side, merged modes: input j's modes (output o, pole i) at
+  /// j * block + o * poles + i, each input's block padded with zero modes to
+  /// a multiple of 4 so the per-step loops run whole vectors.
+  int block = 0;
+  Eigen::VectorXd merged_lambda, merged_beta;  ///< [inputs * block], 0 on the padding
+  /// Per input j: [nodes * channels(j)] x [block], the coefficients
+  /// transposed so a node's contribution to all of j's modes is one row.
   std::vector<RowMajorMatrix> by_copy;
-  /// [outputs] x [modes]: 1 where the mode belongs to the output (dy = sum).
-  Eigen::MatrixXd mode_output;
   /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s.
   std::vector<Eigen::MatrixXd> power_sum;
   std::vector<std::vector<int>> modes_of_output;
@@ -68,6 +70,15 @@ struct StateSpaceForm {
   std::vector<std::vector<Eigen::VectorXd>> coefficient;  ///< [region][output]
 };
 
+/// The input-side grid as the predictor looks it up: each scheduling input's
+/// levels, searched from the last cell (a lagged input moves a cell at a
+/// time), weights as PwlPartition::blend gives them.
+struct NodeGrid {
+  std::vector<int> inputs;
+  std::vector<std::vector<double>> levels;
+  std::vector<int> strides;
+};
+
 struct CompiledModel {
   int n_u = 0, n_y = 0;
   int poles = 0;  ///< per bank (every bank has as many)
@@ -79,6 +90,7 @@ struct CompiledModel {
   bool input_side = false;
   PwlPartition partition;       ///< the coefficients' schedule (one region on the input side)
   PwlPartition node_partition;  ///< input side: the grid whose nodes weigh the inputs
+  NodeGrid node_grid;           ///< the same, for the hot path
   std::vector<PlayChannel> play;           ///< per channel
   std::vector<int> channel_input;          ///< per channel: its input
   std::vector<int> first_channel;          ///< [inputs + 1]: input j's channels are [first, first + 1)

@@ -22,6 +22,10 @@
 
 #include <Eigen/Dense>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
 #include "plsa/model/dio_pwl_obf_model.hpp"
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/model_handoff.hpp"
@@ -32,6 +36,26 @@ namespace plsa {
 /// Filter states smaller than this are zero (far below any measurable
 /// output, far above the subnormal range).
 inline constexpr double kTinyState = 1e-150;
+
+/// Inputs whose resting (never driven) filters a predictor skips; beyond
+/// this many, every input's filters step.
+inline constexpr int kMaxRestingInputs = 16;
+
+/// For its scope, arithmetic flushes subnormal results and operands to zero
+/// (x86 SSE: MXCSR's FTZ and DAZ bits, restored on exit; elsewhere a no-op,
+/// and the stored states' flush alone keeps them out). Every real-time call
+/// of the predictor runs under one, so no intermediate of a prediction can
+/// slow down on a subnormal number either.
+class SubnormalsFlushed {
+ public:
+#if defined(__SSE2__)
+  SubnormalsFlushed() noexcept : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
+  ~SubnormalsFlushed() { _mm_setcsr(saved_); }
+
+ private:
+  unsigned saved_;
+#endif
+};
 
 /// The predictor for any number of poles per bank. update() and predict()
 /// belong to one (real-time) thread; install() may be called from any other.
@@ -60,6 +84,13 @@ class NStepPredictor {
   bool heldPathIsModal() const noexcept { return model().modal; }
   /// The model in force on the real-time thread (0 the first; each install adds 1).
   std::uint64_t modelId() const noexcept { return handoff_.currentId(); }
+  /// Filter states that are subnormal numbers (always 0: states below
+  /// kTinyState are flushed at every step; for tests and benchmarks).
+  int subnormalStates() const noexcept {
+    int n = 0;
+    for (Eigen::Index i = 0; i < state_.size(); ++i) n += std::fpclassify(state_(i)) == FP_SUBNORMAL;
+    return n;
+  }
   /// The compiled model in force (real-time thread, or before it starts).
   const std::shared_ptr<const CompiledModel>& compiledModel() const noexcept { return handoff_.currentShared(); }
 
@@ -67,6 +98,7 @@ class NStepPredictor {
   /// indexable vectors with size().
   template <class U, class Y>
   PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
+    const SubnormalsFlushed flushed;
     handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) { carryStates(from, to); });
     const CompiledModel& m = model();
     if (static_cast<int>(u.size()) != m.n_u || static_cast<int>(y.size()) != m.n_y) return PredictorStatus::kBadShape;
@@ -113,7 +145,7 @@ class NStepPredictor {
     }
     m.partition.updateDirections(du_, dir_);
     lagSchedule(m, u_, us_);
-    advance(m, state_, vc_, us_, node_w_, u_);
+    advance(m, state_, vc_, us_, node_w_, u_, resting_);
     y_ = ym_;
     ++samples_;
     return status;
@@ -128,13 +160,10 @@ class NStepPredictor {
   /// last measured).
   PredictorStatus predict(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                           Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const SubnormalsFlushed flushed;
     const PredictorStatus status = predictInModelFrame(horizon, plan, out);
     if (status != PredictorStatus::kOk || model().frame != OutputFrame::kTipCartesian) return status;
-    double reference = steer_reference_;
-    for (int h = 0; h < horizon; ++h) {
-      tipAngles(out(h, 0), out(h, 1), reference, out(h, 0), out(h, 1));
-      reference = out(h, 1);
-    }
+    toTipAngles(horizon, out);
     return status;
   }
 
@@ -156,6 +185,34 @@ class NStepPredictor {
  private:
   const CompiledModel& model() const noexcept { return handoff_.current(); }
 
+  // Rows of tip components back to bending and steering. Each steering angle
+  // is the one before it plus the turn between the two directions (so on the
+  // branch nearest it, as tipAngles picks), the turn by its arctangent series
+  // where it is small (every step of a smooth prediction), else by atan2. A
+  // straight tip (no direction) keeps the steering it had.
+  void toTipAngles(int horizon, Eigen::Ref<Eigen::MatrixXd> out) const noexcept {
+    double steer = steer_reference_;
+    double px = std::cos(steer * kRadPerDeg), py = std::sin(steer * kRadPerDeg);
+    for (int h = 0; h < horizon; ++h) {
+      const double x = out(h, 0), y = out(h, 1);
+      const double cross = px * y - py * x, dot = px * x + py * y;
+      if (x != 0.0 || y != 0.0) {
+        double turn;
+        if (dot > 0.0 && std::abs(cross) <= 0.1 * dot) {
+          const double t = cross / dot, t2 = t * t;  // atan t to double precision for |t| <= 0.1
+          turn = t * (1.0 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
+        } else {
+          turn = std::atan2(cross, dot);
+        }
+        steer += turn / kRadPerDeg;
+        px = x;
+        py = y;
+      }
+      out(h, 0) = std::sqrt(x * x + y * y);
+      out(h, 1) = steer;
+    }
+  }
+
   void allocate(const CompiledModel& m) {
     shape_ = handoff_.currentShared();
     accept_min_ = m.accept_min;
@@ -170,7 +227,10 @@ class NStepPredictor {
     work_state_.setZero(m.states());
     bank_x_.setZero(m.poles);
     const Eigen::Index modes = static_cast<Eigen::Index>(m.n_u) * m.n_y * m.poles;
-    for (Eigen::VectorXd* v : {&zeta_, &g_, &g_next_}) v->setZero(modes);
+    zeta_.setZero(modes);
+    const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
+    for (Eigen::VectorXd* v : {&merged_, &g_, &g_next_}) v->setZero(slots);
+    total_.setZero(m.modal && m.input_side ? m.modal_form.block : 0);
     zeta_of_output_.setZero(modes);
     blended_.setZero(m.states());
     drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
@@ -180,6 +240,7 @@ class NStepPredictor {
   template <class U>
   void restart(const CompiledModel& m, const U& u) noexcept {
     state_.setZero();
+    resting_.fill(true);
     for (int j = 0; j < m.n_u; ++j) u_(j) = u[j];
     us_ = u_;  // the schedule's lag starts settled
     const double positive_sum = positiveSumAbove(u_, m.threshold);
@@ -196,9 +257,14 @@ class NStepPredictor {
   // us <- the lag's next value toward u; once within rounding of u it is u,
   // so a held input settles the schedule exactly (and takes the held path).
   static void lagSchedule(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& us) noexcept {
-    us = m.schedule_pole * us + (1.0 - m.schedule_pole) * u;
-    for (Eigen::Index j = 0; j < us.size(); ++j)
-      if (std::abs(us(j) - u(j)) <= 1e-12 * std::max(std::abs(u(j)), 1e-3)) us(j) = u(j);
+    const double pole = m.schedule_pole, gain = 1.0 - pole;
+    const double* in = u.data();
+    double* lagged = us.data();
+    for (Eigen::Index j = 0; j < us.size(); ++j) {
+      const double next = pole * lagged[j] + gain * in[j];
+      const double scale = std::abs(in[j]) > 1e-3 ? std::abs(in[j]) : 1e-3;
+      lagged[j] = std::abs(next - in[j]) <= 1e-12 * scale ? in[j] : next;
+    }
   }
 
   // Dense node weights (input side) at the scheduling point us.
@@ -240,21 +306,40 @@ class NStepPredictor {
   }
 
   // One step of every filter: z <- lambda z + beta d (modal), or each bank's
-  // x <- A x + B d; states below kTinyState flushed to zero.
-  void stepFilters(const CompiledModel& m, Eigen::VectorXd& state) noexcept {
+  // x <- A x + B d. On x86 every call runs with subnormals flushed
+  // (SubnormalsFlushed); elsewhere states below kTinyState are set to zero
+  // here. `resting[j]`: input j's states are all zero; they stay so, and are
+  // skipped, while its drive is zero (a chamber never pressurised).
+  void stepFilters(const CompiledModel& m, Eigen::VectorXd& state, std::array<bool, kMaxRestingInputs>& resting) noexcept {
     const int n = m.poles;
     if (m.modal) {
       const ModalForm& f = m.modal_form;
-      const Eigen::Index per_input = static_cast<Eigen::Index>(m.n_y) * n;
-      for (Eigen::Index q = 0; q < f.lambda.size(); ++q) {
-        const int j = static_cast<int>(q / per_input);
-        const int begin = f.offset[static_cast<std::size_t>(q)], width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
-        auto z = state.segment(begin, width).array();
-        const auto next = f.lambda(q) * z + f.beta(q) * drive_.segment(m.nodes * m.first_channel[static_cast<std::size_t>(j)], width).array();
-        z = (next.abs() < kTinyState).select(0.0, next);
+      const int per_input = m.n_y * n;
+      for (int j = 0; j < m.n_u; ++j) {
+        const int width = m.nodes * m.channels(j);
+        const double* __restrict d = drive_.data() + m.nodes * m.first_channel[static_cast<std::size_t>(j)];
+        if (j < kMaxRestingInputs && resting[static_cast<std::size_t>(j)]) {
+          bool still = true;
+          for (int k = 0; k < width; ++k) still = still && d[k] == 0.0;
+          if (still) continue;
+          resting[static_cast<std::size_t>(j)] = false;
+        }
+        for (int q = j * per_input; q < (j + 1) * per_input; ++q) {
+          double* __restrict z = state.data() + f.offset[static_cast<std::size_t>(q)];
+          const double lambda = f.lambda(q), beta = f.beta(q);
+          for (int k = 0; k < width; ++k) {
+#if defined(__SSE2__)
+            z[k] = lambda * z[k] + beta * d[k];
+#else
+            const double next = lambda * z[k] + beta * d[k];
+            z[k] = std::abs(next) < kTinyState ? 0.0 : next;
+#endif
+          }
+        }
       }
       return;
     }
+    resting.fill(false);  // tracked in modal form only
     const StateSpaceForm& s = m.state_space;
     for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
       const int j = s.bank_input[b];
@@ -281,11 +366,11 @@ class NStepPredictor {
   // input side the node weights move to the lagged input us (node_w holds
   // the previous ones).
   void advance(const CompiledModel& m, Eigen::VectorXd& state, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
-               Eigen::VectorXd& node_w, const Eigen::VectorXd& u) noexcept {
+               Eigen::VectorXd& node_w, const Eigen::VectorXd& u, std::array<bool, kMaxRestingInputs>& resting) noexcept {
     moveChannels(m, u, vc);
     if (m.input_side) nodeWeights(m, us, next_node_w_);
     driveInputs(m, vc, node_w);
-    stepFilters(m, state);
+    stepFilters(m, state, resting);
     if (m.input_side) node_w = next_node_w_;
   }
 
@@ -313,12 +398,25 @@ class NStepPredictor {
     }
   }
 
+  // dy_o = the sum of output o's modes (modes run input, output, pole).
+  static void sumModes(const CompiledModel& m, const Eigen::VectorXd& zeta, Eigen::VectorXd& dy) noexcept {
+    const int n = m.poles;
+    const double* z = zeta.data();
+    for (int o = 0; o < m.n_y; ++o) dy(o) = 0.0;
+    for (int j = 0; j < m.n_u; ++j)
+      for (int o = 0; o < m.n_y; ++o, z += n) {
+        double acc = 0.0;
+        for (int i = 0; i < n; ++i) acc += z[i];
+        dy(o) += acc;
+      }
+  }
+
   // dy for the next sample from the filter states, scheduled on (us, dir).
   void increments(const CompiledModel& m, const Eigen::VectorXd& state, const Eigen::VectorXd& us,
                   const DirectionState& dir, Eigen::VectorXd& dy) noexcept {
     if (m.modal) {
       mergeModes(m, state, us, dir, zeta_);
-      dy.noalias() = m.modal_form.mode_output * zeta_;
+      sumModes(m, zeta_, dy);
       return;
     }
     const StateSpaceForm& s = m.state_space;
@@ -385,51 +483,182 @@ class NStepPredictor {
   // Input side, modal: the copies merged once into one state per mode; each
   // step then drives every mode with the change of its scheduled level,
   // g = sum over the active nodes of w_r times the channels, zeta <- lambda
-  // zeta + beta (g' - g).
+  // zeta + beta (g' - g). The modes run in padded blocks (ModalForm::block),
+  // whose usual sizes get kernels with the size fixed at compile time.
   PredictorStatus predictMergedModes(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    switch (m.modal_form.block) {
+      case 4: return runMerged<4>(m, horizon, plan, out);
+      case 8: return runMerged<8>(m, horizon, plan, out);
+      case 12: return runMerged<12>(m, horizon, plan, out);
+      case 16: return runMerged<16>(m, horizon, plan, out);
+      case 20: return runMerged<20>(m, horizon, plan, out);
+      case 24: return runMerged<24>(m, horizon, plan, out);
+      default: return runMerged<0>(m, horizon, plan, out);
+    }
+  }
+
+  // B: the block size, or 0 for any (read from the model). Per step: the
+  // inputs, their lag and channels, the grid's blend; then per input its
+  // levels (kept in registers for a fixed B), its modes' step, and their sum
+  // into one block-long total whose output segments are dy. An input whose
+  // channels are zero and whose modes are at rest (a chamber never
+  // pressurised) is skipped until it moves.
+  template <int B>
+  PredictorStatus runMerged(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                            Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
+    const int n = m.poles, block = B > 0 ? B : f.block, per_input = m.n_y * n, nu = m.n_u, ny = m.n_y;
     mergeModes(m, state_, us_, dir_, zeta_);
+    merged_.setZero();
+    for (int j = 0; j < nu; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
     work_u_ = u_;
     work_us_ = us_;
     work_vc_ = vc_;
-    DirectionState dir = dir_;
-    scheduledLevels(m, work_us_, work_vc_, g_);
-    for (int h = 0; h < horizon; ++h) {
-      dy_.noalias() = f.mode_output * zeta_;
-      work_y_ += dy_;
-      out.row(h) = work_y_.transpose();
-      if (h + 1 == horizon) break;
-      planStep(m, plan, h, dir);
-      moveChannels(m, work_u_, work_vc_);
-      scheduledLevels(m, work_us_, work_vc_, g_next_);
-      const auto next = f.lambda.array() * zeta_.array() + f.beta.array() * (g_next_ - g_).array();
-      zeta_ = (next.abs() < kTinyState).select(0.0, next);
-      g_.swap(g_next_);
+    grid_hint_ = {};
+    ScheduleBlend blend;
+    gridBlend(m.node_grid, work_us_, blend);
+    double* __restrict zeta = merged_.data();
+    double* __restrict level = g_.data();       // each input's levels now
+    double* __restrict next = g_next_.data();   // and at the next step
+    for (int j = 0; j < nu; ++j) levelsOfInput<B>(m, j, blend, work_vc_, level + j * block);
+    std::array<bool, 16> resting{};
+    for (int j = 0; j < nu && j < 16; ++j) {
+      bool rest = true;
+      for (int i = 0; i < block; ++i) rest = rest && zeta[j * block + i] == 0.0 && level[j * block + i] == 0.0;
+      resting[static_cast<std::size_t>(j)] = rest;
     }
+    double* __restrict total = total_.data();
+    for (int i = 0; i < block; ++i) total[i] = 0.0;
+    for (int j = 0; j < nu; ++j)
+      for (int i = 0; i < block; ++i) total[i] += zeta[j * block + i];
+    double y[8], dy[8];
+    for (int o = 0; o < ny; ++o) {
+      y[o] = work_y_(o);
+      dy[o] = outputSum(total, o, n);
+    }
+    const double* lambda = f.merged_lambda.data();
+    const double* beta = f.merged_beta.data();
+    for (int h = 0; h < horizon; ++h) {
+      for (int o = 0; o < ny; ++o) out(h, o) = y[o] += dy[o];
+      if (h + 1 == horizon) break;
+      if (h < plan.rows())  // the input side schedules no direction split: inputs and lag only
+        for (int j = 0; j < nu; ++j) work_u_(j) = plan(h, j);
+      lagSchedule(m, work_u_, work_us_);
+      moveChannels(m, work_u_, work_vc_);
+      gridBlend(m.node_grid, work_us_, blend);
+      for (int i = 0; i < block; ++i) total[i] = 0.0;
+      for (int j = 0; j < nu; ++j) {
+        if (j < 16 && resting[static_cast<std::size_t>(j)]) {
+          bool still = true;
+          for (int c = m.first_channel[static_cast<std::size_t>(j)]; c < m.first_channel[static_cast<std::size_t>(j) + 1]; ++c)
+            still = still && work_vc_(c) == 0.0;
+          if (still) continue;
+          resting[static_cast<std::size_t>(j)] = false;
+        }
+        const int at = j * block;
+        levelsOfInput<B>(m, j, blend, work_vc_, next + at);
+        stepMerged<B>(block, lambda + at, beta + at, next + at, level + at, zeta + at, total);
+      }
+      for (int o = 0; o < ny; ++o) dy[o] = outputSum(total, o, n);
+    }
+    work_y_ = Eigen::Map<const Eigen::VectorXd>(y, ny);
     return PredictorStatus::kOk;
   }
 
-  // g_q = sum_r w_r(us) sum_c v_c M_q[r, c]: each mode's level at the nodes
-  // the lagged input weighs, through the channels' values.
-  void scheduledLevels(const CompiledModel& m, const Eigen::VectorXd& us, const Eigen::VectorXd& vc,
-                       Eigen::VectorXd& g) const noexcept {
+  // Output o's share of a block-long total (its modes o * n .. o * n + n - 1).
+  static double outputSum(const double* total, int o, int n) noexcept {
+    double acc = 0.0;
+    for (int i = 0; i < n; ++i) acc += total[o * n + i];
+    return acc;
+  }
+
+  // zeta <- lambda zeta + beta (next - level); level <- next; total += zeta,
+  // over one input's block.
+  template <int B>
+  static void stepMerged(int block, const double* __restrict lambda, const double* __restrict beta,
+                         const double* __restrict next, double* __restrict level, double* __restrict zeta,
+                         double* __restrict total) noexcept {
+    const int size = B > 0 ? B : block;
+    for (int i = 0; i < size; ++i) {
+      const double z = lambda[i] * zeta[i] + beta[i] * (next[i] - level[i]);
+      zeta[i] = z;
+      level[i] = next[i];
+      total[i] += z;
+    }
+  }
+
+  // Input j's levels: sum over the blend's nodes r and j's channels c of
+  // w_r v_c times the node-channel row, into `level` (one block).
+  template <int B>
+  void levelsOfInput(const CompiledModel& m, int j, const ScheduleBlend& blend, const Eigen::VectorXd& vc,
+                     double* __restrict level) const noexcept {
     const ModalForm& f = m.modal_form;
-    ScheduleBlend blend;
-    m.node_partition.blend(us, DirectionState{}, blend);
-    g.setZero();
-    const Eigen::Index block = static_cast<Eigen::Index>(m.n_y) * m.poles;
-    for (int j = 0; j < m.n_u; ++j) {
-      const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
-      auto gj = g.segment(j * block, block);
-      const RowMajorMatrix& t = f.by_copy[static_cast<std::size_t>(j)];
+    const int size = B > 0 ? B : f.block;
+    const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
+    const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
+    double acc[B > 0 ? B : 1];  // a fixed block stays in registers
+    double* sum = B > 0 ? acc : level;
+    for (int i = 0; i < size; ++i) sum[i] = 0.0;
+    for (int c = 0; c < channels; ++c) {
+      const double v = vc(first + c);
+      if (v == 0.0) continue;
       for (int k = 0; k < blend.count; ++k) {
-        const int r = blend.region[static_cast<std::size_t>(k)];
-        for (int c = 0; c < channels; ++c) {
-          const double weight = blend.weight[static_cast<std::size_t>(k)] * vc(first + c);
-          if (weight != 0.0) gj.noalias() += weight * t.row(r * channels + c).transpose();
-        }
+        const double weight = blend.weight[static_cast<std::size_t>(k)] * v;
+        const double* __restrict row =
+            table + static_cast<std::ptrdiff_t>(blend.region[static_cast<std::size_t>(k)] * channels + c) * size;
+        for (int i = 0; i < size; ++i) sum[i] += weight * row[i];
       }
+    }
+    if (B > 0)
+      for (int i = 0; i < size; ++i) level[i] = sum[i];
+  }
+
+  // dy_o = the sum of output o's merged modes.
+  void sumMerged(const CompiledModel& m, Eigen::VectorXd& dy) const noexcept {
+    const int n = m.poles, block = m.modal_form.block;
+    for (int o = 0; o < m.n_y; ++o) {
+      double acc = 0.0;
+      for (int j = 0; j < m.n_u; ++j) {
+        const double* z = merged_.data() + j * block + o * n;
+        for (int i = 0; i < n; ++i) acc += z[i];
+      }
+      dy(o) = acc;
+    }
+  }
+
+  // The input-side grid's blend at us, searching each input's cell from the
+  // last one; the same regions and weights as PwlPartition::blend.
+  void gridBlend(const NodeGrid& grid, const Eigen::VectorXd& us, ScheduleBlend& out) noexcept {
+    out.count = 1;
+    out.region[0] = 0;
+    out.weight[0] = 1.0;
+    for (std::size_t s = 0; s < grid.inputs.size(); ++s) {
+      const std::vector<double>& lv = grid.levels[s];
+      const int last = static_cast<int>(lv.size()) - 1;
+      const double x = us(grid.inputs[s]);
+      int i = 0;
+      double t = 0.0;
+      if (x >= lv[static_cast<std::size_t>(last)]) {
+        i = last;
+      } else if (x > lv[0]) {
+        i = std::min(grid_hint_[s], last - 1);
+        while (x < lv[static_cast<std::size_t>(i)]) --i;
+        while (x >= lv[static_cast<std::size_t>(i) + 1]) ++i;
+        t = (x - lv[static_cast<std::size_t>(i)]) / (lv[static_cast<std::size_t>(i) + 1] - lv[static_cast<std::size_t>(i)]);
+      }
+      grid_hint_[s] = i;
+      const int c = out.count, stride = grid.strides[s];
+      for (int k = 0; k < c; ++k) {
+        const auto kk = static_cast<std::size_t>(k);
+        if (t > 0.0) {
+          out.region[kk + static_cast<std::size_t>(c)] = out.region[kk] + (i + 1) * stride;
+          out.weight[kk + static_cast<std::size_t>(c)] = out.weight[kk] * t;
+        }
+        out.region[kk] += i * stride;
+        out.weight[kk] *= 1.0 - t;
+      }
+      if (t > 0.0) out.count = 2 * c;
     }
   }
 
@@ -443,13 +672,14 @@ class NStepPredictor {
     work_vc_ = vc_;
     work_node_w_ = node_w_;
     DirectionState dir = dir_;
+    std::array<bool, kMaxRestingInputs> work_resting = resting_;
     for (int h = 0; h < horizon; ++h) {
       increments(m, work_state_, work_us_, dir, dy_);
       work_y_ += dy_;
       out.row(h) = work_y_.transpose();
       if (h + 1 == horizon) break;
       planStep(m, plan, h, dir);
-      advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_);
+      advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_, work_resting);
     }
     return PredictorStatus::kOk;
   }
@@ -497,7 +727,9 @@ class NStepPredictor {
   Eigen::VectorXd state_, work_state_;  // filter states: modal z, or banks' x, in the model's form
   Eigen::VectorXd drive_;               // per state: what drives it this step
   Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
-  Eigen::VectorXd zeta_, g_, g_next_, zeta_of_output_, blended_;
+  Eigen::VectorXd zeta_, merged_, g_, g_next_, total_, zeta_of_output_, blended_;
+  std::array<int, 4> grid_hint_{};  // input side: each scheduling input's last cell
+  std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
   DirectionState dir_;

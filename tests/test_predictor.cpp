@@ -384,6 +384,32 @@ TEST(Predictor, SwapToOtherPolesCarriesTheFilterStates) {
   }
 }
 
+// A step of the held input: the lagged schedule then crosses grid cells
+// during the horizon, which the closed-form held path takes stretch by
+// stretch. It must equal a plan repeating the input, step by step.
+TEST(Predictor, HeldInputWhoseLagCrossesCellsMatchesTheSteppedPlan) {
+  const Data& d = data();
+  for (const DioPwlObfModel* model : {&d.input_side, &d.tip}) {
+    Predictor<5> p(*model);
+    ASSERT_TRUE(p.heldPathIsModal());
+    Eigen::MatrixXd held(400, 2), stepped(400, 2);
+    double worst = 0.0;
+    int t = 0;
+    for (; t < 200; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+    // Both scheduling inputs jump across the 0.2..0.35 grid, both ways, and the
+    // horizon starts at several points of the lag's approach.
+    for (const Eigen::Vector3d& u : {Eigen::Vector3d(0.34, 0.21, 0.0), Eigen::Vector3d(0.19, 0.36, 0.0),
+                                     Eigen::Vector3d(0.27, 0.27, 0.0)})
+      for (int k = 0; k < 12; ++k, ++t) {
+        ASSERT_EQ(p.update(t * d.dt, u, d.y.row(200)), PredictorStatus::kOk);
+        ASSERT_EQ(p.predict(400, Eigen::MatrixXd(0, 3), held), PredictorStatus::kOk);
+        ASSERT_EQ(p.predict(400, u.transpose().replicate(399, 1), stepped), PredictorStatus::kOk);
+        worst = std::max(worst, (held - stepped).cwiseAbs().maxCoeff());
+      }
+    EXPECT_LT(worst, 1e-9) << "held path and stepped plan differ across cells";
+  }
+}
+
 // A robot at rest for 125 s: every filter state decays toward zero. None may
 // end as a subnormal number (they slow arithmetic down by orders of
 // magnitude), and predictions stay those of a fresh predictor at rest.

@@ -208,6 +208,28 @@ void compileModal(CompiledModel& c) {
     }
     f.power_sum.push_back(std::move(sum));
   }
+  const auto orders = static_cast<int>(c.node_grid.inputs.size());
+  const std::size_t doubles = static_cast<std::size_t>(c.max_horizon) * static_cast<std::size_t>(Q) * (orders + 1);
+  if (c.input_side && c.schedule_pole > 0.0 && orders > 0 && doubles <= kMaxHeldTableDoubles)
+    for (int o = 0; o < c.n_y; ++o) {
+      const int width = (orders + 1) * n;
+      Eigen::MatrixXd sum(c.max_horizon, c.n_u * width);
+      for (int j = 0; j < c.n_u; ++j)
+        for (int i = 0; i < n; ++i) {
+          const double lambda = f.lambda((j * c.n_y + o) * n + i);
+          for (int d = 0; d <= orders; ++d) {
+            const double rate = std::pow(c.schedule_pole, d);
+            double k = d == 0 ? 1.0 : 0.0, power = 1.0, acc = 0.0;  // d = 0: lambda^h itself
+            for (int h = 0; h < c.max_horizon; ++h) {
+              acc += k;
+              sum(h, j * width + d * n + i) = acc;
+              k = d == 0 ? (std::abs(k * lambda) < 1e-200 ? 0.0 : k * lambda) : lambda * k + power;
+              power = power * rate < 1e-200 ? 0.0 : power * rate;
+            }
+          }
+        }
+      f.lag_sum.push_back(std::move(sum));
+    }
   c.modal_form = std::move(f);
   c.modal = true;
 }

@@ -31,6 +31,10 @@ using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eig
 /// o, pole i), numbered q = (j * outputs + o) * poles + i. Each mode has one
 /// state per copy k of its bank: k = node * channels(j) + channel; the states
 /// of mode q are z[offset[q], offset[q + 1]).
+/// Largest closed-form held-input tables (ModalForm::lag_sum) set-up builds,
+/// in doubles (32 MB); beyond it a held input with an unsettled lag steps.
+inline constexpr std::size_t kMaxHeldTableDoubles = std::size_t{4} << 20;
+
 struct ModalForm {
   Eigen::VectorXd lambda;        ///< [modes] the pole
   Eigen::VectorXd beta;          ///< [modes] (V^-1 B) of the mode's bank
@@ -48,6 +52,15 @@ struct ModalForm {
   std::vector<RowMajorMatrix> by_copy;
   /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s.
   std::vector<Eigen::MatrixXd> power_sum;
+  /// Input side with a schedule lag: a held input's lagged schedule moves as
+  /// rho^h, and within a grid cell each mode's level is a polynomial of
+  /// degree <= D (scheduling inputs) in it, so the horizon has a closed form.
+  /// [output]: max_horizon x (inputs x (1 + D) x poles), per input j the
+  /// columns S (sum_{i<=m} lambda^i) then KS_d for d = 1..D, KS(m) =
+  /// sum_{i<=m} K(i), K(0) = 0, K(i+1) = lambda K(i) + rho^(d i), each over
+  /// the input's poles: one table product per input that moves.
+  /// Empty when there is no lag or the tables would pass kMaxHeldTableDoubles.
+  std::vector<Eigen::MatrixXd> lag_sum;
   std::vector<std::vector<int>> modes_of_output;
   /// [o * inputs + j]: the eigenbasis V and its inverse of bank (o, j), to
   /// carry states across a model swap.

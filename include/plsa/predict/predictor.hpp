@@ -31,7 +31,60 @@
 #include "plsa/predict/model_handoff.hpp"
 #include "plsa/predict/predictor_options.hpp"
 
+// x86-64 with GCC or Clang: the hot kernels also come compiled for AVX2 and
+// FMA, chosen at run time when the processor has them.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define PLSA_PREDICT_AVX2 1
+#define PLSA_TARGET_AVX2 __attribute__((target("avx2,fma")))
+#define PLSA_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#define PLSA_PREDICT_AVX2 0
+#define PLSA_TARGET_AVX2
+#define PLSA_ALWAYS_INLINE inline
+#endif
+
 namespace plsa {
+
+/// Whether this processor runs the AVX2+FMA versions of the predictor's kernels.
+inline bool predictorUsesAvx2() noexcept {
+#if PLSA_PREDICT_AVX2
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+#else
+  return false;
+#endif
+}
+
+/// y[0, rows) += A[0, rows) x [0, cols) for a column-major table with leading
+/// dimension ld: the held paths' table products, in a generic and an AVX2 build.
+PLSA_ALWAYS_INLINE void accumulateColumnsBody(const double* __restrict a, Eigen::Index ld, int rows, int cols,
+                                              const double* __restrict x, double* __restrict y) noexcept {
+  int c = 0;
+  for (; c + 4 <= cols; c += 4) {  // four columns a pass: y loaded and stored once per four
+    const double *a0 = a + c * ld, *a1 = a0 + ld, *a2 = a1 + ld, *a3 = a2 + ld;
+    const double x0 = x[c], x1 = x[c + 1], x2 = x[c + 2], x3 = x[c + 3];
+    for (int r = 0; r < rows; ++r) y[r] += a0[r] * x0 + a1[r] * x1 + a2[r] * x2 + a3[r] * x3;
+  }
+  for (; c < cols; ++c) {
+    const double* ac = a + c * ld;
+    const double xc = x[c];
+    for (int r = 0; r < rows; ++r) y[r] += ac[r] * xc;
+  }
+}
+inline void accumulateColumnsGeneric(const double* a, Eigen::Index ld, int rows, int cols, const double* x,
+                                     double* y) noexcept {
+  accumulateColumnsBody(a, ld, rows, cols, x, y);
+}
+PLSA_TARGET_AVX2 inline void accumulateColumnsAvx2(const double* a, Eigen::Index ld, int rows, int cols,
+                                                   const double* x, double* y) noexcept {
+  accumulateColumnsBody(a, ld, rows, cols, x, y);
+}
+inline void accumulateColumns(const double* a, Eigen::Index ld, int rows, int cols, const double* x, double* y) noexcept {
+  if (predictorUsesAvx2())
+    accumulateColumnsAvx2(a, ld, rows, cols, x, y);
+  else
+    accumulateColumnsGeneric(a, ld, rows, cols, x, y);
+}
 
 /// Filter states smaller than this are zero (far below any measurable
 /// output, far above the subnormal range).
@@ -187,24 +240,40 @@ class NStepPredictor {
 
   // Rows of tip components back to bending and steering. Each steering angle
   // is the one before it plus the turn between the two directions (so on the
-  // branch nearest it, as tipAngles picks), the turn by its arctangent series
-  // where it is small (every step of a smooth prediction), else by atan2. A
-  // straight tip (no direction) keeps the steering it had.
-  void toTipAngles(int horizon, Eigen::Ref<Eigen::MatrixXd> out) const noexcept {
+  // branch nearest it, as tipAngles picks). The turns are computed for all
+  // rows at once by the arctangent series where they are small (every step
+  // of a smooth prediction); a large turn or a straight tip (no direction:
+  // it keeps the steering it had) sends the rows through atan2 one by one.
+  void toTipAngles(int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const double reference = steer_reference_;
+    double* __restrict turn = turn_.data();
+    bool smooth = true;
+    for (int h = 0; h < horizon; ++h) {
+      const double px = h ? out(h - 1, 0) : std::cos(reference * kRadPerDeg);
+      const double py = h ? out(h - 1, 1) : std::sin(reference * kRadPerDeg);
+      const double x = out(h, 0), y = out(h, 1);
+      const double cross = px * y - py * x, dot = px * x + py * y;
+      smooth = smooth && dot > 0.0 && std::abs(cross) <= 0.1 * dot;
+      const double t = cross / dot, t2 = t * t;  // atan t to double precision for |t| <= 0.1
+      turn[h] = t * (1.0 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
+    }
+    if (!smooth) return toTipAnglesRowByRow(horizon, out);
+    double steer = reference;
+    for (int h = 0; h < horizon; ++h) {
+      const double x = out(h, 0), y = out(h, 1);
+      steer += turn[h] / kRadPerDeg;
+      out(h, 0) = std::sqrt(x * x + y * y);
+      out(h, 1) = steer;
+    }
+  }
+
+  void toTipAnglesRowByRow(int horizon, Eigen::Ref<Eigen::MatrixXd> out) const noexcept {
     double steer = steer_reference_;
     double px = std::cos(steer * kRadPerDeg), py = std::sin(steer * kRadPerDeg);
     for (int h = 0; h < horizon; ++h) {
       const double x = out(h, 0), y = out(h, 1);
-      const double cross = px * y - py * x, dot = px * x + py * y;
       if (x != 0.0 || y != 0.0) {
-        double turn;
-        if (dot > 0.0 && std::abs(cross) <= 0.1 * dot) {
-          const double t = cross / dot, t2 = t * t;  // atan t to double precision for |t| <= 0.1
-          turn = t * (1.0 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
-        } else {
-          turn = std::atan2(cross, dot);
-        }
-        steer += turn / kRadPerDeg;
+        steer += std::atan2(px * y - py * x, px * x + py * y) / kRadPerDeg;
         px = x;
         py = y;
       }
@@ -231,7 +300,10 @@ class NStepPredictor {
     const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
     for (Eigen::VectorXd* v : {&merged_, &g_, &g_next_}) v->setZero(slots);
     total_.setZero(m.modal && m.input_side ? m.modal_form.block : 0);
+    held_levels_.setZero(slots * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
+    lag_drive_.setZero(static_cast<Eigen::Index>(m.poles) * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
     zeta_of_output_.setZero(modes);
+    turn_.setZero(options_.max_horizon);
     blended_.setZero(m.states());
     drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
   }
@@ -294,14 +366,23 @@ class NStepPredictor {
   // the channel (w' v' - w v); every output's and pole's bank of that copy
   // takes the same drive.
   void driveInputs(const CompiledModel& m, const Eigen::VectorXd& vc, const Eigen::VectorXd& node_w) noexcept {
-    for (int j = 0; j < m.n_u; ++j) {
+    const int nodes = m.nodes;
+    for (int ch = 0; ch < static_cast<int>(m.play.size()); ++ch) {
+      const int j = m.channel_input[static_cast<std::size_t>(ch)];
       const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
-      for (int r = 0; r < m.nodes; ++r)
-        for (int c = 0; c < channels; ++c) {
-          const Eigen::Index ch = first + c;
-          drive_(m.nodes * first + r * channels + c) =
-              m.input_side ? next_node_w_(r) * vc(ch) - node_w(r) * (vc(ch) - delta_(ch)) : delta_(ch);
-        }
+      double* __restrict d = drive_.data() + nodes * first + (ch - first);
+      const double v = vc(ch), before = v - delta_(ch);
+      if (!m.input_side) {
+        d[0] = delta_(ch);
+        continue;
+      }
+      const double* __restrict next = next_node_w_.data();
+      const double* __restrict now = node_w.data();
+      if (channels == 1) {
+        for (int r = 0; r < nodes; ++r) d[r] = next[r] * v - now[r] * before;
+      } else {
+        for (int r = 0; r < nodes; ++r) d[r * channels] = next[r] * v - now[r] * before;
+      }
     }
   }
 
@@ -324,18 +405,10 @@ class NStepPredictor {
           if (still) continue;
           resting[static_cast<std::size_t>(j)] = false;
         }
-        for (int q = j * per_input; q < (j + 1) * per_input; ++q) {
-          double* __restrict z = state.data() + f.offset[static_cast<std::size_t>(q)];
-          const double lambda = f.lambda(q), beta = f.beta(q);
-          for (int k = 0; k < width; ++k) {
-#if defined(__SSE2__)
-            z[k] = lambda * z[k] + beta * d[k];
-#else
-            const double next = lambda * z[k] + beta * d[k];
-            z[k] = std::abs(next) < kTinyState ? 0.0 : next;
-#endif
-          }
-        }
+        if (width == 16)
+          stepModes<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
+        else
+          stepModes<0>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
       }
       return;
     }
@@ -359,6 +432,26 @@ class NStepPredictor {
         x = bank_x_ + s.B[g] * d;
       }
       x = (x.array().abs() < kTinyState).select(0.0, x);
+    }
+  }
+
+  // Modes [begin, end) of one input, each over its `width` copies (W: fixed
+  // at compile time, or 0): z <- lambda z + beta d.
+  template <int W>
+  static void stepModes(const ModalForm& f, int begin, int end, int width, const double* __restrict d,
+                        double* __restrict state) noexcept {
+    const int size = W > 0 ? W : width;
+    for (int q = begin; q < end; ++q) {
+      double* __restrict z = state + f.offset[static_cast<std::size_t>(q)];
+      const double lambda = f.lambda(q), beta = f.beta(q);
+      for (int k = 0; k < size; ++k) {
+#if defined(__SSE2__)
+        z[k] = lambda * z[k] + beta * d[k];
+#else
+        const double next = lambda * z[k] + beta * d[k];
+        z[k] = std::abs(next) < kTinyState ? 0.0 : next;
+#endif
+      }
     }
   }
 
@@ -449,8 +542,200 @@ class NStepPredictor {
     // A held input keeps the schedule fixed once its lag has settled: every
     // mode then decays on its own, y(k+1+h) = y(k) + sum_q zeta_q sum_{s<=h} lambda_q^s.
     if (plan.rows() == 0 && us_ == u_ && m.modal) return predictSettled(m, horizon, out);
-    if (m.modal && m.input_side) return predictMergedModes(m, horizon, plan, out);
+    const bool merged = m.modal && m.input_side && m.n_y <= 8;  // the merged paths keep outputs in fixed arrays
+    if (merged && plan.rows() == 0 && !m.modal_form.lag_sum.empty()) return predictHeldLagged(m, horizon, out);
+    if (merged) return predictMergedModes(m, horizon, plan, out);
     return predictStepByStep(m, horizon, plan, out);
+  }
+
+  // Input side, input held while its lagged schedule still moves: in each
+  // stretch where every scheduling input stays in one grid cell the mode
+  // levels are polynomials in rho^h, so each stretch is a product of the
+  // closed-form tables (ModalForm::power_sum, lag_sum) with its start state;
+  // a cell change is one explicit step between two stretches.
+  PredictorStatus predictHeldLagged(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int block = f.block, per_input = m.n_y * m.poles;
+    mergeModes(m, state_, us_, dir_, zeta_);
+    merged_.setZero();
+    for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
+    const int inputs = static_cast<int>(m.node_grid.inputs.size());
+    for (int s = 0; s < inputs; ++s) {
+      lag_start_[static_cast<std::size_t>(s)] = us_(m.node_grid.inputs[static_cast<std::size_t>(s)]);
+      lag_target_[static_cast<std::size_t>(s)] = u_(m.node_grid.inputs[static_cast<std::size_t>(s)]);
+    }
+    for (int o = 0; o < m.n_y; ++o) base_[static_cast<std::size_t>(o)] = work_y_(o);
+    for (int first = 0; first < horizon;) {
+      const int last = stretchEnd(m, first, horizon);
+      stretchLevels(m, first);
+      heldStretchRows(m, first, last, out);
+      if (last + 1 < horizon) stepAcrossCells(m, first, last);
+      for (int o = 0; o < m.n_y; ++o) base_[static_cast<std::size_t>(o)] = out(last, o);
+      first = last + 1;
+    }
+    return PredictorStatus::kOk;
+  }
+
+  // A held input's lagged scheduling input s, h steps ahead.
+  double laggedAt(int s, int h, double pole) const noexcept {
+    const auto ss = static_cast<std::size_t>(s);
+    return lag_target_[ss] + (lag_start_[ss] - lag_target_[ss]) * std::pow(pole, h);
+  }
+
+  // The cell of a scheduling input at x (as PwlPartition::blend takes it):
+  // -1 below or at the first level, L-1 at or above the last, else i with
+  // levels[i] <= x < levels[i + 1].
+  static int cellOf(const std::vector<double>& lv, double x) noexcept {
+    if (x >= lv.back()) return static_cast<int>(lv.size()) - 1;
+    if (!(x > lv.front())) return -1;
+    return static_cast<int>(std::upper_bound(lv.begin(), lv.end(), x) - lv.begin()) - 1;
+  }
+
+  // The last step of the stretch starting at `first` in which no scheduling
+  // input changes cell (the lag moves each monotonically toward its target).
+  int stretchEnd(const CompiledModel& m, int first, int horizon) const noexcept {
+    const double pole = m.schedule_pole;
+    int last = horizon - 1;
+    for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s) {
+      const std::vector<double>& lv = m.node_grid.levels[s];
+      const int cell = cellOf(lv, laggedAt(static_cast<int>(s), first, pole));
+      // The first later step in another cell: its estimate from the logarithm, then checked.
+      const double x = laggedAt(static_cast<int>(s), first, pole), target = lag_target_[s];
+      if (cellOf(lv, target) == cell || x == target) continue;
+      const double bound = target < x ? lv[static_cast<std::size_t>(std::max(cell, 0))]
+                                      : lv[static_cast<std::size_t>(std::min(cell + 1, static_cast<int>(lv.size()) - 1))];
+      const double ratio = (bound - target) / (x - target);
+      int h = first + 1;
+      if (ratio > 0.0 && ratio < 1.0) h = std::max(first + 1, first + static_cast<int>(std::log(ratio) / std::log(pole)) - 1);
+      while (h <= last && cellOf(lv, laggedAt(static_cast<int>(s), h, pole)) == cell) ++h;
+      last = std::min(last, h - 1);
+    }
+    return last;
+  }
+
+  // The stretch's levels as polynomials in e = rho^(h - first): level_d (d =
+  // 0..D) per mode slot, from the weights of its cell's corners.
+  void stretchLevels(const CompiledModel& m, int first) noexcept {
+    const ModalForm& f = m.modal_form;
+    const NodeGrid& grid = m.node_grid;
+    const int inputs = static_cast<int>(grid.inputs.size()), block = f.block;
+    // Corners: node index and weight polynomial (degree <= inputs).
+    int corners = 1;
+    corner_node_[0] = 0;
+    std::fill(corner_poly_[0].begin(), corner_poly_[0].end(), 0.0);
+    corner_poly_[0][0] = 1.0;
+    for (int s = 0; s < inputs; ++s) {
+      const auto ss = static_cast<std::size_t>(s);
+      const std::vector<double>& lv = grid.levels[ss];
+      const double x = laggedAt(s, first, m.schedule_pole), target = lag_target_[ss];
+      const int cell = cellOf(lv, x);
+      if (cell < 0 || cell == static_cast<int>(lv.size()) - 1) {  // outside: the edge node, weight 1
+        for (int c = 0; c < corners; ++c) corner_node_[static_cast<std::size_t>(c)] += std::max(cell, 0) * grid.strides[ss];
+        continue;
+      }
+      const double width = lv[static_cast<std::size_t>(cell) + 1] - lv[static_cast<std::size_t>(cell)];
+      const double a = (target - lv[static_cast<std::size_t>(cell)]) / width, b = (x - target) / width;  // t = a + b e
+      for (int c = 0; c < corners; ++c) {
+        auto& low = corner_poly_[static_cast<std::size_t>(c)];
+        auto& high = corner_poly_[static_cast<std::size_t>(c + corners)];
+        for (int d = inputs; d >= 0; --d) {
+          const double below = d > 0 ? low[static_cast<std::size_t>(d) - 1] : 0.0;
+          high[static_cast<std::size_t>(d)] = a * low[static_cast<std::size_t>(d)] + b * below;
+          low[static_cast<std::size_t>(d)] = (1.0 - a) * low[static_cast<std::size_t>(d)] - b * below;
+        }
+        corner_node_[static_cast<std::size_t>(c + corners)] = corner_node_[static_cast<std::size_t>(c)] + (cell + 1) * grid.strides[ss];
+        corner_node_[static_cast<std::size_t>(c)] += cell * grid.strides[ss];
+      }
+      corners *= 2;
+    }
+    held_levels_.setZero();
+    for (int j = 0; j < m.n_u; ++j) {
+      const int first_channel = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
+      const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
+      for (int c = 0; c < corners; ++c)
+        for (int ch = 0; ch < channels; ++ch) {
+          const double v = vc_(first_channel + ch);
+          if (v == 0.0) continue;
+          const double* row = table + static_cast<std::ptrdiff_t>(corner_node_[static_cast<std::size_t>(c)] * channels + ch) * block;
+          for (int d = 0; d <= inputs; ++d) {
+            const double w = v * corner_poly_[static_cast<std::size_t>(c)][static_cast<std::size_t>(d)];
+            if (w == 0.0) continue;
+            double* level = held_levels_.data() + static_cast<std::ptrdiff_t>(d) * merged_.size() + j * block;
+            for (int i = 0; i < block; ++i) level[i] += w * row[i];
+          }
+        }
+    }
+  }
+
+  // Rows first..last: y = base + sum over each output's modes of
+  // S(m) zeta(first) + sum_d KS_d(m) beta level_d (rho^d - 1), m = h - first:
+  // one table product per output and input that moves.
+  void heldStretchRows(const CompiledModel& m, int first, int last, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
+    const int rows = last - first + 1, width = (inputs + 1) * n;
+    const Eigen::Index slots = merged_.size();
+    std::array<double, 5> drop{};  // rho^d - 1
+    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(m.schedule_pole, d) - 1.0;
+    auto x = lag_drive_.head(width);
+    for (int o = 0; o < m.n_y; ++o) {
+      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
+      auto column = out.col(o).segment(first, rows);
+      column.setConstant(base_[static_cast<std::size_t>(o)]);
+      for (int j = 0; j < m.n_u; ++j) {
+        bool moves = false;
+        for (int i = 0; i < n; ++i) {
+          const Eigen::Index slot = j * block + o * n + i;
+          x(i) = merged_(slot);
+          for (int d = 1; d <= inputs; ++d)
+            x(d * n + i) = f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)];
+        }
+        for (int k = 0; k < width; ++k) moves = moves || x(k) != 0.0;
+        if (moves) accumulateColumns(table.data() + j * width * table.rows(), table.rows(), rows, width, x.data(), &out(first, o));
+      }
+    }
+  }
+
+  // From the last step of one stretch to the first of the next: the modes
+  // at `last` from the closed form, then one explicit step to the new cell.
+  void stepAcrossCells(const CompiledModel& m, int first, int last) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
+    const int steps = last - first;
+    const Eigen::Index slots = merged_.size();
+    const double pole = m.schedule_pole, e = std::pow(pole, steps);
+    std::array<double, 5> drop{};  // rho^d - 1
+    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(pole, d) - 1.0;
+    const int width = (inputs + 1) * n;
+    for (int o = 0; o < m.n_y; ++o) {
+      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
+      for (int j = 0; j < m.n_u; ++j)
+        for (int i = 0; i < n; ++i) {
+          const Eigen::Index slot = j * block + o * n + i;
+          // One step's term of a cumulative column: its difference.
+          auto term = [&](int d) {
+            const Eigen::Index col = j * width + d * n + i;
+            return steps == 0 ? (d == 0 ? 1.0 : 0.0) : table(steps, col) - table(steps - 1, col);
+          };
+          double z = term(0) * merged_(slot), level = held_levels_(slot);  // lambda^steps zeta
+          double ed = 1.0;
+          for (int d = 1; d <= inputs; ++d) {
+            ed *= e;
+            z += f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)] * term(d);
+            level += held_levels_(d * slots + slot) * ed;
+          }
+          merged_(slot) = z;
+          g_(slot) = level;  // the level at `last`
+        }
+    }
+    // The level one step on, in its new cell, explicitly.
+    for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s)
+      work_us_(m.node_grid.inputs[s]) = laggedAt(static_cast<int>(s), last + 1, pole);
+    ScheduleBlend blend;
+    m.node_partition.blend(work_us_, DirectionState{}, blend);
+    for (int j = 0; j < m.n_u; ++j) levelsOfInput<0>(m, j, blend, vc_, g_next_.data() + j * block);
+    for (Eigen::Index k = 0; k < slots; ++k)
+      merged_(k) = f.merged_lambda(k) * merged_(k) + f.merged_beta(k) * (g_next_(k) - g_(k));
   }
 
   PredictorStatus predictSettled(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
@@ -461,8 +746,9 @@ class NStepPredictor {
       auto zeta = zeta_of_output_.head(static_cast<Eigen::Index>(modes.size()));
       for (std::size_t t = 0; t < modes.size(); ++t) zeta(static_cast<Eigen::Index>(t)) = zeta_(modes[t]);
       auto column = out.col(o).head(horizon);
-      column.noalias() = f.power_sum[static_cast<std::size_t>(o)].topRows(horizon) * zeta;
-      column.array() += work_y_(o);
+      column.setConstant(work_y_(o));
+      const Eigen::MatrixXd& sums = f.power_sum[static_cast<std::size_t>(o)];
+      accumulateColumns(sums.data(), sums.rows(), horizon, static_cast<int>(zeta.size()), zeta.data(), column.data());
     }
     return PredictorStatus::kOk;
   }
@@ -487,15 +773,28 @@ class NStepPredictor {
   // whose usual sizes get kernels with the size fixed at compile time.
   PredictorStatus predictMergedModes(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const bool avx2 = false;  // measured: the AVX2 build of this loop ran slower (its steps are short)
     switch (m.modal_form.block) {
-      case 4: return runMerged<4>(m, horizon, plan, out);
-      case 8: return runMerged<8>(m, horizon, plan, out);
-      case 12: return runMerged<12>(m, horizon, plan, out);
-      case 16: return runMerged<16>(m, horizon, plan, out);
-      case 20: return runMerged<20>(m, horizon, plan, out);
-      case 24: return runMerged<24>(m, horizon, plan, out);
+      case 4: return avx2 ? runMergedAvx2<4>(m, horizon, plan, out) : runMerged<4>(m, horizon, plan, out);
+      case 8: return avx2 ? runMergedAvx2<8>(m, horizon, plan, out) : runMerged<8>(m, horizon, plan, out);
+      case 12: return avx2 ? runMergedAvx2<12>(m, horizon, plan, out) : runMerged<12>(m, horizon, plan, out);
+      case 16: return avx2 ? runMergedAvx2<16>(m, horizon, plan, out) : runMerged<16>(m, horizon, plan, out);
+      case 20: return avx2 ? runMergedAvx2<20>(m, horizon, plan, out) : runMerged<20>(m, horizon, plan, out);
+      case 24: return avx2 ? runMergedAvx2<24>(m, horizon, plan, out) : runMerged<24>(m, horizon, plan, out);
       default: return runMerged<0>(m, horizon, plan, out);
     }
+  }
+
+  template <int B>
+  PredictorStatus runMerged(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                            Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    return runMergedBody<B>(m, horizon, plan, out);
+  }
+  template <int B>
+  PLSA_TARGET_AVX2 PredictorStatus runMergedAvx2(const CompiledModel& m, int horizon,
+                                                 const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                                 Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    return runMergedBody<B>(m, horizon, plan, out);
   }
 
   // B: the block size, or 0 for any (read from the model). Per step: the
@@ -505,8 +804,9 @@ class NStepPredictor {
   // channels are zero and whose modes are at rest (a chamber never
   // pressurised) is skipped until it moves.
   template <int B>
-  PredictorStatus runMerged(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
-                            Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+  PLSA_ALWAYS_INLINE PredictorStatus runMergedBody(const CompiledModel& m, int horizon,
+                                                   const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                                   Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
     const int n = m.poles, block = B > 0 ? B : f.block, per_input = m.n_y * n, nu = m.n_u, ny = m.n_y;
     mergeModes(m, state_, us_, dir_, zeta_);
@@ -576,7 +876,7 @@ class NStepPredictor {
   // zeta <- lambda zeta + beta (next - level); level <- next; total += zeta,
   // over one input's block.
   template <int B>
-  static void stepMerged(int block, const double* __restrict lambda, const double* __restrict beta,
+  PLSA_ALWAYS_INLINE static void stepMerged(int block, const double* __restrict lambda, const double* __restrict beta,
                          const double* __restrict next, double* __restrict level, double* __restrict zeta,
                          double* __restrict total) noexcept {
     const int size = B > 0 ? B : block;
@@ -591,7 +891,7 @@ class NStepPredictor {
   // Input j's levels: sum over the blend's nodes r and j's channels c of
   // w_r v_c times the node-channel row, into `level` (one block).
   template <int B>
-  void levelsOfInput(const CompiledModel& m, int j, const ScheduleBlend& blend, const Eigen::VectorXd& vc,
+  PLSA_ALWAYS_INLINE void levelsOfInput(const CompiledModel& m, int j, const ScheduleBlend& blend, const Eigen::VectorXd& vc,
                      double* __restrict level) const noexcept {
     const ModalForm& f = m.modal_form;
     const int size = B > 0 ? B : f.block;
@@ -730,6 +1030,14 @@ class NStepPredictor {
   Eigen::VectorXd zeta_, merged_, g_, g_next_, total_, zeta_of_output_, blended_;
   std::array<int, 4> grid_hint_{};  // input side: each scheduling input's last cell
   std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
+  // Held input with a moving lag: the scheduling inputs' start and target,
+  // the stretch's corners (node, weight polynomial) and level polynomials.
+  std::array<double, 4> lag_start_{}, lag_target_{};
+  std::array<double, 8> base_{};
+  std::array<int, 16> corner_node_{};
+  std::array<std::array<double, 5>, 16> corner_poly_{};
+  Eigen::VectorXd held_levels_, lag_drive_;
+  Eigen::VectorXd turn_;  // tip frame: each predicted row's turn
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
   DirectionState dir_;

@@ -19,6 +19,9 @@ void addPredictCommand(CLI::App& app) {
   c->add_option("--state-channel", o->state_channel, "Channel of actuator state");
   c->add_option("--prediction-channel", o->prediction_channel, "Channel for predictions");
   c->add_option("--status-channel", o->status_channel, "Channel for status");
+  c->add_option("--realtime-priority", o->realtime_priority,
+                "SCHED_FIFO priority where permitted (1-99; 0: normal scheduling); memory is locked either way")
+      ->check(CLI::Range(0, 99));
   c->callback([model, o] {
     const DioPwlObfModel m = loadModel(*model);
     const std::atomic<bool>& stop = stopOnSignals();
@@ -26,9 +29,10 @@ void addPredictCommand(CLI::App& app) {
     for (int h : o->horizons) std::fprintf(stderr, " %d", h);
     std::fprintf(stderr, ", %s -> %s\n", o->state_channel.c_str(), o->prediction_channel.c_str());
     const lcm::PredictorNodeStats s = lcm::runPredictorNode(m, *o, stop);
-    std::fprintf(stderr, "plsa predict: stopped; %lld states, %lld predictions, %lld rejected samples\n",
+    std::fprintf(stderr, "plsa predict: stopped; %lld states, %lld predictions, %lld rejected samples, %lld over a "
+                 "sample time\n",
                  static_cast<long long>(s.states), static_cast<long long>(s.predictions),
-                 static_cast<long long>(s.rejected));
+                 static_cast<long long>(s.rejected), static_cast<long long>(s.deadline_misses));
   });
 }
 

@@ -12,9 +12,6 @@
 //       per tick and deadline misses, N segments of the demo's model.
 //   plsa-bench                        Google Benchmark runs of single calls
 #include <benchmark/benchmark.h>
-#include <malloc.h>
-#include <sched.h>
-#include <sys/mman.h>
 #include <time.h>
 
 #include <algorithm>
@@ -32,6 +29,7 @@
 #include "identified_models.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/predict/predictor.hpp"
+#include "plsa/predict/realtime_thread.hpp"
 #include "straightforward_predictor.hpp"
 
 namespace {
@@ -293,26 +291,6 @@ void runLatency(long calls) {
   }
 }
 
-// Real-time set-up: SCHED_FIFO, locked memory, pre-faulted stack and heap.
-std::string realTimeSetUp() {
-  std::string said;
-  sched_param sp{};
-  sp.sched_priority = 50;
-  if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0)
-    said += "SCHED_FIFO priority 50";
-  else
-    said += std::string("SCHED_FIFO not permitted (") + std::strerror(errno) + "), normal scheduling";
-  mallopt(M_TRIM_THRESHOLD, -1);  // freed heap stays mapped and faulted in
-  mallopt(M_MMAP_MAX, 0);
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0)
-    said += ", memory locked";
-  else
-    said += std::string(", mlockall not permitted (") + std::strerror(errno) + ")";
-  volatile char stack[256 * 1024];
-  for (std::size_t i = 0; i < sizeof stack; i += 4096) stack[i] = 0;
-  return said + ", stack pre-faulted";
-}
-
 void runLoop(double seconds, int segments) {
   const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, say);
   const plsa::io::Log run = plsa::bench::drivingRun(1);
@@ -327,7 +305,7 @@ void runLoop(double seconds, int segments) {
   std::vector<double> jitter, work;
   jitter.reserve(static_cast<std::size_t>(ticks));
   work.reserve(static_cast<std::size_t>(ticks));
-  const std::string setup = realTimeSetUp();
+  const std::string setup = plsa::enterRealTime(50).words;
   long misses = 0;
   timespec next{};
   clock_gettime(CLOCK_MONOTONIC, &next);

@@ -16,6 +16,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/lcm/message_codec.hpp"
 #include "plsa/predict/predictor.hpp"
+#include "plsa/predict/realtime_thread.hpp"
 
 namespace plsa::lcm {
 namespace {
@@ -62,6 +63,7 @@ class PredictorNode {
     for (const auto& n : model.inputs) in_.push_back(fieldFor(n));
     for (const auto& n : model.outputs) out_.push_back(fieldFor(n));
     names_ = model.outputs;
+    sample_time_ = model.sample_time_s;
     max_h_ = predictor_.maxHorizon();
     traj_.resize(max_h_, model.outputCount());
     plan_.resize(0, model.inputCount());
@@ -82,6 +84,8 @@ class PredictorNode {
   }
 
   PredictorNodeStats run() {
+    stats_.realtime = enterRealTime(o_.realtime_priority).words;
+    std::fprintf(stderr, "plsa predict: real time: %s\n", stats_.realtime.c_str());
     auto next_status = Clock::now() + std::chrono::seconds(1);
     const int fd = lcm_.getFileno();
     while (!stop_.load()) {
@@ -107,6 +111,12 @@ class PredictorNode {
   void onState(const ::lcm::ReceiveBuffer* rbuf, const std::string&) {
     ++stats_.states;
     const auto t0 = Clock::now();
+    if (have_arrival_) {
+      const double interval = std::chrono::duration<double>(t0 - last_arrival_).count();
+      jitter_[static_cast<std::size_t>(jitter_n_++ % jitter_.size())] = std::abs(interval - sample_time_) * 1e6;
+    }
+    last_arrival_ = t0;
+    have_arrival_ = true;
     const std::string why = decodeMessage(rbuf->data, rbuf->data_size, state_);
     if (!why.empty()) {
       ++stats_.rejected;
@@ -139,6 +149,7 @@ class PredictorNode {
       lcm_.publish(o_.prediction_channel, &p);
       ++stats_.predictions;
     }
+    if (std::chrono::duration<double>(Clock::now() - t0).count() > sample_time_) ++stats_.deadline_misses;
   }
 
   void publishStatus() {
@@ -161,16 +172,22 @@ class PredictorNode {
     s.message = last_problem_.empty()            ? "running"
                 : rejected_per_s > 0             ? "rejecting samples; last: " + last_problem_
                                                  : "running; last rejected or restarted: " + last_problem_;
+    const std::size_t jn = std::min<std::size_t>(static_cast<std::size_t>(jitter_n_), jitter_.size());
+    std::copy(jitter_.begin(), jitter_.begin() + static_cast<long>(jn), sorted_.begin());
+    std::sort(sorted_.begin(), sorted_.begin() + static_cast<long>(jn));
+    const double jitter_p99 = jn ? sorted_[std::min(jn - 1, static_cast<std::size_t>(0.99 * static_cast<double>(jn)))] : 0.0;
     s.names = {"states", "predictions", "rejected", "latency_p50_us", "latency_p99_us", "latency_max_us",
                "states_per_s", "rejected_per_s", "rejected_malformed", "rejected_not_finite",
-               "rejected_out_of_range", "rejected_time", "restarts"};
+               "rejected_out_of_range", "rejected_time", "restarts", "deadline_misses", "arrival_jitter_p99_us",
+               "realtime_fifo"};
     s.values = {static_cast<double>(stats_.states), static_cast<double>(stats_.predictions),
                 static_cast<double>(stats_.rejected), q(0.5), q(0.99), n ? sorted_[n - 1] : 0.0, states_per_s,
                 rejected_per_s, static_cast<double>(malformed_),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kNotFinite)]),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kInputOutOfRange)]),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kTimeNotIncreasing)]),
-                static_cast<double>(restarts_)};
+                static_cast<double>(restarts_), static_cast<double>(stats_.deadline_misses), jitter_p99,
+                stats_.realtime.rfind("SCHED_FIFO priority", 0) == 0 ? 1.0 : 0.0};
     s.n_values = static_cast<int32_t>(s.names.size());
     lcm_.publish(o_.status_channel, &s);
   }
@@ -194,6 +211,11 @@ class PredictorNode {
   std::array<std::int64_t, kReasons> rejected_by_{};  // by -PredictorStatus
   std::int64_t malformed_ = 0, restarts_ = 0;
   Clock::time_point last_status_ = Clock::now();
+  Clock::time_point last_arrival_{};
+  bool have_arrival_ = false;
+  double sample_time_ = 0.0125;
+  std::vector<double> jitter_ = std::vector<double>(4096, 0.0);
+  std::int64_t jitter_n_ = 0;
   std::int64_t states_at_status_ = 0, rejected_at_status_ = 0;
 };
 

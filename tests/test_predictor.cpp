@@ -169,7 +169,7 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
   const Data& d = data();
   Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side), tip(d.tip);
   Predictor<> q(d.switched);
-  Eigen::MatrixXd out(80, 2), plan(79, 3);
+  Eigen::MatrixXd out(80, 2), plan(79, 3), jacobian(160, 237);
   Eigen::Vector3d u;
   Eigen::Vector2d y(40.0, 60.0);
   std::set<int> regions_seen;
@@ -191,6 +191,7 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk || tip.update(k * d.dt, u, y) != PredictorStatus::kOk)
       FAIL();
     if (k % 10 == 0 && (input_side.predict(80, plan, out) != PredictorStatus::kOk ||
+                        tip.sensitivity(80, plan, jacobian) != PredictorStatus::kOk ||
                         input_side.predict(80, plan.topRows(0), out) != PredictorStatus::kOk ||
                         tip.predict(80, plan, out) != PredictorStatus::kOk ||
                         tip.predict(80, plan.topRows(0), out) != PredictorStatus::kOk))
@@ -407,6 +408,65 @@ TEST(Predictor, HeldInputWhoseLagCrossesCellsMatchesTheSteppedPlan) {
         worst = std::max(worst, (held - stepped).cwiseAbs().maxCoeff());
       }
     EXPECT_LT(worst, 1e-9) << "held path and stepped plan differ across cells";
+  }
+}
+
+// The sensitivity to the plan against central finite differences of
+// predict() itself, where the schedule cannot move: a model of one region,
+// and scheduled models whose scheduling inputs the plan holds (only the third
+// chamber moves, coupled to the others through the play channels' level).
+TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
+  const Data& d = data();
+  DioPwlObfModel one_region = d.switched;
+  one_region.partition = PwlPartition::single();
+  fitCoefficients(one_region, {d.u}, {d.y});
+  struct Case {
+    const DioPwlObfModel* model;
+    bool move_all;  // a one-region model may move every input
+  };
+  DioPwlObfModel no_lag = d.input_side;
+  no_lag.schedule_lag_s = 0.0;
+  int index = 0;
+  for (const Case& c : {Case{&one_region, true}, Case{&d.input_side, false}, Case{&d.tip, false},
+                        Case{&d.interpolated, false}, Case{&no_lag, false}}) {
+    SCOPED_TRACE("case " + std::to_string(index++));
+    const DioPwlObfModel& m = *c.model;
+    Predictor<> p(m);
+    const int H = 40;
+    int t = 0;
+    for (; t < 300; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+    const Eigen::RowVector3d held = d.u.row(t - 1);
+    // Long enough for the schedule's lag to settle on the held inputs (it snaps to them).
+    for (int k = 0; k < 1500; ++k, ++t) ASSERT_EQ(p.update(t * d.dt, held, d.y.row(t % 300)), PredictorStatus::kOk);
+    Eigen::MatrixXd plan = held.replicate(H - 1, 1);
+    for (int s = 0; s < H - 1; ++s) {
+      plan(s, 2) = 0.15 + 0.12 * std::sin(0.2 * s);  // across the channels' threshold: coupled to the others
+      if (c.move_all) plan.row(s).head(2) += Eigen::RowVector2d(0.15 * std::sin(0.15 * s), -0.12 * std::cos(0.1 * s));
+    }
+    Eigen::MatrixXd jac((H) * 2, (H - 1) * 3), up(H, 2), down(H, 2);
+    ASSERT_EQ(p.sensitivity(H, plan, jac), PredictorStatus::kOk);
+    double worst = 0.0, scale = 0.0;
+    int compared = 0;
+    for (int s : {0, 5, 17, 38})
+      for (int j = 0; j < 3; ++j) {
+        if (!c.move_all && j < 2) continue;
+        const double eps = 1e-6;
+        Eigen::MatrixXd plus = plan, minus = plan;
+        plus(s, j) += eps;
+        minus(s, j) -= eps;
+        ASSERT_EQ(p.predict(H, plus, up), PredictorStatus::kOk);
+        ASSERT_EQ(p.predict(H, minus, down), PredictorStatus::kOk);
+        const Eigen::MatrixXd fd = (up - down) / (2 * eps);
+        for (int h = 0; h < H; ++h)
+          for (int o = 0; o < 2; ++o) {
+            worst = std::max(worst, std::abs(fd(h, o) - jac(h * 2 + o, s * 3 + j)));
+            scale = std::max(scale, std::abs(fd(h, o)));
+          }
+        ++compared;
+      }
+    EXPECT_GT(compared, 3);
+    EXPECT_GT(scale, 1e-3) << "the plan moves nothing: the check shows nothing";
+    EXPECT_LT(worst, 1e-5 * scale + 1e-7) << "sensitivity and finite differences differ (scale " << scale << ")";
   }
 }
 

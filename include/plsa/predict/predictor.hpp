@@ -220,6 +220,40 @@ class NStepPredictor {
     return status;
   }
 
+  /// The sensitivity of predict(horizon, plan, ...) to the plan:
+  /// jacobian(h * n_y + o, s * n_u + j) = d yhat_o(k+1+h) / d plan(s, j), with
+  /// the schedule frozen where it is now. So it is exact for the
+  /// scheduled-linear model at the current schedule point: for a model of one
+  /// region, and for any model while its schedule does not move; the play
+  /// channels, their threshold, coupling and softening are followed along the
+  /// plan (a play channel's derivative is 0 inside its band, and its edge's
+  /// when the input sits on an edge, as a held input does). `plan` needs
+  /// horizon - 1 rows, `jacobian` horizon * n_y rows and (horizon - 1) * n_u
+  /// columns. A tip_cartesian model answers in bending and steering (through
+  /// the angles at the predicted trajectory). Modal form only (kUnsupported
+  /// otherwise); no allocation.
+  PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                              Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+    const SubnormalsFlushed flushed;
+    const CompiledModel& m = model();
+    if (samples_ == 0) return PredictorStatus::kNotReady;
+    if (!m.modal || m.n_y > 8 || m.n_u > kMaxRestingInputs) return PredictorStatus::kUnsupported;
+    if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
+    const Eigen::Index steps = horizon - 1;
+    if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
+        jacobian.cols() != steps * m.n_u)
+      return PredictorStatus::kBadShape;
+    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    auto nominal = sens_nominal_.topRows(horizon);
+    work_y_ = options_.simulate ? y_sim_ : y_;
+    const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
+    if (status != PredictorStatus::kOk) return status;
+    frozenKernels(m, horizon);
+    channelPath(m, plan);
+    fillSensitivity(m, horizon, nominal, jacobian);
+    return PredictorStatus::kOk;
+  }
+
   /// Installs a model of the same structure (inputs, outputs, pole counts,
   /// play channels, partition, output frame) from any thread but the
   /// real-time one. It compiles (allocates), and throws std::invalid_argument
@@ -304,6 +338,14 @@ class NStepPredictor {
     lag_drive_.setZero(static_cast<Eigen::Index>(m.poles) * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
     zeta_of_output_.setZero(modes);
     turn_.setZero(options_.max_horizon);
+    sens_nominal_.setZero(options_.max_horizon, m.n_y);
+    sens_kernel_.setZero(options_.max_horizon, static_cast<Eigen::Index>(m.play.size()) * m.n_y);
+    sens_drive_.setZero(static_cast<Eigen::Index>(options_.max_horizon) * static_cast<Eigen::Index>(m.play.size()), m.n_u);
+    sens_next_.setZero(static_cast<Eigen::Index>(options_.max_horizon) * static_cast<Eigen::Index>(m.play.size()));
+    sens_pushed_.setZero(sens_next_.size());
+    sens_turn_.setZero(options_.max_horizon, 4);
+    sens_b_.setZero(options_.max_horizon, m.n_y);
+    sens_rows_.setZero(options_.max_horizon, static_cast<Eigen::Index>(m.n_y) * m.n_u);
     blended_.setZero(m.states());
     drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
   }
@@ -526,6 +568,154 @@ class NStepPredictor {
                    .segment(s.coefficient_offset[b], n)
                    .dot(state.segment(static_cast<Eigen::Index>(b) * n, n));
       dy(o) += dot;
+    }
+  }
+
+  // Sensitivity, stage 1: with the schedule frozen where it is, each channel c
+  // drives output o's modes through a_qc (its copies' coefficients weighted
+  // by the frozen schedule); one unit on c from plan step s on moves row h by
+  // CK_oc(h - 1 - s), CK the cumulative sum of K_oc(m) = sum_q beta_q a_qc lambda_q^m.
+  void frozenKernels(const CompiledModel& m, int horizon) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int n = m.poles;
+    ScheduleBlend blend;
+    m.partition.blend(us_, dir_, blend);
+    for (int c = 0; c < static_cast<int>(m.play.size()); ++c) {
+      const int j = m.channel_input[static_cast<std::size_t>(c)], first = m.first_channel[static_cast<std::size_t>(j)];
+      const int channels = m.channels(j);
+      for (int o = 0; o < m.n_y; ++o) {
+        auto kernel = sens_kernel_.col(c * m.n_y + o).head(horizon);
+        kernel.setZero();
+        for (int i = 0; i < n; ++i) {
+          const int q = (j * m.n_y + o) * n + i, begin = f.offset[static_cast<std::size_t>(q)];
+          double a = 0.0;
+          for (int k = 0; k < blend.count; ++k) {
+            const auto row = f.coefficient.row(blend.region[static_cast<std::size_t>(k)]);
+            if (m.input_side)
+              for (int r = 0; r < m.nodes; ++r) a += node_w_(r) * row(begin + r * channels + (c - first));
+            else
+              a += blend.weight[static_cast<std::size_t>(k)] * row(begin + (c - first));
+          }
+          double power = f.beta(q) * a;
+          for (int h = 0; h < horizon; ++h, power *= f.lambda(q)) kernel(h) += power;
+        }
+        for (int h = 1; h < horizon; ++h) kernel(h) += kernel(h - 1);  // cumulative
+      }
+    }
+  }
+
+  // Sensitivity, stage 2: each channel along the plan: at step s whether the
+  // input pushed its band (then the channel takes d level / d u, through the
+  // band's slope, the threshold, softening and coupling; otherwise it holds
+  // and takes nothing), and the next step that pushes it again.
+  void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan) noexcept {
+    const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
+    work_vc_ = vc_;
+    for (Eigen::Index s = 0; s < steps; ++s) {
+      for (int j = 0; j < m.n_u; ++j) work_u_(j) = plan(s, j);
+      const double threshold = m.threshold;
+      const double positive_sum = positiveSumAbove(work_u_, threshold);
+      for (Eigen::Index c = 0; c < channels; ++c) {
+        const auto cc = static_cast<std::size_t>(c);
+        const int j = m.channel_input[cc];
+        const double above = levelAbove(work_u_(j), threshold);
+        const double level = coupledLevel(above, positive_sum, m.coupling, m.softening);
+        const double before = work_vc_(c), after = m.play[cc].follow(level, before);
+        work_vc_(c) = after;
+        auto d = sens_drive_.row(s * channels + c);
+        d.setZero();
+        // At the band's edge a held input moves the channel as soon as it goes
+        // on: take that side's derivative (a controller needs it at rest).
+        const double half = m.play[cc].halfWidth(level), tol = 1e-12 * (std::abs(level) + half + 1e-9);
+        const bool edge = std::abs(after - (level - half)) <= tol || std::abs(after - (level + half)) <= tol;
+        const bool pushed = after != before || edge || m.play[cc].passesThrough();
+        sens_pushed_(s * channels + c) = pushed ? 1 : 0;
+        if (!pushed) continue;  // inside the band
+        // d after / d level: 1 -+ the band's growth on the side it was pushed.
+        const double growth = level > 0.0 ? m.play[cc].slope : 0.0;
+        const double band = after <= level ? 1.0 - growth : 1.0 + growth;
+        // d level / d (own level above the threshold) and / d (each other's).
+        const double own = std::max(0.0, above), others = positive_sum - own;
+        double soft = 1.0, softened = above;
+        if (m.softening > 0.0 && own > 0.0) {
+          const double x = std::min(own, 0.5 / m.softening);
+          softened = x - m.softening * x * x;
+          soft = own < 0.5 / m.softening ? 1.0 - 2.0 * m.softening * own : 0.0;
+        }
+        const double d_own = soft * (1.0 - m.coupling * (softened > 0.0 ? 1.0 : 0.0) * others);
+        for (int k = 0; k < m.n_u; ++k) {
+          const bool counted = threshold > 0.0 ? work_u_(k) > threshold : work_u_(k) > 0.0;  // d levelAbove / d u
+          const double gate = threshold > 0.0 ? (work_u_(k) > threshold ? 1.0 : 0.0) : 1.0;
+          if (k == j)
+            d(k) = band * d_own * gate;
+          else if (counted)
+            d(k) = band * -m.coupling * std::max(0.0, softened);
+        }
+      }
+    }
+    for (Eigen::Index c = 0; c < channels; ++c) {  // the next push of each channel after each step
+      Eigen::Index next = steps;
+      for (Eigen::Index s = steps - 1; s >= 0; --s) {
+        sens_next_(s * channels + c) = static_cast<int>(next);
+        if (sens_pushed_(s * channels + c)) next = s;
+      }
+    }
+  }
+
+  // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
+  // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
+  // t); a tip_cartesian model's row pairs turned from components into angles
+  // at the nominal prediction on the way (d(bend, steer) / d(x, y)).
+  void fillSensitivity(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+                       Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+    const int ny = m.n_y, nu = m.n_u;
+    const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
+    const bool tip = m.frame == OutputFrame::kTipCartesian;
+    if (tip)  // the rows' 2 x 2 turn from components to angles
+      for (int h = 0; h < horizon; ++h) {
+        const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y, r = std::sqrt(r2);
+        const bool straight = r2 == 0.0;  // no direction to move
+        sens_turn_(h, 0) = straight ? 0.0 : x / r;
+        sens_turn_(h, 1) = straight ? 0.0 : y / r;
+        sens_turn_(h, 2) = straight ? 0.0 : -y / r2 / kRadPerDeg;
+        sens_turn_(h, 3) = straight ? 0.0 : x / r2 / kRadPerDeg;
+      }
+    for (Eigen::Index s = 0; s + 1 < horizon; ++s) {
+      const Eigen::Index rows = horizon - 1 - s;  // rows h = s + 1 .. horizon - 1 move with step s
+      for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
+      auto value = sens_rows_.topRows(rows);  // [h - s - 1][o * nu + j]
+      value.setZero();
+      for (Eigen::Index c = 0; c < channels; ++c) {
+        const auto d = sens_drive_.row(s * channels + c);
+        if (d.isZero(0.0)) continue;
+        const Eigen::Index tail = sens_next_(s * channels + c) - s;  // the channel holds for this many steps
+        for (int o = 0; o < ny; ++o) {
+          const double* kernel = sens_kernel_.col(c * ny + o).data();
+          double* b = sens_b_.col(o).data();
+          for (Eigen::Index r = 0; r < rows; ++r) b[r] = kernel[r];
+          for (Eigen::Index r = tail; r < rows; ++r) b[r] -= kernel[r - tail];
+        }
+        if (tip) {
+          double* __restrict x = sens_b_.col(0).data();
+          double* __restrict y = sens_b_.col(1).data();
+          const double *t0 = sens_turn_.col(0).data() + s + 1, *t1 = sens_turn_.col(1).data() + s + 1;
+          const double *t2 = sens_turn_.col(2).data() + s + 1, *t3 = sens_turn_.col(3).data() + s + 1;
+          for (Eigen::Index r = 0; r < rows; ++r) {
+            const double bx = x[r], by = y[r];
+            x[r] = t0[r] * bx + t1[r] * by;
+            y[r] = t2[r] * bx + t3[r] * by;
+          }
+        }
+        for (int o = 0; o < ny; ++o)
+          for (int j = 0; j < nu; ++j)
+            if (d(j) != 0.0) value.col(o * nu + j).noalias() += d(j) * sens_b_.col(o).head(rows);
+      }
+      for (int j = 0; j < nu; ++j)
+        for (int o = 0; o < ny; ++o) {
+          const double* v = value.col(o * nu + j).data();
+          double* column = jacobian.col(s * nu + j).data() + (s + 1) * ny + o;
+          for (Eigen::Index r = 0; r < rows; ++r) column[r * ny] = v[r];
+        }
     }
   }
 
@@ -1038,6 +1228,11 @@ class NStepPredictor {
   std::array<std::array<double, 5>, 16> corner_poly_{};
   Eigen::VectorXd held_levels_, lag_drive_;
   Eigen::VectorXd turn_;  // tip frame: each predicted row's turn
+  // sensitivity(): the nominal prediction, kernels per channel and output,
+  // each step's channel derivatives and next push.
+  Eigen::MatrixXd sens_nominal_, sens_kernel_, sens_drive_;
+  Eigen::VectorXi sens_next_, sens_pushed_;
+  Eigen::MatrixXd sens_turn_, sens_b_, sens_rows_;
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
   DirectionState dir_;

@@ -16,6 +16,7 @@ enum class PredictorStatus : int {
   kHorizonTooLong = -5,     ///< horizon above the capacity set at construction
   kBadShape = -6,           ///< plan or output buffer of the wrong size
   kNotReady = -7,           ///< predict() before the first accepted sample
+  kUnsupported = -8,        ///< not available for this model (sensitivity: no modal form)
 };
 
 inline const char* toString(PredictorStatus s) {
@@ -29,6 +30,7 @@ inline const char* toString(PredictorStatus s) {
     case PredictorStatus::kHorizonTooLong: return "horizon above capacity";
     case PredictorStatus::kBadShape: return "buffer of the wrong size";
     case PredictorStatus::kNotReady: return "no sample yet";
+    case PredictorStatus::kUnsupported: return "not available for this model";
   }
   return "unknown";
 }

@@ -35,7 +35,7 @@ ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, co
 ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                             const std::vector<double>& sim_drift_per_s, double sample_time_s) {
-  require(sim_drift_per_s.empty() || (static_cast<Eigen::Index>(sim_drift_per_s.size()) == y.cols() &&
+  PLSA_CHECK(sim_drift_per_s.empty() || (static_cast<Eigen::Index>(sim_drift_per_s.size()) == y.cols() &&
                                       std::isfinite(sample_time_s) && sample_time_s > 0),
           "predictArx: need one drift rate per output and a sample time > 0");
   ModelPredictions out{name, {}};

@@ -13,7 +13,6 @@
 #include "plsa/core/check.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/lcm/lcm_log.hpp"
 
 namespace fs = std::filesystem;
 

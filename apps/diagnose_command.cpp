@@ -11,7 +11,6 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
-#include "plsa/lcm/lcm_log.hpp"
 #include "plsa/sim/sim_config.hpp"
 
 namespace plsa::app {

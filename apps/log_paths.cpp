@@ -43,7 +43,11 @@ std::vector<std::string> logPaths(const std::vector<std::string>& paths, const s
 #include <cstdio>
 #include <system_error>
 
+#if PLSA_WITH_LCM
 #include "plsa/lcm/lcm_log.hpp"
+#else
+#include <fstream>
+#endif
 
 namespace plsa::app {
 
@@ -71,7 +75,18 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
 }
 
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool) {
+#if PLSA_WITH_LCM
   io::Log log = lcm::readLogFile(path, options);
+#else
+  {  // an LCM event log starts with its sync word, 0xEDA1DA01
+    std::ifstream in(path, std::ios::binary);
+    unsigned char head[4] = {};
+    if (in.read(reinterpret_cast<char*>(head), 4) && head[0] == 0xED && head[1] == 0xA1 && head[2] == 0xDA &&
+        head[3] == 0x01)
+      throw std::invalid_argument(path + ": an LCM event log, and this build has no LCM (PLSA_WITH_LCM=OFF)");
+  }
+  io::Log log = io::readCsvLog(path, options);
+#endif
   for (const auto& w : log.warnings) std::fprintf(stderr, "plsa %s: warning: %s\n", tool.c_str(), w.c_str());
   return log;
 }

@@ -12,11 +12,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   plsa::app::addDemoCommand(app);
   plsa::app::addSimulateCommands(app);
+#if PLSA_WITH_LCM
   plsa::app::addSimNodeCommand(app);
+#endif
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
+#if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);
   plsa::app::addCanBridgeCommand(app);
+#endif
   plsa::app::addDiagnoseCommands(app);
   try {
     app.parse(argc, argv);

@@ -7,7 +7,9 @@
 #include "commands.hpp"
 #include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
+#if PLSA_WITH_LCM
 #include "plsa/lcm/lcm_log.hpp"
+#endif
 #include "plsa/sim/experiment.hpp"
 
 namespace plsa::app {
@@ -73,10 +75,15 @@ void runSimulate(const SimulateOptions& o) {
   io::Log log = sim::runExperiment(actuator, ex);
   log.metadata["seed"] = std::to_string(o.seed);
   const bool lcm_out = o.out.size() > 7 && o.out.compare(o.out.size() - 7, 7, ".lcmlog") == 0;
-  if (lcm_out)
+  if (lcm_out) {
+#if PLSA_WITH_LCM
     lcm::writeLcmLog(o.out, log);
-  else
+#else
+    throw std::invalid_argument("plsa simulate: this build has no LCM (PLSA_WITH_LCM=OFF): write a .csv log");
+#endif
+  } else {
     io::writeCsvLog(o.out, log);
+  }
   std::fprintf(stderr, "plsa simulate: wrote %lld samples to %s (effects: %s)\n",
                static_cast<long long>(log.samples()), o.out.c_str(), log.metadata["effects"].c_str());
 }

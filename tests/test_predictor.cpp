@@ -165,7 +165,7 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   expectAgreement<5>(d.close_poles, d.u, d.y, d.dt);
 }
 
-TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
+TEST(Predictor, NoAllocationOverFortyThousandTicksWithRegionSwitching) {
   const Data& d = data();
   Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side), tip(d.tip);
   Predictor<> q(d.switched);
@@ -174,7 +174,7 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
   Eigen::Vector2d y(40.0, 60.0);
   std::set<int> regions_seen;
   plsa::testing::AllocGuard guard;
-  for (int k = 0; k < 100000; ++k) {
+  for (int k = 0; k < 40000; ++k) {  // about 19 sweeps of the grid
     // Sweep both scheduling inputs across the whole grid, rising and falling.
     u << 0.275 + 0.09 * std::sin(0.003 * k), 0.275 + 0.09 * std::cos(0.0021 * k), 0.0;
     y(0) += 0.01 * std::sin(0.01 * k);
@@ -191,7 +191,7 @@ TEST(Predictor, NoAllocationOverHundredThousandTicksWithRegionSwitching) {
     if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk || tip.update(k * d.dt, u, y) != PredictorStatus::kOk)
       FAIL();
     if (k % 10 == 0 && (input_side.predict(80, plan, out) != PredictorStatus::kOk ||
-                        tip.sensitivity(80, plan, jacobian) != PredictorStatus::kOk ||
+                        (k % 50 == 0 && tip.sensitivity(80, plan, jacobian) != PredictorStatus::kOk) ||
                         input_side.predict(80, plan.topRows(0), out) != PredictorStatus::kOk ||
                         tip.predict(80, plan, out) != PredictorStatus::kOk ||
                         tip.predict(80, plan.topRows(0), out) != PredictorStatus::kOk))

@@ -24,8 +24,8 @@ double arxStep(const ArxModel& m, const Eigen::MatrixXd& u, int o, Eigen::Index 
 
 ArxModel ArxModel::fit(const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y, int na, int nb,
                        double ridge) {
-  require(na >= 0 && nb >= 1, "ArxModel::fit: need na >= 0 and nb >= 1");
-  require(!U.empty() && U.size() == Y.size(), "ArxModel::fit: need matching input and output records");
+  PLSA_CHECK(na >= 0 && nb >= 1, "ArxModel::fit: need na >= 0 and nb >= 1");
+  PLSA_CHECK(!U.empty() && U.size() == Y.size(), "ArxModel::fit: need matching input and output records");
   ArxModel m;
   m.na = na;
   m.nb = nb;
@@ -36,7 +36,7 @@ ArxModel ArxModel::fit(const std::vector<Eigen::MatrixXd>& U, const std::vector<
     Eigen::MatrixXd G = Eigen::MatrixXd::Zero(p, p);
     Eigen::VectorXd h = Eigen::VectorXd::Zero(p);
     for (std::size_t r = 0; r < U.size(); ++r) {
-      require(U[r].cols() == nu && Y[r].cols() == ny && U[r].rows() == Y[r].rows(),
+      PLSA_CHECK(U[r].cols() == nu && Y[r].cols() == ny && U[r].rows() == Y[r].rows(),
               "ArxModel::fit: record " + std::to_string(r) + " has a different shape");
       Eigen::VectorXd phi(p);
       for (Eigen::Index t = lag(m); t < U[r].rows(); ++t) {
@@ -55,9 +55,9 @@ ArxModel ArxModel::fit(const std::vector<Eigen::MatrixXd>& U, const std::vector<
 }
 
 AlignedPrediction ArxModel::kStepAhead(const Eigen::MatrixXd& u, const Eigen::VectorXd& y, int o, int k) const {
-  require(k >= 1, "ArxModel::kStepAhead: horizon must be >= 1");
+  PLSA_CHECK(k >= 1, "ArxModel::kStepAhead: horizon must be >= 1");
   const Eigen::Index L = lag(*this), T = y.size();
-  require(T > L + k, "ArxModel::kStepAhead: log shorter than lag + horizon");
+  PLSA_CHECK(T > L + k, "ArxModel::kStepAhead: log shorter than lag + horizon");
   AlignedPrediction out;
   out.first = L + k - 1;
   out.values.resize(T - out.first);
@@ -78,7 +78,7 @@ AlignedPrediction ArxModel::kStepAhead(const Eigen::MatrixXd& u, const Eigen::Ve
 
 AlignedPrediction ArxModel::simulate(const Eigen::MatrixXd& u, const Eigen::VectorXd& y, int o) const {
   const Eigen::Index L = lag(*this), T = y.size();
-  require(T > L + 1, "ArxModel::simulate: log shorter than the model's lag");
+  PLSA_CHECK(T > L + 1, "ArxModel::simulate: log shorter than the model's lag");
   Eigen::VectorXd sim = y;
   for (Eigen::Index t = L; t < T; ++t) sim(t) = arxStep(*this, u, o, t, [&](Eigen::Index q) { return sim(q); });
   AlignedPrediction out;

@@ -22,9 +22,9 @@ int regionDistance(const PwlPartition& p, int a, int b) {
 
 void checkSampleWeights(const std::vector<Eigen::MatrixXd>& U, const SampleWeights& weights, const char* who) {
   if (weights.empty()) return;
-  require(weights.size() == U.size(), std::string(who) + ": need one weight vector per record");
+  PLSA_CHECK(weights.size() == U.size(), std::string(who) + ": need one weight vector per record");
   for (std::size_t r = 0; r < U.size(); ++r)
-    require(weights[r].size() == U[r].rows() && weights[r].allFinite() && (weights[r].array() >= 0).all(),
+    PLSA_CHECK(weights[r].size() == U[r].rows() && weights[r].allFinite() && (weights[r].array() >= 0).all(),
             std::string(who) + ": record " + std::to_string(r) + " needs one finite weight >= 0 per sample");
 }
 
@@ -169,9 +169,9 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
 // A record's outputs (model frame) against the model and its sample count.
 void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::Index rows, std::size_t r,
                  const char* who) {
-  require(Y.cols() == model.outputCount() && Y.rows() == rows,
+  PLSA_CHECK(Y.cols() == model.outputCount() && Y.rows() == rows,
           std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
-  require(Y.allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
+  PLSA_CHECK(Y.allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
 }
 
 }  // namespace
@@ -179,15 +179,15 @@ void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::I
 CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
                                 const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
                                 int groups) {
-  require(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
+  PLSA_CHECK(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
           "coefficientSums: need one regressor set, output record and group vector per record");
-  require(groups >= 1, "coefficientSums: need at least one group");
+  PLSA_CHECK(groups >= 1, "coefficientSums: need at least one group");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   CoefficientSums sums;
   sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
   for (std::size_t r = 0; r < Y.size(); ++r) {
     checkRecord(model, Y[r], static_cast<Eigen::Index>(regressors[r].schedule.size()), r, "coefficientSums");
-    require(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
+    PLSA_CHECK(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
             "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
                 ") per sample");
     accumulate(model, regressors[r], Y[r], nullptr, &group[r], sums);
@@ -198,13 +198,13 @@ CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<M
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                                      const std::vector<Eigen::MatrixXd>& Y, const CoefficientFitOptions& o,
                                      const SampleWeights& weights) {
-  require(!U.empty() && U.size() == Y.size(), "fitCoefficients: need matching input and output records");
+  PLSA_CHECK(!U.empty() && U.size() == Y.size(), "fitCoefficients: need matching input and output records");
   checkSampleWeights(U, weights, "fitCoefficients");
   CoefficientSums sums;
   sums.groups.assign(1, emptyGroup(model));
   const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
   for (std::size_t r = 0; r < U.size(); ++r) {
-    require(U[r].cols() == model.inputCount(),
+    PLSA_CHECK(U[r].cols() == model.inputCount(),
             "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
     const ModelRegressors reg = modelRegressors(model, U[r]);  // one record at a time: they are large
@@ -215,13 +215,13 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
 
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
                                        const CoefficientFitOptions& o) {
-  require(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
+  PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
           "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
   const int R = model.partition.regionCount();
   const int ny = model.outputCount();
   const bool input_side = model.schedule_side == ScheduleSide::kInput;
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
-  require(static_cast<int>(sums.groups.front().count.size()) == R &&
+  PLSA_CHECK(static_cast<int>(sums.groups.front().count.size()) == R &&
               static_cast<int>(sums.groups.front().J.size()) == ny,
           "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = emptyGroup(model);
@@ -278,7 +278,7 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
       Gs += G[oo][static_cast<std::size_t>(l)];
       hs += h[oo][static_cast<std::size_t>(l)];
     }
-    require(Gs.trace() > 0, "fitCoefficients: the inputs never move, nothing to fit");
+    PLSA_CHECK(Gs.trace() > 0, "fitCoefficients: the inputs never move, nothing to fit");
     const double scale = Gs.trace() / n;
     Gs.diagonal().array() += o.ridge * scale;
     if (!joint) {
@@ -356,15 +356,15 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
 void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
                     const std::vector<Eigen::MatrixXd>& Y_logged, const SampleWeights& weights,
                     const std::vector<Eigen::MatrixXd>& increments) {
-  require(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
-  require(!U.empty() && U.size() == Y_logged.size(), "fitOutputLevel: need matching input and output records");
+  PLSA_CHECK(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
+  PLSA_CHECK(!U.empty() && U.size() == Y_logged.size(), "fitOutputLevel: need matching input and output records");
   checkSampleWeights(U, weights, "fitOutputLevel");
-  require(increments.empty() || increments.size() == U.size(), "fitOutputLevel: need one increment record per record");
+  PLSA_CHECK(increments.empty() || increments.size() == U.size(), "fitOutputLevel: need one increment record per record");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
   double n = 0.0;
   for (std::size_t r = 0; r < U.size(); ++r) {
-    require(Y[r].cols() == model.outputCount() && Y[r].rows() == U[r].rows() && Y[r].allFinite(),
+    PLSA_CHECK(Y[r].cols() == model.outputCount() && Y[r].rows() == U[r].rows() && Y[r].allFinite(),
             "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
     if (U[r].rows() == 0) continue;
     const Eigen::MatrixXd residual =
@@ -377,7 +377,7 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
       n += weights[r].sum();
     }
   }
-  require(n > 0, "fitOutputLevel: no samples (or all weights zero)");
+  PLSA_CHECK(n > 0, "fitOutputLevel: no samples (or all weights zero)");
   model.output_level.resize(static_cast<std::size_t>(model.outputCount()));
   for (int o = 0; o < model.outputCount(); ++o) model.output_level[static_cast<std::size_t>(o)] = sum(o) / n;
 }

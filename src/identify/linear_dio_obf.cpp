@@ -7,10 +7,10 @@ namespace plsa {
 
 Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
                                  const Eigen::MatrixXd& u, DioStart start) {
-  require(static_cast<Eigen::Index>(poles_per_input.size()) == u.cols(),
+  PLSA_CHECK(static_cast<Eigen::Index>(poles_per_input.size()) == u.cols(),
           "dioObfRegressors: " + std::to_string(poles_per_input.size()) + " pole sets for " +
               std::to_string(u.cols()) + " inputs");
-  require(u.allFinite(), "dioObfRegressors: the inputs contain NaN or Inf");
+  PLSA_CHECK(u.allFinite(), "dioObfRegressors: the inputs contain NaN or Inf");
   const Eigen::MatrixXd du = dioDifference(u, start);
   int width = 0;
   for (const auto& p : poles_per_input) width += p.size();
@@ -31,15 +31,15 @@ Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
 LinearDioObf LinearDioObf::fit(const std::vector<PoleSet>& poles_per_input,
                                const std::vector<Eigen::MatrixXd>& inputs,
                                const std::vector<Eigen::MatrixXd>& outputs, double ridge) {
-  require(!inputs.empty() && inputs.size() == outputs.size(),
+  PLSA_CHECK(!inputs.empty() && inputs.size() == outputs.size(),
           "LinearDioObf::fit: need as many output records as input records, at least one");
-  require(ridge >= 0.0, "LinearDioObf::fit: the ridge weight must be >= 0");
+  PLSA_CHECK(ridge >= 0.0, "LinearDioObf::fit: the ridge weight must be >= 0");
   Eigen::MatrixXd gram;
   Eigen::MatrixXd rhs;
   for (std::size_t r = 0; r < inputs.size(); ++r) {
-    require(inputs[r].rows() == outputs[r].rows(),
+    PLSA_CHECK(inputs[r].rows() == outputs[r].rows(),
             "LinearDioObf::fit: record " + std::to_string(r) + " has different input and output lengths");
-    require(outputs[r].allFinite(), "LinearDioObf::fit: record " + std::to_string(r) +
+    PLSA_CHECK(outputs[r].allFinite(), "LinearDioObf::fit: record " + std::to_string(r) +
                                         " has NaN or Inf outputs");
     const Eigen::MatrixXd phi = dioObfRegressors(poles_per_input, inputs[r]);
     const Eigen::MatrixXd dy = dioDifference(outputs[r], DioStart::kAtRest);
@@ -47,7 +47,7 @@ LinearDioObf LinearDioObf::fit(const std::vector<PoleSet>& poles_per_input,
       gram = Eigen::MatrixXd::Zero(phi.cols(), phi.cols());
       rhs = Eigen::MatrixXd::Zero(phi.cols(), dy.cols());
     }
-    require(dy.cols() == rhs.cols(), "LinearDioObf::fit: records have different output counts");
+    PLSA_CHECK(dy.cols() == rhs.cols(), "LinearDioObf::fit: records have different output counts");
     gram.noalias() += phi.transpose() * phi;
     rhs.noalias() += phi.transpose() * dy;
   }

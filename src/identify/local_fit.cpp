@@ -11,8 +11,8 @@ namespace plsa {
 
 LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order,
                        double max_std_error, double min_snr) {
-  require(order >= 1 && order <= 6, "fitLocalModel: order must be 1 to 6");
-  require(u.size() == y.size(), "fitLocalModel: u and y lengths differ");
+  PLSA_CHECK(order >= 1 && order <= 6, "fitLocalModel: order must be 1 to 6");
+  PLSA_CHECK(u.size() == y.size(), "fitLocalModel: u and y lengths differ");
   LocalFit fit;
   const Eigen::Index T = y.size();
   if (T < 4 * order + 4) {

@@ -74,7 +74,7 @@ std::vector<double> midpoints(const std::vector<double>& levels) {
 }
 
 std::vector<double> quantileBreakpoints(std::vector<double> values, int levels) {
-  require(levels >= 1, "quantileBreakpoints: need at least one level");
+  PLSA_CHECK(levels >= 1, "quantileBreakpoints: need at least one level");
   std::sort(values.begin(), values.end());
   std::vector<double> b;
   for (int i = 1; i < levels; ++i) {
@@ -107,15 +107,15 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
 }
 
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
-  require(!logs.empty(), "identify: no logs given");
-  require(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
-  require(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
-  require(o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
+  PLSA_CHECK(!logs.empty(), "identify: no logs given");
+  PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
+  PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  PLSA_CHECK(o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
           "identify: play refinement evaluations must be in 0..10000, got " +
               std::to_string(o.play_refine_evaluations));
-  require(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
+  PLSA_CHECK(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
           "identify: the progress interval must be a finite number of seconds >= 0");
-  require(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
+  PLSA_CHECK(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
           "identify: output drift '" + o.output_drift + "': expected auto, on or off");
   IdentifyReport local;
   IdentifyReport& rep = out ? *out : local;
@@ -137,7 +137,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     for (std::size_t j = 0; j < o.inputs.size(); ++j)
       reference.push_back(have_cmd ? "cmd_" + std::to_string(j + 1) : o.inputs[j]);
   }
-  require(reference.size() == o.inputs.size(), "identify: need one reference column per input");
+  PLSA_CHECK(reference.size() == o.inputs.size(), "identify: need one reference column per input");
   for (const auto& log : logs) {
     if (o.refuse_outliers) {
       std::vector<std::string> columns = o.inputs;
@@ -159,7 +159,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
   if (o.output_frame == OutputFrame::kTipCartesian)
-    require(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
+    PLSA_CHECK(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
                                    "steering in deg), got " + std::to_string(o.outputs.size()));
   const std::vector<Eigen::MatrixXd> Ym = toModelFrame(o.output_frame, Y);
   Eigen::Index total = 0;
@@ -313,7 +313,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // One output too weak for its step fits does not make the staircase less designed.
   bool designed = rep.staircase;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
-  require(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "input" ||
+  PLSA_CHECK(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "input" ||
               o.scheduling == "auto",
           "identify: scheduling must be 'auto', 'interpolated', 'switched' or 'input', not '" + o.scheduling + "'");
   std::vector<bool> schedulings;  // interpolated?
@@ -387,7 +387,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     if (interp && !o.direction_split && (o.scheduling == "input" || o.scheduling == "auto"))
       structures.push_back({pi, ScheduleSide::kInput, "N"});
   }
-  require(!structures.empty(), "identify: input-side scheduling cannot split by direction");
+  PLSA_CHECK(!structures.empty(), "identify: input-side scheduling cannot split by direction");
   auto applyStructure = [&](const Structure& st) {
     model.partition = partitions[st.partition];
     model.schedule_side = st.side;
@@ -395,14 +395,14 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
 
   // Step 7: coefficients, for each candidate set of play channels; keep the
   // set whose model predicts the training data best k steps ahead.
-  require(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
+  PLSA_CHECK(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
   std::vector<double> range(static_cast<std::size_t>(ni));
   for (int in_i = 0; in_i < ni; ++in_i) range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
   auto applyPlay = [&](const std::vector<PlayChannel>& set) {
     model.input_play.assign(static_cast<std::size_t>(ni), {});
     for (int in_i = 0; in_i < ni; ++in_i)
       for (const PlayChannel& c : set) {
-        require(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
+        PLSA_CHECK(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
                 "identify: play widths and slopes must be finite and >= 0");
         model.input_play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
                                                                       c.slope);
@@ -411,11 +411,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   // Cross-validation folds (IdentifyOptions::cv_layout). Contiguous: every
   // log cut into time blocks, each scored by a model fitted on the others.
   // Interleaved: chunks dealt to the folds in turn, held-out rows weighted out.
-  require(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
-  require(o.cv_layout == "interleaved" || o.cv_layout == "contiguous",
+  PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
+  PLSA_CHECK(o.cv_layout == "interleaved" || o.cv_layout == "contiguous",
           "identify: cross-validation layout '" + o.cv_layout + "': expected interleaved or contiguous");
   const bool interleaved = o.cv_layout == "interleaved";
-  require(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
+  PLSA_CHECK(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
           "identify: cross-validation chunks must last a positive, finite number of seconds");
   std::vector<Eigen::MatrixXd> BU, BY;
   std::vector<Eigen::VectorXd> BT;
@@ -556,7 +556,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size());
   for (std::size_t pi = 0; pi < structures.size(); ++pi)
     for (const auto& set : o.play_candidates) {
-      require(!set.empty(), "identify: a play channel set is empty");
+      PLSA_CHECK(!set.empty(), "identify: a play channel set is empty");
       applyStructure(structures[pi]);
       applyPlay(set);
       const double score = crossValidated();
@@ -573,7 +573,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   const double top_level = std::max(1e-12, all_u.maxCoeff());
   beginScoring("coupled play channels", o.play_coupling_candidates.size() * o.play_candidates.size());
   for (double c : o.play_coupling_candidates) {
-    require(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
+    PLSA_CHECK(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
     applyStructure(structures[best_structure]);
     model.play_coupling = c / top_level;
     for (const auto& set : o.play_candidates) {
@@ -620,7 +620,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     rep.schedule_lag_scores.emplace_back(0.0, best_score);
     beginScoring("scheduling lags", o.schedule_lag_candidates.size());
     for (double lag : o.schedule_lag_candidates) {
-      require(lag >= 0 && std::isfinite(lag), "identify: schedule lags must be finite and >= 0");
+      PLSA_CHECK(lag >= 0 && std::isfinite(lag), "identify: schedule lags must be finite and >= 0");
       model.schedule_lag_s = lag;
       const double score = crossValidated();
       rep.schedule_lag_scores.emplace_back(lag, score);
@@ -658,11 +658,11 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
         sets.push_back(set);
     std::vector<double> thresholds{0.0}, softenings{0.0};
     for (double d : o.play_threshold_candidates) {
-      require(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
+      PLSA_CHECK(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
       if (d > 0) thresholds.push_back(d);
     }
     for (double f : o.play_softening_candidates) {
-      require(f >= 0 && f < 0.5,
+      PLSA_CHECK(f >= 0 && f < 0.5,
               "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
       if (f > 0 && input_side_chosen) softenings.push_back(f);
     }
@@ -903,7 +903,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     double best_sim = crossValidated(Score::kSimulation);
     rep.slow_pole_scores.emplace_back(0.0, best_sim);
     for (double tau : o.slow_pole_candidates) {
-      require(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
+      PLSA_CHECK(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
       if (tau == 0) continue;  // none, scored already
       withSlowPole(tau);
       const double score = crossValidated(Score::kSimulation);

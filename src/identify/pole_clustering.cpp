@@ -25,19 +25,19 @@ struct Layout {
 };
 
 Layout layoutOf(const ClusteringOptions& o) {
-  require(o.centres >= 1, "pole clustering: need at least one centre");
-  require(o.complex_pairs >= 0 && 2 * o.complex_pairs <= o.centres,
+  PLSA_CHECK(o.centres >= 1, "pole clustering: need at least one centre");
+  PLSA_CHECK(o.complex_pairs >= 0 && 2 * o.complex_pairs <= o.centres,
           "pole clustering: complex pairs must fit in the number of centres");
   // An infinite m weighs every pole alike (u^m -> 0): no clustering is left.
-  require(o.fuzziness > 1.0 && std::isfinite(o.fuzziness),
+  PLSA_CHECK(o.fuzziness > 1.0 && std::isfinite(o.fuzziness),
           "pole clustering: fuzziness m must be finite and > 1, got " + std::to_string(o.fuzziness));
   return {o.centres - 2 * o.complex_pairs, o.complex_pairs};
 }
 
 void checkPoles(const std::vector<C>& poles) {
-  require(!poles.empty(), "pole clustering: no identified poles to cluster");
+  PLSA_CHECK(!poles.empty(), "pole clustering: no identified poles to cluster");
   for (const auto& p : poles)
-    require(std::isfinite(p.real()) && std::isfinite(p.imag()) && std::abs(p) < 1.0,
+    PLSA_CHECK(std::isfinite(p.real()) && std::isfinite(p.imag()) && std::abs(p) < 1.0,
             "pole clustering: identified pole " + std::to_string(p.real()) + "+" + std::to_string(p.imag()) +
                 "i is not stable; drop it before clustering");
 }
@@ -254,7 +254,7 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
 ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const ClusteringOptions& o) {
   checkPoles(poles);
   const Layout L = layoutOf(o);
-  require(L.pairs == 0, "fuzzy c-means here clusters real centres only");
+  PLSA_CHECK(L.pairs == 0, "fuzzy c-means here clusters real centres only");
   std::vector<double> x = initialCentres(L, poles);
   double objective = 0.0;
   int it = 0;
@@ -288,7 +288,7 @@ ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const Cluste
 ClusteringResult kMeansClustering(const std::vector<C>& poles, const ClusteringOptions& o) {
   checkPoles(poles);
   const Layout L = layoutOf(o);
-  require(L.pairs == 0, "k-means here clusters real centres only");
+  PLSA_CHECK(L.pairs == 0, "k-means here clusters real centres only");
   std::mt19937_64 rng(o.seed);
   std::vector<double> best;
   double best_sse = std::numeric_limits<double>::infinity();

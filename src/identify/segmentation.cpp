@@ -9,7 +9,7 @@
 namespace plsa {
 
 std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& ref, double min_step, Eigen::Index min_length) {
-  require(min_step > 0, "segmentSteps: min_step must be positive");
+  PLSA_CHECK(min_step > 0, "segmentSteps: min_step must be positive");
   std::vector<Eigen::Index> changes;
   for (Eigen::Index k = 1; k < ref.rows(); ++k)
     if ((ref.row(k) - ref.row(k - 1)).cwiseAbs().maxCoeff() > min_step) changes.push_back(k);
@@ -32,7 +32,7 @@ std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& ref, double min_st
 }
 
 std::vector<std::vector<double>> referenceLevels(const Eigen::MatrixXd& ref, double resolution, Eigen::Index min_length) {
-  require(resolution > 0, "referenceLevels: resolution must be positive");
+  PLSA_CHECK(resolution > 0, "referenceLevels: resolution must be positive");
   std::vector<std::vector<double>> levels(static_cast<std::size_t>(ref.cols()));
   for (Eigen::Index j = 0; j < ref.cols(); ++j) {
     std::map<long long, double> held;  // rounded key -> the level as held

@@ -14,7 +14,7 @@
 namespace plsa {
 
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
-  require(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
+  PLSA_CHECK(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
           "SimulationStart: the yaw registration window must be finite and >= 0 s, got " +
               std::to_string(start.yaw_registration_s));
   if (model.output_level.empty() || model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0)
@@ -34,7 +34,7 @@ double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start)
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                              const SimulationStart& start) {
-  require(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
+  PLSA_CHECK(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
               dy.rows() == u.rows(),
           "simulateModel: the record does not match the model's outputs");
   const Eigen::Index n = yawRegistrationSamples(model, start);
@@ -43,7 +43,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
     for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
     return out;
   }
-  require(u.rows() >= 2, "simulateModel: need at least two samples");
+  PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
   Eigen::MatrixXd level = modelLevels(model, u, dy);
   for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
   if (const double yaw_rate = carriedYawRate(model, start); yaw_rate != 0.0) {
@@ -58,7 +58,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   }
   Eigen::Index first = 1;
   if (n > 0) {
-    require(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
+    PLSA_CHECK(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
                               " s, " + std::to_string(n) + " samples) leaves nothing of the " +
                               std::to_string(u.rows()) + "-sample record to simulate");
     // The rotation that best maps the predicted tip components onto the
@@ -113,14 +113,14 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start) {
-  require(y.cols() == model.outputCount() && y.rows() == u.rows(),
+  PLSA_CHECK(y.cols() == model.outputCount() && y.rows() == u.rows(),
           "predictOutputs: the record does not match the model's outputs");
-  require(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
+  PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
           "predictOutputs: the increments do not match the record");
   const Eigen::MatrixXd ym = toModelFrame(model.output_frame, y);
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
   for (int k : horizons) {
-    require(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
+    PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
     for (int o = 0; o < model.outputCount(); ++o) out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
     if (model.output_frame == OutputFrame::kTipCartesian)
       std::tie(out[0][k], out[1][k]) =
@@ -138,7 +138,7 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
 }
 
 InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  require(u.cols() == static_cast<Eigen::Index>(model.inputs.size()), "inputsOutsideTraining: one column per input");
+  PLSA_CHECK(u.cols() == static_cast<Eigen::Index>(model.inputs.size()), "inputsOutsideTraining: one column per input");
   InputsOutsideTraining out;
   if (u.rows() == 0) return out;
   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> outside(u.rows(), u.cols());

@@ -14,12 +14,12 @@ namespace {
 constexpr double kMaxModalCondition = 1e5;
 
 void checkOptions(const PredictorOptions& o) {
-  require(o.max_horizon >= 1 && o.max_horizon <= kMaxPredictorHorizon,
+  PLSA_CHECK(o.max_horizon >= 1 && o.max_horizon <= kMaxPredictorHorizon,
           "Predictor: max_horizon " + std::to_string(o.max_horizon) + " is outside 1.." +
               std::to_string(kMaxPredictorHorizon) + " samples");
   // Infinite values would switch the input-range or gap check off unannounced.
-  require(std::isfinite(o.input_margin) && o.input_margin >= 0, "Predictor: input_margin must be finite and >= 0");
-  require(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
+  PLSA_CHECK(std::isfinite(o.input_margin) && o.input_margin >= 0, "Predictor: input_margin must be finite and >= 0");
+  PLSA_CHECK(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
           "Predictor: max_gap_factor must be finite and > 1");
 }
 
@@ -63,7 +63,7 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
   for (int oo = 0; oo < c.n_y; ++oo)
     for (int j = 0; j < c.n_u; ++j) {
       const PoleSet& ps = m.poles[static_cast<std::size_t>(oo)][static_cast<std::size_t>(j)];
-      require(ps.size() == c.poles, "Predictor: every filter bank needs the same number of poles");
+      PLSA_CHECK(ps.size() == c.poles, "Predictor: every filter bank needs the same number of poles");
       for (const auto& p : ps.poles()) c.pole_values.push_back(p.real()), c.pole_values.push_back(p.imag());
     }
   c.banks = c.n_y * c.nodes * static_cast<int>(c.play.size());

@@ -56,16 +56,16 @@ class CommandWriter {
 };
 
 void checkCommon(const ExperimentOptions& o) {
-  require(o.sample_rate_hz > 0 && std::isfinite(o.sample_rate_hz),
+  PLSA_CHECK(o.sample_rate_hz > 0 && std::isfinite(o.sample_rate_hz),
           "experiment: sample_rate_hz must be a finite number above 0");
-  require(o.hold_s > 0 && std::isfinite(o.hold_s), "experiment: hold_s must be a finite number above 0");
-  require(o.initial_rest_s >= 0 && std::isfinite(o.initial_rest_s),
+  PLSA_CHECK(o.hold_s > 0 && std::isfinite(o.hold_s), "experiment: hold_s must be a finite number above 0");
+  PLSA_CHECK(o.initial_rest_s >= 0 && std::isfinite(o.initial_rest_s),
           "experiment: initial_rest_s must be a finite number >= 0");
-  require(o.preroll_s >= 0 && std::isfinite(o.preroll_s), "experiment: preroll_s must be a finite number >= 0");
+  PLSA_CHECK(o.preroll_s >= 0 && std::isfinite(o.preroll_s), "experiment: preroll_s must be a finite number >= 0");
 }
 
 int chamberIndex(int chamber) {
-  require(chamber >= 1 && chamber <= 3, "experiment: chambers are numbered 1 to 3, got " + std::to_string(chamber));
+  PLSA_CHECK(chamber >= 1 && chamber <= 3, "experiment: chambers are numbered 1 to 3, got " + std::to_string(chamber));
   return chamber - 1;
 }
 
@@ -73,8 +73,8 @@ int chamberIndex(int chamber) {
 
 Experiment staircaseExperiment(const ExperimentOptions& o) {
   checkCommon(o);
-  require(o.staircase_steps >= 1, "staircase: need at least one step");
-  require(o.staircase_max_bar > 0, "staircase: staircase_max_bar must be positive");
+  PLSA_CHECK(o.staircase_steps >= 1, "staircase: need at least one step");
+  PLSA_CHECK(o.staircase_max_bar > 0, "staircase: staircase_max_bar must be positive");
   const int c = chamberIndex(o.staircase_chamber);
   CommandWriter w("staircase1", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
@@ -95,12 +95,12 @@ namespace {
 
 Experiment gridWithOptionalJointPass(const ExperimentOptions& o, bool joint) {
   checkCommon(o);
-  require(o.grid_levels_bar.size() >= 2, "grid2: need at least two levels per chamber");
+  PLSA_CHECK(o.grid_levels_bar.size() >= 2, "grid2: need at least two levels per chamber");
   for (std::size_t i = 1; i < o.grid_levels_bar.size(); ++i)
-    require(o.grid_levels_bar[i] > o.grid_levels_bar[i - 1], "grid2: levels must increase");
+    PLSA_CHECK(o.grid_levels_bar[i] > o.grid_levels_bar[i - 1], "grid2: levels must increase");
   const int a = chamberIndex(o.grid_chambers[0]);
   const int b = chamberIndex(o.grid_chambers[1]);
-  require(a != b, "grid2: the two chambers must differ");
+  PLSA_CHECK(a != b, "grid2: the two chambers must differ");
   const auto& L = o.grid_levels_bar;
   CommandWriter w(joint ? "grid2_joint" : "grid2", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
@@ -169,13 +169,13 @@ Experiment gridJointExperiment(const ExperimentOptions& o) { return gridWithOpti
 
 Experiment joystickExperiment(const ExperimentOptions& o) {
   checkCommon(o);
-  require(o.joystick_duration_s > 0 && std::isfinite(o.joystick_duration_s),
+  PLSA_CHECK(o.joystick_duration_s > 0 && std::isfinite(o.joystick_duration_s),
           "joystick: duration must be a finite number above 0");
-  require(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
+  PLSA_CHECK(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
           "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
-  require(o.joystick_preroll_s > 0 && std::isfinite(o.joystick_preroll_s),
+  PLSA_CHECK(o.joystick_preroll_s > 0 && std::isfinite(o.joystick_preroll_s),
           "joystick: joystick_preroll_s must be a finite number above 0");
-  require(o.joystick_bandwidth_hz > 0 && o.joystick_bandwidth_hz <= o.sample_rate_hz / 2,
+  PLSA_CHECK(o.joystick_bandwidth_hz > 0 && o.joystick_bandwidth_hz <= o.sample_rate_hz / 2,
           "joystick: joystick_bandwidth_hz must be above 0 and at most half the sample rate");
   constexpr double kSettledS = 1.0;  // recorded, held at the starting point before the path moves
   // The trajectory is allocated before the writer sees it, so its length is checked here.
@@ -220,20 +220,20 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
 
 Experiment staticMapExperiment(const ExperimentOptions& o) {
   checkCommon(o);
-  require(o.static_map_points >= 2 && o.static_map_points <= 100, "static_map: static_map_points must be 2 to 100");
-  require(std::isfinite(o.static_map_base_bar) && o.static_map_base_bar >= 0,
+  PLSA_CHECK(o.static_map_points >= 2 && o.static_map_points <= 100, "static_map: static_map_points must be 2 to 100");
+  PLSA_CHECK(std::isfinite(o.static_map_base_bar) && o.static_map_base_bar >= 0,
           "static_map: static_map_base_bar must be a finite number >= 0");
-  require(o.static_map_base_s > 0 && std::isfinite(o.static_map_base_s),
+  PLSA_CHECK(o.static_map_base_s > 0 && std::isfinite(o.static_map_base_s),
           "static_map: static_map_base_s must be a finite number above 0");
-  require(o.static_map_hold_s > 0 && std::isfinite(o.static_map_hold_s),
+  PLSA_CHECK(o.static_map_hold_s > 0 && std::isfinite(o.static_map_hold_s),
           "static_map: static_map_hold_s must be a finite number above 0");
-  require(o.grid_levels_bar.size() >= 2 && o.grid_levels_bar.back() > o.grid_levels_bar.front(),
+  PLSA_CHECK(o.grid_levels_bar.size() >= 2 && o.grid_levels_bar.back() > o.grid_levels_bar.front(),
           "static_map: the grid's levels must span a range");
   const int a = chamberIndex(o.grid_chambers[0]);
   const int b = chamberIndex(o.grid_chambers[1]);
-  require(a != b, "static_map: the two chambers must differ");
+  PLSA_CHECK(a != b, "static_map: the two chambers must differ");
   const double lo = o.grid_levels_bar.front(), hi = o.grid_levels_bar.back();
-  require(o.static_map_base_bar <= lo, "static_map: the base must not be above the grid's lowest level");
+  PLSA_CHECK(o.static_map_base_bar <= lo, "static_map: the base must not be above the grid's lowest level");
   const int n = o.static_map_points;
   requireSamples("static_map",
                  (o.preroll_s + n * n * (o.static_map_base_s + o.static_map_hold_s)) * o.sample_rate_hz,
@@ -264,10 +264,10 @@ Experiment makeExperiment(const std::string& name, const ExperimentOptions& o) {
 }
 
 io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
-  require(experiment.commands.cols() == 3, "runExperiment: commands must have 3 columns");
+  PLSA_CHECK(experiment.commands.cols() == 3, "runExperiment: commands must have 3 columns");
   const Eigen::Index first = experiment.record_from;
   const Eigen::Index T = experiment.commands.rows() - first;
-  require(first >= 0 && T >= 1, "runExperiment: the experiment records no samples");
+  PLSA_CHECK(first >= 0 && T >= 1, "runExperiment: the experiment records no samples");
   for (Eigen::Index k = 0; k < first; ++k)
     actuator.step({experiment.commands(k, 0), experiment.commands(k, 1), experiment.commands(k, 2)});
   io::Log log;

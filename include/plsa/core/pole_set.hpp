@@ -73,7 +73,7 @@ class PoleSet {
   static PoleSet laguerre(double a, int n) { return real(std::vector<double>(checkCount(n), a)); }
   /// Two-parameter Kautz basis: one conjugate pair repeated n_pairs times.
   static PoleSet kautz(std::complex<double> p, int n_pairs) {
-    require(p.imag() != 0.0, "PoleSet::kautz: the pole must be complex (Im != 0)");
+    PLSA_CHECK(p.imag() != 0.0, "PoleSet::kautz: the pole must be complex (Im != 0)");
     std::vector<std::complex<double>> c;
     for (int i = 0; i < checkCount(n_pairs); ++i) {
       c.push_back(p);
@@ -125,7 +125,7 @@ class PoleSet {
     }
   }
   static int checkCount(int n) {
-    require(n >= 1, "PoleSet: the number of poles must be at least 1");
+    PLSA_CHECK(n >= 1, "PoleSet: the number of poles must be at least 1");
     return n;
   }
 

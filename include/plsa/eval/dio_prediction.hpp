@@ -22,9 +22,9 @@ struct AlignedPrediction {
 /// model's increment for sample m (it may use inputs up to m, never y after m-1).
 inline AlignedPrediction kStepAhead(const Eigen::Ref<const Eigen::VectorXd>& y,
                                     const Eigen::Ref<const Eigen::VectorXd>& dyhat, int k) {
-  require(k >= 1, "kStepAhead: the horizon must be at least 1 step");
-  require(y.size() == dyhat.size(), "kStepAhead: y and dyhat lengths differ");
-  require(y.size() > k, "kStepAhead: the log (" + std::to_string(y.size()) +
+  PLSA_CHECK(k >= 1, "kStepAhead: the horizon must be at least 1 step");
+  PLSA_CHECK(y.size() == dyhat.size(), "kStepAhead: y and dyhat lengths differ");
+  PLSA_CHECK(y.size() > k, "kStepAhead: the log (" + std::to_string(y.size()) +
                             " samples) is not longer than the horizon (" + std::to_string(k) + ")");
   const Eigen::Index T = y.size();
   AlignedPrediction out;
@@ -42,8 +42,8 @@ inline AlignedPrediction kStepAhead(const Eigen::Ref<const Eigen::VectorXd>& y,
 /// Free simulation from the first measured sample.
 inline AlignedPrediction simulate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                   const Eigen::Ref<const Eigen::VectorXd>& dyhat) {
-  require(y.size() == dyhat.size(), "simulate: y and dyhat lengths differ");
-  require(y.size() >= 2, "simulate: need at least two samples");
+  PLSA_CHECK(y.size() == dyhat.size(), "simulate: y and dyhat lengths differ");
+  PLSA_CHECK(y.size() >= 2, "simulate: need at least two samples");
   AlignedPrediction out;
   out.first = 1;
   out.values.resize(y.size() - 1);

@@ -17,11 +17,11 @@ namespace detail {
 inline void requireComparable(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& yhat,
                               const char* who, Eigen::Index min_samples) {
   const std::string w = who;
-  require(y.size() == yhat.size(), w + ": measured and predicted lengths differ (" + std::to_string(y.size()) +
+  PLSA_CHECK(y.size() == yhat.size(), w + ": measured and predicted lengths differ (" + std::to_string(y.size()) +
                                        " vs " + std::to_string(yhat.size()) + ")");
-  require(y.size() >= min_samples, w + ": need at least " + std::to_string(min_samples) + " sample(s)");
-  require(y.allFinite(), w + ": the measured signal contains NaN or Inf");
-  require(yhat.allFinite(), w + ": the predicted signal contains NaN or Inf");
+  PLSA_CHECK(y.size() >= min_samples, w + ": need at least " + std::to_string(min_samples) + " sample(s)");
+  PLSA_CHECK(y.allFinite(), w + ": the measured signal contains NaN or Inf");
+  PLSA_CHECK(yhat.allFinite(), w + ": the predicted signal contains NaN or Inf");
 }
 }  // namespace detail
 
@@ -30,7 +30,7 @@ inline double nrmseFit(const Eigen::Ref<const Eigen::VectorXd>& y,
                        const Eigen::Ref<const Eigen::VectorXd>& yhat) {
   detail::requireComparable(y, yhat, "nrmseFit", 2);
   const double spread = (y.array() - y.mean()).matrix().norm();
-  require(spread > 0.0, "nrmseFit: the measured signal is constant, the fit is undefined");
+  PLSA_CHECK(spread > 0.0, "nrmseFit: the measured signal is constant, the fit is undefined");
   return 100.0 * (1.0 - (y - yhat).norm() / spread);
 }
 
@@ -46,7 +46,7 @@ inline double rmsError(const Eigen::Ref<const Eigen::VectorXd>& y,
 /// Standard deviation of the measured signal: what rmsError is read against
 /// (fit = 100 (1 - rms / spread)).
 inline double spreadOf(const Eigen::Ref<const Eigen::VectorXd>& y) {
-  require(y.size() >= 1 && y.allFinite(), "spreadOf: need finite samples");
+  PLSA_CHECK(y.size() >= 1 && y.allFinite(), "spreadOf: need finite samples");
   return (y.array() - y.mean()).matrix().norm() / std::sqrt(static_cast<double>(y.size()));
 }
 

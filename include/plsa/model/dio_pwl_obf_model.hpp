@@ -192,67 +192,67 @@ struct DioPwlObfModel {
 
   /// Throws std::invalid_argument naming the first inconsistency.
   void validate() const {
-    require(sample_time_s > 0 && std::isfinite(sample_time_s), "model: sample_time_s must be positive");
-    require(!inputs.empty(), "model: no inputs");
-    require(!outputs.empty(), "model: no outputs");
+    PLSA_CHECK(sample_time_s > 0 && std::isfinite(sample_time_s), "model: sample_time_s must be positive");
+    PLSA_CHECK(!inputs.empty(), "model: no inputs");
+    PLSA_CHECK(!outputs.empty(), "model: no outputs");
     for (const auto* names : {&inputs, &outputs})
       for (auto at = names->begin(); at != names->end(); ++at)
-        require(std::find(names->begin(), at, *at) == at, "model: column '" + *at + "' is named twice");
+        PLSA_CHECK(std::find(names->begin(), at, *at) == at, "model: column '" + *at + "' is named twice");
     for (const auto& in : inputs)
-      require(std::find(outputs.begin(), outputs.end(), in) == outputs.end(),
+      PLSA_CHECK(std::find(outputs.begin(), outputs.end(), in) == outputs.end(),
               "model: column '" + in + "' is both an input and an output");
-    require(input_min < input_max, "model: input_min must be below input_max");
-    require(input_ranges.empty() || input_ranges.size() == inputs.size(),
+    PLSA_CHECK(input_min < input_max, "model: input_min must be below input_max");
+    PLSA_CHECK(input_ranges.empty() || input_ranges.size() == inputs.size(),
             "model: input_ranges needs one [min, max] per input");
     for (const auto& r : input_ranges)
-      require(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1],
+      PLSA_CHECK(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1],
               "model: every input_ranges entry must be finite with min <= max");
-    require(poles.size() == outputs.size(), "model: need one row of pole sets per output");
-    require(input_play.size() == inputs.size(), "model: need one input_play list per input");
+    PLSA_CHECK(poles.size() == outputs.size(), "model: need one row of pole sets per output");
+    PLSA_CHECK(input_play.size() == inputs.size(), "model: need one input_play list per input");
     for (const auto& ch : input_play) {
-      require(!ch.empty(), "model: every input needs at least one play channel (width 0 for the raw input)");
+      PLSA_CHECK(!ch.empty(), "model: every input needs at least one play channel (width 0 for the raw input)");
       for (const PlayChannel& c : ch)
-        require(std::isfinite(c.width) && c.width >= 0 && std::isfinite(c.slope) && c.slope >= 0,
+        PLSA_CHECK(std::isfinite(c.width) && c.width >= 0 && std::isfinite(c.slope) && c.slope >= 0,
                 "model: input_play widths and slopes must be finite and >= 0");
     }
-    require(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
-    require(std::isfinite(play_threshold) && play_threshold >= 0, "model: play_threshold must be finite and >= 0");
-    require(std::isfinite(play_softening) && play_softening >= 0, "model: play_softening must be finite and >= 0");
-    require(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
-    require(output_level.empty() || schedule_side == ScheduleSide::kInput,
+    PLSA_CHECK(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
+    PLSA_CHECK(std::isfinite(play_threshold) && play_threshold >= 0, "model: play_threshold must be finite and >= 0");
+    PLSA_CHECK(std::isfinite(play_softening) && play_softening >= 0, "model: play_softening must be finite and >= 0");
+    PLSA_CHECK(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
+    PLSA_CHECK(output_level.empty() || schedule_side == ScheduleSide::kInput,
             "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
-    require(output_level.empty() || output_level.size() == outputs.size(),
+    PLSA_CHECK(output_level.empty() || output_level.size() == outputs.size(),
             "model: output_level needs one value per output");
-    for (double b : output_level) require(std::isfinite(b), "model: output_level values must be finite");
-    require(training_drift_per_s.empty() || training_drift_per_s.size() == outputs.size(),
+    for (double b : output_level) PLSA_CHECK(std::isfinite(b), "model: output_level values must be finite");
+    PLSA_CHECK(training_drift_per_s.empty() || training_drift_per_s.size() == outputs.size(),
             "model: training_output_drift needs one rate per output");
-    for (double r : training_drift_per_s) require(std::isfinite(r), "model: training_output_drift rates must be finite");
-    require(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
-    require(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
+    for (double r : training_drift_per_s) PLSA_CHECK(std::isfinite(r), "model: training_output_drift rates must be finite");
+    PLSA_CHECK(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
+    PLSA_CHECK(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
             "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
-    require(schedule_side == ScheduleSide::kOutput ||
+    PLSA_CHECK(schedule_side == ScheduleSide::kOutput ||
                 (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
             "model: input-side scheduling needs an interpolated partition without a direction split");
     for (std::size_t o = 0; o < poles.size(); ++o) {
-      require(poles[o].size() == inputs.size(),
+      PLSA_CHECK(poles[o].size() == inputs.size(),
               "model: output '" + outputs[o] + "' needs one pole set per input");
       for (std::size_t j = 0; j < poles[o].size(); ++j)
-        require(!poles[o][j].empty(), "model: empty pole set for " + inputs[j] + " -> " + outputs[o]);
+        PLSA_CHECK(!poles[o][j].empty(), "model: empty pole set for " + inputs[j] + " -> " + outputs[o]);
     }
-    require(partition.maxInputIndex() < inputCount(), "model: the partition schedules on an input that does not exist");
+    PLSA_CHECK(partition.maxInputIndex() < inputCount(), "model: the partition schedules on an input that does not exist");
     const auto regions = static_cast<std::size_t>(partition.regionCount());
-    require(coefficients.size() == regions, "model: " + std::to_string(coefficients.size()) +
+    PLSA_CHECK(coefficients.size() == regions, "model: " + std::to_string(coefficients.size()) +
                                                 " coefficient blocks for " + std::to_string(regions) + " regions");
-    require(region_fits.size() == regions, "model: region_fits has the wrong length");
+    PLSA_CHECK(region_fits.size() == regions, "model: region_fits has the wrong length");
     for (std::size_t r = 0; r < regions; ++r) {
-      require(coefficients[r].size() == outputs.size(),
+      PLSA_CHECK(coefficients[r].size() == outputs.size(),
               "model: region " + std::to_string(r) + " needs coefficients for every output");
       for (std::size_t o = 0; o < outputs.size(); ++o) {
-        require(coefficients[r][o].size() == regressorSize(static_cast<int>(o)),
+        PLSA_CHECK(coefficients[r][o].size() == regressorSize(static_cast<int>(o)),
                 "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has " +
                     std::to_string(coefficients[r][o].size()) + " coefficients, expected " +
                     std::to_string(regressorSize(static_cast<int>(o))));
-        require(coefficients[r][o].allFinite(),
+        PLSA_CHECK(coefficients[r][o].allFinite(),
                 "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has a NaN or Inf coefficient");
       }
     }
@@ -296,8 +296,8 @@ inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<P
                            const PwlPartition& partition, const Eigen::MatrixXd& u,
                            const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
                            double schedule_pole, ScheduleSide side, double threshold, double softening) {
-  require(!poles.empty(), "modelRegressors: no outputs");
-  require(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
+  PLSA_CHECK(!poles.empty(), "modelRegressors: no outputs");
+  PLSA_CHECK(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
   const auto n_u = static_cast<std::size_t>(u.cols());
   out.schedule.resize(static_cast<std::size_t>(T));
@@ -330,7 +330,7 @@ inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<P
         node_weight(k, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
     }
   }
-  require(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
+  PLSA_CHECK(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
   // Channel inputs: input j above the threshold (coupled to the others)
   // through each of its play channels.
   Eigen::MatrixXd coupled;
@@ -350,7 +350,7 @@ inline void fillRegressors(ModelRegressors& out, const std::vector<std::vector<P
     for (const PlayChannel& ch : list)
       channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, start));
   }
-  for (const auto& row : poles) require(row.size() == n_u, "modelRegressors: need one pole set per input");
+  for (const auto& row : poles) PLSA_CHECK(row.size() == n_u, "modelRegressors: need one pole set per input");
   const int copies = side == ScheduleSide::kInput ? regions : 1;
   out.phi.resize(poles.size());
   out.level0.resize(side == ScheduleSide::kInput ? poles.size() : 0);
@@ -465,7 +465,7 @@ inline void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& 
 /// The model's predicted increments dyhat (T x n_y) from regressors of its
 /// own structure (modelRegressors(model, u)), for reuse across coefficient sets.
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
-  require(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
+  PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
           "modelIncrements: the regressors were made for another model");
   const auto T = static_cast<Eigen::Index>(reg.schedule.size());
   Eigen::MatrixXd dy(T, model.outputCount());
@@ -506,7 +506,7 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelR
 
 /// The model's predicted increments dyhat (T x n_y) for an input record.
 inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  require(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
+  PLSA_CHECK(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                               " inputs, the model " + std::to_string(model.inputCount()));
   return modelIncrements(model, modelRegressors(model, u));
 }
@@ -516,10 +516,10 @@ inline Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen:
 /// increment dy(k). The filters start settled at the first input, so only the
 /// first sample's regressors are needed beside `dy` = modelIncrements(model, u).
 inline Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {
-  require(model.schedule_side == ScheduleSide::kInput,
+  PLSA_CHECK(model.schedule_side == ScheduleSide::kInput,
           "modelLevels: only an input-side model has a level that is a function of its inputs");
-  require(u.rows() >= 1, "modelLevels: empty record");
-  require(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
+  PLSA_CHECK(u.rows() >= 1, "modelLevels: empty record");
+  PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
   // Settled states depend on the first sample alone (its schedule, played and coupled level).
   const ModelRegressors first = modelRegressors(model, u.topRows(1));
   Eigen::MatrixXd level(u.rows(), model.outputCount());

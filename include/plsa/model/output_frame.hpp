@@ -49,7 +49,7 @@ inline void tipAngles(double x, double y, double steer_reference_deg, double& be
 /// A record (T x n_y) in the model's frame.
 inline Eigen::MatrixXd toModelFrame(OutputFrame frame, const Eigen::MatrixXd& y) {
   if (frame == OutputFrame::kAsLogged) return y;
-  require(y.cols() == 2, "tip_cartesian output frame: needs exactly two outputs (bending, steering), got " +
+  PLSA_CHECK(y.cols() == 2, "tip_cartesian output frame: needs exactly two outputs (bending, steering), got " +
                              std::to_string(y.cols()));
   Eigen::MatrixXd m(y.rows(), 2);
   for (Eigen::Index k = 0; k < y.rows(); ++k) tipComponents(y(k, 0), y(k, 1), m(k, 0), m(k, 1));

@@ -46,15 +46,15 @@ class PwlPartition {
   /// `inputs[s]`; outside the outer nodes the nearest node's coefficients hold.
   static PwlPartition interpolated(std::vector<int> inputs, std::vector<std::vector<double>> levels,
                                    bool direction_split = false, double direction_threshold = 1e-3) {
-    require(inputs.size() <= 4, "PwlPartition: interpolated scheduling takes at most 4 inputs");
-    for (const auto& l : levels) require(!l.empty(), "PwlPartition: every interpolated input needs a level");
+    PLSA_CHECK(inputs.size() <= 4, "PwlPartition: interpolated scheduling takes at most 4 inputs");
+    for (const auto& l : levels) PLSA_CHECK(!l.empty(), "PwlPartition: every interpolated input needs a level");
     // Nodes are stored as "breakpoints"; a node's cell is its index.
     PwlPartition p(std::move(inputs), std::move(levels), direction_split, direction_threshold);
     p.mode_ = Scheduling::kInterpolated;
     p.cells_ = 1;
     p.strides_.clear();
     for (const auto& l : p.breakpoints_) {
-      require(l.size() <= static_cast<std::size_t>(kMaxRegions / p.cells_), regionLimitMessage());
+      PLSA_CHECK(l.size() <= static_cast<std::size_t>(kMaxRegions / p.cells_), regionLimitMessage());
       p.strides_.push_back(p.cells_);
       p.cells_ *= static_cast<int>(l.size());
     }
@@ -71,21 +71,21 @@ class PwlPartition {
         breakpoints_(std::move(breakpoints)),
         direction_split_(direction_split),
         direction_threshold_(direction_threshold) {
-    require(inputs_.size() == breakpoints_.size(), "PwlPartition: one breakpoint list per scheduling input");
-    require(inputs_.size() <= static_cast<std::size_t>(DirectionState::kMaxInputs),
+    PLSA_CHECK(inputs_.size() == breakpoints_.size(), "PwlPartition: one breakpoint list per scheduling input");
+    PLSA_CHECK(inputs_.size() <= static_cast<std::size_t>(DirectionState::kMaxInputs),
             "PwlPartition: at most 8 scheduling inputs");
-    require(direction_threshold_ >= 0 && std::isfinite(direction_threshold_),
+    PLSA_CHECK(direction_threshold_ >= 0 && std::isfinite(direction_threshold_),
             "PwlPartition: the direction threshold must be finite and >= 0");
     cells_ = 1;
     for (std::size_t s = 0; s < inputs_.size(); ++s) {
-      require(inputs_[s] >= 0, "PwlPartition: scheduling input indices must be >= 0");
+      PLSA_CHECK(inputs_[s] >= 0, "PwlPartition: scheduling input indices must be >= 0");
       const auto& b = breakpoints_[s];
       for (std::size_t i = 0; i < b.size(); ++i) {
-        require(std::isfinite(b[i]), "PwlPartition: breakpoints must be finite");
-        require(i == 0 || b[i] > b[i - 1], "PwlPartition: breakpoints of input " + std::to_string(inputs_[s]) +
+        PLSA_CHECK(std::isfinite(b[i]), "PwlPartition: breakpoints must be finite");
+        PLSA_CHECK(i == 0 || b[i] > b[i - 1], "PwlPartition: breakpoints of input " + std::to_string(inputs_[s]) +
                                                " must increase strictly");
       }
-      require(b.size() < static_cast<std::size_t>(kMaxRegions / cells_), regionLimitMessage());
+      PLSA_CHECK(b.size() < static_cast<std::size_t>(kMaxRegions / cells_), regionLimitMessage());
       strides_.push_back(cells_);
       cells_ *= static_cast<int>(b.size()) + 1;
     }

@@ -28,10 +28,10 @@ class ObfBank {
   ObfBank() = default;
 
   explicit ObfBank(const PoleSet& poles) : poles_(poles) {
-    require(!poles.empty(), "ObfBank: the pole set is empty");
+    PLSA_CHECK(!poles.empty(), "ObfBank: the pole set is empty");
     const int n = poles.size();
     if constexpr (N != Eigen::Dynamic) {
-      require(n == N, "ObfBank<" + std::to_string(N) + ">: the pole set has " +
+      PLSA_CHECK(n == N, "ObfBank<" + std::to_string(N) + ">: the pole set has " +
                           std::to_string(n) + " basis functions");
     }
     A_.setZero(n, n);

@@ -120,8 +120,8 @@ class NStepPredictor {
   /// Shares an already compiled model; `options` must be those it was compiled with.
   NStepPredictor(std::shared_ptr<const CompiledModel> model, const PredictorOptions& options)
       : options_(options), handoff_(model) {
-    require(model != nullptr, "Predictor: no compiled model");
-    require(model->max_horizon == options.max_horizon,
+    PLSA_CHECK(model != nullptr, "Predictor: no compiled model");
+    PLSA_CHECK(model->max_horizon == options.max_horizon,
             "Predictor: the compiled model holds tables for another max_horizon");
     allocate(*model);
   }
@@ -262,7 +262,7 @@ class NStepPredictor {
   void install(const DioPwlObfModel& model) { install(compileModel(model, options_)); }
   /// The same with an already compiled model (shared, e.g. by many segments).
   void install(std::shared_ptr<const CompiledModel> model) {
-    require(model != nullptr && sameStructure(*shape_, *model),
+    PLSA_CHECK(model != nullptr && sameStructure(*shape_, *model),
             "Predictor::install: the new model's structure differs from the running one");
     handoff_.offer(std::move(model), ++installs_);
   }
@@ -435,6 +435,7 @@ class NStepPredictor {
   // skipped, while its drive is zero (a chamber never pressurised).
   void stepFilters(const CompiledModel& m, Eigen::VectorXd& state, std::array<bool, kMaxRestingInputs>& resting) noexcept {
     const int n = m.poles;
+    PLSA_DEBUG_ASSERT(state.size() == m.states() && drive_.size() >= m.nodes * static_cast<Eigen::Index>(m.play.size()));
     if (m.modal) {
       const ModalForm& f = m.modal_form;
       const int per_input = m.n_y * n;
@@ -746,6 +747,7 @@ class NStepPredictor {
   PredictorStatus predictHeldLagged(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
     const int block = f.block, per_input = m.n_y * m.poles;
+    PLSA_DEBUG_ASSERT(m.node_grid.inputs.size() <= 4 && static_cast<int>(f.lag_sum.size()) == m.n_y);
     mergeModes(m, state_, us_, dir_, zeta_);
     merged_.setZero();
     for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
@@ -999,6 +1001,8 @@ class NStepPredictor {
                                                    Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
     const int n = m.poles, block = B > 0 ? B : f.block, per_input = m.n_y * n, nu = m.n_u, ny = m.n_y;
+    PLSA_DEBUG_ASSERT(block == f.block && block % 4 == 0 && per_input <= block && ny <= 8);
+    PLSA_DEBUG_ASSERT(merged_.size() == static_cast<Eigen::Index>(nu) * block && g_next_.size() == merged_.size());
     mergeModes(m, state_, us_, dir_, zeta_);
     merged_.setZero();
     for (int j = 0; j < nu; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
@@ -1252,7 +1256,7 @@ class Predictor : public NStepPredictor {
       : NStepPredictor(checkedPoles(model), options) {}
   Predictor(std::shared_ptr<const CompiledModel> model, const PredictorOptions& options)
       : NStepPredictor(std::move(model), options) {
-    require(NP == Eigen::Dynamic || compiledModel()->poles == NP,
+    PLSA_CHECK(NP == Eigen::Dynamic || compiledModel()->poles == NP,
             "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
                 std::to_string(compiledModel()->poles) + " poles");
   }
@@ -1263,7 +1267,7 @@ class Predictor : public NStepPredictor {
       m.validate();
       for (const auto& row : m.poles)
         for (const auto& ps : row)
-          require(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
+          PLSA_CHECK(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
                                        std::to_string(ps.size()) + " poles");
     }
     return m;

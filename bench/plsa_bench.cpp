@@ -3,7 +3,8 @@
 //       per call p50/p99.9 of update and predict on models identified by plsa
 //       itself (the demo's and its structural variants, 1-3 chambers, input and
 //       output side, with and without lag, slow pole, tip frame), against a
-//       straightforward dynamic implementation of the same model; after a
+//       straightforward dynamic implementation of the same model; the
+//       sensitivity of an 80-step prediction to its plan; after a
 //       125 s hold; 100 segments of the demo's model per tick; and the
 //       synthetic output-side models of earlier benchmarks.
 //   plsa-bench --loop SECONDS [--segments N] [--json FILE]
@@ -150,6 +151,12 @@ void measureModel(const BenchModel& bm, const Drive& d, long calls) {
            if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
            p.predict(80, plan, out);
            benchmark::DoNotOptimize(out.data());
+         }));
+  Eigen::MatrixXd jacobian(80 * m.outputCount(), 79 * m.inputCount());
+  report(tag + ": sensitivity 80 (jacobian to the plan)", timeCalls(predicts / 4, [&](long i) {
+           if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
+           p.sensitivity(80, plan, jacobian);
+           benchmark::DoNotOptimize(jacobian.data());
          }));
   report(tag + ": predict 400, input held, moving", timeCalls(predicts / 4, [&](long i) {
            if ((i & 3) == 0) feed();

@@ -1,5 +1,6 @@
 #include "comparison.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -51,24 +52,31 @@ ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Ei
   return out;
 }
 
-std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
-                                                                  const Eigen::MatrixXd& y) {
-  std::vector<std::vector<std::map<int, CommonScore>>> scores(models.size());
-  for (Eigen::Index o = 0; o < y.cols(); ++o) {
-    for (const auto& [k, unused] : models[0].by_output[static_cast<std::size_t>(o)]) {
-      (void)unused;
-      Eigen::Index from = 0;
-      for (const auto& m : models) {
-        const Eigen::VectorXd& p = m.by_output[static_cast<std::size_t>(o)].at(k);
+Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models) {
+  Eigen::Index from = 0;
+  for (const auto& m : models)
+    for (const auto& by_horizon : m.by_output)
+      for (const auto& [k, p] : by_horizon) {
+        (void)k;
         Eigen::Index f = 0;
         while (f < p.size() && !std::isfinite(p(f))) ++f;
         from = std::max(from, f);
       }
-      const Eigen::Index n = y.rows() - from;
+  return from;
+}
+
+std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
+                                                                  const Eigen::MatrixXd& y) {
+  const Eigen::Index from = commonScoringStart(models), n = y.rows() - from;
+  PLSA_CHECK(n >= 2, "commonScores: " + std::to_string(y.rows()) + " samples leave " + std::to_string(std::max<Eigen::Index>(n, 0)) +
+                         " to score after every model's longest horizon; a fit needs 2");
+  std::vector<std::vector<std::map<int, CommonScore>>> scores(models.size());
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    scores[i].resize(static_cast<std::size_t>(y.cols()));
+    for (Eigen::Index o = 0; o < y.cols(); ++o) {
       const Eigen::VectorXd measured = y.col(o).segment(from, n);
-      for (std::size_t i = 0; i < models.size(); ++i) {
-        if (scores[i].size() <= static_cast<std::size_t>(o)) scores[i].resize(static_cast<std::size_t>(o) + 1);
-        const Eigen::VectorXd predicted = models[i].by_output[static_cast<std::size_t>(o)].at(k).segment(from, n);
+      for (const auto& [k, p] : models[i].by_output[static_cast<std::size_t>(o)]) {
+        const Eigen::VectorXd predicted = p.segment(from, n);
         scores[i][static_cast<std::size_t>(o)][k] = {nrmseFit(measured, predicted), rmsError(measured, predicted),
                                                      spreadOf(measured)};
       }

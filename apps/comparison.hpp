@@ -37,7 +37,11 @@ struct CommonScore {
   double spread = 0.0;  ///< the measured output's standard deviation over the same samples
 };
 
-/// scores[model][output][horizon] over the samples every model predicts.
+/// The first sample every model predicts at every horizon and in simulation.
+Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models);
+
+/// scores[model][output][horizon], all over the same samples: from
+/// commonScoringStart(models) to the end.
 std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
                                                                   const Eigen::MatrixXd& y);
 

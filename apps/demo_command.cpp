@@ -69,7 +69,8 @@ void runDemo(const DemoOptions& opt) {
   // threshold, sensor drift and slow pole by cross-validation) and the
   // paper's (switched, no play, the angles as logged).
   IdentifyOptions io_;
-  io_.output_frame = OutputFrame::kTipCartesian;  // bend and steer are the tip direction's polar coordinates
+  // The output frame is identification's own choice: bend_deg and steer_deg
+  // are read as the tip direction's polar coordinates (output_frame_choice.hpp).
   // The grid moves one input at a time, so its held-out blocks cannot show the
   // drift of output-side gains along a wandering path; input side has none
   // (docs/identification.md).
@@ -108,8 +109,11 @@ void runDemo(const DemoOptions& opt) {
   // 3. Validation on the joystick run.
   const std::vector<int> horizons = {40, 80};
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
-  std::printf("  the joystick run has an input outside its training range on %.1f%% of its samples\n",
-              100 * inputsOutsideTraining(model, Uv).any);
+  const InputsOutsideTraining coverage = inputsOutsideTraining(model, Uv);
+  std::printf("  the joystick run has an input outside its training range on %.1f%% of its samples and beyond the "
+              "training grid's outer nodes on %.1f%%\n",
+              100 * coverage.any, 100 * coverage.any_beyond_grid);
+  for (const std::string& w : inputCoverageWarnings(model, coverage)) std::printf("    %s\n", w.c_str());
   // ARX was fitted to the same drift-free outputs: its simulation gets the same drift back.
   const std::vector<double> arx_drift = report.drift_taken_out ? report.output_drift.rate : std::vector<double>{};
   const std::vector<ModelPredictions> preds = {
@@ -132,12 +136,16 @@ void runDemo(const DemoOptions& opt) {
     all.push_back(predictArx("", arx, Uv, Yv, horizons));
   }
   const auto scores_all = commonScores(all, Yv);
+  const Eigen::Index scored_from = commonScoringStart(all);
+  const Eigen::VectorXd tv = val.column("time_s").array() - val.column("time_s")(0);
+  const std::string window = "samples " + std::to_string(scored_from) + " to " + std::to_string(Yv.rows() - 1) +
+                             ", t = " + fmt(tv(scored_from), "%g") + " to " + fmt(tv(tv.size() - 1), "%g") + " s";
   const std::size_t nm = preds.size();
   const std::vector<std::vector<std::map<int, CommonScore>>> scores(scores_all.begin(), scores_all.begin() + nm);
   auto fitNoDrift = [&](std::size_t m, std::size_t o) { return scores_all[nm + m][o].at(0).fit; };
   auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return scores_all[2 * nm + m][o].at(0).fit; };
-  std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; all models scored on the same samples, from %s s)\n",
-              reg_s.c_str());
+  std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; every model, horizon and error on the same %s)\n",
+              window.c_str());
   std::printf("  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
               "  from its first sample, and the models fitted without the grid run's sensor drift turn at its rate;\n"
               "  no drift: they do not; training yaw: the tip-frame models carry the grid run's yaw, no drift\n",
@@ -167,11 +175,15 @@ void runDemo(const DemoOptions& opt) {
                                       {"fit_sim", f.at(0).fit},    {"fit_sim_no_drift", fitNoDrift(0, o)},
                                       {"fit_sim_training_yaw", fitTrainingYaw(0, o)},
                                       {"rms_k40", f.at(40).rms},   {"rms_k80", f.at(80).rms},
-                                      {"rms_sim", f.at(0).rms},    {"std_sim", f.at(0).spread}};
+                                      {"rms_sim", f.at(0).rms},    {"std", f.at(0).spread}};
   }
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
-  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in degrees; std_sim: the measured output's standard deviation "
-                    "over the scored samples";
+  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in degrees; std: the measured output's standard deviation; "
+                    "every fit, rms and std over the same samples (scored_samples)";
+  j["scored_samples"] = {{"first", scored_from},
+                         {"count", Yv.rows() - scored_from},
+                         {"first_time_s", tv(scored_from)},
+                         {"last_time_s", tv(tv.size() - 1)}};
   writeTextFile(path("fits.json"), j.dump(2) + "\n", "fits file");
 
   // 4. Report.
@@ -187,8 +199,8 @@ void runDemo(const DemoOptions& opt) {
        << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
        << "coupling, schedule lag, play threshold, sensor drift and slow pole chosen by cross-validation on the grid. "
        << drift_text << "Every model is scored on the logged angles.</p>"
-       << "<h2>Fits (NRMSE %)</h2><p>All models are scored on the same samples, from " << reg_s
-       << " s into the run. sim: the tip-frame models (plsa's and the global linear OBF) register the joystick run's "
+       << "<h2>Fits (NRMSE %)</h2><p>Every model, horizon and error is scored on the same " << window
+       << " into the run. sim: the tip-frame models (plsa's and the global linear OBF) register the joystick run's "
        << "sensor yaw on its first " << reg_s << " s, as the other two start from its first sample; the models fitted "
        << "without the grid run's sensor drift turn at its rate. sim, no drift: they do not. sim, training yaw: the "
        << "tip-frame models carry the grid run's yaw instead, with no drift.</p><table><tr><th>model</th>"

@@ -103,19 +103,8 @@ void runValidate(const ValidateArgs& a) {
   required.push_back("time_s");  // the sample rate and gaps are checked against the model's
   const io::Log log = readLogs({a.log}, required, "validate").front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
-  if (v.outside_training.any > 0) {
-    std::string each;
-    for (std::size_t c = 0; c < model.inputs.size(); ++c) {
-      if (v.outside_training.each[c] == 0) continue;
-      char b[160];
-      const auto [lo, hi] = model.trainingRange(c);
-      std::snprintf(b, sizeof b, "%s%s outside [%g, %g] on %.1f%%", each.empty() ? "" : ", ", model.inputs[c].c_str(),
-                    lo, hi, 100 * v.outside_training.each[c]);
-      each += b;
-    }
-    std::fprintf(stderr, "plsa validate: warning: %.1f%% of samples have an input outside its training range (%s)\n",
-                 100 * v.outside_training.any, each.c_str());
-  }
+  for (const std::string& w : inputCoverageWarnings(model, v.outside_training))
+    std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
   std::printf("%-12s", "output");
   for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());
   std::printf(" %9s\n", "sim");
@@ -139,15 +128,23 @@ void runValidate(const ValidateArgs& a) {
       std::printf(" %9.4g", o.rms_k.at(k));
       j["outputs"][o.name]["rms_k" + std::to_string(k)] = o.rms_k.at(k);
     }
-    std::printf(" %9.4g %12.4g\n", o.rms_sim, o.spread_sim);
+    std::printf(" %9.4g %12.4g\n", o.rms_sim, o.spread);
     j["outputs"][o.name]["rms_sim"] = o.rms_sim;
-    j["outputs"][o.name]["std_sim"] = o.spread_sim;
+    j["outputs"][o.name]["std"] = o.spread;
   }
+  const Eigen::Index scored = v.time.size() - v.scored_from;
+  std::printf("(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
+              static_cast<long long>(scored), static_cast<long long>(v.scored_from),
+              seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
+  j["scored_samples"] = {{"first", v.scored_from},
+                         {"count", scored},
+                         {"first_time_s", v.time(v.scored_from)},
+                         {"last_time_s", v.time(v.time.size() - 1)}};
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
-  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std_sim: the measured output's standard "
-                    "deviation over the simulation's scored samples";
+  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
+                    "deviation; every fit, rms and std over the same samples (scored_samples)";
   // Say how the simulation started: the ways differ when the log starts unsettled.
   const bool registered = yawRegistrationSamples(model, a.start) > 0;
   std::string start =
@@ -209,11 +206,18 @@ void addIdentifyCommands(CLI::App& app) {
       ->check(CLI::Range(1, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
   id->add_option_function<std::string>(
-        "--output-frame", [a](const std::string& f) { a->options.output_frame = outputFrameFromString(f); },
-        "as_logged (default) or tip_cartesian: the two outputs are a tip's bending and steering angles (deg) and "
-        "the model runs on bend*cos(steer), bend*sin(steer), where a constant-curvature segment's dynamics are "
-        "linear; predictions come back as the logged angles")
-      ->check(CLI::IsMember({"as_logged", "tip_cartesian"}));
+        "--output-frame",
+        [a](const std::string& f) {
+          if (f == "auto")
+            a->options.output_frame.reset();
+          else
+            a->options.output_frame = outputFrameFromString(f);
+        },
+        "auto (default): tip_cartesian when the two outputs are named as a tip's bending and steering angles "
+        "(e.g. bend_deg, steer_deg) and the bending is never negative, else as_logged; the choice is printed. "
+        "tip_cartesian: the model runs on bend*cos(steer), bend*sin(steer), where a constant-curvature "
+        "segment's dynamics are linear; predictions come back as the logged angles")
+      ->check(CLI::IsMember({"auto", "as_logged", "tip_cartesian"}));
   id->add_option("--scheduling", a->options.scheduling,
                  "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
                  "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "

@@ -8,6 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plsa/eval/fit.hpp"
+#include "plsa/io/csv_log.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -110,18 +113,28 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
       ASSERT_TRUE(j["outputs"][out].contains(key)) << out << "." << key;
       EXPECT_TRUE(j["outputs"][out][key].is_number());
     }
-  // Errors in degrees beside the fits, and consistent with them for the
-  // simulation, whose spread is reported.
+  // Errors in degrees beside the fits: every fit, error and the spread on
+  // the same samples, so each fit is 100 (1 - rms / std).
+  const plsa::io::Log pred_log = plsa::io::readCsvLog(file("pred.csv"));
+  const Eigen::MatrixXd& pred = pred_log.data;
+  ASSERT_TRUE(j.contains("scored_samples")) << j.dump();
+  EXPECT_EQ(j["scored_samples"]["count"].get<long>(), pred.rows()) << "the CSV holds the scored samples";
   for (const std::string out : {"bend_deg", "steer_deg"}) {
     const auto& o = j["outputs"][out];
-    for (const std::string key : {"rms_k40", "rms_k80", "rms_sim", "std_sim"}) {
+    for (const std::string key : {"rms_k40", "rms_k80", "rms_sim", "std"}) {
       ASSERT_TRUE(o.contains(key)) << out << "." << key;
       EXPECT_GT(o[key].get<double>(), 0.0) << out << "." << key;
     }
-    EXPECT_LT(o["rms_k40"].get<double>(), o["std_sim"].get<double>()) << out;
-    EXPECT_NEAR(o["fit_sim"].get<double>(),
-                100.0 * (1.0 - o["rms_sim"].get<double>() / o["std_sim"].get<double>()), 1e-6)
-        << out;
+    EXPECT_LT(o["rms_k40"].get<double>(), o["std"].get<double>()) << out;
+    for (const std::string h : {"k40", "k80", "sim"}) {
+      EXPECT_NEAR(o["fit_" + h].get<double>(), 100.0 * (1.0 - o["rms_" + h].get<double>() / o["std"].get<double>()),
+                  1e-6)
+          << out << " " << h;
+      // ...and the same fit recomputed from the written predictions.
+      EXPECT_NEAR(o["fit_" + h].get<double>(),
+                  plsa::nrmseFit(pred_log.column(out), pred_log.column(out + "_" + h)), 1e-6)
+          << out << " " << h;
+    }
   }
   const std::string printed = slurp(file("stdout.txt"));
   EXPECT_NE(printed.find("measured std"), std::string::npos) << printed;

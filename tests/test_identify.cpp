@@ -14,6 +14,7 @@
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
+#include "plsa/identify/output_frame_choice.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/identify/pole_clustering.hpp"
 #include "plsa/identify/segmentation.hpp"
@@ -853,6 +854,7 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   sim::Actuator a(clean, 1);
   const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
   IdentifyOptions o;
+  o.output_frame = OutputFrame::kAsLogged;  // the levels below are compared in the logged angles
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
@@ -1290,6 +1292,88 @@ static void expectLifted(const ValidationResult& v, const ValidationResult& w, c
   }
 }
 
+// Identification given only column names picks the frame the outputs
+// describe, says so, and says how to pick the other.
+TEST(OutputFrameChoice, TipFrameFromBendingAndSteeringNamesAndNonNegativeBending) {
+  Eigen::MatrixXd y(100, 2);
+  y.col(0) = Eigen::VectorXd::LinSpaced(100, 0.0, 30.0);
+  y.col(1) = Eigen::VectorXd::LinSpaced(100, -170.0, 170.0);
+  const OutputFrameChoice tip = chooseOutputFrame({"bend_deg", "steer_deg"}, {y});
+  EXPECT_EQ(tip.frame, OutputFrame::kTipCartesian);
+  EXPECT_NE(tip.reason.find("--output-frame as_logged"), std::string::npos) << tip.reason;
+  EXPECT_EQ(chooseOutputFrame({"Theta", "Phi"}, {y}).frame, OutputFrame::kTipCartesian);
+  EXPECT_EQ(chooseOutputFrame({"tip_inclination", "tip_azimuth"}, {y}).frame, OutputFrame::kTipCartesian);
+  // Reversed: named, and the fix given.
+  const OutputFrameChoice reversed = chooseOutputFrame({"steer_deg", "bend_deg"}, {y});
+  EXPECT_EQ(reversed.frame, OutputFrame::kAsLogged);
+  EXPECT_NE(reversed.reason.find("--outputs bend_deg,steer_deg"), std::string::npos) << reversed.reason;
+  // Names that say nothing: as logged, with the option named.
+  const OutputFrameChoice unnamed = chooseOutputFrame({"y_1", "y_2"}, {y});
+  EXPECT_EQ(unnamed.frame, OutputFrame::kAsLogged);
+  EXPECT_NE(unnamed.reason.find("--output-frame tip_cartesian"), std::string::npos) << unnamed.reason;
+  EXPECT_EQ(chooseOutputFrame({"bend_deg"}, {y.leftCols(1)}).frame, OutputFrame::kAsLogged);
+  // A "bending" that goes negative is no polar radius: a planar angle, say.
+  Eigen::MatrixXd planar = y;
+  planar.col(0).array() -= 15.0;
+  const OutputFrameChoice signed_bend = chooseOutputFrame({"bend_deg", "steer_deg"}, {y, planar});
+  EXPECT_EQ(signed_bend.frame, OutputFrame::kAsLogged);
+  EXPECT_NE(signed_bend.reason.find("below -0.5 deg"), std::string::npos) << signed_bend.reason;
+  // Noise around zero bending is still a tip direction.
+  Eigen::MatrixXd noisy = y;
+  noisy(3, 0) = -0.3;
+  EXPECT_EQ(chooseOutputFrame({"bend_deg", "steer_deg"}, {noisy}).frame, OutputFrame::kTipCartesian);
+}
+
+TEST(Pipeline, DefaultOutputFrameIsChosenReportedAndOverridable) {
+  const io::Log& train = allEffectsRuns().train;
+  IdentifyOptions o;  // a cheap structure: the frame is what is checked
+  o.scheduling = "switched";
+  o.play_candidates = {{0.0}};
+  o.play_coupling_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.slow_pole_candidates = {};
+  o.play_threshold_candidates = {};
+  IdentifyReport report;
+  EXPECT_EQ(identifyModel({train}, o, &report).output_frame, OutputFrame::kTipCartesian);
+  EXPECT_EQ(report.output_frame.frame, OutputFrame::kTipCartesian);
+  const bool said = std::any_of(report.lines.begin(), report.lines.end(), [](const std::string& l) {
+    return l.find("read as a tip's bending and steering angles") != std::string::npos;
+  });
+  EXPECT_TRUE(said) << "the choice is in the progress lines";
+  o.output_frame = OutputFrame::kAsLogged;
+  EXPECT_EQ(identifyModel({train}, o, &report).output_frame, OutputFrame::kAsLogged);
+}
+
+// Validation counts the samples beyond the grid's outer nodes per input,
+// not only those beyond the training range: a run recorded from rest spans
+// 0 while its grid starts higher.
+TEST(Validation, ReportsSamplesBeyondTheGridPerInput) {
+  DioPwlObfModel m;
+  m.inputs = {"p_1", "p_2"};
+  m.input_ranges = {{0.0, 0.4}, {0.0, 0.4}};
+  m.partition = PwlPartition::interpolated({0}, {{0.2, 0.3, 0.4}});
+  Eigen::MatrixXd u(10, 2);
+  u.col(0) << 0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45;
+  u.col(1).setConstant(0.1);
+  const InputsOutsideTraining c = inputsOutsideTraining(m, u);
+  EXPECT_DOUBLE_EQ(c.each[0], 0.1);  // 0.45 alone is beyond the range
+  ASSERT_TRUE(c.on_grid[0]);
+  EXPECT_FALSE(c.on_grid[1]);
+  EXPECT_DOUBLE_EQ(c.below_grid[0], 0.4);
+  EXPECT_DOUBLE_EQ(c.above_grid[0], 0.1);
+  EXPECT_DOUBLE_EQ(c.any_beyond_grid, 0.5);
+  const std::vector<std::string> w = inputCoverageWarnings(m, c);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("p_1 is below the training grid's lowest node 0.2 on 40.0%"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("above its highest node 0.4 on 10.0%"), std::string::npos) << w[0];
+  // A switched partition has no nodes: only the range is reported.
+  m.partition = PwlPartition({0}, {{0.25, 0.35}});
+  const InputsOutsideTraining s = inputsOutsideTraining(m, u);
+  EXPECT_FALSE(s.on_grid[0]);
+  EXPECT_DOUBLE_EQ(s.any_beyond_grid, 0.0);
+  EXPECT_NE(inputCoverageWarnings(m, s).at(0).find("outside its training range [0, 0.4] on 10.0%"), std::string::npos);
+}
+
 TEST(Pipeline, TipFrameLiftsTheKStepFits) {
   const io::Log& train = allEffectsRuns().train;
   const io::Log& val = allEffectsRuns().val;
@@ -1301,6 +1385,7 @@ TEST(Pipeline, TipFrameLiftsTheKStepFits) {
   o.schedule_lag_candidates = {0.8};
   o.slow_pole_candidates = {2.0};
   o.play_threshold_candidates = {};
+  o.output_frame = OutputFrame::kAsLogged;
   const DioPwlObfModel logged = identifyModel({train}, o);
   o.output_frame = OutputFrame::kTipCartesian;
   const DioPwlObfModel tip = identifyModel({train}, o);

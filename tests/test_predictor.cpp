@@ -36,6 +36,7 @@ const Data& data() {
     const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
     const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
     IdentifyOptions o;
+    o.output_frame = OutputFrame::kAsLogged;  // the tip-frame variant is made below
     o.play_candidates = {{0.1}};
     o.play_coupling_candidates = {};
     o.scheduling = "switched";

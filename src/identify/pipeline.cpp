@@ -158,15 +158,20 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     times.push_back(log.column("time_s"));
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
-  if (o.output_frame == OutputFrame::kTipCartesian)
+  rep.output_frame = o.output_frame ? OutputFrameChoice{*o.output_frame, std::string("output frame ") +
+                                                                             toString(*o.output_frame) + " as given"}
+                                    : chooseOutputFrame(o.outputs, Y);
+  const OutputFrame frame = rep.output_frame.frame;
+  if (frame == OutputFrame::kTipCartesian)
     PLSA_CHECK(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
                                    "steering in deg), got " + std::to_string(o.outputs.size()));
-  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(o.output_frame, Y);
+  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(frame, Y);
   Eigen::Index total = 0;
   for (const auto& u : U) total += u.rows();
   say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
       std::to_string(1.0 / dt).substr(0, 6) + " Hz");
-  if (o.output_frame == OutputFrame::kTipCartesian)
+  if (!o.output_frame) say("[1/5] " + rep.output_frame.reason);
+  if (frame == OutputFrame::kTipCartesian)
     say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] + " as a tip's bending and steering angles; the model "
         "runs on " + o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
 
@@ -265,7 +270,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   model.sample_time_s = dt;
   model.inputs = o.inputs;
   model.outputs = o.outputs;
-  model.output_frame = o.output_frame;
+  model.output_frame = frame;
   model.poles.assign(static_cast<std::size_t>(no), {});
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
@@ -859,7 +864,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
     std::string s = "[5/5] sensor drift over the training run: ";
     for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
-      if (o.output_frame != OutputFrame::kTipCartesian || oi == 1)
+      if (frame != OutputFrame::kTipCartesian || oi == 1)
         s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
     rep.output_drift = drift;
     if (o.output_drift == "on" || with > without + 1e-9) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <limits>
 #include <stdexcept>
@@ -137,6 +138,38 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   return out;
 }
 
+namespace {
+
+// The grid-node part of InputsOutsideTraining.
+void gridCoverage(const PwlPartition& partition, const Eigen::MatrixXd& u, InputsOutsideTraining& out) {
+  const auto n = static_cast<std::size_t>(u.cols());
+  const double nan = std::numeric_limits<double>::quiet_NaN(), rows = static_cast<double>(u.rows());
+  out.on_grid.assign(n, false);
+  out.grid_low.assign(n, nan);
+  out.grid_high.assign(n, nan);
+  out.below_grid.assign(n, 0.0);
+  out.above_grid.assign(n, 0.0);
+  Eigen::Array<bool, Eigen::Dynamic, 1> beyond = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(u.rows(), false);
+  if (partition.scheduling() == Scheduling::kInterpolated)
+    for (std::size_t s = 0; s < partition.inputs().size(); ++s) {
+      const auto c = static_cast<std::size_t>(partition.inputs()[s]);
+      const std::vector<double>& nodes = partition.breakpoints()[s];
+      if (c >= n || nodes.empty()) continue;
+      out.on_grid[c] = true;
+      out.grid_low[c] = nodes.front();
+      out.grid_high[c] = nodes.back();
+      const auto col = u.col(static_cast<Eigen::Index>(c)).array();
+      const Eigen::Array<bool, Eigen::Dynamic, 1> below = col < nodes.front() - 1e-9;
+      const Eigen::Array<bool, Eigen::Dynamic, 1> above = col > nodes.back() + 1e-9;
+      out.below_grid[c] = static_cast<double>(below.count()) / rows;
+      out.above_grid[c] = static_cast<double>(above.count()) / rows;
+      beyond = beyond || below || above;
+    }
+  out.any_beyond_grid = static_cast<double>(beyond.count()) / rows;
+}
+
+}  // namespace
+
 InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   PLSA_CHECK(u.cols() == static_cast<Eigen::Index>(model.inputs.size()), "inputsOutsideTraining: one column per input");
   InputsOutsideTraining out;
@@ -148,6 +181,36 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
     out.each.push_back(static_cast<double>(outside.col(c).count()) / static_cast<double>(u.rows()));
   }
   out.any = static_cast<double>(outside.rowwise().any().count()) / static_cast<double>(u.rows());
+  gridCoverage(model.partition, u, out);
+  return out;
+}
+
+std::vector<std::string> inputCoverageWarnings(const DioPwlObfModel& model, const InputsOutsideTraining& c) {
+  std::vector<std::string> out;
+  auto pct = [](double share) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.1f%%", 100.0 * share);
+    return std::string(b);
+  };
+  auto num = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", v);
+    return std::string(b);
+  };
+  for (std::size_t i = 0; i < model.inputs.size() && i < c.each.size(); ++i) {
+    const std::string& name = model.inputs[i];
+    const auto [lo, hi] = model.trainingRange(i);
+    const std::string range = "training range [" + num(lo) + ", " + num(hi) + "]";
+    if (i < c.on_grid.size() && c.on_grid[i]) {
+      if (c.below_grid[i] > 0 || c.above_grid[i] > 0)
+        out.push_back(name + " is below the training grid's lowest node " + num(c.grid_low[i]) + " on " +
+                      pct(c.below_grid[i]) + " and above its highest node " + num(c.grid_high[i]) + " on " +
+                      pct(c.above_grid[i]) + " of the samples, where the model holds the outer node's dynamics (" +
+                      range + ", left on " + pct(c.each[i]) + ")");
+    } else if (c.each[i] > 0) {
+      out.push_back(name + " is outside its " + range + " on " + pct(c.each[i]) + " of the samples");
+    }
+  }
   return out;
 }
 
@@ -163,6 +226,29 @@ void requireFiniteScore(double value, const std::string& what, const std::string
       << largest << ", beyond what a score can be computed on; the model is unusable on this log "
       << "(was it identified on data with a gross outlier?)";
   throw std::runtime_error(msg.str());
+}
+
+// The first sample every prediction of `pred` (all outputs, all keys) covers.
+Eigen::Index scoringStart(const std::vector<std::map<int, AlignedPrediction>>& pred) {
+  Eigen::Index first = 0;
+  for (const auto& by_key : pred)
+    for (const auto& [key, p] : by_key) {
+      (void)key;
+      first = std::max(first, p.first);
+    }
+  return first;
+}
+
+// The part of `p` from sample `from` on (p covers up to the record's end).
+AlignedPrediction scoredPart(const AlignedPrediction& p, Eigen::Index from) {
+  const Eigen::Index skip = from - p.first;
+  return {from, p.values.tail(p.values.size() - skip)};
+}
+
+Eigen::VectorXd placedOver(const AlignedPrediction& p, Eigen::Index rows, double fill) {
+  Eigen::VectorXd full = Eigen::VectorXd::Constant(rows, fill);
+  full.segment(p.first, p.values.size()) = p.values;
+  return full;
 }
 
 }  // namespace
@@ -189,29 +275,33 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   ValidationResult res;
   res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.outside_training = inputsOutsideTraining(model, u);
+  // One window for every score: from the first sample every prediction covers.
+  res.scored_from = scoringStart(pred);
+  if (u.rows() - res.scored_from < 2)
+    throw std::invalid_argument(log.source + ": " + std::to_string(u.rows()) + " samples leave " +
+                                std::to_string(std::max<Eigen::Index>(0, u.rows() - res.scored_from)) +
+                                " to score after the longest horizon and the simulation's start (sample " +
+                                std::to_string(res.scored_from) + "); a fit needs 2: give a longer log");
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;
     ov.name = model.outputs[static_cast<std::size_t>(o)];
     ov.measured = y.col(o);
     for (int k : horizons) {
-      const AlignedPrediction& p = pred[static_cast<std::size_t>(o)].at(k);
+      const AlignedPrediction p = scoredPart(pred[static_cast<std::size_t>(o)].at(k), res.scored_from);
       ov.fit_k[k] = fitOf(ov.measured, p);
       ov.rms_k[k] = rmsErrorOf(ov.measured, p);
       requireFiniteScore(ov.fit_k[k], std::to_string(k) + "-step fit", ov.name, p, log.source);
       requireFiniteScore(ov.rms_k[k], std::to_string(k) + "-step rms error", ov.name, p, log.source);
-      Eigen::VectorXd full = Eigen::VectorXd::Constant(y.rows(), nan);
-      full.segment(p.first, p.values.size()) = p.values;
-      ov.predicted_k[k] = full;
+      ov.predicted_k[k] = placedOver(pred[static_cast<std::size_t>(o)].at(k), y.rows(), nan);
     }
-    const AlignedPrediction& s = pred[static_cast<std::size_t>(o)].at(0);
+    const AlignedPrediction s = scoredPart(pred[static_cast<std::size_t>(o)].at(0), res.scored_from);
     ov.fit_sim = fitOf(ov.measured, s);
     ov.rms_sim = rmsErrorOf(ov.measured, s);
     requireFiniteScore(ov.fit_sim, "simulation fit", ov.name, s, log.source);
     requireFiniteScore(ov.rms_sim, "simulation rms error", ov.name, s, log.source);
-    ov.spread_sim = spreadOf(ov.measured.segment(s.first, s.values.size()));
-    ov.simulated = Eigen::VectorXd::Constant(y.rows(), nan);
-    ov.simulated.segment(s.first, s.values.size()) = s.values;
+    ov.spread = spreadOf(ov.measured.segment(s.first, s.values.size()));
+    ov.simulated = placedOver(pred[static_cast<std::size_t>(o)].at(0), y.rows(), nan);
     res.outputs.push_back(std::move(ov));
   }
   return res;
@@ -220,17 +310,12 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
 io::Log predictionLog(const ValidationResult& v) {
   io::Log log;
   log.columns.push_back("time_s");
-  int first = 1;
   for (const auto& o : v.outputs) {
     log.columns.push_back(o.name);
-    for (const auto& [k, p] : o.predicted_k) {
-      log.columns.push_back(o.name + "_k" + std::to_string(k));
-      first = std::max(first, k);
-    }
-    while (first < o.simulated.size() && !std::isfinite(o.simulated(first))) ++first;  // a registration window
+    for (const auto& [k, p] : o.predicted_k) log.columns.push_back(o.name + "_k" + std::to_string(k));
     log.columns.push_back(o.name + "_sim");
   }
-  const Eigen::Index T = v.time.size() - first;
+  const Eigen::Index T = v.time.size() - v.scored_from;
   log.data.resize(T, static_cast<Eigen::Index>(log.columns.size()));
   Eigen::Index c = 0;
   log.data.col(c++) = v.time.tail(T);

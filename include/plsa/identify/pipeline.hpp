@@ -4,11 +4,13 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
+#include "plsa/identify/output_frame_choice.hpp"
 #include "plsa/identify/pole_clustering.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
@@ -30,7 +32,10 @@ struct IdentifyOptions {
   std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
   /// tip_cartesian: the two outputs are a tip's bending and steering angles
   /// (deg) and the model runs on the tip direction's components (output_frame.hpp).
-  OutputFrame output_frame = OutputFrame::kAsLogged;
+  /// Unset (the default): chosen from the outputs' names and data
+  /// (chooseOutputFrame), the choice and its reason in the progress lines
+  /// and IdentifyReport::output_frame.
+  std::optional<OutputFrame> output_frame;
   /// Piecewise-constant references to segment on; empty: cmd_1..3 when present, else the inputs.
   std::vector<std::string> reference;
   int poles_per_pair = 5;
@@ -136,6 +141,8 @@ struct PairPoles {
 
 struct IdentifyReport {
   int segments = 0;
+  /// The frame the outputs were fitted in and why (given, or chosen).
+  OutputFrameChoice output_frame;
   std::vector<std::pair<std::vector<PlayChannel>, double>> play_scores;  ///< (candidate channels, held-out k-step fit)
   struct CouplingScore {
     std::vector<PlayChannel> set;

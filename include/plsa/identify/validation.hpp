@@ -18,7 +18,7 @@ struct OutputValidation {
   double fit_sim = 0.0;
   std::map<int, double> rms_k;  ///< horizon -> rms error, output units
   double rms_sim = 0.0;
-  double spread_sim = 0.0;  ///< standard deviation of the measured output over the simulation's scored samples
+  double spread = 0.0;  ///< standard deviation of the measured output over the scored samples
   Eigen::VectorXd measured;
   std::map<int, Eigen::VectorXd> predicted_k;  ///< aligned with measured, NaN where undefined
   Eigen::VectorXd simulated;
@@ -27,19 +27,40 @@ struct OutputValidation {
 /// Share of the rows of `u` (columns: the model's inputs) with an input
 /// outside its training range, in all (`any`) and per input (`each`): each
 /// input's own range when the model has input_ranges, else the one over all.
+/// For an input the model schedules on a grid of nodes (interpolated
+/// partitions), also the shares below its lowest and above its highest node:
+/// there the model holds the outer node's dynamics, an extrapolation even
+/// where the input stays inside the range the training run spanned (a run
+/// recorded from rest spans 0 while its grid may start higher).
 struct InputsOutsideTraining {
   double any = 0.0;
   std::vector<double> each;
+  std::vector<bool> on_grid;        ///< per input: scheduled on a grid of nodes
+  std::vector<double> grid_low;     ///< per input: lowest node (NaN when not on a grid)
+  std::vector<double> grid_high;    ///< per input: highest node (NaN when not on a grid)
+  std::vector<double> below_grid;   ///< per input: share of rows below the lowest node
+  std::vector<double> above_grid;   ///< per input: share of rows above the highest node
+  double any_beyond_grid = 0.0;     ///< share of rows with some input beyond its grid
 };
 
+/// Every fit and rms error, at every horizon and in simulation, is computed
+/// on the same samples: from `scored_from` (the first sample every
+/// prediction covers: the longest horizon, or the end of the simulation's
+/// yaw registration) to the log's end.
 struct ValidationResult {
   std::vector<OutputValidation> outputs;
   Eigen::VectorXd time;
+  Eigen::Index scored_from = 0;
   InputsOutsideTraining outside_training;  ///< samples with an input outside its training range
 };
 
 /// InputsOutsideTraining of `u` (one column per model input).
 InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
+
+/// Warnings for a user, one sentence each, per input: the share of samples
+/// outside its training range, and below / above its grid's outer nodes.
+/// Empty when every sample is inside both.
+std::vector<std::string> inputCoverageWarnings(const DioPwlObfModel& model, const InputsOutsideTraining& c);
 
 /// How a free simulation takes up a run. A model with an output_level
 /// simulates from the inputs alone and so carries its training run's sensor
@@ -107,7 +128,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
                                const SimulationStart& start = {});
 
 /// Measured vs predicted as a log: time_s, then per output <name>, <name>_k<h>..., <name>_sim,
-/// from the first sample every prediction covers.
+/// over the scored samples (from scored_from): the fits recomputed from it are the ones printed.
 io::Log predictionLog(const ValidationResult& v);
 
 }  // namespace plsa

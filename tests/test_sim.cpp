@@ -8,6 +8,7 @@
 
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
+#include "plsa/sim/independent_actuator.hpp"
 
 using namespace plsa::sim;
 
@@ -465,6 +466,7 @@ TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers
       SimConfig a = only(e), b = only(e);
       EXPECT_EQ(a.formulationOf(e), forms[0]) << e << ": the default comes first";
       b.formulationOf(e) = forms[f];
+      if (forms[f] == "weighted_pi") b.hysteresis.weight_wide = 0.5;  // its defaults are the play's
       Actuator x(a, 1), y(b, 1), off(allOff(), 1);
       double differs = 0.0, effect = 0.0;
       for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
@@ -514,4 +516,138 @@ TEST(SimEffects, PowerLawsReduceToTheFixedOnes) {
       }
     }
   }
+}
+
+TEST(SimEffects, StiffeningsStaticShareHoldsTheBendBack) {
+  SimConfig dynamic = only("stiffening");
+  dynamic.stiffening.formulation = "power";
+  SimConfig hardening = dynamic;
+  hardening.stiffening.static_share = 1.0;
+  Actuator a(dynamic, 1), b(hardening, 1), off(allOff(), 1);
+  const double low_a = settled(a, {0.04, 0, 0}, 6.0), low_b = settled(b, {0.04, 0, 0}, 6.0);
+  const double high_a = settled(a, {0.35, 0, 0}, 6.0), high_b = settled(b, {0.35, 0, 0}, 6.0);
+  const double high_off = settled(off, {0.35, 0, 0}, 6.0);
+  EXPECT_NEAR(high_a, high_off, 0.01 * high_off);  // share 0: the same static bend, only sooner
+  EXPECT_LT(high_b, 0.6 * high_a);                 // share 1: held back by the stiffer spring
+  EXPECT_GT(low_b / low_a, 2.0 * high_b / high_a);  // far less held back at low pressure
+}
+
+TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
+  SimConfig play = only("hysteresis"), pi = only("hysteresis"), none = allOff();
+  pi.hysteresis.formulation = "weighted_pi";
+  pi.hysteresis.weight_narrow = pi.hysteresis.weight_wide = 0.0;
+  pi.hysteresis.weight_mid = 1.0;
+  SimConfig flat = pi;
+  flat.hysteresis.weight_mid = 0.0;
+  SimConfig spread = pi;
+  spread.hysteresis.weight_narrow = spread.hysteresis.weight_wide = 0.5;
+  spread.hysteresis.weight_mid = 0.5;  // sums to 1.5: scaled to 1
+  Actuator a(play, 1), b(pi, 1), c(none, 1), d(flat, 1), e(spread, 1);
+  double differs = 0.0;
+  for (std::array<double, 3> cmd : {std::array<double, 3>{0.3, 0.1, 0}, {0.1, 0, 0.2}, {0.35, 0.3, 0}}) {
+    const auto ra = hold(a, cmd, 2.0), rb = hold(b, cmd, 2.0), rc = hold(c, cmd, 2.0), rd = hold(d, cmd, 2.0),
+               re = hold(e, cmd, 2.0);
+    for (std::size_t k = 0; k < ra.size(); ++k) {
+      ASSERT_NEAR(ra[k].bend_deg, rb[k].bend_deg, 1e-9);
+      ASSERT_NEAR(rc[k].bend_deg, rd[k].bend_deg, 1e-9);
+      ASSERT_TRUE(std::isfinite(re[k].bend_deg));
+      differs = std::max(differs, std::abs(re[k].bend_deg - ra[k].bend_deg));
+    }
+  }
+  EXPECT_GT(differs, 0.05);  // other weights give another loop
+  EXPECT_EQ(flexibleFormulationOf("hysteresis"), "weighted_pi");
+  EXPECT_EQ(pi.parameters("hysteresis").size(), 4u);
+}
+
+TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
+  SimConfig c = only("sensor_bias");
+  c.sensor_bias.tilt_deg = c.sensor_bias.yaw_drift_deg_per_s = 0.0;
+  SimConfig biased = c;
+  biased.sensor_bias.offset_x_deg = 1.0;
+  biased.sensor_bias.drift_y_deg_per_s = 0.1;
+  Actuator a(c, 1), b(biased, 1);
+  const auto ra = hold(a, {0.2, 0.1, 0}, 10.0), rb = hold(b, {0.2, 0.1, 0}, 10.0);
+  auto vec = [](const ActuatorSample& s) {
+    return Eigen::Vector2d(s.bend_deg * std::cos(s.steer_deg * M_PI / 180), s.bend_deg * std::sin(s.steer_deg * M_PI / 180));
+  };
+  for (std::size_t k : {std::size_t{79}, std::size_t{799}}) {
+    const Eigen::Vector2d d = vec(rb[k]) - vec(ra[k]);
+    EXPECT_NEAR(d.x(), 1.0, 1e-9);
+    EXPECT_NEAR(d.y(), 0.1 * rb[k].time_s, 1e-9);
+  }
+}
+
+// --- the independently written actuator (the self-check's "real" data) -----
+
+namespace {
+
+std::vector<IndependentSample> holdIndependent(IndependentActuator& a, std::array<double, 3> cmd, double seconds) {
+  std::vector<IndependentSample> out;
+  for (int k = 0; k < static_cast<int>(std::lround(seconds * 80.0)); ++k) out.push_back(a.step(cmd));
+  return out;
+}
+
+IndependentPhysics quietIndependent() {
+  IndependentPhysics p;
+  p.noise_deg = 0.0;
+  p.pressure_noise_bar = 0.0;
+  return p;
+}
+
+}  // namespace
+
+TEST(IndependentActuator, StartsAtRestAndBendsTowardTheChamber) {
+  IndependentActuator a(quietIndependent(), 1);
+  const IndependentSample first = a.step({0.3, 0, 0});
+  EXPECT_LT(first.bending_deg.norm(), 0.5);  // vented and straight when recording begins
+  EXPECT_LT(first.pressure_bar[0], 0.1);
+  const auto r = holdIndependent(a, {0.3, 0, 0}, 6.0);
+  EXPECT_NEAR(r.back().pressure_bar[0], 0.3, 0.01);
+  EXPECT_GT(r.back().bending_deg.x(), 5.0);
+  EXPECT_NEAR(r.back().bending_deg.y(), 0.0, 0.05 * r.back().bending_deg.x());
+}
+
+TEST(IndependentActuator, EveryLawChangesTheResponseAndEachDiffersFromTheOthers) {
+  for (const std::string& effect : effectNames()) {
+    const auto& laws = independentLawsOf(effect);
+    ASSERT_GE(laws.size(), 3u) << effect;
+    // A staircase up and down on two chambers: every law shows on it.
+    const std::map<std::string, double> strength = {{"deadzone", 0.06}, {"hysteresis", 0.15}, {"stiffening", 1.0},
+                                                    {"coupling", 0.8},  {"pneumatic_lag", 0.3}, {"creep", 0.1},
+                                                    {"sensor_bias", 1.5}};
+    auto response = [&](const std::string& law) {
+      IndependentPhysics p = quietIndependent();
+      if (!law.empty()) setIndependentEffect(p, effect, law, strength.at(effect));
+      IndependentActuator a(p, 7);
+      std::vector<double> trace;
+      for (double c : {0.1, 0.25, 0.35, 0.2, 0.05, 0.0})
+        for (const auto& s : holdIndependent(a, {c, 0.5 * c, 0}, 3.0)) {
+          trace.push_back(s.bending_deg.x());
+          trace.push_back(s.bending_deg.y());
+        }
+      return Eigen::Map<Eigen::VectorXd>(trace.data(), static_cast<Eigen::Index>(trace.size())).eval();
+    };
+    const Eigen::VectorXd off = response("");
+    std::vector<Eigen::VectorXd> each;
+    for (const auto& law : laws) {
+      each.push_back(response(law));
+      EXPECT_GT((each.back() - off).cwiseAbs().maxCoeff(), 0.2) << effect << " / " << law << " changes nothing";
+    }
+    for (std::size_t i = 0; i < each.size(); ++i)
+      for (std::size_t j = i + 1; j < each.size(); ++j)
+        EXPECT_GT((each[i] - each[j]).cwiseAbs().maxCoeff(), 0.05) << effect << ": " << laws[i] << " = " << laws[j];
+  }
+}
+
+TEST(IndependentActuator, RejectsUnknownLawsValuesAndCommands) {
+  IndependentPhysics p;
+  EXPECT_THROW(setIndependentEffect(p, "friction", "coulomb", 1.0), std::invalid_argument);
+  EXPECT_THROW(setIndependentEffect(p, "creep", "maxwell", 1.0), std::invalid_argument);
+  p.hysteresis = "play";  // plsa's own law is not one of the independent ones
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = IndependentPhysics{};
+  p.natural_freq_hz = -1.0;
+  EXPECT_THROW(IndependentActuator(p, 1), std::invalid_argument);
+  IndependentActuator a(IndependentPhysics{}, 1);
+  EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
 }

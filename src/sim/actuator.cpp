@@ -50,7 +50,16 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   const double period = 1.0 / config_.sample_rate_hz;
   substeps_ = std::max(1, static_cast<int>(std::lround(period / config_.internal_step_s)));
   dt_ = period / substeps_;
-  const std::size_t n_play = config_.hysteresis.formulation == "prandtl_ishlinskii" ? kPiOperators : 1;
+  const std::string& hyst = config_.hysteresis.formulation;
+  const std::size_t n_play = hyst == "prandtl_ishlinskii" ? kPiOperators : hyst == "weighted_pi" ? 3 : 1;
+  weighted_pi_ = hyst == "weighted_pi";
+  if (weighted_pi_) {
+    const auto& h = config_.hysteresis;
+    pi_weights_ = {h.weight_narrow, h.weight_mid, h.weight_wide};
+    const double sum = pi_weights_[0] + pi_weights_[1] + pi_weights_[2];
+    if (sum > 1.0)
+      for (double& w : pi_weights_) w /= sum;
+  }
   for (auto& p : play_) p.assign(n_play, 0.0);
   // A fractional delay (linear between two taps) keeps the response, and so
   // any calibration of delay_s, continuous in the parameter.
@@ -120,7 +129,16 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     if (c.coupling.enabled)
       strain *= saturating_coupling_ ? 1.0 / (1.0 + c.coupling.per_bar * (sum_p - p_eff[i]))
                                      : std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
-    if (c.hysteresis.enabled) {
+    if (c.hysteresis.enabled && weighted_pi_) {
+      auto& plays = play_[i];
+      double out = strain;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const double r = c.hysteresis.width * (k == 0 ? 0.5 : k == 1 ? 1.0 : 2.0) * std::abs(strain);
+        plays[k] = std::clamp(plays[k], strain - r, strain + r);
+        out += pi_weights_[k] * (plays[k] - strain);
+      }
+      strain = out;
+    } else if (c.hysteresis.enabled) {
       // Play operator(s): output moves only once the input leaves a band around it.
       auto& plays = play_[i];
       double out = 0.0;
@@ -158,7 +176,10 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     if (stiffening_law_ == StiffeningLaw::kQuadratic) growth = x * x;
     if (stiffening_law_ == StiffeningLaw::kExponential) growth = std::expm1(x) / (std::exp(1.0) - 1.0);
     if (stiffening_law_ == StiffeningLaw::kPower) growth = std::pow(std::max(0.0, x), c.stiffening.exponent);
-    omega *= std::sqrt(1.0 + c.stiffening.per_bar * 0.2 * growth);
+    const double stiffer = 1.0 + c.stiffening.per_bar * 0.2 * growth;
+    omega *= std::sqrt(stiffer);
+    if (stiffening_law_ == StiffeningLaw::kPower && c.stiffening.static_share > 0.0)
+      target /= std::pow(stiffer, c.stiffening.static_share);
   }
   // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
   bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
@@ -193,7 +214,17 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   }
   s.sensor_rotation = g_r_b.transpose();
   anglesFromRotation(s.sensor_rotation, s.bend_deg, s.steer_deg);
+  if (c.sensor_bias.enabled) addBendingOffset(s);
   return s;
+}
+
+void Actuator::addBendingOffset(ActuatorSample& s) const {
+  const auto& b = config_.sensor_bias;
+  const double x = s.bend_deg * std::cos(s.steer_deg * kDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
+  const double y = s.bend_deg * std::sin(s.steer_deg * kDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
+  if (x == 0.0 && y == 0.0 && s.bend_deg == 0.0) return;
+  s.bend_deg = std::hypot(x, y);
+  s.steer_deg = std::atan2(y, x) / kDeg;
 }
 
 ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) {

@@ -40,8 +40,12 @@ std::vector<Field> fields(SimConfig& c) {
       {"deadzone", {"threshold_bar", &c.deadzone.threshold_bar, 0.0, 0.2, "bar"}},
       {"deadzone", {"smooth_width_bar", &c.deadzone.smooth_width_bar, 0.001, 0.1, "bar"}, "smooth"},
       {"hysteresis", {"width", &c.hysteresis.width, 0.0, 0.5, "fraction"}},
+      {"hysteresis", {"weight_narrow", &c.hysteresis.weight_narrow, 0.0, 1.0, ""}, "weighted_pi"},
+      {"hysteresis", {"weight_mid", &c.hysteresis.weight_mid, 0.0, 1.0, ""}, "weighted_pi"},
+      {"hysteresis", {"weight_wide", &c.hysteresis.weight_wide, 0.0, 1.0, ""}, "weighted_pi"},
       {"stiffening", {"per_bar", &c.stiffening.per_bar, 0.0, 60.0, "1/bar"}},
       {"stiffening", {"exponent", &c.stiffening.exponent, 0.5, 3.0, ""}, "power"},
+      {"stiffening", {"static_share", &c.stiffening.static_share, 0.0, 1.0, ""}, "power"},
       {"coupling", {"per_bar", &c.coupling.per_bar, 0.0, 2.5, "1/bar"}},
       {"pneumatic_lag", {"fill_time_constant_s", &c.pneumatic_lag.fill_time_constant_s, 0.005, 2.0, "s"}},
       {"pneumatic_lag", {"vent_time_constant_s", &c.pneumatic_lag.vent_time_constant_s, 0.005, 2.0, "s"}},
@@ -51,6 +55,10 @@ std::vector<Field> fields(SimConfig& c) {
       {"creep", {"time_constant_s", &c.creep.time_constant_s, 0.1, 200.0, "s"}},
       {"sensor_bias", {"tilt_deg", &c.sensor_bias.tilt_deg, -15.0, 15.0, "deg"}},
       {"sensor_bias", {"yaw_drift_deg_per_s", &c.sensor_bias.yaw_drift_deg_per_s, -1.0, 1.0, "deg/s"}},
+      {"sensor_bias", {"offset_x_deg", &c.sensor_bias.offset_x_deg, -10.0, 10.0, "deg"}},
+      {"sensor_bias", {"offset_y_deg", &c.sensor_bias.offset_y_deg, -10.0, 10.0, "deg"}},
+      {"sensor_bias", {"drift_x_deg_per_s", &c.sensor_bias.drift_x_deg_per_s, -0.2, 0.2, "deg/s"}},
+      {"sensor_bias", {"drift_y_deg_per_s", &c.sensor_bias.drift_y_deg_per_s, -0.2, 0.2, "deg/s"}},
   };
 }
 
@@ -83,7 +91,7 @@ std::string* formulation(SimConfig& c, const std::string& module) {
 const std::vector<std::string>& formulationsOf(const std::string& module) {
   static const std::map<std::string, std::vector<std::string>> all = {
       {"deadzone", {"sharp", "smooth"}},
-      {"hysteresis", {"play", "prandtl_ishlinskii"}},
+      {"hysteresis", {"play", "prandtl_ishlinskii", "weighted_pi"}},
       {"stiffening", {"linear", "quadratic", "exponential", "power"}},
       {"coupling", {"multiplicative", "saturating"}},
       {"pneumatic_lag", {"linear", "orifice", "choked", "power"}},
@@ -96,6 +104,7 @@ const std::vector<std::string>& formulationsOf(const std::string& module) {
 
 std::string flexibleFormulationOf(const std::string& effect) {
   const auto& laws = formulationsOf(effect);
+  if (effect == "hysteresis") return "weighted_pi";
   return std::find(laws.begin(), laws.end(), "power") != laws.end() ? "power" : "";
 }
 

@@ -60,6 +60,7 @@ class Actuator {
   void substep(const std::array<double, 3>& cmd);
   double effectivePressure(double p) const;
   ActuatorSample measure(const std::array<double, 3>& cmd);
+  void addBendingOffset(ActuatorSample& s) const;  ///< sensor_bias offsets and drifts of the reported angles
 
   SimConfig config_;
   std::mt19937_64 rng_;
@@ -79,6 +80,8 @@ class Actuator {
   FlowLaw flow_law_ = FlowLaw::kLinear;
   StiffeningLaw stiffening_law_ = StiffeningLaw::kLinear;
   bool saturating_coupling_ = false, two_rate_creep_ = false, random_walk_bias_ = false;
+  bool weighted_pi_ = false;
+  std::array<double, 3> pi_weights_{};
   Eigen::Vector2d bend_ = Eigen::Vector2d::Zero();  ///< theta * (cos phi, sin phi), rad
   Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();
   std::vector<std::array<double, 3>> delay_line_;

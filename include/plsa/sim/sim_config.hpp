@@ -65,8 +65,14 @@ struct SimConfig {
   } deadzone;
   struct Hysteresis {
     bool enabled = true;
-    std::string formulation = "play";  ///< "play" | "prandtl_ishlinskii"
+    /// "play" | "prandtl_ishlinskii" (five equal plays, widths spread to 2x) |
+    /// "weighted_pi": a Prandtl-Ishlinskii operator with fitted weights,
+    /// strain + sum_k w_k (play_k - strain) over plays of width/2, width and
+    /// 2 width (weights scaled to sum to at most 1; the rest is the linear
+    /// part). It contains "play" (weights 0, 1, 0) and no hysteresis (0, 0, 0).
+    std::string formulation = "play";
     double width = 0.12;  ///< play half-width as a fraction of the strain
+    double weight_narrow = 0.0, weight_mid = 1.0, weight_wide = 0.0;  ///< only for "weighted_pi"
   } hysteresis;
   struct Stiffening {
     bool enabled = true;
@@ -77,6 +83,12 @@ struct SimConfig {
     std::string formulation = "linear";
     double per_bar = 20.0;
     double exponent = 1.5;  ///< only for "power"
+    /// Only for "power": how much of the stiffening also holds the static
+    /// deflection back (the target divided by growth^static_share). 0: the
+    /// stiffer mode reaches the same bend sooner (the other laws); 1: a
+    /// stiffer spring under the same drive bends less, as a hardening
+    /// material does.
+    double static_share = 0.0;
   } stiffening;
   struct Coupling {
     bool enabled = true;
@@ -111,6 +123,11 @@ struct SimConfig {
     std::string formulation = "linear_drift";
     double tilt_deg = 1.5;          ///< mount misalignment
     double yaw_drift_deg_per_s = 0.02;
+    /// A zero error and a linear drift of each bending-vector component
+    /// (bend cos steer, bend sin steer), as an uncalibrated or warming
+    /// sensor shows; 0 by default.
+    double offset_x_deg = 0.0, offset_y_deg = 0.0;
+    double drift_x_deg_per_s = 0.0, drift_y_deg_per_s = 0.0;
   } sensor_bias;
 
   bool effectEnabled(const std::string& effect) const;
@@ -127,8 +144,9 @@ struct SimConfig {
 /// The formulations an effect can take, its default first.
 const std::vector<std::string>& formulationsOf(const std::string& effect);
 
-/// The effect's flexible law (one whose shape parameter spans its fixed
-/// laws: "power" for stiffening and pneumatic_lag), or "" when it has none.
+/// The effect's flexible law (one whose shape parameters span its fixed
+/// laws: "power" for stiffening and pneumatic_lag, "weighted_pi" for
+/// hysteresis), or "" when it has none.
 std::string flexibleFormulationOf(const std::string& effect);
 
 /// JSON I/O. Unknown keys and wrong types are errors naming the key path.

@@ -1,0 +1,126 @@
+// A second simulated three-chamber actuator, written apart from Actuator and
+// sharing none of its effect laws: the source of "real" data for checks that
+// must not test plsa on its own formulations (the diagnosis self-check, the
+// identification generalisation benchmark). Every effect has three or more
+// laws, each outside the family the diagnosis calibrates for that effect
+// (Bouc-Wen, Preisach and backlash hysteresis; logistic, cubic-onset and
+// sticking deadzones; Duffing, tanh and saturating-exponential stiffening;
+// two-volume, pressure-dependent and quantised-valve pneumatics; Prony-series
+// and asymmetric creep; sensor scale, warm-up and wandering offsets...). Its
+// nominal physics has the same parts as Actuator's (first-order chambers,
+// a static elongation map, a second-order bending mode, constant curvature),
+// each integrated its own way.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace plsa::sim {
+
+struct IndependentPhysics {
+  double sample_rate_hz = 80.0;
+  double max_pressure_bar = 0.4;
+  // --- nominal -----------------------------------------------------------
+  double time_constant_s = 0.05;          ///< chamber filling and venting (first order)
+  double max_rate_bar_per_s = 8.0;        ///< flow limit
+  double strain_per_bar = 0.75;
+  double strain_quadratic = -0.6;         ///< per bar^2
+  double natural_freq_hz = 0.8;
+  double damping_ratio = 0.85;
+  double length_m = 0.09, chamber_radius_m = 0.008;
+  std::array<double, 3> bend_direction_deg = {0.0, 120.0, 240.0};
+  double noise_deg = 0.05;                ///< white noise on each bending-vector component
+  double pressure_noise_bar = 0.002;      ///< white noise on each measured pressure
+  // --- effects: a law name ("" = off) and one strength each ------------------
+  /// deadzone: "logistic" (p * sigmoid), "cubic_onset" (p^3 / (p^2 + t^2)),
+  /// "sticking" (opens above t, closes below t/2); strength: t (bar).
+  std::string deadzone;
+  double deadzone_bar = 0.06;
+  /// hysteresis: "bouc_wen" (on each chamber's strain), "preisach" (a
+  /// triangle of relays), "backlash" (mechanical play of the bending
+  /// vector); strength: fraction of the strain (bouc_wen, preisach) or
+  /// degrees / 10 (backlash: 0.1 = 1 deg).
+  std::string hysteresis;
+  double hysteresis_strength = 0.12;
+  /// stiffening: "duffing" (a cubic spring in the bending angle),
+  /// "tanh_strain" (strain saturating), "saturating_exp" (stiffness grows
+  /// as 1 - exp(-sum p / 0.15 bar)); strength: dimensionless.
+  std::string stiffening;
+  double stiffening_strength = 1.0;
+  /// coupling: "exponential" (strain x exp(-k others)), "quadratic" (x (1 -
+  /// k others^2 / 0.2 bar)), "crosstalk" (a chamber's strain adds to its
+  /// neighbours'); strength k (1/bar, or a fraction for crosstalk).
+  std::string coupling;
+  double coupling_strength = 0.8;
+  /// pneumatic lag: "two_volume" (a supply line filling the chamber),
+  /// "pressure_dependent" (time constant growing with the pressure),
+  /// "quantised_valve" (commands held at 25 Hz and rounded to 0.02 bar);
+  /// strength: the line's time constant (s), the growth per 0.2 bar, unused.
+  std::string pneumatic_lag;
+  double pneumatic_strength = 0.08;
+  /// creep: "prony" (four Kelvin elements, 0.5 to 500 s, equal shares: a
+  /// logarithmic creep), "power_law" (six elements, 0.2 to 200 s, shares
+  /// rising with the time constant), "asymmetric" (loads at tau, recovers at
+  /// 4 tau); strength: the total extra strain fraction; creep_time_s: tau.
+  std::string creep;
+  double creep_fraction = 0.1;
+  double creep_time_s = 6.0;
+  /// sensor bias: "scale_offset" (gain and alignment error plus a constant
+  /// offset of the bending vector), "warm_up" (an offset settling in with
+  /// time constant 20 s), "wandering" (a random-walk offset); strength:
+  /// the offset (deg).
+  std::string sensor_bias;
+  double sensor_offset_deg = 1.5;
+
+  /// Throws std::invalid_argument naming an unknown law or a value out of range.
+  void validate() const;
+};
+
+/// The laws IndependentPhysics offers for an effect named as in
+/// sim::effectNames() (deadzone, hysteresis, ...); throws for other names.
+const std::vector<std::string>& independentLawsOf(const std::string& effect);
+
+/// Sets the law of `effect` (a name from sim::effectNames()) and its strength.
+void setIndependentEffect(IndependentPhysics& physics, const std::string& effect, const std::string& law,
+                          double strength);
+
+struct IndependentSample {
+  std::array<double, 3> pressure_bar{};
+  Eigen::Vector2d bending_deg = Eigen::Vector2d::Zero();  ///< measured bending vector (bend cos steer, bend sin steer)
+};
+
+/// Starts vented and at rest; step() advances one sample.
+class IndependentActuator {
+ public:
+  IndependentActuator(const IndependentPhysics& physics, std::uint64_t seed);
+  IndependentSample step(const std::array<double, 3>& command_bar);
+
+ private:
+  void substep(const std::array<double, 3>& cmd, double dt);
+  double effectivePressure(std::size_t i, double p);
+  double hysteretic(std::size_t i, double strain, double dt);
+  double creepOf(std::size_t i, double strain, double dt);
+  Eigen::Vector2d measured(const Eigen::Vector2d& bend);
+
+  IndependentPhysics ph_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  int substeps_ = 1;
+  double t_ = 0.0;
+  std::array<double, 3> p_{}, line_{}, held_cmd_{};
+  double next_valve_update_ = 0.0;
+  std::array<bool, 3> open_{};
+  std::array<double, 3> bw_z_{}, last_strain_{};
+  std::array<std::array<bool, 55>, 3> relays_{};
+  std::array<std::array<double, 6>, 3> creep_{};
+  Eigen::Vector2d bend_ = Eigen::Vector2d::Zero(), rate_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d backlash_out_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d wander_ = Eigen::Vector2d::Zero();
+};
+
+}  // namespace plsa::sim

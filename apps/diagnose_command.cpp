@@ -29,7 +29,7 @@ struct DiagnoseArgs {
 void runDiagnose(DiagnoseArgs& a) {
   std::vector<std::string> inputs = a.real;
   inputs.push_back(a.sim);
-  for (const char* name : {"diagnosis.json", "report.html", "calibrated_sim.json"})
+  for (const char* name : {"diagnosis.json", "report.html", "calibrated_sim.json", "trace.csv", "gap_map.csv", "shrink.csv"})
     refuseOverwritingInputs((std::filesystem::path(a.out) / name).string(), "--out", inputs, "plsa diagnose");
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
@@ -48,6 +48,8 @@ void runDiagnose(DiagnoseArgs& a) {
   const auto dir = std::filesystem::path(a.out);
   writeTextFile((dir / "diagnosis.json").string(), diagnose::toJson(d), "diagnosis");
   writeTextFile((dir / "report.html").string(), diagnose::reportHtml(d), "HTML report");
+  for (const auto& [name, text] : diagnose::reportSeriesCsv(d))
+    writeTextFile((dir / name).string(), text, "report data " + name);
   writeTextFile((dir / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config),
                 "calibrated simulator configuration");
   std::printf("%s\n", d.verdict.c_str());
@@ -57,7 +59,8 @@ void runDiagnose(DiagnoseArgs& a) {
   for (const auto& c : d.ranking)
     std::printf("  %-14s %-18s -> %5.1f%%  shrink %5.1f%%%s\n", c.effect.c_str(), ("(" + c.formulation + ")").c_str(),
                 c.heldout_after.percent(), c.shrink_percent, c.signature.present ? "  (signature supports it)" : "");
-  std::printf("wrote %s/diagnosis.json, report.html, calibrated_sim.json (%.0f s)\n", a.out.c_str(), d.elapsed_s);
+  std::printf("wrote %s/diagnosis.json, report.html (with trace.csv, gap_map.csv, shrink.csv), calibrated_sim.json (%.0f s)\n",
+              a.out.c_str(), d.elapsed_s);
 }
 
 struct SelfcheckArgs {
@@ -78,10 +81,20 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
       j["cases"].push_back({{"name", c.name}, {"withheld", c.withheld}, {"formulation", c.formulation},
                             {"selected", c.selected}, {"top2", c.top2}, {"gap_before", c.gap_before},
                             {"gap_after", c.gap_after}, {"noise", c.noise}, {"true_effect_shrink", c.true_effect_shrink},
+                            {"spurious", c.spurious}, {"verdict", c.verdict}, {"confidence", c.confidence},
+                            {"effect_size_percent", c.effect_size}, {"truth", c.truth},
                             {"pass", c.pass}, {"elapsed_s", c.elapsed_s}});
     j["labels"] = r.labels;
     j["confusion"] = r.confusion;
     j["targets_met"] = r.targets_met;
+    j["truth"] = r.truth;
+    j["summary"] = {{"single_cases", r.single_cases},   {"single_top1", r.single_top1},
+                    {"pair_cases", r.pair_cases},       {"pair_top2", r.pair_top2},
+                    {"null_cases", r.null_cases},       {"null_clean", r.null_clean},
+                    {"cases_with_spurious", r.cases_with_spurious},
+                    {"gap_single_cases", r.gap_single_cases},   {"gap_single_top1", r.gap_single_top1},
+                    {"uncertain", r.uncertain},                 {"qualified", r.qualified},
+                    {"median_true_shrink", r.median_true_shrink}, {"min_true_shrink", r.min_true_shrink}};
     writeTextFile(a.out, j.dump(2), "self-check results");
   }
   if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");
@@ -124,11 +137,23 @@ void addDiagnoseCommands(CLI::App& app) {
 
   auto s = std::make_shared<SelfcheckArgs>();
   CLI::App* sc = app.add_subcommand("diagnose-selfcheck", "Score the diagnosis blind on data with withheld effects");
+  sc->add_option_function<std::string>(
+        "--truth",
+        [s](const std::string& t) {
+          s->options.truth = t == "own" ? diagnose::SelfcheckTruth::kOwnLaws : diagnose::SelfcheckTruth::kIndependent;
+        },
+        "independent (default): \"real\" data from a simulator written apart from plsa's, laws outside every "
+        "candidate's family, nominal physics randomised widely; own: plsa's simulator and its formulations (a "
+        "check of the machinery, not of generalisation)")
+      ->check(CLI::IsMember({"independent", "own"}));
+  sc->add_flag("--settled", [s](std::int64_t n) { s->options.from_rest = n == 0; },
+               "own laws: record the runs settled at their first command instead of from rest");
   sc->add_option("--effects", s->options.effects, "Single-effect cases (default: all seven)")->delimiter(',');
   sc->add_flag("--fixed-laws", [s](std::int64_t n) { s->options.diagnose.flexible_laws = n == 0; },
                "Diagnose with each candidate's configured formulation instead of its flexible law");
   sc->add_option("--seeds", s->options.seeds_per_effect,
-                 "Cases per effect (odd ones generate the data with a law the candidate's cannot express)")
+                 "Cases per effect (independent: its three laws in turn; own: odd ones with a law the candidate's "
+                 "cannot express); default 4")
       ->check(CLI::Range(1, 20));
   sc->add_flag("--no-pairs", s->no_pairs, "Skip the pairs of withheld effects");
   sc->add_option("--null", s->options.null_cases, "Null cases (nothing withheld)")->check(CLI::Range(0, 20));
@@ -143,6 +168,9 @@ void addDiagnoseCommands(CLI::App& app) {
   sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
   sc->add_option("--out", s->out, "Results as JSON");
   sc->add_flag("--verbose", s->options.verbose, "Show each diagnosis's progress");
+  sc->add_option("--save-runs", s->options.save_runs_dir,
+                 "Write every case's training and held-out runs to this directory as CSV logs (for plsa diagnose)")
+      ->check(CLI::ExistingDirectory);
   sc->callback([s] { runSelfcheckCommand(*s); });
 }
 

@@ -3,6 +3,7 @@
 // and of a null case; the report rendered in headless Chromium.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -35,6 +36,7 @@ RunData recorded(const sim::SimConfig& truth, double seconds, std::uint64_t seed
   const SimTrace t = replayCommands(truth, r.commands, seed);
   r.outputs = t.outputs;
   r.pressures = t.pressures;
+  r.start = RunStart::kSettled;  // replayCommands held the first command for 3 s
   return r;
 }
 
@@ -160,10 +162,30 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
     if (e == "stiffening" || e == "pneumatic_lag") {
       EXPECT_EQ(law, "power") << e;
       EXPECT_TRUE(c["params"].contains(e + ".exponent")) << e;
+    } else if (e == "hysteresis") {
+      EXPECT_EQ(law, "weighted_pi");
+      EXPECT_TRUE(c["params"].contains("hysteresis.weight_wide"));
     } else {
       EXPECT_EQ(law, sim::formulationsOf(e)[0]) << e;
     }
   }
+
+  // How sure: the margins behind the confidence, and the identified reference.
+  EXPECT_TRUE(d.confidence == "confident" || d.confidence == "qualified" || d.confidence == "uncertain") << d.confidence;
+  EXPECT_EQ(j["confidence"]["level"], d.confidence);
+  EXPECT_EQ(j["confidence"]["runner_up"], d.ranking[1].effect);
+  EXPECT_GT(d.margin_over_recalibration, 0.0);
+  EXPECT_LE(d.margin_over_recalibration, 1.0);
+  EXPECT_TRUE(j["identified_reference"].contains("available"));
+  EXPECT_FALSE(d.reference.note.empty());
+  // Every plotted series is exported: the trace row for row, the map cell for cell, one row per candidate.
+  const auto series = reportSeriesCsv(d);
+  ASSERT_EQ(series.size(), 3u);
+  auto lines = [](const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); };
+  EXPECT_EQ(series[0].first, "trace.csv");
+  EXPECT_EQ(lines(series[0].second), static_cast<std::size_t>(d.trace_real.rows()) + 1);
+  EXPECT_EQ(lines(series[1].second), static_cast<std::size_t>(d.where.gap_map.size()) + 1);
+  EXPECT_EQ(lines(series[2].second), d.ranking.size() + 1);
 
   // The report renders its charts in a real browser.
   const char* chromium = "/usr/bin/chromium";
@@ -187,6 +209,9 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   };
   EXPECT_NE(html.find("id=\"verdict\""), std::string::npos) << "the page did not load";
   EXPECT_EQ(count("<rect class=\"cell\""), 32u) << "two 4x4 gap maps";
+  EXPECT_EQ(count("<g class=\"colour-bar\""), 2u) << "a colour bar per map";
+  EXPECT_EQ(count("RMS residual (deg, bending vector)"), 2u) << "the maps' unit";
+  EXPECT_NE(html.find("href=\"trace.csv\""), std::string::npos);
   EXPECT_EQ(count("<rect class=\"bar\""), d.ranking.size()) << "one bar per candidate";
   EXPECT_EQ(count("<path class=\"series\""), 6u) << "real, sim and sim+effect traces for two outputs";
   fs::remove_all(dir);
@@ -199,4 +224,84 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   const Diagnosis d = runDiagnosis(allOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, quick());
   EXPECT_TRUE(d.selected.empty()) << d.verdict;
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
+  EXPECT_EQ(d.confidence, "none");
+  EXPECT_EQ(d.verdict.find("misses something"), std::string::npos) << "the gap is at the noise floor";
+}
+
+TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
+  // A periodic wobble of the steering output that no candidate makes and
+  // the nominal physics cannot absorb.
+  sim::SimConfig truth = allOff();
+  std::vector<RunData> runs = {recorded(truth, 40, 31), recorded(truth, 30, 32)};
+  for (auto& r : runs)
+    for (Eigen::Index i = 0; i < r.samples(); ++i) {
+      const double t = static_cast<double>(i) * r.sample_time_s;
+      r.outputs(i, 1) += 4.0 * std::sin(2.0 * M_PI * t / 7.0);
+    }
+  DiagnoseOptions o = quick();
+  o.candidates = {"deadzone", "creep"};
+  const Diagnosis d = runDiagnosis(allOff(), runs, o);
+  EXPECT_GT(d.gap_after.percent(), 3.0 * d.noise.percent());
+  if (d.selected.empty())
+    EXPECT_NE(d.verdict.find("misses something no candidate models"), std::string::npos) << d.verdict;
+  else
+    EXPECT_EQ(d.confidence, "qualified") << d.verdict;
+}
+
+namespace {
+
+// A settled recording whose first command puts `first_bar` in chamber 1.
+RunData startingAt(const sim::SimConfig& truth, double first_bar, std::uint64_t seed) {
+  RunData r;
+  r.name = "run" + std::to_string(seed);
+  r.sample_time_s = 1.0 / truth.sample_rate_hz;
+  r.commands = excitationCommands(10, truth.sample_rate_hz, seed);
+  r.commands.topRows(80).setZero();
+  r.commands.topRows(80).col(0).setConstant(first_bar);
+  const SimTrace t = replayCommands(truth, r.commands, seed);
+  r.outputs = t.outputs;
+  r.pressures = t.pressures;
+  r.start = RunStart::kSettled;
+  return r;
+}
+
+}  // namespace
+
+TEST(RunStartDetection, TellsARecordingFromRestFromASettledOne) {
+  sim::SimConfig truth = allOff();
+  RunData settled = startingAt(truth, 0.25, 5);
+  settled.start = RunStart::kAuto;
+  EXPECT_EQ(detectRunStart(settled, OutputMap::kAngles), RunStart::kSettled);
+  RunData rest = settled;
+  const SimTrace t = replayCommands(truth, rest.commands, 5, 0.0);  // no pre-roll: from rest
+  rest.outputs = t.outputs;
+  rest.pressures = t.pressures;
+  EXPECT_EQ(detectRunStart(rest, OutputMap::kAngles), RunStart::kAtRest);
+  // Without pressures the bending tells; with affine outputs nothing does: at rest, as users record.
+  RunData no_p = settled;
+  no_p.pressures.resize(0, 0);
+  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAngles), RunStart::kSettled);
+  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAffine), RunStart::kAtRest);
+  no_p.outputs = rest.outputs;
+  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAngles), RunStart::kAtRest);
+  // A chamber a third of the way up after the first sample period is filling, not settled.
+  RunData filling = rest;
+  filling.pressures(0, 0) = 0.34 * filling.commands(0, 0);
+  EXPECT_EQ(detectRunStart(filling, OutputMap::kAngles), RunStart::kAtRest);
+  // A zero first command is a start at rest whatever follows.
+  RunData zero = settled;
+  zero.commands.row(0).setZero();
+  EXPECT_EQ(detectRunStart(zero, OutputMap::kAngles), RunStart::kAtRest);
+}
+
+TEST(RunStartDetection, TheSimulatorReplaysEachStartItsOwnWay) {
+  sim::SimConfig truth = allOff();
+  truth.sensor.noise_deg = 0.0;
+  RunData run = startingAt(truth, 0.25, 6);
+  run.start = RunStart::kSettled;
+  const double settled_gap = measureGap(truth, {run}, GapOptions{}).total;
+  run.start = RunStart::kAtRest;  // replayed from rest: the first second differs
+  const double rest_gap = measureGap(truth, {run}, GapOptions{}).total;
+  EXPECT_LT(settled_gap, 1e-6);
+  EXPECT_GT(rest_gap, 100 * settled_gap + 1e-4);
 }

@@ -39,7 +39,7 @@ SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double pr
   c.sensor.noise_deg = 0.0;
   c.sample_rate_hz = 1.0 / run.sample_time_s;
   c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
-  return replayCommands(c, run.commands, 1, preroll_s);
+  return replayCommands(c, run.commands, 1, run.start == RunStart::kSettled ? preroll_s : 0.0);
 }
 
 namespace {

@@ -1,4 +1,5 @@
 // JSON and HTML renderings of a diagnosis.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -107,8 +108,60 @@ std::string toJson(const Diagnosis& d) {
   j["where"] = breakdownJson(d.where);
   j["where_after"] = breakdownJson(d.where_after);
   j["verdict"] = d.verdict;
+  j["identified_reference"] = {{"available", d.reference.available},
+                               {"heldout_gap_percent", d.reference.gap.percent()},
+                               {"note", d.reference.note}};
+  j["confidence"] = {{"level", d.confidence},
+                     {"runner_up", d.runner_up},
+                     {"margin_over_recalibration", d.margin_over_recalibration},
+                     {"margin_over_runner_up", d.margin_over_runner_up},
+                     {"recalibrated_gap_percent", d.recalibrated_round1.percent()}};
   j["elapsed_s"] = d.elapsed_s;
   return j.dump(2);
+}
+
+namespace {
+
+std::string outputUnit(const Diagnosis& d) {
+  return d.map == OutputMap::kAngles ? "deg, bending vector" : "output units";
+}
+
+std::string csvNumber(double v) {
+  if (!std::isfinite(v)) return "nan";
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis& d) {
+  std::ostringstream trace, map, shrink;
+  trace << "time_s,real_1,real_2,calibrated_sim_1,calibrated_sim_2,with_effects_1,with_effects_2\n";
+  for (Eigen::Index i = 0; i < d.trace_real.rows(); ++i) {
+    trace << csvNumber(static_cast<double>(i) * d.trace_dt);
+    for (const Eigen::MatrixXd* m : {&d.trace_real, &d.trace_before, &d.trace_after})
+      for (Eigen::Index c = 0; c < 2; ++c) trace << ',' << csvNumber((*m)(i, c));
+    trace << '\n';
+  }
+  map << "chamber_1_from_bar,chamber_1_to_bar,chamber_2_from_bar,chamber_2_to_bar,rms_before,rms_after\n";
+  const auto& edges = d.where.grid_edges_bar;
+  for (Eigen::Index r = 0; r < d.where.gap_map.rows(); ++r)
+    for (Eigen::Index c = 0; c < d.where.gap_map.cols(); ++c) {
+      const auto rr = static_cast<std::size_t>(r), cc = static_cast<std::size_t>(c);
+      const bool has_after = d.where_after.gap_map.rows() > r && d.where_after.gap_map.cols() > c;
+      map << csvNumber(cc < edges.size() ? edges[cc] : NAN) << ',' << csvNumber(cc + 1 < edges.size() ? edges[cc + 1] : NAN)
+          << ',' << csvNumber(rr < edges.size() ? edges[rr] : NAN) << ','
+          << csvNumber(rr + 1 < edges.size() ? edges[rr + 1] : NAN) << ',' << csvNumber(d.where.gap_map(r, c)) << ','
+          << csvNumber(has_after ? d.where_after.gap_map(r, c) : NAN) << '\n';
+    }
+  shrink << "effect,formulation,heldout_gap_before_percent,heldout_gap_after_percent,shrink_percent,kept\n";
+  for (const auto& c : d.ranking) {
+    const bool kept = std::find(d.selected.begin(), d.selected.end(), c.effect) != d.selected.end();
+    shrink << c.effect << ',' << c.formulation << ',' << csvNumber(c.heldout_before.percent()) << ','
+           << csvNumber(c.heldout_after.percent()) << ',' << csvNumber(c.shrink_percent) << ',' << (kept ? 1 : 0) << '\n';
+  }
+  return {{"trace.csv", trace.str()}, {"gap_map.csv", map.str()}, {"shrink.csv", shrink.str()}};
 }
 
 std::string reportHtml(const Diagnosis& d) {
@@ -124,7 +177,13 @@ std::string reportHtml(const Diagnosis& d) {
     << " run(s)); 0 is a perfect match, 100 no better than the mean. Simulator as given: "
     << fmt(d.heldout_uncalibrated.percent()) << "%; nominal physics calibrated: " << fmt(d.gap_before.percent())
     << "%; with the selected effects: " << fmt(d.gap_after.percent()) << "%; noise floor: " << fmt(d.noise.percent())
-    << "%.</p>\n";
+    << "%; " << (d.reference.available ? "an identified model (outputs only): " + fmt(d.reference.gap.percent()) + "%"
+                                        : "no identified reference (" + escape(d.reference.note) + ")")
+    << ". Confidence: " << escape(d.confidence);
+  if (!d.runner_up.empty())
+    h << " (margin over re-calibration " << fmt(100 * d.margin_over_recalibration) << "%, over the runner-up, "
+      << escape(d.runner_up) << ", " << fmt(100 * d.margin_over_runner_up) << "%)";
+  h << ".</p>\n";
 
   h << "<h2>Where</h2>\n<ul id=\"places\">";
   for (const auto& p : d.where.top_places) h << "<li>" << escape(p.words) << "</li>";
@@ -134,15 +193,18 @@ std::string reportHtml(const Diagnosis& d) {
     labels.push_back(fmt(d.where.grid_edges_bar[k], "%.2f") + "-" + fmt(d.where.grid_edges_bar[k + 1], "%.2f"));
   // Both maps on the before map's colour scale, so "after" reads as lighter.
   const double scale = report::heatScale(d.where.gap_map);
+  const std::string unit = "RMS residual (" + outputUnit(d) + ")";
   h << "<div id=\"gap-map\">"
     << report::heatMap("Gap map: RMS residual after nominal calibration", d.where.gap_map, labels, labels,
-                       "chamber 2 (bar)", "chamber 1 (bar)", 64, scale)
+                       "chamber 2 (bar)", "chamber 1 (bar)", 64, scale, unit)
     << "</div>\n";
   if (!d.selected.empty())
     h << "<div id=\"gap-map-after\">"
       << report::heatMap("Gap map with the selected effects (same colour scale)", d.where_after.gap_map, labels, labels,
-                         "chamber 2 (bar)", "chamber 1 (bar)", 64, scale)
+                         "chamber 2 (bar)", "chamber 1 (bar)", 64, scale, unit)
       << "</div>\n";
+  h << "<p class=\"note\">Data behind the charts: <a href=\"gap_map.csv\">gap_map.csv</a>, "
+       "<a href=\"shrink.csv\">shrink.csv</a>, <a href=\"trace.csv\">trace.csv</a>.</p>\n";
   auto table = [&](const char* title, const std::vector<ResidualShare>& v) {
     h << "<table><tr><th>" << title << "</th><th>RMS</th><th>share of squared residual</th><th>share of samples</th></tr>";
     for (const auto& s : v)

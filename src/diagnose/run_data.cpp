@@ -53,7 +53,28 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
     r.pressures = log.columnsOf(c.pressures);
     if (!r.pressures.allFinite()) throw std::invalid_argument(where + "a pressure column has NaN or Inf");
   }
+  r.start = c.start == RunStart::kAuto ? detectRunStart(r, c.map) : c.start;
   return r;
+}
+
+RunStart detectRunStart(const RunData& run, OutputMap map) {
+  if (run.samples() == 0) return RunStart::kAtRest;
+  const double first = run.commands.row(0).maxCoeff();
+  if (first < 0.005) return RunStart::kAtRest;
+  if (run.hasPressures()) {
+    // The first sample is taken after a first period of filling: a chamber
+    // filling from vent is already part way (a third within one time
+    // constant), so only a pressure close to its command means settled.
+    Eigen::Index c = 0;
+    run.commands.row(0).maxCoeff(&c);
+    return std::abs(run.pressures(0, c) - first) <= 0.2 * first ? RunStart::kSettled : RunStart::kAtRest;
+  }
+  if (map != OutputMap::kAngles) return RunStart::kAtRest;
+  std::vector<double> lengths(static_cast<std::size_t>(run.samples()));
+  for (Eigen::Index i = 0; i < run.samples(); ++i) lengths[static_cast<std::size_t>(i)] = run.outputs.row(i).norm();
+  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
+  const double median = lengths[lengths.size() / 2];
+  return run.outputs.row(0).norm() < 0.15 * median ? RunStart::kAtRest : RunStart::kSettled;
 }
 
 std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction) {
@@ -68,6 +89,8 @@ std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fract
     r.commands = run.commands.middleRows(from, len);
     r.outputs = run.outputs.middleRows(from, len);
     if (run.hasPressures()) r.pressures = run.pressures.middleRows(from, len);
+    // The held-out part starts wherever the run was: closest to settled.
+    r.start = from == 0 ? run.start : RunStart::kSettled;
     return r;
   };
   return {part(0, cut, " (training part)"), part(cut, n - cut, " (held-out part)")};

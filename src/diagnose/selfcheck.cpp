@@ -1,11 +1,15 @@
 #include "plsa/diagnose/selfcheck.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <map>
 #include <random>
 #include <sstream>
+
+#include "plsa/io/csv_log.hpp"
+#include "plsa/sim/independent_actuator.hpp"
 
 
 namespace plsa::diagnose {
@@ -42,15 +46,17 @@ std::vector<std::string> lawsOutsideTheCandidate(const std::string& effect, bool
   return out;
 }
 
-RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed, const std::string& name) {
-  // The same 3 s pre-roll the diagnosis assumes, sensor noise on.
-  SimTrace t = replayCommands(truth, commands, seed);
+RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
+                  const std::string& name, bool from_rest) {
+  // From rest, or settled for the 3 s the diagnosis then replays; sensor noise on.
+  SimTrace t = replayCommands(truth, commands, seed, from_rest ? 0.0 : 3.0);
   RunData r;
   r.name = name;
   r.sample_time_s = 1.0 / truth.sample_rate_hz;
   r.commands = commands;
   r.outputs = std::move(t.outputs);
   r.pressures = std::move(t.pressures);
+  r.start = from_rest ? RunStart::kAtRest : RunStart::kSettled;
   return r;
 }
 
@@ -86,15 +92,17 @@ Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint6
 std::string SelfcheckResult::summary() const {
   std::ostringstream o;
   char line[512];
-  o << "case                                   withheld -> selected (round-1 top 2)            gap before -> after (noise)  true-effect shrink  pass\n";
+  o << "case | effect size | withheld -> selected (round-1 top 2) | gap before -> after (noise) | true-effect shrink | "
+       "confidence | pass\n";
   for (const auto& c : cases) {
     std::string w, s, t;
     for (const auto& x : c.withheld) w += (w.empty() ? "" : "+") + x;
     for (const auto& x : c.selected) s += (s.empty() ? "" : "+") + x;
     for (const auto& x : c.top2) t += (t.empty() ? "" : ",") + x;
-    std::snprintf(line, sizeof line, "%-38s %s -> %s (%s)  %.1f%% -> %.1f%% (%.1f%%)  %.0f%%  %s\n", c.name.c_str(),
-                  w.empty() ? "nothing" : w.c_str(), s.empty() ? "nothing" : s.c_str(), t.c_str(), c.gap_before,
-                  c.gap_after, c.noise, c.true_effect_shrink, c.pass ? "yes" : "NO");
+    std::snprintf(line, sizeof line, "%-38s %5.1f%%  %s -> %s (%s)  %.1f%% -> %.1f%% (%.1f%%)  %.0f%%  %s  %s\n",
+                  c.name.c_str(), c.effect_size, w.empty() ? "nothing" : w.c_str(), s.empty() ? "nothing" : s.c_str(),
+                  t.c_str(), c.gap_before, c.gap_after, c.noise, c.true_effect_shrink, c.confidence.c_str(),
+                  c.pass ? "yes" : "NO");
     o << line;
   }
   o << "\nconfusion matrix (rows: withheld effect, single cases and null; columns: first effect selected)\n";
@@ -115,126 +123,300 @@ std::string SelfcheckResult::summary() const {
     o << "\n";
   }
   std::snprintf(line, sizeof line,
-                "\ntargets: top-1 correct %d/%d (%.0f%%, target >= 90%%); pairs with both in the top 2: %d/%d; "
-                "true-effect held-out shrink min %.0f%%, median %.0f%% (target >= 50%%); null cases claiming nothing: "
-                "%d/%d -> %s\n",
-                single_top1, single_cases, single_cases ? 100.0 * single_top1 / single_cases : 0.0, pair_top2,
-                pair_cases, min_true_shrink, median_true_shrink, null_clean, null_cases,
-                targets_met ? "all targets met" : "targets NOT met");
+                "\n\"real\" data: %s laws; targets: top-1 correct %d/%d (%.0f%%, target >= 95%%); pairs with both "
+                "in the top 2: %d/%d (target >= 90%%); true-effect held-out shrink min %.0f%%, median %.0f%% (target "
+                ">= 60%%); null cases claiming nothing: %d/%d; cases with a spurious selection: %d/%zu (target <= "
+                "10%%) -> %s\n",
+                truth.c_str(), single_top1, single_cases, single_cases ? 100.0 * single_top1 / single_cases : 0.0,
+                pair_top2, pair_cases, min_true_shrink, median_true_shrink, null_clean, null_cases,
+                cases_with_spurious, cases.size(), targets_met ? "all targets met" : "targets NOT met");
+  o << line;
+  std::snprintf(line, sizeof line,
+                "single cases with a calibrated gap over twice the noise floor: %d/%d, the withheld effect named "
+                "first in %d of them; verdicts: %d uncertain, %d qualified\n",
+                gap_single_cases, single_cases, gap_single_top1, uncertain, qualified);
   o << line;
   return o.str();
 }
 
-SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
-  SelfcheckResult res;
-  std::vector<std::string> effects = o.effects.empty() ? sim::effectNames() : o.effects;
-  res.labels = sim::effectNames();
-  res.labels.push_back("none");
-  res.confusion.assign(res.labels.size(), std::vector<int>(res.labels.size(), 0));
-  auto index = [&](const std::string& e) {
-    return static_cast<std::size_t>(std::find(res.labels.begin(), res.labels.end(), e) - res.labels.begin());
-  };
-  struct Spec {
-    std::vector<std::string> withheld;
-    std::string alternative;  ///< the law the "real" data follows; empty: the default one
-    std::uint64_t seed;
-  };
+namespace {
+
+struct Spec {
+  std::vector<std::string> withheld;
+  std::string law;  ///< own laws: the formulation ("" = default); independent: the law of a single case
+  std::uint64_t seed;
+};
+
+std::vector<Spec> caseSpecs(const SelfcheckOptions& o) {
   std::vector<Spec> specs;
   std::uint64_t seed = o.seed;
+  const std::vector<std::string> effects = o.effects.empty() ? sim::effectNames() : o.effects;
   for (const auto& e : effects) {
-    const std::vector<std::string> others = lawsOutsideTheCandidate(e, o.diagnose.flexible_laws);
-    for (int s = 0; s < o.seeds_per_effect; ++s)
-      specs.push_back({{e}, s % 2 == 1 ? others[static_cast<std::size_t>(s / 2) % others.size()] : "", seed++});
+    const std::vector<std::string> others = o.truth == SelfcheckTruth::kOwnLaws
+                                                ? lawsOutsideTheCandidate(e, o.diagnose.flexible_laws)
+                                                : sim::independentLawsOf(e);
+    for (int s = 0; s < o.seeds_per_effect; ++s) {
+      std::string law;
+      if (o.truth == SelfcheckTruth::kOwnLaws)
+        law = s % 2 == 1 ? others[static_cast<std::size_t>(s / 2) % others.size()] : "";
+      else
+        law = others[static_cast<std::size_t>(s) % others.size()];
+      specs.push_back({{e}, law, seed++});
+    }
   }
   for (const auto& [a, b] : o.pairs) specs.push_back({{a, b}, "", seed++});
   for (int k = 0; k < o.null_cases; ++k) specs.push_back({{}, "", seed++});
-  std::vector<double> shrinks;
-  int number = 0;
-  for (const Spec& spec : specs) {
-    const auto t0 = std::chrono::steady_clock::now();
-    std::mt19937_64 rng(spec.seed * 7919 + 13);
-    std::uniform_real_distribution<double> uni(0.0, 1.0);
-    sim::SimConfig truth = allOff();
-    for (const sim::ParamRef& p : truth.parameters("nominal"))
-      *p.value = std::clamp(*p.value * (1.0 + o.nominal_perturbation * (2 * uni(rng) - 1)), p.lower, p.upper);
-    SelfcheckCase c;
-    c.withheld = spec.withheld;
-    std::string forms;
-    for (const auto& e : spec.withheld) {
-      truth.setEffectEnabled(e, true);
-      if (!spec.alternative.empty()) truth.formulationOf(e) = spec.alternative;
-      for (const sim::ParamRef& p : truth.parameters(e)) {
-        const auto range = truthRanges().find(e + "." + p.name);
-        if (range == truthRanges().end()) continue;
-        double v = range->second.first + uni(rng) * (range->second.second - range->second.first);
-        if (e == "sensor_bias" && uni(rng) < 0.5) v = -v;
-        *p.value = v;
-        c.truth.emplace_back(e + "." + p.name, v);
-      }
-      forms += (forms.empty() ? "" : ", ") + e + " " + truth.formulationOf(e);
-    }
-    c.formulation = forms;
-    std::string label;
-    for (const auto& e : spec.withheld) label += (label.empty() ? "" : "+") + e;
-    c.name = (label.empty() ? std::string("null") : label) + (spec.alternative.empty() ? "" : " (" + spec.alternative + ")") + " #" +
-             std::to_string(spec.seed);
-    if (o.log) o.log("selfcheck " + std::to_string(++number) + "/" + std::to_string(specs.size()) + ": " + c.name);
-    const std::vector<RunData> runs = {
-        recordRun(truth, excitationCommands(o.train_s, truth.sample_rate_hz, spec.seed * 2 + 1), spec.seed, "train"),
-        recordRun(truth, excitationCommands(o.heldout_s, truth.sample_rate_hz, spec.seed * 2 + 2), spec.seed + 1000,
-                  "held-out")};
-    DiagnoseOptions dopt = o.diagnose;
-    if (!o.verbose) dopt.log = nullptr;
-    else if (!dopt.log) dopt.log = o.log;
-    const Diagnosis d = runDiagnosis(allOff(), runs, dopt);
-    c.selected = d.selected;
-    for (std::size_t k = 0; k < std::min<std::size_t>(2, d.ranking.size()); ++k) c.top2.push_back(d.ranking[k].effect);
-    c.gap_before = d.gap_before.percent();
-    c.gap_after = d.gap_after.percent();
-    c.noise = d.noise.percent();
-    const std::string first = d.selected.empty() ? "none" : d.selected[0];
-    if (spec.withheld.size() == 1) {
-      for (const auto& r : d.ranking)
-        if (r.effect == spec.withheld[0]) c.true_effect_shrink = r.shrink_percent;
-      // Kept first: its gap once its calibration is polished.
-      if (!d.steps.empty() && d.steps[0].first == spec.withheld[0])
-        c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].second.percent() / std::max(1e-12, c.gap_before));
-      c.pass = first == spec.withheld[0] && c.true_effect_shrink >= 50.0;
-      ++res.single_cases;
-      res.single_top1 += first == spec.withheld[0];
-      res.confusion[index(spec.withheld[0])][index(first)]++;
-      shrinks.push_back(c.true_effect_shrink);
-    } else if (spec.withheld.size() == 2) {
-      c.true_effect_shrink = 100.0 * (1.0 - c.gap_after / std::max(1e-12, c.gap_before));
-      const bool both = std::find(c.top2.begin(), c.top2.end(), spec.withheld[0]) != c.top2.end() &&
-                        std::find(c.top2.begin(), c.top2.end(), spec.withheld[1]) != c.top2.end();
-      c.pass = both;
-      ++res.pair_cases;
-      res.pair_top2 += both;
-      shrinks.push_back(c.true_effect_shrink);
-    } else {
-      c.pass = d.selected.empty();
-      ++res.null_cases;
-      res.null_clean += c.pass;
-      res.confusion[index("none")][index(first)]++;
-    }
-    c.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (o.log) {
-      char line[256];
-      std::snprintf(line, sizeof line, "  -> selected %s; gap %.1f%% -> %.1f%% (noise %.1f%%); %s (%.0f s)",
-                    first.c_str(), c.gap_before, c.gap_after, c.noise, c.pass ? "pass" : "FAIL", c.elapsed_s);
-      o.log(line);
-    }
-    res.cases.push_back(c);
+  return specs;
+}
+
+// Strengths the independent laws are drawn from: strong enough to matter,
+// inside what a real actuator shows.
+std::pair<double, double> independentStrength(const std::string& effect, const std::string& law) {
+  static const std::map<std::string, std::pair<double, double>> r = {
+      {"deadzone", {0.04, 0.10}},           {"hysteresis.bouc_wen", {0.25, 0.5}},
+      {"hysteresis.preisach", {0.25, 0.5}}, {"hysteresis.backlash", {0.05, 0.15}},
+      {"stiffening.duffing", {0.4, 1.2}},   {"stiffening.tanh_strain", {0.7, 1.3}},
+      {"stiffening.saturating_exp", {2.0, 5.0}}, {"coupling.exponential", {1.0, 2.5}},
+      {"coupling.quadratic", {0.1, 0.3}},   {"coupling.crosstalk", {0.15, 0.35}},
+      {"pneumatic_lag.two_volume", {0.06, 0.15}}, {"pneumatic_lag.pressure_dependent", {1.0, 3.0}},
+      {"pneumatic_lag.quantised_valve", {0.0, 0.0}}, {"creep", {0.06, 0.15}},
+      {"sensor_bias", {1.0, 3.0}}};
+  const auto it = r.find(effect + "." + law);
+  return it != r.end() ? it->second : r.at(effect);
+}
+
+// One case's truth, its parameters and laws recorded in `c`; independent.
+RunData recordIndependent(const sim::IndependentPhysics& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
+                          const std::string& name) {
+  sim::IndependentActuator a(truth, seed);
+  RunData r;
+  r.name = name;
+  r.sample_time_s = 1.0 / truth.sample_rate_hz;
+  r.commands = commands;
+  r.outputs.resize(commands.rows(), 2);
+  r.pressures.resize(commands.rows(), 3);
+  for (Eigen::Index i = 0; i < commands.rows(); ++i) {
+    const sim::IndependentSample smp = a.step({commands(i, 0), commands(i, 1), commands(i, 2)});
+    r.outputs.row(i) = smp.bending_deg.transpose();
+    for (Eigen::Index j = 0; j < 3; ++j) r.pressures(i, j) = smp.pressure_bar[static_cast<std::size_t>(j)];
   }
+  r.start = RunStart::kAtRest;
+  return r;
+}
+
+sim::IndependentPhysics independentTruth(const Spec& spec, std::mt19937_64& rng, SelfcheckCase& c) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  auto between = [&](double lo, double hi) { return lo + (hi - lo) * uni(rng); };
+  sim::IndependentPhysics t;
+  t.natural_freq_hz *= between(0.5, 1.5);
+  t.damping_ratio = between(0.3, 2.0);
+  const double gain = between(0.6, 1.4);
+  t.strain_per_bar *= gain;
+  t.strain_quadratic *= gain;
+  t.time_constant_s *= between(0.5, 3.0);
+  c.truth = {{"nominal.natural_freq_hz", t.natural_freq_hz}, {"nominal.damping_ratio", t.damping_ratio},
+             {"nominal.gain", gain}, {"nominal.time_constant_s", t.time_constant_s}};
+  std::string forms;
+  for (std::size_t k = 0; k < spec.withheld.size(); ++k) {
+    const std::string& e = spec.withheld[k];
+    const auto& laws = sim::independentLawsOf(e);
+    const std::string law = spec.withheld.size() == 1 ? spec.law : laws[(spec.seed + k) % laws.size()];
+    const auto [lo, hi] = independentStrength(e, law);
+    const double strength = between(lo, hi);
+    sim::setIndependentEffect(t, e, law, strength);
+    if (e == "creep") t.creep_time_s = between(3.0, 12.0);
+    c.truth.emplace_back(e + "." + law, strength);
+    forms += (forms.empty() ? "" : ", ") + e + " " + law;
+  }
+  c.formulation = forms;
+  return t;
+}
+
+sim::SimConfig ownLawsTruth(const Spec& spec, const SelfcheckOptions& o, std::mt19937_64& rng, SelfcheckCase& c) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  sim::SimConfig truth = allOff();
+  for (const sim::ParamRef& p : truth.parameters("nominal"))
+    *p.value = std::clamp(*p.value * (1.0 + o.nominal_perturbation * (2 * uni(rng) - 1)), p.lower, p.upper);
+  std::string forms;
+  for (const auto& e : spec.withheld) {
+    truth.setEffectEnabled(e, true);
+    if (!spec.law.empty()) truth.formulationOf(e) = spec.law;
+    for (const sim::ParamRef& p : truth.parameters(e)) {
+      const auto range = truthRanges().find(e + "." + p.name);
+      if (range == truthRanges().end()) continue;
+      double v = range->second.first + uni(rng) * (range->second.second - range->second.first);
+      if (e == "sensor_bias" && uni(rng) < 0.5) v = -v;
+      *p.value = v;
+      c.truth.emplace_back(e + "." + p.name, v);
+    }
+    forms += (forms.empty() ? "" : ", ") + e + " " + truth.formulationOf(e);
+  }
+  c.formulation = forms;
+  return truth;
+}
+
+// RMS of what the truth's effects change on a run, noise-free, over the
+// outputs' spread (%).
+double effectSize(sim::IndependentPhysics truth, const Eigen::MatrixXd& commands) {
+  truth.noise_deg = 0.0;
+  truth.pressure_noise_bar = 0.0;
+  sim::IndependentPhysics bare = truth;
+  for (const auto& e : sim::effectNames()) sim::setIndependentEffect(bare, e, "", 0.0);
+  const RunData with = recordIndependent(truth, commands, 1, "with");
+  const RunData without = recordIndependent(bare, commands, 1, "without");
+  const Eigen::RowVectorXd mean = with.outputs.colwise().mean();
+  const double spread = (with.outputs.rowwise() - mean).squaredNorm();
+  return 100.0 * std::sqrt((with.outputs - without.outputs).squaredNorm() / std::max(1e-12, spread));
+}
+
+// A case's runs as logs `plsa diagnose` reads (angles, as a tip sensor gives them).
+void saveRuns(const std::vector<RunData>& runs, const std::string& dir, const std::string& case_name) {
+  std::string stem;
+  for (char ch : case_name) stem += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+  const char* part[] = {"train", "heldout"};
+  for (std::size_t k = 0; k < runs.size() && k < 2; ++k) {
+    const RunData& r = runs[k];
+    io::Log log;
+    log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
+    log.metadata["source"] = "plsa diagnose-selfcheck, case " + case_name;
+    log.data.resize(r.samples(), 9);
+    for (Eigen::Index i = 0; i < r.samples(); ++i) {
+      log.data(i, 0) = static_cast<double>(i) * r.sample_time_s;
+      log.data(i, 7) = r.outputs.row(i).norm();
+      log.data(i, 8) = std::atan2(r.outputs(i, 1), r.outputs(i, 0)) * 180.0 / M_PI;
+    }
+    log.data.middleCols(1, 3) = r.commands;
+    log.data.middleCols(4, 3) = r.pressures;
+    io::writeCsvLog(dir + "/" + stem + "_" + part[k] + ".csv", log);
+  }
+}
+
+// The training and held-out runs of one case.
+std::vector<RunData> caseRuns(const Spec& spec, const SelfcheckOptions& o, SelfcheckCase& c) {
+  std::mt19937_64 rng(spec.seed * 7919 + 13);
+  const double rate = sim::SimConfig{}.sample_rate_hz;
+  const Eigen::MatrixXd train_u = excitationCommands(o.train_s, rate, spec.seed * 2 + 1);
+  const Eigen::MatrixXd held_u = excitationCommands(o.heldout_s, rate, spec.seed * 2 + 2);
+  if (o.truth == SelfcheckTruth::kIndependent) {
+    const sim::IndependentPhysics truth = independentTruth(spec, rng, c);
+    c.effect_size = effectSize(truth, held_u);
+    return {recordIndependent(truth, train_u, spec.seed, "train"),
+            recordIndependent(truth, held_u, spec.seed + 1000, "held-out")};
+  }
+  const sim::SimConfig truth = ownLawsTruth(spec, o, rng, c);
+  return {recordRun(truth, train_u, spec.seed, "train", o.from_rest),
+          recordRun(truth, held_u, spec.seed + 1000, "held-out", o.from_rest)};
+}
+
+std::string caseName(const Spec& spec, const SelfcheckOptions& o) {
+  std::string label;
+  for (const auto& e : spec.withheld) label += (label.empty() ? "" : "+") + e;
+  const bool show_law = !spec.law.empty() && spec.withheld.size() == 1;
+  (void)o;
+  return (label.empty() ? std::string("null") : label) + (show_law ? " (" + spec.law + ")" : "") + " #" +
+         std::to_string(spec.seed);
+}
+
+// Scores one diagnosed case into `c` and the totals.
+void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, SelfcheckResult& res,
+               std::vector<double>& shrinks) {
+  auto index = [&](const std::string& e) {
+    return static_cast<std::size_t>(std::find(res.labels.begin(), res.labels.end(), e) - res.labels.begin());
+  };
+  auto withheld = [&](const std::string& e) {
+    return std::find(spec.withheld.begin(), spec.withheld.end(), e) != spec.withheld.end();
+  };
+  c.selected = d.selected;
+  c.verdict = d.verdict;
+  c.confidence = d.confidence;
+  res.uncertain += d.confidence == "uncertain";
+  res.qualified += d.confidence == "qualified";
+  for (std::size_t k = 0; k < std::min<std::size_t>(2, d.ranking.size()); ++k) c.top2.push_back(d.ranking[k].effect);
+  c.gap_before = d.gap_before.percent();
+  c.gap_after = d.gap_after.percent();
+  c.noise = d.noise.percent();
+  for (const auto& e : d.selected) c.spurious += !withheld(e);
+  res.cases_with_spurious += c.spurious > 0;
+  const std::string first = d.selected.empty() ? "none" : d.selected[0];
+  if (spec.withheld.size() == 1) {
+    for (const auto& r : d.ranking)
+      if (r.effect == spec.withheld[0]) c.true_effect_shrink = r.shrink_percent;
+    // Kept first: its gap once its calibration is polished.
+    if (!d.steps.empty() && d.steps[0].first == spec.withheld[0])
+      c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].second.percent() / std::max(1e-12, c.gap_before));
+    c.pass = first == spec.withheld[0] && c.true_effect_shrink >= 60.0 && c.spurious == 0;
+    ++res.single_cases;
+    res.single_top1 += first == spec.withheld[0];
+    if (c.gap_before > 2.0 * c.noise) {
+      ++res.gap_single_cases;
+      res.gap_single_top1 += first == spec.withheld[0];
+    }
+    res.confusion[index(spec.withheld[0])][index(first)]++;
+    shrinks.push_back(c.true_effect_shrink);
+  } else if (spec.withheld.size() == 2) {
+    c.true_effect_shrink = 100.0 * (1.0 - c.gap_after / std::max(1e-12, c.gap_before));
+    const bool both = withheld(c.top2.size() > 0 ? c.top2[0] : "") && withheld(c.top2.size() > 1 ? c.top2[1] : "");
+    c.pass = both;
+    ++res.pair_cases;
+    res.pair_top2 += both;
+    shrinks.push_back(c.true_effect_shrink);
+  } else {
+    c.pass = d.selected.empty();
+    ++res.null_cases;
+    res.null_clean += c.pass;
+    res.confusion[index("none")][index(first)]++;
+  }
+}
+
+void summarise(SelfcheckResult& res, std::vector<double>& shrinks) {
   if (!shrinks.empty()) {
     std::sort(shrinks.begin(), shrinks.end());
     res.min_true_shrink = shrinks.front();
     res.median_true_shrink = shrinks[shrinks.size() / 2];
   }
-  res.targets_met = (res.single_cases == 0 || res.single_top1 >= 0.9 * res.single_cases) &&
-                    res.pair_top2 == res.pair_cases && res.null_clean == res.null_cases &&
-                    (shrinks.empty() || res.min_true_shrink >= 50.0);
+  const auto n = static_cast<double>(res.cases.size());
+  res.targets_met = (res.single_cases == 0 || res.single_top1 >= 0.95 * res.single_cases) &&
+                    (res.pair_cases == 0 || res.pair_top2 >= 0.9 * res.pair_cases) &&
+                    res.null_clean == res.null_cases && (shrinks.empty() || res.median_true_shrink >= 60.0) &&
+                    res.cases_with_spurious <= 0.1 * n;
+}
+
+}  // namespace
+
+SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
+  SelfcheckResult res;
+  res.truth = o.truth == SelfcheckTruth::kIndependent ? "independent" : "own laws";
+  res.labels = sim::effectNames();
+  res.labels.push_back("none");
+  res.confusion.assign(res.labels.size(), std::vector<int>(res.labels.size(), 0));
+  const std::vector<Spec> specs = caseSpecs(o);
+  std::vector<double> shrinks;
+  int number = 0;
+  for (const Spec& spec : specs) {
+    const auto t0 = std::chrono::steady_clock::now();
+    SelfcheckCase c;
+    c.withheld = spec.withheld;
+    c.name = caseName(spec, o);
+    if (o.log) o.log("selfcheck " + std::to_string(++number) + "/" + std::to_string(specs.size()) + ": " + c.name);
+    const std::vector<RunData> runs = caseRuns(spec, o, c);
+    if (!o.save_runs_dir.empty()) saveRuns(runs, o.save_runs_dir, c.name);
+    DiagnoseOptions dopt = o.diagnose;
+    dopt.identified_reference = false;  // reported, never used to decide: not what is scored here
+    if (!o.verbose) dopt.log = nullptr;
+    else if (!dopt.log) dopt.log = o.log;
+    const Diagnosis d = runDiagnosis(allOff(), runs, dopt);
+    scoreCase(spec, d, c, res, shrinks);
+    c.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (o.log) {
+      char line[256];
+      std::snprintf(line, sizeof line, "  -> selected %s; gap %.1f%% -> %.1f%% (noise %.1f%%); %s (%.0f s)",
+                    c.selected.empty() ? "none" : c.selected[0].c_str(), c.gap_before, c.gap_after, c.noise,
+                    c.pass ? "pass" : "FAIL", c.elapsed_s);
+      o.log(line);
+    }
+    res.cases.push_back(c);
+  }
+  summarise(res, shrinks);
   return res;
 }
 

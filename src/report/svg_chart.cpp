@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <sstream>
 
 namespace plsa::report {
@@ -203,12 +204,39 @@ double heatScale(const Eigen::MatrixXd& values) {
   return vmax;
 }
 
+namespace {
+
+// The heat map's colours from 0 (bottom) to vmax (top), five ticks, the unit above.
+std::string colourBar(double x, double y, double w, double h, double vmax, const std::string& unit,
+                      const std::string& title) {
+  // One gradient per map: ids must be unique on a page holding several.
+  const std::string id = "heat-" + std::to_string(std::hash<std::string>{}(title) % 1000000007u);
+  std::ostringstream o;
+  o << "<g class=\"colour-bar\"><defs><linearGradient id=\"" << id << "\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">"
+    << "<stop offset=\"0\" stop-color=\"#ffffff\"/><stop offset=\"1\" stop-color=\"#ff3723\"/></linearGradient></defs>\n";
+  o << "<rect x=\"" << num(x) << "\" y=\"" << num(y) << "\" width=\"" << num(w) << "\" height=\"" << num(h)
+    << "\" fill=\"url(#" << id << ")\" stroke=\"#999\"/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double v = vmax * k / 4.0, ty = y + h - h * k / 4.0;
+    o << "<line x1=\"" << num(x + w) << "\" y1=\"" << num(ty) << "\" x2=\"" << num(x + w + 4) << "\" y2=\"" << num(ty)
+      << "\" stroke=\"#666\"/><text x=\"" << num(x + w + 6) << "\" y=\"" << num(ty + 4) << "\" font-size=\"10\">"
+      << tick(v) << "</text>\n";
+  }
+  if (!unit.empty())
+    o << "<text x=\"" << num(x) << "\" y=\"" << num(y - 8) << "\" font-size=\"11\">" << escape(unit) << "</text>\n";
+  o << "</g>\n";
+  return o.str();
+}
+
+}  // namespace
+
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
-                    int cell, double scale_max) {
-  const double ml = 110, mt = 30, mb = 50;
+                    int cell, double scale_max, const std::string& unit) {
+  const double ml = 110, mt = 30, mb = 50, bar_w = 16, bar_gap = 24;
   const auto rows = values.rows(), cols = values.cols();
-  const int width = static_cast<int>(ml + cols * cell + 20), height = static_cast<int>(mt + rows * cell + mb);
+  const int width = static_cast<int>(ml + cols * cell + bar_gap + bar_w + 90),
+            height = static_cast<int>(mt + rows * cell + mb);
   const double vmax = scale_max > 0 ? scale_max : heatScale(values);
   std::ostringstream o;
   o << "<svg class=\"chart heatmap\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
@@ -242,6 +270,7 @@ std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, con
     << "\" font-size=\"12\" text-anchor=\"middle\">" << escape(col_axis) << "</text>\n";
   o << "<text x=\"14\" y=\"" << num(mt + rows * cell / 2.0) << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
     << num(mt + rows * cell / 2.0) << ")\">" << escape(row_axis) << "</text>\n";
+  o << colourBar(ml + cols * cell + bar_gap, mt, bar_w, rows * cell, vmax, unit, title);
   o << "</svg>\n";
   return o.str();
 }

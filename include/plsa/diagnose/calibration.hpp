@@ -26,7 +26,9 @@ struct SimTrace {
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
                         double preroll_s = 3.0);
 
-/// replayCommands at the run's sample rate with the simulator's own sensor noise off.
+/// replayCommands at the run's sample rate with the simulator's own sensor
+/// noise off: from rest, or after `preroll_s` at the first command when the
+/// run started settled (RunData::start).
 SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s = 3.0);
 
 /// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.

@@ -11,6 +11,7 @@
 
 #include "plsa/diagnose/calibration.hpp"
 #include "plsa/diagnose/gap_breakdown.hpp"
+#include "plsa/diagnose/identified_reference.hpp"
 #include "plsa/diagnose/run_data.hpp"
 #include "plsa/sim/sim_config.hpp"
 
@@ -25,6 +26,14 @@ struct DiagnoseOptions {
   /// it): form mismatch leaves a structured residual that any added freedom
   /// trims by a few percent, on held-out data too.
   double min_relative = 0.15;
+  /// The verdict says "uncertain" when the runner-up reaches more than
+  /// 1 - this share of the best's drop over re-calibration.
+  double uncertain_margin = 0.25;
+  /// ...and "qualified" when the gap left is above this many noise floors.
+  double qualified_noise_multiple = 3.0;
+  /// Identify a DIO-PWL OBF model on the training runs as the reference
+  /// for what the data allow (IdentifiedReference).
+  bool identified_reference = true;
   int max_selected = 3;
   std::vector<std::string> candidates;  ///< empty: every effect switched off in the simulator
   /// A switched-on candidate takes its flexible law where the simulator has
@@ -53,6 +62,7 @@ struct Diagnosis {
   Gap gap_before;            ///< held out, after calibrating the nominal physics
   Gap train_before;
   Gap noise;                 ///< noise floor of the held-out data, same measure
+  IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
@@ -63,6 +73,19 @@ struct Diagnosis {
   std::vector<std::pair<std::string, double>> final_params;
   Breakdown where, where_after;
   std::string verdict;           ///< in words
+  /// How firmly the evidence backs the first kept effect (round 1):
+  /// "confident", "uncertain" (the runner-up comes within uncertain_margin of
+  /// the best's drop over re-calibration, so the data do not separate the
+  /// two) or "qualified" (a confident pick whose calibration ends far above
+  /// the noise floor: the named effect explains part of the gap, the rest is
+  /// something no candidate models). "none" when nothing was kept.
+  std::string confidence = "none";
+  std::string runner_up;           ///< round 1's second-best candidate
+  /// Round 1: the best's drop in squared held-out gap over re-calibration
+  /// with nothing added, as a share of that bar (0..1), and the share of
+  /// that drop the runner-up does not reach (0: a tie, 1: it gains nothing).
+  double margin_over_recalibration = 0.0, margin_over_runner_up = 0.0;
+  Gap recalibrated_round1;         ///< round 1's bar: re-calibration with nothing added, the candidates' budget
   sim::SimConfig calibrated, final_config;
   // Traces for the report: the first held-out run.
   Eigen::MatrixXd trace_real, trace_before, trace_after;
@@ -78,5 +101,10 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
 std::string toJson(const Diagnosis& d);
 /// One self-contained page: verdict, gap map, traces, shrinkage per effect, tables.
 std::string reportHtml(const Diagnosis& d);
+/// Every series the report plots, as CSV text by file name: trace.csv (the
+/// first held-out run: real, calibrated sim, sim with the selected
+/// effects), gap_map.csv (per chamber-band cell, RMS before and after) and
+/// shrink.csv (round-1 candidates). The report links to them by these names.
+std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis& d);
 
 }  // namespace plsa::diagnose

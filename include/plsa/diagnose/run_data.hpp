@@ -18,12 +18,22 @@ enum class OutputMap {
   kAffine,  ///< outputs are an unknown affine image of the bending vector (e.g. tip position), fitted
 };
 
+/// How a run's recording began: with the actuator vented and at rest (as a
+/// user records: valves open, logger started, then the commands), or settled
+/// at its first command. The simulator replays each the same way.
+enum class RunStart {
+  kAtRest,   ///< replayed from rest, no pre-roll
+  kSettled,  ///< replayed after holding the first command for 3 s, unrecorded
+  kAuto,     ///< runFromLog: decided from the data (detectRunStart)
+};
+
 struct RunColumns {
   std::vector<std::string> inputs = {"cmd_1", "cmd_2", "cmd_3"};  ///< 1 to 3 chambers; the rest get 0
   std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
   std::vector<std::string> pressures = {"p_1", "p_2", "p_3"};  ///< used when every one is present
   double input_scale = 1.0;  ///< bar per input unit
   OutputMap map = OutputMap::kAngles;
+  RunStart start = RunStart::kAuto;
 };
 
 struct RunData {
@@ -32,6 +42,7 @@ struct RunData {
   Eigen::MatrixXd commands;   ///< samples x 3, bar
   Eigen::MatrixXd outputs;    ///< samples x 2: bending vector (deg) for kAngles, raw outputs for kAffine
   Eigen::MatrixXd pressures;  ///< samples x 3 (bar) or no columns
+  RunStart start = RunStart::kAtRest;  ///< kAtRest or kSettled
 
   Eigen::Index samples() const { return commands.rows(); }
   bool hasPressures() const { return pressures.cols() == 3; }
@@ -40,6 +51,15 @@ struct RunData {
 /// Throws std::invalid_argument naming the run and the problem (missing
 /// column, NaN, negative or out-of-range command, too few samples, no time).
 RunData runFromLog(const io::Log& log, const RunColumns& columns, double max_pressure_bar);
+
+/// Whether `run` starts at rest or settled: at rest when its first command
+/// is (nearly) zero, when the measured pressure of the chamber with the
+/// largest first command starts more than 20% away from it, or (without pressures, outputs as angles) when its first
+/// bending vector is under 15% of its median length; settled when the
+/// pressures or the bending show the first command already applied; at
+/// rest when nothing tells (affine outputs without pressures), as users
+/// record.
+RunStart detectRunStart(const RunData& run, OutputMap map);
 
 /// Bend and steer (deg) -> bending vector (deg): steer wraps, the vector does not.
 Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::VectorXd& steer_deg);

@@ -27,6 +27,7 @@ struct CrossvalArgs {
   int arx_na = 4, arx_nb = 4;
   std::string json;
   IdentifyOptions options;
+  std::string channel = "PLSA_STATE";
 };
 
 void runCrossval(CrossvalArgs& a) {
@@ -42,6 +43,7 @@ void runCrossval(CrossvalArgs& a) {
   io::CsvReadOptions ro;
   ro.required = a.inputs;
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
+  ro.lcm_channel = a.channel;
   std::vector<io::Log> logs;
   refuseOverwritingInputs(a.json, "--json", files, "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
@@ -150,7 +152,8 @@ void addCrossvalCommand(CLI::App& app) {
       ->check(CLI::Range(0, 10000));
   c->add_option("--arx-na", a->arx_na, "ARX output lags");
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
-  c->add_option("--json", a->json, "Write the fits as JSON");
+  c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
+  c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
   c->callback([a] { runCrossval(*a); });
 }
 

@@ -24,6 +24,7 @@ struct DiagnoseArgs {
   std::string output_map = "angles";
   std::vector<std::string> pressures{"p_1", "p_2", "p_3"};
   diagnose::DiagnoseOptions options;
+  std::string channel = "PLSA_STATE";
 };
 
 void runDiagnose(DiagnoseArgs& a) {
@@ -40,6 +41,7 @@ void runDiagnose(DiagnoseArgs& a) {
     io::CsvReadOptions ro;
     ro.required = a.columns.inputs;
     ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());
+    ro.lcm_channel = a.channel;
     runs.push_back(diagnose::runFromLog(readLogWithWarnings(path, ro, "diagnose"), a.columns, config.max_pressure_bar));
   }
   a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
@@ -108,9 +110,10 @@ void addDiagnoseCommands(CLI::App& app) {
   c->add_option("--sim", a->sim, "Simulator configuration (JSON; its switched-off effects are the candidates)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--real", a->real, "Real run(s): CSV or .lcmlog; several: split by run, one: split by time")
+  c->add_option("--real", a->real, "Real run(s): CSV or LCM event logs (known by content); several: split by run, one: split by time")
       ->required()
       ->check(CLI::ExistingFile);
+  c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
   c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');

@@ -24,6 +24,7 @@ struct IdentifyArgs {
   std::string out;
   bool compare_poles = false;
   IdentifyOptions options;
+  std::string channel = "PLSA_STATE";
 };
 
 struct ValidateArgs {
@@ -33,12 +34,14 @@ struct ValidateArgs {
   std::string json;
   std::string csv;
   SimulationStart start;
+  std::string channel = "PLSA_STATE";
 };
 
 std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
-                              const std::string& tool) {
+                              const std::string& tool, const std::string& channel) {
   io::CsvReadOptions ro;
   ro.required = required;
+  ro.lcm_channel = channel;
   std::vector<io::Log> logs;
   for (const auto& p : logPaths(paths, tool, false)) logs.push_back(readLogWithWarnings(p, ro, tool));
   return logs;
@@ -53,7 +56,7 @@ void runIdentify(IdentifyArgs& a) {
   std::vector<std::string> required = a.inputs;
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
   refuseOverwritingInputs(a.out, "--out", a.logs, "plsa identify");
-  const auto logs = readLogs(a.logs, required, "identify");
+  const auto logs = readLogs(a.logs, required, "identify", a.channel);
   IdentifyReport report;
   const DioPwlObfModel model = identifyModel(logs, o, &report);
   for (const auto& pp : report.pairs)
@@ -96,44 +99,48 @@ std::string rateText(double r) {
 void runValidate(const ValidateArgs& a) {
   for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}})
     refuseOverwritingInputs(out, option, {a.model, a.log}, "plsa validate");
-  refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
+  if (a.csv != kStandardOutput) refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
+  if (a.json == kStandardOutput && a.csv == kStandardOutput)
+    throw std::invalid_argument("plsa validate: --json and --csv cannot both be '-' (standard output)");
+  // With an output on standard output, the table a person reads goes to standard error.
+  FILE* table = a.json == kStandardOutput || a.csv == kStandardOutput ? stderr : stdout;
   const DioPwlObfModel model = loadModel(a.model);
   std::vector<std::string> required = model.inputs;
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   required.push_back("time_s");  // the sample rate and gaps are checked against the model's
-  const io::Log log = readLogs({a.log}, required, "validate").front();
+  const io::Log log = readLogs({a.log}, required, "validate", a.channel).front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   for (const std::string& w : inputCoverageWarnings(model, v.outside_training))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
-  std::printf("%-12s", "output");
-  for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());
-  std::printf(" %9s\n", "sim");
+  std::fprintf(table, "%-12s", "output");
+  for (int k : a.horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
+  std::fprintf(table, " %9s\n", "sim");
   nlohmann::json j;
   for (const auto& o : v.outputs) {
-    std::printf("%-12s", o.name.c_str());
+    std::fprintf(table, "%-12s", o.name.c_str());
     for (int k : a.horizons) {
-      std::printf(" %9.2f", o.fit_k.at(k));
+      std::fprintf(table, " %9.2f", o.fit_k.at(k));
       j["outputs"][o.name]["fit_k" + std::to_string(k)] = o.fit_k.at(k);
     }
-    std::printf(" %9.2f\n", o.fit_sim);
+    std::fprintf(table, " %9.2f\n", o.fit_sim);
     j["outputs"][o.name]["fit_sim"] = o.fit_sim;
   }
   // The same errors in the outputs' units, beside the spread the fit divides by.
-  std::printf("%-12s", "rms error");
-  for (int k : a.horizons) std::printf(" %9s", ("k=" + std::to_string(k)).c_str());
-  std::printf(" %9s %12s\n", "sim", "measured std");
+  std::fprintf(table, "%-12s", "rms error");
+  for (int k : a.horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
+  std::fprintf(table, " %9s %12s\n", "sim", "measured std");
   for (const auto& o : v.outputs) {
-    std::printf("%-12s", o.name.c_str());
+    std::fprintf(table, "%-12s", o.name.c_str());
     for (int k : a.horizons) {
-      std::printf(" %9.4g", o.rms_k.at(k));
+      std::fprintf(table, " %9.4g", o.rms_k.at(k));
       j["outputs"][o.name]["rms_k" + std::to_string(k)] = o.rms_k.at(k);
     }
-    std::printf(" %9.4g %12.4g\n", o.rms_sim, o.spread);
+    std::fprintf(table, " %9.4g %12.4g\n", o.rms_sim, o.spread);
     j["outputs"][o.name]["rms_sim"] = o.rms_sim;
     j["outputs"][o.name]["std"] = o.spread;
   }
   const Eigen::Index scored = v.time.size() - v.scored_from;
-  std::printf("(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
+  std::fprintf(table, "(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
               static_cast<long long>(scored), static_cast<long long>(v.scored_from),
               seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
   j["scored_samples"] = {{"first", v.scored_from},
@@ -156,7 +163,7 @@ void runValidate(const ValidateArgs& a) {
   if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
   j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
-  std::printf("(sim from the %s)\n", start.c_str());
+  std::fprintf(table, "(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) {
     writeTextFile(a.json, j.dump(2) + "\n", "fits file");
   }
@@ -190,7 +197,8 @@ CLI::Validator secondsValidator(const std::string& example) {
 void addIdentifyCommands(CLI::App& app) {
   auto a = std::make_shared<IdentifyArgs>();
   CLI::App* id = app.add_subcommand("identify", "Identify a DIO-PWL-OBF model from logs (paper Table I)");
-  id->add_option("--log", a->logs, "Training log(s): CSV or .lcmlog; repeat for more")->required()->check(CLI::ExistingFile);
+  id->add_option("--log", a->logs, "Training log(s): CSV, or LCM event logs (known by their content, any name); repeat for more")->required()->check(CLI::ExistingFile);
+  id->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
@@ -302,10 +310,11 @@ void addIdentifyCommands(CLI::App& app) {
   auto v = std::make_shared<ValidateArgs>();
   CLI::App* va = app.add_subcommand("validate", "k-step-ahead and simulation NRMSE fits of a model on a log");
   va->add_option("--model", v->model, "Model file")->required()->check(CLI::ExistingFile);
-  va->add_option("--log", v->log, "Validation log (CSV or .lcmlog)")->required()->check(CLI::ExistingFile);
+  va->add_option("--log", v->log, "Validation log: CSV, or an LCM event log (known by its content, any name)")->required()->check(CLI::ExistingFile);
   va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
-  va->add_option("--json", v->json, "Write fits as JSON");
-  va->add_option("--csv", v->csv, "Write measured vs predicted as CSV");
+  va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
+  va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
+  va->add_option("--channel", v->channel, "LCM logs: the channel of the actuator-state messages");
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
                  "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "
                  "simulation, which is scored after them (default 5); 0 carries the training run's yaw")

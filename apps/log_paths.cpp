@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <stdexcept>
 
@@ -9,15 +10,29 @@ namespace fs = std::filesystem;
 
 namespace plsa::app {
 
+namespace {
+
+// lcm-logger names its files lcmlog-YYYY-MM-DD.NN: a log is known by its first word.
+bool startsWithLcmSyncWord(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[4] = {};
+  return in.read(reinterpret_cast<char*>(head), 4) && head[0] == 0xED && head[1] == 0xA1 && head[2] == 0xDA &&
+         head[3] == 0x01;
+}
+
+}  // namespace
+
 std::vector<std::string> logPaths(const std::vector<std::string>& paths, const std::string& tool, bool folders) {
   std::vector<std::string> files;
   for (const auto& p : paths) {
     if (folders && fs::is_directory(p)) {
       std::vector<std::string> in;
       for (const auto& e : fs::directory_iterator(p))
-        if (e.is_regular_file() && (e.path().extension() == ".csv" || e.path().extension() == ".lcmlog"))
+        if (e.is_regular_file() && (e.path().extension() == ".csv" || e.path().extension() == ".lcmlog" ||
+                                    startsWithLcmSyncWord(e.path())))
           in.push_back(e.path().string());
-      if (in.empty()) throw std::invalid_argument(tool + ": " + p + ": no .csv or .lcmlog logs in this folder");
+      if (in.empty())
+        throw std::invalid_argument(tool + ": " + p + ": no logs in this folder (.csv, .lcmlog, or LCM event logs by content)");
       std::sort(in.begin(), in.end());
       files.insert(files.end(), in.begin(), in.end());
     } else if (fs::is_regular_file(p) || fs::is_fifo(p)) {

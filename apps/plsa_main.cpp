@@ -6,8 +6,17 @@
 
 #include "commands.hpp"
 
+// Exit codes: 0 done; 1 the tool failed (bad input, a failed check, a
+// target not met), with the reason on standard error; 2 the command line
+// itself is wrong (unknown option, a value out of range), with CLI usage.
+constexpr int kExitFailed = 1, kExitUsage = 2;
+
 int main(int argc, char** argv) {
+  // Progress reaches a pipe or a log line by line, not in one burst at exit.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   CLI::App app{"plsa: identify and predict pneumatic soft actuators (DIO-PWL-OBF)"};
+  app.option_defaults()->always_capture_default();  // --help shows every default
+  app.footer("Exit codes: 0 done; 1 failed (reason on standard error); 2 usage error.");
   app.set_version_flag("--version", std::string("plsa ") + PLSA_VERSION);
   app.require_subcommand(1);
   plsa::app::addDemoCommand(app);
@@ -25,13 +34,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : kExitUsage;  // --help and --version are not errors
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plsa: error: %s\n", e.what());
-    return 1;
+    return kExitFailed;
   } catch (...) {
     std::fprintf(stderr, "plsa: error: an unknown exception stopped the tool\n");
-    return 1;
+    return kExitFailed;
   }
   return 0;
 }

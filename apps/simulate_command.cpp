@@ -17,6 +17,7 @@ namespace {
 
 struct SimulateOptions {
   std::string config;
+  std::string channel = "PLSA_STATE";
   std::string experiment = "grid2";
   double duration_s = 0.0;
   std::uint64_t seed = 1;
@@ -77,7 +78,7 @@ void runSimulate(const SimulateOptions& o) {
   const bool lcm_out = o.out.size() > 7 && o.out.compare(o.out.size() - 7, 7, ".lcmlog") == 0;
   if (lcm_out) {
 #if PLSA_WITH_LCM
-    lcm::writeLcmLog(o.out, log);
+    lcm::writeLcmLog(o.out, log, o.channel);
 #else
     throw std::invalid_argument("plsa simulate: this build has no LCM (PLSA_WITH_LCM=OFF): write a .csv log");
 #endif
@@ -105,7 +106,9 @@ void addSimulateCommands(CLI::App& app) {
                   "held at the start)")
       ->check(kPositive);
   cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file")->check(kSeed);
-  cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log")->required();
+  cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log ('-': CSV on standard output)")
+      ->required();
+  cmd->add_option("--channel", o->channel, "LCM event log: the channel the actuator-state messages go on");
   cmd->callback([o] { runSimulate(*o); });
 
   auto path = std::make_shared<std::string>();

@@ -153,6 +153,31 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   EXPECT_EQ(run(validate + " --horizons 2479"), 1);
   EXPECT_NE(err_.find("leave 1 to score at horizon 2479"), std::string::npos) << err_;
   EXPECT_EQ(run(validate + " --horizons 2478"), 0) << err_;
+
+  // '-' is standard output: the JSON alone there, the table a person reads on standard error.
+  ASSERT_EQ(run(validate + " --json -"), 0) << err_;
+  const auto piped = nlohmann::json::parse(slurp(file("stdout.txt")));
+  EXPECT_EQ(piped["outputs"], j["outputs"]);
+  EXPECT_NE(err_.find("measured std"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists("-")) << "a file named '-' was written";
+  EXPECT_EQ(run(validate + " --json - --csv -"), 1);
+  EXPECT_NE(err_.find("cannot both be '-'"), std::string::npos) << err_;
+  // An LCM log under lcm-logger's own kind of name, on another channel: known by its content, read by --channel.
+  ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --channel ARM_7_STATE --out " +
+                file("other.lcmlog")),
+            0)
+      << err_;
+  fs::rename(file("other.lcmlog"), file("lcmlog-2026-11-25.00"));
+  const std::string other = "validate --model " + file("model.json") + " --log " + file("lcmlog-2026-11-25.00");
+  EXPECT_EQ(run(other), 1);
+  EXPECT_NE(err_.find("no actuator-state messages on channel PLSA_STATE"), std::string::npos) << err_;
+  ASSERT_EQ(run(other + " --channel ARM_7_STATE --json " + file("other.json")), 0) << err_;
+  EXPECT_EQ(nlohmann::json::parse(slurp(file("other.json")))["outputs"], j["outputs"]) << "the same recording";
+  // A wrong command line is a usage error (2), not a failure of the tool (1).
+  EXPECT_EQ(run(validate + " --no-such-option"), 2);
+  EXPECT_EQ(run(validate + " --horizons forty"), 2);
+  EXPECT_EQ(run("validate --help"), 0);
+  EXPECT_NE(slurp(file("stdout.txt")).find("--channel TEXT=PLSA_STATE"), std::string::npos) << "defaults in --help";
 }
 
 // The README's main job end to end: every file it names, the fits the issue
@@ -245,7 +270,7 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
   fs::create_directories(file("empty"));
   EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
-  EXPECT_NE(err_.find("empty: no .csv or .lcmlog logs in this folder"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, or LCM event logs by content)"), std::string::npos) << err_;
 }
 
 TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {

@@ -216,7 +216,7 @@ io::Log readLogFile(const std::string& path, const io::CsvReadOptions& options) 
   in.clear();
   in.seekg(0);
   if (!lcm_log) return io::readCsvLog(in, path, options);
-  io::Log log = readLcmLog(in, path);
+  io::Log log = readLcmLog(in, path, options.lcm_channel);
   for (const auto& r : options.required)
     if (!log.hasColumn(r)) throw std::runtime_error(path + ": LCM log has no column '" + r + "'");
   return log;

@@ -61,12 +61,21 @@ inline std::string folderOf(const std::string& path) {
 
 }  // namespace detail
 
+/// The path that means standard output, as command-line tools take it.
+inline constexpr const char* kStandardOutput = "-";
+
 /// Writes `bytes` to `path` atomically: into a temporary file beside it,
 /// fsync'ed, then renamed over `path` (and the folder fsync'ed). A path that
-/// exists and is not a regular file (a FIFO, /dev/null) is written in place.
+/// exists and is not a regular file (a FIFO, /dev/null) is written in place;
+/// "-" (kStandardOutput) is standard output.
 /// Throws std::runtime_error "PATH: cannot write the WHAT: reason"; on any
 /// failure the temporary file is removed and `path` is left as it was.
 inline void writeFileAtomically(const std::string& path, std::string_view bytes, const std::string& what) {
+  if (path == kStandardOutput) {
+    std::fflush(stdout);  // whatever was printed before comes first
+    detail::writeAll(STDOUT_FILENO, bytes, "standard output", what);
+    return;
+  }
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);

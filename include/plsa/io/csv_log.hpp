@@ -39,6 +39,9 @@ struct CsvReadOptions {
   std::string time_column = "time_s";
   /// Columns that must be present.
   std::vector<std::string> required;
+  /// When the file is an LCM event log (lcm::readLogFile): the channel whose
+  /// actuator-state messages are read.
+  std::string lcm_channel = "PLSA_STATE";
 };
 
 /// Longest line the reader takes: a log's rows are a few hundred bytes, and a

@@ -2,11 +2,12 @@
 // every effect on: the paper's protocol (two-chamber grid identification,
 // joystick validation), against the paper's switched PWL and two baselines,
 // with the model, fits and a self-contained HTML report written to --out.
+#include <array>
 #include <chrono>
-#include <sstream>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -153,13 +154,21 @@ void runDemo(const DemoOptions& opt) {
   std::printf("  %-36s %-10s %8s %8s %8s %9s %13s\n", "model", "output", "40-step", "80-step", "sim", "no drift",
               "training yaw");
   nlohmann::json j;
+  // Keyed by a machine key (MATLAB's jsondecode and pandas take it as is);
+  // the name people read is the entry's "label".
+  const std::array<const char*, 4> keys = {"plsa", "paper", "global_linear", "arx"};
+  const std::array<const char*, 4> files = {"model.json", "baseline_paper.json", "baseline_global_linear.json", ""};
+  for (std::size_t m = 0; m < preds.size(); ++m) {
+    j["models"][keys[m]]["label"] = preds[m].name;
+    if (*files[m]) j["models"][keys[m]]["file"] = files[m];
+  }
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o) {
       const auto& f = scores[m][o];
       const double f_nd = fitNoDrift(m, o), f_ty = fitTrainingYaw(m, o);
       std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %9.1f %13.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(),
                   f.at(40).fit, f.at(80).fit, f.at(0).fit, f_nd, f_ty);
-      j["models"][preds[m].name][model.outputs[o]] = {
+      j["models"][keys[m]][model.outputs[o]] = {
           {"fit_k40", f.at(40).fit},  {"fit_k80", f.at(80).fit},     {"fit_sim", f.at(0).fit},
           {"fit_sim_no_drift", f_nd}, {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms},
           {"rms_k80", f.at(80).rms},  {"rms_sim", f.at(0).rms}};

@@ -192,8 +192,12 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
     EXPECT_GT(fs::file_size(file("demo/" + f)), 100u) << f;
   }
   const auto fits = nlohmann::json::parse(slurp(file("demo/fits.json")));
-  const std::string plsa = "DIO-PWL-OBF (plsa)", paper = "DIO-PWL-OBF as in the paper",
-                    global = "global linear OBF (same poles, play)", arx = "linear ARX(4,4)";
+  const std::string plsa = "plsa", paper = "paper", global = "global_linear", arx = "arx";
+  // Machine keys, with the names people read as labels.
+  EXPECT_EQ(fits["models"][plsa]["label"], "DIO-PWL-OBF (plsa)");
+  EXPECT_EQ(fits["models"][global]["label"], "global linear OBF (same poles, play)");
+  EXPECT_EQ(fits["models"][paper]["file"], "baseline_paper.json");
+  EXPECT_FALSE(fits["models"][arx].contains("file"));
   for (const std::string out : {"bend_deg", "steer_deg"}) {
     for (const std::string key : {"fit_k40", "fit_k80", "fit_sim"}) {
       ASSERT_TRUE(fits["outputs"][out].contains(key)) << out << "." << key;

@@ -180,6 +180,12 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_GT(d.margin_over_recalibration, 0.0);
   EXPECT_LE(d.margin_over_recalibration, 1.0);
   EXPECT_TRUE(j["identified_reference"].contains("available"));
+  // How each calibration went: its starts, runs and where each start ended.
+  EXPECT_EQ(d.ranking[0].starts, 2);
+  EXPECT_EQ(d.ranking[0].train_gap_per_start.size(), 2u);
+  EXPECT_GE(d.ranking[0].evaluations, 2 * 20);
+  EXPECT_EQ(j["ranking"][0]["calibration"]["evaluations"], d.ranking[0].evaluations);
+  EXPECT_GT(d.nominal_evaluations, 28 + 3 * 20);
   EXPECT_FALSE(d.reference.note.empty());
   // Every plotted series is exported: the trace row for row, the map cell for cell, one row per candidate.
   const auto series = reportSeriesCsv(d);

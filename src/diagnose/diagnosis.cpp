@@ -1,12 +1,13 @@
 #include "plsa/diagnose/diagnosis.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
-#include <atomic>
+#include <functional>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 
 namespace plsa::diagnose {
@@ -125,6 +126,28 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
   return {neutral, best};
 }
 
+// Runs work(0) .. work(count - 1) on `threads` threads (at least one), each
+// index once; rethrows the first exception any of them threw.
+void forEachInParallel(std::size_t count, int threads, const std::function<void(std::size_t)>& work) {
+  std::vector<std::thread> pool;
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  for (int t = 0; t < std::max(1, threads); ++t)
+    pool.emplace_back([&] {
+      for (std::size_t i = next++; i < count; i = next++) {
+        try {
+          work(i);
+        } catch (...) {
+          std::lock_guard<std::mutex> lock(failure_mutex);
+          if (!failure) failure = std::current_exception();
+        }
+      }
+    });
+  for (auto& th : pool) th.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
 // Starts for the nominal fit taken from the data: the static gain scaled by
 // regressing the measured bending on the simulated one, then a coarse grid
 // of bending frequency, damping and chamber time constant around it, ranked
@@ -167,33 +190,25 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
 // The baseline: BOBYQA from the simulator as given and from the best
 // data-derived starts (in parallel), then a restart from the best answer
 // (a restart shrinks the trust region afresh).
+// `spent`: the simulator runs of every stage (the gain regression and grid
+// count one per run each).
 CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::vector<RunData>& train,
-                                   const CalibrationOptions& nominal, const DiagnoseOptions& o) {
+                                   const CalibrationOptions& nominal, const DiagnoseOptions& o, int& spent) {
   const std::vector<sim::SimConfig> starts = nominalStarts(simulator, train, nominal.gap, 2);
+  spent = 1 + 27;
   std::vector<CalibrationResult> results(starts.size());
-  std::vector<std::thread> pool;
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
   CalibrationOptions quiet = nominal;
   quiet.progress = nullptr;
-  for (int t = 0; t < std::max(1, o.threads); ++t)
-    pool.emplace_back([&] {
-      for (std::size_t i = next++; i < starts.size(); i = next++) {
-        try {
-          results[i] = calibrate(starts[i], {"nominal"}, train, i == 0 ? nominal : quiet);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(failure_mutex);
-          if (!failure) failure = std::current_exception();
-        }
-      }
-    });
-  for (auto& th : pool) th.join();
-  if (failure) std::rethrow_exception(failure);
+  forEachInParallel(starts.size(), o.threads, [&](std::size_t i) {
+    results[i] = calibrate(starts[i], {"nominal"}, train, i == 0 ? nominal : quiet);
+  });
   CalibrationResult best = results[0];
-  for (const auto& r : results)
+  for (const auto& r : results) {
+    spent += r.evaluations;
     if (r.train_gap.total < best.train_gap.total) best = r;
+  }
   CalibrationResult again = calibrate(best.config, {"nominal"}, train, quiet);
+  spent += again.evaluations;
   return again.train_gap.total < best.train_gap.total ? again : best;
 }
 
@@ -299,13 +314,14 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   nominal_opts.progress = [&](int e, double best) {
     say(o, "  nominal calibration: " + std::to_string(e) + " evaluations, training gap " + pct(100 * std::sqrt(best)));
   };
-  const CalibrationResult base = calibrateNominal(simulator, train, nominal_opts, o);
+  const CalibrationResult base = calibrateNominal(simulator, train, nominal_opts, o, d.nominal_evaluations);
   d.calibrated = base.config;
   d.nominal_params = base.values;
   d.train_before = base.train_gap;
   OutputFit fit = base.fit;
   d.gap_before = measureGap(base.config, held, g, &fit, false);
-  say(o, "plsa diagnose: nominal physics calibrated; held-out gap " + pct(d.gap_before.percent()));
+  say(o, "plsa diagnose: nominal physics calibrated (" + std::to_string(d.nominal_evaluations) +
+             " simulator runs); held-out gap " + pct(d.gap_before.percent()));
   d.where = breakdownFor(base.config, held, fit, d.map);
 
   // 2. Candidates, forward selection.
@@ -348,14 +364,17 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       modules.insert(modules.end(), selected.begin(), selected.end());
       modules.push_back(e);
       CalibrationResult r;
+      CandidateResult cr;
       bool first = true;
       for (const sim::SimConfig& start : startsFor(c, e, train, g)) {
         CalibrationResult trial = calibrate(start, modules, train, o.calibration);
+        ++cr.starts;
+        cr.evaluations += trial.evaluations;
+        cr.train_gap_per_start.push_back(trial.train_gap.percent());
         if (first || trial.train_gap.total < r.train_gap.total) r = std::move(trial);
         first = false;
       }
       OutputFit f = r.fit;
-      CandidateResult cr;
       cr.effect = e;
       cr.formulation = c.formulationOf(e);
       cr.round = round;
@@ -370,24 +389,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       configs[i] = r.config;
       fits[i] = f;
     };
-    const std::size_t threads = std::max(1, o.threads);
-    std::vector<std::thread> pool;
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    for (std::size_t t = 0; t < threads; ++t)
-      pool.emplace_back([&] {
-        for (std::size_t i = next++; i <= remaining.size(); i = next++) {
-          try {
-            work(i);
-          } catch (...) {
-            std::lock_guard<std::mutex> lock(failure_mutex);
-            if (!failure) failure = std::current_exception();
-          }
-        }
-      });
-    for (auto& th : pool) th.join();
-    if (failure) std::rethrow_exception(failure);
+    forEachInParallel(remaining.size() + 1, o.threads, work);  // the last index: the nothing-added bar
     std::vector<std::size_t> order(results.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(),

@@ -73,6 +73,8 @@ json candidateJson(const CandidateResult& c) {
           {"heldout_gap_after", c.heldout_after.percent()},
           {"shrink_percent", c.shrink_percent},
           {"train_gap_after", c.train_after.percent()},
+          {"calibration", {{"starts", c.starts}, {"evaluations", c.evaluations},
+                           {"train_gap_percent_per_start", c.train_gap_per_start}}},
           {"params", paramsJson(c.params)},
           {"signature", {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
 }
@@ -98,6 +100,7 @@ std::string toJson(const Diagnosis& d) {
   j["train_gap_before"] = d.train_before.percent();
   j["noise_floor"] = d.noise.percent();
   j["nominal_params"] = paramsJson(d.nominal_params);
+  j["nominal_evaluations"] = d.nominal_evaluations;
   j["ranking"] = arrayOf(d.ranking, candidateJson);
   j["later_rounds"] = arrayOf(d.later_rounds, candidateJson);
   j["selected"] = d.selected;
@@ -225,8 +228,9 @@ std::string reportHtml(const Diagnosis& d) {
   }
   h << "<div id=\"shrink-chart\">"
     << report::barChart("Held-out gap shrinkage per candidate effect (round 1)", bars, "shrink (%)") << "</div>\n";
-  h << "<table id=\"ranking\"><tr><th>effect</th><th>held-out gap before</th><th>after</th><th>shrink</th>"
-       "<th>signature</th><th>fitted parameters</th></tr>";
+  h << "<table id=\"ranking\"><tr><th>effect (law calibrated)</th><th>held-out gap before</th><th>after</th>"
+       "<th>shrink</th><th>signature</th><th>fitted parameters</th><th>calibration: starts, simulator runs, "
+       "training gap per start</th></tr>";
   for (const auto& c : d.ranking) {
     std::string params;
     for (const auto& [k, v] : c.params)
@@ -235,7 +239,9 @@ std::string reportHtml(const Diagnosis& d) {
       << fmt(c.heldout_before.percent()) << "%</td><td>" << fmt(c.heldout_after.percent()) << "%</td><td>"
       << fmt(c.shrink_percent) << "%</td><td>"
       << (c.signature.present ? "supports: " : "") << escape(c.signature.evidence) << "</td><td>" << escape(params)
-      << "</td></tr>";
+      << "</td><td>" << c.starts << ", " << c.evaluations << ";";
+    for (double gap : c.train_gap_per_start) h << " " << fmt(gap) << "%";
+    h << "</td></tr>";
   }
   h << "</table>\n";
   if (!d.later_rounds.empty()) {
@@ -272,7 +278,10 @@ std::string reportHtml(const Diagnosis& d) {
         h << "<tr><td>chamber " << b.chamber << ", " << fmt(b.from_bar, "%.2f") << "-" << fmt(b.to_bar, "%.2f")
           << " bar, " << b.direction << "</td><td>" << fmt(b.rms, "%.3g") << "</td><td>" << fmt(a.rms, "%.3g")
           << "</td></tr>";
-  h << "</table>\n<h2>Calibrated nominal parameters</h2><table><tr><th>parameter</th><th>value</th></tr>";
+  h << "</table>\n<h2>Calibrated nominal parameters</h2><p class=\"note\">" << d.nominal_evaluations
+    << " simulator runs: the gain regression, a 27-point grid of frequency, damping and time constant, BOBYQA from "
+       "the simulator as given and the best two grid points, then a restart from the best.</p>"
+       "<table><tr><th>parameter</th><th>value</th></tr>";
   for (const auto& [k, v] : d.nominal_params) h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
   h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n</body></html>\n";
   return h.str();

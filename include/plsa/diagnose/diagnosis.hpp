@@ -52,6 +52,12 @@ struct CandidateResult {
   Gap heldout_before, heldout_after, train_after;
   double shrink_percent = 0.0;   ///< 100 (1 - gap_after% / gap_before%), held out
   std::vector<std::pair<std::string, double>> params;  ///< its fitted parameters (nominal ones too)
+  /// How its calibration went: the starts tried (neutral, then the best of
+  /// the configured values, spread points and, for sensor bias, the
+  /// residual's offset and drift), the simulator runs spent over all of
+  /// them, and the training gap each start ended at (%).
+  int starts = 0, evaluations = 0;
+  std::vector<double> train_gap_per_start;
   Signature signature;           ///< of the residual before it was added
 };
 
@@ -64,6 +70,7 @@ struct Diagnosis {
   Gap noise;                 ///< noise floor of the held-out data, same measure
   IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
+  int nominal_evaluations = 0;  ///< simulator runs the nominal calibration spent (grid and every start)
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
   std::vector<std::string> selected;

@@ -155,7 +155,7 @@ void forEachInParallel(std::size_t count, int threads, const std::function<void(
 // far basin on physics unlike plsa's defaults, and every candidate was then
 // credited with what moving the nominal physics bought).
 std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const std::vector<RunData>& train,
-                                          const GapOptions& g, std::size_t keep) {
+                                          const GapOptions& g, std::size_t keep, int& spent) {
   sim::SimConfig scaled = simulator;
   double num = 0.0, den = 0.0;
   for (const auto& run : train) {
@@ -163,6 +163,7 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
     num += (run.outputs.array() * t.outputs.array()).sum();
     den += t.outputs.squaredNorm();
   }
+  ++spent;
   if (g.map == OutputMap::kAngles && den > 0 && num > 0) {
     const double k = std::clamp(num / den, 0.2, 5.0);
     scaled.elongation.strain_per_bar = std::clamp(scaled.elongation.strain_per_bar * k, 0.01, 5.0);
@@ -177,6 +178,7 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
         c.bending.damping_ratio = z;
         c.pneumatics.time_constant_s = std::clamp(c.pneumatics.time_constant_s * tc, 0.005, 2.0);
         try {
+          ++spent;
           ranked.emplace_back(measureGap(c, train, g).total, c);
         } catch (const std::invalid_argument&) {
         }
@@ -194,8 +196,8 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
 // count one per run each).
 CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::vector<RunData>& train,
                                    const CalibrationOptions& nominal, const DiagnoseOptions& o, int& spent) {
-  const std::vector<sim::SimConfig> starts = nominalStarts(simulator, train, nominal.gap, 2);
-  spent = 1 + 27;
+  spent = 0;
+  const std::vector<sim::SimConfig> starts = nominalStarts(simulator, train, nominal.gap, 2, spent);
   std::vector<CalibrationResult> results(starts.size());
   CalibrationOptions quiet = nominal;
   quiet.progress = nullptr;

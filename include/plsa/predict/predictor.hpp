@@ -22,93 +22,19 @@
 
 #include <Eigen/Dense>
 
-#if defined(__SSE2__)
-#include <xmmintrin.h>
-#endif
-
 #include "plsa/model/dio_pwl_obf_model.hpp"
 #include "plsa/predict/compiled_model.hpp"
+#include "plsa/predict/kernels.hpp"
+#include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/model_handoff.hpp"
+#include "plsa/predict/plan_sensitivity.hpp"
 #include "plsa/predict/predictor_options.hpp"
 
-// x86-64 with GCC or Clang: the hot kernels also come compiled for AVX2 and
-// FMA, chosen at run time when the processor has them.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define PLSA_PREDICT_AVX2 1
-#define PLSA_TARGET_AVX2 __attribute__((target("avx2,fma")))
-#define PLSA_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#define PLSA_PREDICT_AVX2 0
-#define PLSA_TARGET_AVX2
-#define PLSA_ALWAYS_INLINE inline
-#endif
-
 namespace plsa {
-
-/// Whether this processor runs the AVX2+FMA versions of the predictor's kernels.
-inline bool predictorUsesAvx2() noexcept {
-#if PLSA_PREDICT_AVX2
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
-#else
-  return false;
-#endif
-}
-
-/// y[0, rows) += A[0, rows) x [0, cols) for a column-major table with leading
-/// dimension ld: the held paths' table products, in a generic and an AVX2 build.
-PLSA_ALWAYS_INLINE void accumulateColumnsBody(const double* __restrict a, Eigen::Index ld, int rows, int cols,
-                                              const double* __restrict x, double* __restrict y) noexcept {
-  int c = 0;
-  for (; c + 4 <= cols; c += 4) {  // four columns a pass: y loaded and stored once per four
-    const double *a0 = a + c * ld, *a1 = a0 + ld, *a2 = a1 + ld, *a3 = a2 + ld;
-    const double x0 = x[c], x1 = x[c + 1], x2 = x[c + 2], x3 = x[c + 3];
-    for (int r = 0; r < rows; ++r) y[r] += a0[r] * x0 + a1[r] * x1 + a2[r] * x2 + a3[r] * x3;
-  }
-  for (; c < cols; ++c) {
-    const double* ac = a + c * ld;
-    const double xc = x[c];
-    for (int r = 0; r < rows; ++r) y[r] += ac[r] * xc;
-  }
-}
-inline void accumulateColumnsGeneric(const double* a, Eigen::Index ld, int rows, int cols, const double* x,
-                                     double* y) noexcept {
-  accumulateColumnsBody(a, ld, rows, cols, x, y);
-}
-PLSA_TARGET_AVX2 inline void accumulateColumnsAvx2(const double* a, Eigen::Index ld, int rows, int cols,
-                                                   const double* x, double* y) noexcept {
-  accumulateColumnsBody(a, ld, rows, cols, x, y);
-}
-inline void accumulateColumns(const double* a, Eigen::Index ld, int rows, int cols, const double* x, double* y) noexcept {
-  if (predictorUsesAvx2())
-    accumulateColumnsAvx2(a, ld, rows, cols, x, y);
-  else
-    accumulateColumnsGeneric(a, ld, rows, cols, x, y);
-}
-
-/// Filter states smaller than this are zero (far below any measurable
-/// output, far above the subnormal range).
-inline constexpr double kTinyState = 1e-150;
 
 /// Inputs whose resting (never driven) filters a predictor skips; beyond
 /// this many, every input's filters step.
 inline constexpr int kMaxRestingInputs = 16;
-
-/// For its scope, arithmetic flushes subnormal results and operands to zero
-/// (x86 SSE: MXCSR's FTZ and DAZ bits, restored on exit; elsewhere a no-op,
-/// and the stored states' flush alone keeps them out). Every real-time call
-/// of the predictor runs under one, so no intermediate of a prediction can
-/// slow down on a subnormal number either.
-class SubnormalsFlushed {
- public:
-#if defined(__SSE2__)
-  SubnormalsFlushed() noexcept : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
-  ~SubnormalsFlushed() { _mm_setcsr(saved_); }
-
- private:
-  unsigned saved_;
-#endif
-};
 
 /// The predictor for any number of poles per bank. update() and predict()
 /// belong to one (real-time) thread; install() may be called from any other.
@@ -237,7 +163,7 @@ class NStepPredictor {
     const SubnormalsFlushed flushed;
     const CompiledModel& m = model();
     if (samples_ == 0) return PredictorStatus::kNotReady;
-    if (!m.modal || m.n_y > 8 || m.n_u > kMaxRestingInputs) return PredictorStatus::kUnsupported;
+    if (!m.modal || m.n_y > 8 || m.n_u > kMaxSensitivityInputs) return PredictorStatus::kUnsupported;
     if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
     const Eigen::Index steps = horizon - 1;
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
@@ -248,9 +174,7 @@ class NStepPredictor {
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
     if (status != PredictorStatus::kOk) return status;
-    frozenKernels(m, horizon);
-    channelPath(m, plan);
-    fillSensitivity(m, horizon, nominal, jacobian);
+    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, jacobian);
     return PredictorStatus::kOk;
   }
 
@@ -280,23 +204,15 @@ class NStepPredictor {
   // it keeps the steering it had) sends the rows through atan2 one by one.
   void toTipAngles(int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const double reference = steer_reference_;
-    double* __restrict turn = turn_.data();
-    bool smooth = true;
-    for (int h = 0; h < horizon; ++h) {
-      const double px = h ? out(h - 1, 0) : std::cos(reference * kRadPerDeg);
-      const double py = h ? out(h - 1, 1) : std::sin(reference * kRadPerDeg);
-      const double x = out(h, 0), y = out(h, 1);
-      const double cross = px * y - py * x, dot = px * x + py * y;
-      smooth = smooth && dot > 0.0 && std::abs(cross) <= 0.1 * dot;
-      const double t = cross / dot, t2 = t * t;  // atan t to double precision for |t| <= 0.1
-      turn[h] = t * (1.0 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
-    }
-    if (!smooth) return toTipAnglesRowByRow(horizon, out);
+    double* turn = turn_.data();
+    double* bend = turn_.data() + options_.max_horizon;
+    if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, std::cos(reference * kRadPerDeg),
+                  std::sin(reference * kRadPerDeg), turn, bend))
+      return toTipAnglesRowByRow(horizon, out);
     double steer = reference;
     for (int h = 0; h < horizon; ++h) {
-      const double x = out(h, 0), y = out(h, 1);
       steer += turn[h] / kRadPerDeg;
-      out(h, 0) = std::sqrt(x * x + y * y);
+      out(h, 0) = bend[h];
       out(h, 1) = steer;
     }
   }
@@ -337,15 +253,9 @@ class NStepPredictor {
     held_levels_.setZero(slots * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
     lag_drive_.setZero(static_cast<Eigen::Index>(m.poles) * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
     zeta_of_output_.setZero(modes);
-    turn_.setZero(options_.max_horizon);
+    turn_.setZero(2 * static_cast<Eigen::Index>(options_.max_horizon));  // turns, then lengths
     sens_nominal_.setZero(options_.max_horizon, m.n_y);
-    sens_kernel_.setZero(options_.max_horizon, static_cast<Eigen::Index>(m.play.size()) * m.n_y);
-    sens_drive_.setZero(static_cast<Eigen::Index>(options_.max_horizon) * static_cast<Eigen::Index>(m.play.size()), m.n_u);
-    sens_next_.setZero(static_cast<Eigen::Index>(options_.max_horizon) * static_cast<Eigen::Index>(m.play.size()));
-    sens_pushed_.setZero(sens_next_.size());
-    sens_turn_.setZero(options_.max_horizon, 4);
-    sens_b_.setZero(options_.max_horizon, m.n_y);
-    sens_rows_.setZero(options_.max_horizon, static_cast<Eigen::Index>(m.n_y) * m.n_u);
+    sensitivity_.allocate(m, options_.max_horizon);
     blended_.setZero(m.states());
     drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
   }
@@ -448,8 +358,13 @@ class NStepPredictor {
           if (still) continue;
           resting[static_cast<std::size_t>(j)] = false;
         }
-        if (width == 16)
+        const bool avx2 = predictorUsesAvx2();
+        if (width == 16 && avx2)
+          stepModesAvx2<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
+        else if (width == 16)
           stepModes<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
+        else if (avx2)
+          stepModesAvx2<0>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
         else
           stepModes<0>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
       }
@@ -481,8 +396,17 @@ class NStepPredictor {
   // Modes [begin, end) of one input, each over its `width` copies (W: fixed
   // at compile time, or 0): z <- lambda z + beta d.
   template <int W>
-  static void stepModes(const ModalForm& f, int begin, int end, int width, const double* __restrict d,
-                        double* __restrict state) noexcept {
+  static void stepModes(const ModalForm& f, int begin, int end, int width, const double* d, double* state) noexcept {
+    stepModesBody<W>(f, begin, end, width, d, state);
+  }
+  template <int W>
+  PLSA_TARGET_AVX2 static void stepModesAvx2(const ModalForm& f, int begin, int end, int width, const double* d,
+                                             double* state) noexcept {
+    stepModesBody<W>(f, begin, end, width, d, state);
+  }
+  template <int W>
+  PLSA_ALWAYS_INLINE static void stepModesBody(const ModalForm& f, int begin, int end, int width,
+                                               const double* __restrict d, double* __restrict state) noexcept {
     const int size = W > 0 ? W : width;
     for (int q = begin; q < end; ++q) {
       double* __restrict z = state + f.offset[static_cast<std::size_t>(q)];
@@ -572,154 +496,6 @@ class NStepPredictor {
     }
   }
 
-  // Sensitivity, stage 1: with the schedule frozen where it is, each channel c
-  // drives output o's modes through a_qc (its copies' coefficients weighted
-  // by the frozen schedule); one unit on c from plan step s on moves row h by
-  // CK_oc(h - 1 - s), CK the cumulative sum of K_oc(m) = sum_q beta_q a_qc lambda_q^m.
-  void frozenKernels(const CompiledModel& m, int horizon) noexcept {
-    const ModalForm& f = m.modal_form;
-    const int n = m.poles;
-    ScheduleBlend blend;
-    m.partition.blend(us_, dir_, blend);
-    for (int c = 0; c < static_cast<int>(m.play.size()); ++c) {
-      const int j = m.channel_input[static_cast<std::size_t>(c)], first = m.first_channel[static_cast<std::size_t>(j)];
-      const int channels = m.channels(j);
-      for (int o = 0; o < m.n_y; ++o) {
-        auto kernel = sens_kernel_.col(c * m.n_y + o).head(horizon);
-        kernel.setZero();
-        for (int i = 0; i < n; ++i) {
-          const int q = (j * m.n_y + o) * n + i, begin = f.offset[static_cast<std::size_t>(q)];
-          double a = 0.0;
-          for (int k = 0; k < blend.count; ++k) {
-            const auto row = f.coefficient.row(blend.region[static_cast<std::size_t>(k)]);
-            if (m.input_side)
-              for (int r = 0; r < m.nodes; ++r) a += node_w_(r) * row(begin + r * channels + (c - first));
-            else
-              a += blend.weight[static_cast<std::size_t>(k)] * row(begin + (c - first));
-          }
-          double power = f.beta(q) * a;
-          for (int h = 0; h < horizon; ++h, power *= f.lambda(q)) kernel(h) += power;
-        }
-        for (int h = 1; h < horizon; ++h) kernel(h) += kernel(h - 1);  // cumulative
-      }
-    }
-  }
-
-  // Sensitivity, stage 2: each channel along the plan: at step s whether the
-  // input pushed its band (then the channel takes d level / d u, through the
-  // band's slope, the threshold, softening and coupling; otherwise it holds
-  // and takes nothing), and the next step that pushes it again.
-  void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan) noexcept {
-    const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
-    work_vc_ = vc_;
-    for (Eigen::Index s = 0; s < steps; ++s) {
-      for (int j = 0; j < m.n_u; ++j) work_u_(j) = plan(s, j);
-      const double threshold = m.threshold;
-      const double positive_sum = positiveSumAbove(work_u_, threshold);
-      for (Eigen::Index c = 0; c < channels; ++c) {
-        const auto cc = static_cast<std::size_t>(c);
-        const int j = m.channel_input[cc];
-        const double above = levelAbove(work_u_(j), threshold);
-        const double level = coupledLevel(above, positive_sum, m.coupling, m.softening);
-        const double before = work_vc_(c), after = m.play[cc].follow(level, before);
-        work_vc_(c) = after;
-        auto d = sens_drive_.row(s * channels + c);
-        d.setZero();
-        // At the band's edge a held input moves the channel as soon as it goes
-        // on: take that side's derivative (a controller needs it at rest).
-        const double half = m.play[cc].halfWidth(level), tol = 1e-12 * (std::abs(level) + half + 1e-9);
-        const bool edge = std::abs(after - (level - half)) <= tol || std::abs(after - (level + half)) <= tol;
-        const bool pushed = after != before || edge || m.play[cc].passesThrough();
-        sens_pushed_(s * channels + c) = pushed ? 1 : 0;
-        if (!pushed) continue;  // inside the band
-        // d after / d level: 1 -+ the band's growth on the side it was pushed.
-        const double growth = level > 0.0 ? m.play[cc].slope : 0.0;
-        const double band = after <= level ? 1.0 - growth : 1.0 + growth;
-        // d level / d (own level above the threshold) and / d (each other's).
-        const double own = std::max(0.0, above), others = positive_sum - own;
-        double soft = 1.0, softened = above;
-        if (m.softening > 0.0 && own > 0.0) {
-          const double x = std::min(own, 0.5 / m.softening);
-          softened = x - m.softening * x * x;
-          soft = own < 0.5 / m.softening ? 1.0 - 2.0 * m.softening * own : 0.0;
-        }
-        const double d_own = soft * (1.0 - m.coupling * (softened > 0.0 ? 1.0 : 0.0) * others);
-        for (int k = 0; k < m.n_u; ++k) {
-          const bool counted = threshold > 0.0 ? work_u_(k) > threshold : work_u_(k) > 0.0;  // d levelAbove / d u
-          const double gate = threshold > 0.0 ? (work_u_(k) > threshold ? 1.0 : 0.0) : 1.0;
-          if (k == j)
-            d(k) = band * d_own * gate;
-          else if (counted)
-            d(k) = band * -m.coupling * std::max(0.0, softened);
-        }
-      }
-    }
-    for (Eigen::Index c = 0; c < channels; ++c) {  // the next push of each channel after each step
-      Eigen::Index next = steps;
-      for (Eigen::Index s = steps - 1; s >= 0; --s) {
-        sens_next_(s * channels + c) = static_cast<int>(next);
-        if (sens_pushed_(s * channels + c)) next = s;
-      }
-    }
-  }
-
-  // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
-  // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
-  // t); a tip_cartesian model's row pairs turned from components into angles
-  // at the nominal prediction on the way (d(bend, steer) / d(x, y)).
-  void fillSensitivity(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
-                       Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
-    const int ny = m.n_y, nu = m.n_u;
-    const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
-    const bool tip = m.frame == OutputFrame::kTipCartesian;
-    if (tip)  // the rows' 2 x 2 turn from components to angles
-      for (int h = 0; h < horizon; ++h) {
-        const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y, r = std::sqrt(r2);
-        const bool straight = r2 == 0.0;  // no direction to move
-        sens_turn_(h, 0) = straight ? 0.0 : x / r;
-        sens_turn_(h, 1) = straight ? 0.0 : y / r;
-        sens_turn_(h, 2) = straight ? 0.0 : -y / r2 / kRadPerDeg;
-        sens_turn_(h, 3) = straight ? 0.0 : x / r2 / kRadPerDeg;
-      }
-    for (Eigen::Index s = 0; s + 1 < horizon; ++s) {
-      const Eigen::Index rows = horizon - 1 - s;  // rows h = s + 1 .. horizon - 1 move with step s
-      for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
-      auto value = sens_rows_.topRows(rows);  // [h - s - 1][o * nu + j]
-      value.setZero();
-      for (Eigen::Index c = 0; c < channels; ++c) {
-        const auto d = sens_drive_.row(s * channels + c);
-        if (d.isZero(0.0)) continue;
-        const Eigen::Index tail = sens_next_(s * channels + c) - s;  // the channel holds for this many steps
-        for (int o = 0; o < ny; ++o) {
-          const double* kernel = sens_kernel_.col(c * ny + o).data();
-          double* b = sens_b_.col(o).data();
-          for (Eigen::Index r = 0; r < rows; ++r) b[r] = kernel[r];
-          for (Eigen::Index r = tail; r < rows; ++r) b[r] -= kernel[r - tail];
-        }
-        if (tip) {
-          double* __restrict x = sens_b_.col(0).data();
-          double* __restrict y = sens_b_.col(1).data();
-          const double *t0 = sens_turn_.col(0).data() + s + 1, *t1 = sens_turn_.col(1).data() + s + 1;
-          const double *t2 = sens_turn_.col(2).data() + s + 1, *t3 = sens_turn_.col(3).data() + s + 1;
-          for (Eigen::Index r = 0; r < rows; ++r) {
-            const double bx = x[r], by = y[r];
-            x[r] = t0[r] * bx + t1[r] * by;
-            y[r] = t2[r] * bx + t3[r] * by;
-          }
-        }
-        for (int o = 0; o < ny; ++o)
-          for (int j = 0; j < nu; ++j)
-            if (d(j) != 0.0) value.col(o * nu + j).noalias() += d(j) * sens_b_.col(o).head(rows);
-      }
-      for (int j = 0; j < nu; ++j)
-        for (int o = 0; o < ny; ++o) {
-          const double* v = value.col(o * nu + j).data();
-          double* column = jacobian.col(s * nu + j).data() + (s + 1) * ny + o;
-          for (Eigen::Index r = 0; r < rows; ++r) column[r * ny] = v[r];
-        }
-    }
-  }
-
   // predict() in the model's output frame.
   PredictorStatus predictInModelFrame(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                                       Eigen::Ref<Eigen::MatrixXd> out) noexcept {
@@ -735,7 +511,7 @@ class NStepPredictor {
     if (plan.rows() == 0 && us_ == u_ && m.modal) return predictSettled(m, horizon, out);
     const bool merged = m.modal && m.input_side && m.n_y <= 8;  // the merged paths keep outputs in fixed arrays
     if (merged && plan.rows() == 0 && !m.modal_form.lag_sum.empty()) return predictHeldLagged(m, horizon, out);
-    if (merged) return predictMergedModes(m, horizon, plan, out);
+    if (merged::fits(m)) return predictMergedModes(m, horizon, plan, out);
     return predictStepByStep(m, horizon, plan, out);
   }
 
@@ -925,7 +701,7 @@ class NStepPredictor {
       work_us_(m.node_grid.inputs[s]) = laggedAt(static_cast<int>(s), last + 1, pole);
     ScheduleBlend blend;
     m.node_partition.blend(work_us_, DirectionState{}, blend);
-    for (int j = 0; j < m.n_u; ++j) levelsOfInput<0>(m, j, blend, vc_, g_next_.data() + j * block);
+    for (int j = 0; j < m.n_u; ++j) merged::levelsOfInput<0>(m, j, blend, vc_.data(), g_next_.data() + j * block);
     for (Eigen::Index k = 0; k < slots; ++k)
       merged_(k) = f.merged_lambda(k) * merged_(k) + f.merged_beta(k) * (g_next_(k) - g_(k));
   }
@@ -965,7 +741,7 @@ class NStepPredictor {
   // whose usual sizes get kernels with the size fixed at compile time.
   PredictorStatus predictMergedModes(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-    const bool avx2 = false;  // measured: the AVX2 build of this loop ran slower (its steps are short)
+    const bool avx2 = predictorUsesAvx2();
     switch (m.modal_form.block) {
       case 4: return avx2 ? runMergedAvx2<4>(m, horizon, plan, out) : runMerged<4>(m, horizon, plan, out);
       case 8: return avx2 ? runMergedAvx2<8>(m, horizon, plan, out) : runMerged<8>(m, horizon, plan, out);
@@ -989,171 +765,24 @@ class NStepPredictor {
     return runMergedBody<B>(m, horizon, plan, out);
   }
 
-  // B: the block size, or 0 for any (read from the model). Per step: the
-  // inputs, their lag and channels, the grid's blend; then per input its
-  // levels (kept in registers for a fixed B), its modes' step, and their sum
-  // into one block-long total whose output segments are dy. An input whose
-  // channels are zero and whose modes are at rest (a chamber never
-  // pressurised) is skipped until it moves.
+  // B: the block size, or 0 for any (read from the model): the modes merged
+  // at the schedule now, laid out a block per input, then merged::runPlanned.
   template <int B>
   PLSA_ALWAYS_INLINE PredictorStatus runMergedBody(const CompiledModel& m, int horizon,
                                                    const Eigen::Ref<const Eigen::MatrixXd>& plan,
                                                    Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
-    const int n = m.poles, block = B > 0 ? B : f.block, per_input = m.n_y * n, nu = m.n_u, ny = m.n_y;
-    PLSA_DEBUG_ASSERT(block == f.block && block % 4 == 0 && per_input <= block && ny <= 8);
-    PLSA_DEBUG_ASSERT(merged_.size() == static_cast<Eigen::Index>(nu) * block && g_next_.size() == merged_.size());
+    const int block = B > 0 ? B : f.block, per_input = m.n_y * m.poles;
+    PLSA_DEBUG_ASSERT(block == f.block && block % 4 == 0 && per_input <= block && merged::fits(m));
+    PLSA_DEBUG_ASSERT(merged_.size() == static_cast<Eigen::Index>(m.n_u) * block && g_.size() == merged_.size());
     mergeModes(m, state_, us_, dir_, zeta_);
     merged_.setZero();
-    for (int j = 0; j < nu; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
-    work_u_ = u_;
-    work_us_ = us_;
-    work_vc_ = vc_;
-    grid_hint_ = {};
-    ScheduleBlend blend;
-    gridBlend(m.node_grid, work_us_, blend);
-    double* __restrict zeta = merged_.data();
-    double* __restrict level = g_.data();       // each input's levels now
-    double* __restrict next = g_next_.data();   // and at the next step
-    for (int j = 0; j < nu; ++j) levelsOfInput<B>(m, j, blend, work_vc_, level + j * block);
-    std::array<bool, 16> resting{};
-    for (int j = 0; j < nu && j < 16; ++j) {
-      bool rest = true;
-      for (int i = 0; i < block; ++i) rest = rest && zeta[j * block + i] == 0.0 && level[j * block + i] == 0.0;
-      resting[static_cast<std::size_t>(j)] = rest;
-    }
-    double* __restrict total = total_.data();
-    for (int i = 0; i < block; ++i) total[i] = 0.0;
-    for (int j = 0; j < nu; ++j)
-      for (int i = 0; i < block; ++i) total[i] += zeta[j * block + i];
-    double y[8], dy[8];
-    for (int o = 0; o < ny; ++o) {
-      y[o] = work_y_(o);
-      dy[o] = outputSum(total, o, n);
-    }
-    const double* lambda = f.merged_lambda.data();
-    const double* beta = f.merged_beta.data();
-    for (int h = 0; h < horizon; ++h) {
-      for (int o = 0; o < ny; ++o) out(h, o) = y[o] += dy[o];
-      if (h + 1 == horizon) break;
-      if (h < plan.rows())  // the input side schedules no direction split: inputs and lag only
-        for (int j = 0; j < nu; ++j) work_u_(j) = plan(h, j);
-      lagSchedule(m, work_u_, work_us_);
-      moveChannels(m, work_u_, work_vc_);
-      gridBlend(m.node_grid, work_us_, blend);
-      for (int i = 0; i < block; ++i) total[i] = 0.0;
-      for (int j = 0; j < nu; ++j) {
-        if (j < 16 && resting[static_cast<std::size_t>(j)]) {
-          bool still = true;
-          for (int c = m.first_channel[static_cast<std::size_t>(j)]; c < m.first_channel[static_cast<std::size_t>(j) + 1]; ++c)
-            still = still && work_vc_(c) == 0.0;
-          if (still) continue;
-          resting[static_cast<std::size_t>(j)] = false;
-        }
-        const int at = j * block;
-        levelsOfInput<B>(m, j, blend, work_vc_, next + at);
-        stepMerged<B>(block, lambda + at, beta + at, next + at, level + at, zeta + at, total);
-      }
-      for (int o = 0; o < ny; ++o) dy[o] = outputSum(total, o, n);
-    }
-    work_y_ = Eigen::Map<const Eigen::VectorXd>(y, ny);
+    for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
+    merged::PlannedSchedule schedule(m, u_, us_, vc_);
+    const merged::MergedStart start{merged_.data(), g_.data(), work_y_.data()};
+    merged::runPlanned<B>(m, schedule, start, horizon, plan.data(), plan.outerStride(), plan.rows(), out.data(),
+                          out.outerStride(), work_y_.data());
     return PredictorStatus::kOk;
-  }
-
-  // Output o's share of a block-long total (its modes o * n .. o * n + n - 1).
-  static double outputSum(const double* total, int o, int n) noexcept {
-    double acc = 0.0;
-    for (int i = 0; i < n; ++i) acc += total[o * n + i];
-    return acc;
-  }
-
-  // zeta <- lambda zeta + beta (next - level); level <- next; total += zeta,
-  // over one input's block.
-  template <int B>
-  PLSA_ALWAYS_INLINE static void stepMerged(int block, const double* __restrict lambda, const double* __restrict beta,
-                         const double* __restrict next, double* __restrict level, double* __restrict zeta,
-                         double* __restrict total) noexcept {
-    const int size = B > 0 ? B : block;
-    for (int i = 0; i < size; ++i) {
-      const double z = lambda[i] * zeta[i] + beta[i] * (next[i] - level[i]);
-      zeta[i] = z;
-      level[i] = next[i];
-      total[i] += z;
-    }
-  }
-
-  // Input j's levels: sum over the blend's nodes r and j's channels c of
-  // w_r v_c times the node-channel row, into `level` (one block).
-  template <int B>
-  PLSA_ALWAYS_INLINE void levelsOfInput(const CompiledModel& m, int j, const ScheduleBlend& blend, const Eigen::VectorXd& vc,
-                     double* __restrict level) const noexcept {
-    const ModalForm& f = m.modal_form;
-    const int size = B > 0 ? B : f.block;
-    const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
-    const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
-    double acc[B > 0 ? B : 1];  // a fixed block stays in registers
-    double* sum = B > 0 ? acc : level;
-    for (int i = 0; i < size; ++i) sum[i] = 0.0;
-    for (int c = 0; c < channels; ++c) {
-      const double v = vc(first + c);
-      if (v == 0.0) continue;
-      for (int k = 0; k < blend.count; ++k) {
-        const double weight = blend.weight[static_cast<std::size_t>(k)] * v;
-        const double* __restrict row =
-            table + static_cast<std::ptrdiff_t>(blend.region[static_cast<std::size_t>(k)] * channels + c) * size;
-        for (int i = 0; i < size; ++i) sum[i] += weight * row[i];
-      }
-    }
-    if (B > 0)
-      for (int i = 0; i < size; ++i) level[i] = sum[i];
-  }
-
-  // dy_o = the sum of output o's merged modes.
-  void sumMerged(const CompiledModel& m, Eigen::VectorXd& dy) const noexcept {
-    const int n = m.poles, block = m.modal_form.block;
-    for (int o = 0; o < m.n_y; ++o) {
-      double acc = 0.0;
-      for (int j = 0; j < m.n_u; ++j) {
-        const double* z = merged_.data() + j * block + o * n;
-        for (int i = 0; i < n; ++i) acc += z[i];
-      }
-      dy(o) = acc;
-    }
-  }
-
-  // The input-side grid's blend at us, searching each input's cell from the
-  // last one; the same regions and weights as PwlPartition::blend.
-  void gridBlend(const NodeGrid& grid, const Eigen::VectorXd& us, ScheduleBlend& out) noexcept {
-    out.count = 1;
-    out.region[0] = 0;
-    out.weight[0] = 1.0;
-    for (std::size_t s = 0; s < grid.inputs.size(); ++s) {
-      const std::vector<double>& lv = grid.levels[s];
-      const int last = static_cast<int>(lv.size()) - 1;
-      const double x = us(grid.inputs[s]);
-      int i = 0;
-      double t = 0.0;
-      if (x >= lv[static_cast<std::size_t>(last)]) {
-        i = last;
-      } else if (x > lv[0]) {
-        i = std::min(grid_hint_[s], last - 1);
-        while (x < lv[static_cast<std::size_t>(i)]) --i;
-        while (x >= lv[static_cast<std::size_t>(i) + 1]) ++i;
-        t = (x - lv[static_cast<std::size_t>(i)]) / (lv[static_cast<std::size_t>(i) + 1] - lv[static_cast<std::size_t>(i)]);
-      }
-      grid_hint_[s] = i;
-      const int c = out.count, stride = grid.strides[s];
-      for (int k = 0; k < c; ++k) {
-        const auto kk = static_cast<std::size_t>(k);
-        if (t > 0.0) {
-          out.region[kk + static_cast<std::size_t>(c)] = out.region[kk] + (i + 1) * stride;
-          out.weight[kk + static_cast<std::size_t>(c)] = out.weight[kk] * t;
-        }
-        out.region[kk] += i * stride;
-        out.weight[kk] *= 1.0 - t;
-      }
-      if (t > 0.0) out.count = 2 * c;
-    }
   }
 
   // Any form: the filters stepped on a copy of the state, the schedule
@@ -1222,7 +851,6 @@ class NStepPredictor {
   Eigen::VectorXd drive_;               // per state: what drives it this step
   Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
   Eigen::VectorXd zeta_, merged_, g_, g_next_, total_, zeta_of_output_, blended_;
-  std::array<int, 4> grid_hint_{};  // input side: each scheduling input's last cell
   std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
   // Held input with a moving lag: the scheduling inputs' start and target,
   // the stretch's corners (node, weight polynomial) and level polynomials.
@@ -1232,11 +860,8 @@ class NStepPredictor {
   std::array<std::array<double, 5>, 16> corner_poly_{};
   Eigen::VectorXd held_levels_, lag_drive_;
   Eigen::VectorXd turn_;  // tip frame: each predicted row's turn
-  // sensitivity(): the nominal prediction, kernels per channel and output,
-  // each step's channel derivatives and next push.
-  Eigen::MatrixXd sens_nominal_, sens_kernel_, sens_drive_;
-  Eigen::VectorXi sens_next_, sens_pushed_;
-  Eigen::MatrixXd sens_turn_, sens_b_, sens_rows_;
+  Eigen::MatrixXd sens_nominal_;  // sensitivity(): the nominal prediction
+  PlanSensitivity sensitivity_;
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
   DirectionState dir_;

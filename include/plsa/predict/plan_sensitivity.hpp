@@ -1,0 +1,226 @@
+// The sensitivity of an n-step prediction to its planned inputs
+// (Predictor::sensitivity, docs/predictor.md): with the schedule frozen where
+// it is, each play channel drives each output's modes through a cumulative
+// modal kernel, and the plan decides, step by step, which channels it moves
+// and by how much. The workspace is sized once (allocate) and never
+// allocates again.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "plsa/predict/compiled_model.hpp"
+#include "plsa/predict/kernels.hpp"
+
+namespace plsa {
+
+/// Inputs a sensitivity is computed for at most (their drive per step is kept
+/// in fixed arrays).
+inline constexpr int kMaxSensitivityInputs = 16;
+
+class PlanSensitivity {
+ public:
+  void allocate(const CompiledModel& m, int max_horizon) {
+    const auto channels = static_cast<Eigen::Index>(m.play.size());
+    kernel_.setZero(max_horizon, channels * m.n_y);
+    drive_.setZero(static_cast<Eigen::Index>(max_horizon) * channels, m.n_u);
+    next_.setZero(static_cast<Eigen::Index>(max_horizon) * channels);
+    pushed_.setZero(next_.size());
+    turn_.setZero(max_horizon, 4);
+    rows_.setZero(max_horizon, m.n_y);
+    weight_.setZero(m.poles);
+    vc_.setZero(channels);
+  }
+
+  /// The Jacobian of `nominal` (the prediction under `plan`, in the model's
+  /// frame) with respect to the plan, into `jacobian`; the schedule frozen at
+  /// (us, dir) with node weights node_w, the channels starting at vc.
+  void compute(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+               const Eigen::VectorXd& us, const DirectionState& dir, const Eigen::VectorXd& node_w,
+               const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+               Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+    frozenKernels(m, horizon, us, dir, node_w);
+    channelPath(m, plan, vc);
+    fill(m, horizon, nominal, jacobian);
+  }
+
+ private:
+  // Sensitivity, stage 1: with the schedule frozen where it is, each channel c
+  // drives output o's modes through a_qc (its copies' coefficients weighted
+  // by the frozen schedule); one unit on c from plan step s on moves row h by
+  // CK_oc(h - 1 - s), CK the cumulative sum of K_oc(m) = sum_q beta_q a_qc lambda_q^m.
+  void frozenKernels(const CompiledModel& m, int horizon, const Eigen::VectorXd& us, const DirectionState& dir,
+                     const Eigen::VectorXd& node_w) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int n = m.poles;
+    ScheduleBlend blend;
+    m.partition.blend(us, dir, blend);
+    for (int c = 0; c < static_cast<int>(m.play.size()); ++c) {
+      const int j = m.channel_input[static_cast<std::size_t>(c)], first = m.first_channel[static_cast<std::size_t>(j)];
+      const int channels = m.channels(j);
+      for (int o = 0; o < m.n_y; ++o) {
+        auto kernel = kernel_.col(c * m.n_y + o).head(horizon);
+        kernel.setZero();
+        for (int i = 0; i < n; ++i) {
+          const int q = (j * m.n_y + o) * n + i, begin = f.offset[static_cast<std::size_t>(q)];
+          double a = 0.0;
+          for (int k = 0; k < blend.count; ++k) {
+            const auto row = f.coefficient.row(blend.region[static_cast<std::size_t>(k)]);
+            if (m.input_side)
+              for (int r = 0; r < m.nodes; ++r) a += node_w(r) * row(begin + r * channels + (c - first));
+            else
+              a += blend.weight[static_cast<std::size_t>(k)] * row(begin + (c - first));
+          }
+          weight_(i) = f.beta(q) * a;
+        }
+        // CK = sum_i beta_i a_i S_i(h), S_i(h) = sum_{s<=h} lambda_i^s: input
+        // j's columns of the output's power-sum table (modes of an output run
+        // input-major), one table product.
+        const Eigen::MatrixXd& sums = f.power_sum[static_cast<std::size_t>(o)];
+        accumulateColumns(sums.data() + static_cast<Eigen::Index>(j) * n * sums.rows(), sums.rows(), horizon, n,
+                          weight_.data(), kernel.data());
+      }
+    }
+  }
+
+  // Sensitivity, stage 2: each channel along the plan: at step s whether the
+  // input pushed its band (then the channel takes d level / d u, through the
+  // band's slope, the threshold, softening and coupling; otherwise it holds
+  // and takes nothing), and the next step that pushes it again.
+  void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan, const Eigen::VectorXd& vc_now) noexcept {
+    const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
+    const int nu = m.n_u;  // at most kMaxSensitivityInputs (sensitivity() checks)
+    const double threshold = m.threshold, kappa = m.coupling, softening = m.softening;
+    vc_ = vc_now;
+    double* vc = vc_.data();
+    double* drive = drive_.data();  // row-major: (s * channels + c) * nu + k
+    int* pushed_at = pushed_.data();
+    double u[kMaxSensitivityInputs];
+    for (Eigen::Index s = 0; s < steps; ++s) {
+      double positive_sum = 0.0;
+      for (int j = 0; j < nu; ++j) {
+        u[j] = plan(s, j);
+        positive_sum += std::max(0.0, u[j] - threshold);
+      }
+      for (Eigen::Index c = 0; c < channels; ++c) {
+        const PlayChannel& play = m.play[static_cast<std::size_t>(c)];
+        const int j = m.channel_input[static_cast<std::size_t>(c)];
+        const double above = levelAbove(u[j], threshold);
+        const double level = coupledLevel(above, positive_sum, kappa, softening);
+        const double before = vc[c], after = play.follow(level, before);
+        vc[c] = after;
+        double* d = drive + (s * channels + c) * nu;
+        for (int k = 0; k < nu; ++k) d[k] = 0.0;
+        // At the band's edge a held input moves the channel as soon as it goes
+        // on: take that side's derivative (a controller needs it at rest).
+        const double half = play.halfWidth(level), tol = 1e-12 * (std::abs(level) + half + 1e-9);
+        const bool edge = std::abs(after - (level - half)) <= tol || std::abs(after - (level + half)) <= tol;
+        const bool pushed = after != before || edge || play.passesThrough();
+        pushed_at[s * channels + c] = pushed ? 1 : 0;
+        if (!pushed) continue;  // inside the band
+        // d after / d level: 1 -+ the band's growth on the side it was pushed.
+        const double growth = level > 0.0 ? play.slope : 0.0;
+        const double band = after <= level ? 1.0 - growth : 1.0 + growth;
+        // d level / d (own level above the threshold) and / d (each other's).
+        const double own = std::max(0.0, above), others = positive_sum - own;
+        double soft = 1.0, softened = above;
+        if (softening > 0.0 && own > 0.0) {
+          const double x = std::min(own, 0.5 / softening);
+          softened = x - softening * x * x;
+          soft = own < 0.5 / softening ? 1.0 - 2.0 * softening * own : 0.0;
+        }
+        const double d_own = soft * (1.0 - kappa * (softened > 0.0 ? 1.0 : 0.0) * others);
+        const bool gated = threshold > 0.0;  // d levelAbove / d u: 0 below the threshold
+        d[j] = gated && !(u[j] > threshold) ? 0.0 : band * d_own;
+        if (kappa == 0.0) continue;
+        const double by_others = band * -kappa * std::max(0.0, softened);
+        for (int k = 0; k < nu; ++k)
+          if (k != j && u[k] > (gated ? threshold : 0.0)) d[k] = by_others;
+      }
+    }
+    for (Eigen::Index c = 0; c < channels; ++c) {  // the next push of each channel after each step
+      Eigen::Index next = steps;
+      for (Eigen::Index s = steps - 1; s >= 0; --s) {
+        next_(s * channels + c) = static_cast<int>(next);
+        if (pushed_(s * channels + c)) next = s;
+      }
+    }
+  }
+
+  // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
+  // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
+  // t); a tip_cartesian model's row pairs turned from components into angles
+  // at the nominal prediction on the way (d(bend, steer) / d(x, y)).
+  void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+                       Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+    const int ny = m.n_y, nu = m.n_u;
+    const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
+    const bool tip = m.frame == OutputFrame::kTipCartesian;
+    if (tip)  // the rows' 2 x 2 turn from components to angles
+      for (int h = 0; h < horizon; ++h) {
+        const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y;
+        const double inv_r = r2 == 0.0 ? 0.0 : 1.0 / std::sqrt(r2);  // straight: no direction to move
+        const double inv_r2 = inv_r * inv_r / kRadPerDeg;
+        turn_(h, 0) = x * inv_r;
+        turn_(h, 1) = y * inv_r;
+        turn_(h, 2) = -y * inv_r2;
+        turn_(h, 3) = x * inv_r2;
+      }
+    double* __restrict rows_by_output = rows_.data();  // [(h - s - 1) * ny + o]: a column's order
+    for (Eigen::Index s = 0; s + 1 < horizon; ++s) {
+      const Eigen::Index rows = horizon - 1 - s;  // rows h = s + 1 .. horizon - 1 move with step s
+      std::array<bool, kMaxSensitivityInputs> written{};
+      for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
+      for (Eigen::Index c = 0; c < channels; ++c) {
+        const auto d = drive_.row(s * channels + c);
+        if (d.isZero(0.0)) continue;
+        const Eigen::Index tail = next_(s * channels + c) - s;  // the channel holds for this many steps
+        channelResponse(ny, c, s, rows, tail, tip, rows_by_output);
+        for (int j = 0; j < nu; ++j) {
+          if (d(j) == 0.0) continue;
+          addScaled(rows_by_output, d(j), rows * ny, jacobian.col(s * nu + j).data() + (s + 1) * ny,
+                    written[static_cast<std::size_t>(j)]);
+          written[static_cast<std::size_t>(j)] = true;
+        }
+      }
+      for (int j = 0; j < nu; ++j)
+        if (!written[static_cast<std::size_t>(j)]) jacobian.col(s * nu + j).tail(rows * ny).setZero();
+    }
+  }
+
+  // Rows s+1.. of one unit on channel c from step s on, held for `tail`
+  // steps: CK(r) - CK(r - tail) per output, turned into angles for a tip
+  // frame, interleaved as a Jacobian column orders them (r * ny + o).
+  void channelResponse(int ny, Eigen::Index c, Eigen::Index s, Eigen::Index rows, Eigen::Index tail, bool tip,
+                       double* __restrict out) const noexcept {
+    const Eigen::Index held = std::min(tail, rows);
+    if (tip) {  // two outputs, turned on the way
+      const double *kx = kernel_.col(c * 2).data(), *ky = kernel_.col(c * 2 + 1).data();
+      const double *t0 = turn_.col(0).data() + s + 1, *t1 = turn_.col(1).data() + s + 1;
+      const double *t2 = turn_.col(2).data() + s + 1, *t3 = turn_.col(3).data() + s + 1;
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const double bx = r < held ? kx[r] : kx[r] - kx[r - tail], by = r < held ? ky[r] : ky[r] - ky[r - tail];
+        out[2 * r] = t0[r] * bx + t1[r] * by;
+        out[2 * r + 1] = t2[r] * bx + t3[r] * by;
+      }
+      return;
+    }
+    for (int o = 0; o < ny; ++o) {
+      const double* k = kernel_.col(c * ny + o).data();
+      for (Eigen::Index r = 0; r < held; ++r) out[r * ny + o] = k[r];
+      for (Eigen::Index r = held; r < rows; ++r) out[r * ny + o] = k[r] - k[r - tail];
+    }
+  }
+
+  Eigen::MatrixXd kernel_;  // [h][c * n_y + o]: CK
+  RowMajorMatrix drive_;    // [step * channels + channel] x inputs
+  Eigen::VectorXi next_, pushed_;
+  Eigen::MatrixXd turn_, rows_;
+  Eigen::VectorXd weight_;  // one kernel's beta a per pole
+  Eigen::VectorXd vc_;      // the channels along the plan
+};
+
+}  // namespace plsa

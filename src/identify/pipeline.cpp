@@ -6,21 +6,15 @@
 #include <cstdio>
 #include <sstream>
 
-#include <nlopt.hpp>
-
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/segmentation.hpp"
 #include "plsa/identify/validation.hpp"
+#include "identification_run.hpp"
 
 namespace plsa {
 namespace {
-
-// Cross-validation scores rows of the training logs themselves, whose sensor
-// the model's level is referenced to: no yaw to register, and the drift is
-// taken out of the rows about that run's own mean time.
-constexpr SimulationStart kSameSession{0, false};
 
 // Printed in ascending order (the clustering returns centres in no particular order).
 std::string fmtPoles(std::vector<std::complex<double>> p) {
@@ -43,13 +37,6 @@ ClusteringResult cluster(const std::string& method, const std::vector<std::compl
   if (method == "kmeans") return kMeansClustering(poles, o);
   if (method == "global") return globalRhoSearch(poles, o);
   throw std::invalid_argument("unknown pole method '" + method + "' (fkcm, fcm, kmeans, global)");
-}
-
-// Shortest form that round-trips a plain candidate value: 0.4, 0.15.
-std::string formatNumber(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
 }
 
 }  // namespace
@@ -106,7 +93,52 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
   return {};
 }
 
+
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
+  IdentifyReport local;
+  IdentificationRun run(o, out ? *out : local);
+  return run.identify(logs);
+}
+
+std::string formatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+IdentificationRun::IdentificationRun(const IdentifyOptions& options, IdentifyReport& report)
+    : o(options), rep(report), last_line(Clock::now()) {}
+
+// The paper's Table I, then plsa's structure search: each stage a function.
+DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
+  checkOptions(logs);
+  readData(logs);
+  fitLocalModels(logs);
+  selectPoles();
+  buildPartitions();
+  listStructures();
+  cutFolds();
+  searchPlayAndScheduling();
+  searchCoupling();
+  searchScheduleLag();
+  searchThreshold();
+  refineJointly();
+  searchOutputDrift();
+  searchSlowPole();
+  return fitFinal();
+}
+
+void IdentificationRun::say(const std::string& line) {
+  rep.lines.push_back(line);
+  if (o.progress) o.progress(line);
+  last_line = Clock::now();
+}
+
+PairPoles& IdentificationRun::pairAt(int in_i, int out_i) {
+  return rep.pairs[static_cast<std::size_t>(out_i * ni + in_i)];
+}
+
+void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
@@ -117,20 +149,10 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
           "identify: the progress interval must be a finite number of seconds >= 0");
   PLSA_CHECK(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
           "identify: output drift '" + o.output_drift + "': expected auto, on or off");
-  IdentifyReport local;
-  IdentifyReport& rep = out ? *out : local;
-  using Clock = std::chrono::steady_clock;
-  Clock::time_point last_line = Clock::now();
-  auto say = [&](const std::string& line) {
-    rep.lines.push_back(line);
-    if (o.progress) o.progress(line);
-    last_line = Clock::now();
-  };
+}
 
-  // Data and sample time; every log must agree.
-  std::vector<Eigen::MatrixXd> U, Y, Ref;
-  std::vector<Eigen::VectorXd> times;
-  double dt = 0.0;
+// Data and sample time; every log must agree.
+void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   std::vector<std::string> reference = o.reference;
   if (reference.empty()) {
     const bool have_cmd = logs[0].hasColumn("cmd_1") && o.inputs.size() <= 3;
@@ -161,12 +183,12 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   rep.output_frame = o.output_frame ? OutputFrameChoice{*o.output_frame, std::string("output frame ") +
                                                                              toString(*o.output_frame) + " as given"}
                                     : chooseOutputFrame(o.outputs, Y);
-  const OutputFrame frame = rep.output_frame.frame;
+  frame = rep.output_frame.frame;
   if (frame == OutputFrame::kTipCartesian)
     PLSA_CHECK(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
                                    "steering in deg), got " + std::to_string(o.outputs.size()));
-  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(frame, Y);
-  Eigen::Index total = 0;
+  Ym = toModelFrame(frame, Y);
+  total = 0;
   for (const auto& u : U) total += u.rows();
   say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
       std::to_string(1.0 / dt).substr(0, 6) + " Hz");
@@ -174,14 +196,16 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   if (frame == OutputFrame::kTipCartesian)
     say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] + " as a tip's bending and steering angles; the model "
         "runs on " + o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
+  ni = static_cast<int>(o.inputs.size());
+  no = static_cast<int>(o.outputs.size());
+  min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
+}
 
-  // Steps 1-2: local data sets and local LTI fits.
-  const auto ni = static_cast<int>(o.inputs.size()), no = static_cast<int>(o.outputs.size());
+// Steps 1-2: local data sets and local LTI fits.
+void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
   rep.pairs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, 0, {}, {}});
-  auto pairAt = [&](int in_i, int out_i) -> PairPoles& { return rep.pairs[static_cast<std::size_t>(out_i * ni + in_i)]; };
-  const auto min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
   rep.segments = 0;
   for (std::size_t r = 0; r < logs.size(); ++r) {
     for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
@@ -211,42 +235,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
       rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
   rep.used_windows = !rep.window_outputs.empty();
   rep.staircase = rep.window_outputs.size() < o.outputs.size();
-  if (rep.used_windows) {
-    for (auto& pp : rep.pairs)
-      if (needs_windows[static_cast<std::size_t>(pp.output)]) {
-        pp.rejected = 0;
-        pp.rejections.clear();
-      }
-    // No staircase: MISO fits on local windows give each output's poles.
-    const auto w = static_cast<Eigen::Index>(std::lround(o.window_s / dt));
-    for (std::size_t r = 0; r < logs.size(); ++r)
-      for (Eigen::Index b = 1; b + w <= U[r].rows(); b += w)
-        for (int out_i = 0; out_i < no; ++out_i) {
-          if (!needs_windows[static_cast<std::size_t>(out_i)]) continue;
-          // Fit y on each input separately is ill-posed with all moving: use the strongest input.
-          Eigen::Index best = 0;
-          double spread = -1;
-          for (int in_i = 0; in_i < ni; ++in_i) {
-            const auto seg = U[r].col(in_i).segment(b, w);
-            const double s = seg.maxCoeff() - seg.minCoeff();
-            if (s > spread) {
-              spread = s;
-              best = in_i;
-            }
-          }
-          const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Ym[r].col(out_i).segment(b, w),
-                                           U[r](b - 1, best), Ym[r](b - 1, out_i), o.local_order);
-          for (int in_i = 0; in_i < ni; ++in_i) {
-            PairPoles& pp = pairAt(in_i, out_i);
-            if (f.usable)
-              pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
-            else if (in_i == 0) {
-              ++pp.rejected;
-              pp.rejections.push_back(logs[r].source + " window at " + std::to_string(b) + ": " + f.reason);
-            }
-          }
-        }
-  }
+  if (rep.used_windows) fitLocalWindows(logs, needs_windows);
   int usable = 0, rejected = 0;
   for (const auto& pp : rep.pairs) {
     usable += static_cast<int>(pp.identified.size());
@@ -264,9 +253,47 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windows_note + ", " +
       std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
       " fits rejected (unstable, badly determined or too small for the noise)");
+}
 
-  // Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
-  DioPwlObfModel model;
+// No staircase: MISO fits on local windows give each output's poles.
+void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows) {
+  for (auto& pp : rep.pairs)
+    if (needs_windows[static_cast<std::size_t>(pp.output)]) {
+      pp.rejected = 0;
+      pp.rejections.clear();
+    }
+  const auto w = static_cast<Eigen::Index>(std::lround(o.window_s / dt));
+  for (std::size_t r = 0; r < logs.size(); ++r)
+    for (Eigen::Index b = 1; b + w <= U[r].rows(); b += w)
+      for (int out_i = 0; out_i < no; ++out_i) {
+        if (!needs_windows[static_cast<std::size_t>(out_i)]) continue;
+        // Fit y on each input separately is ill-posed with all moving: use the strongest input.
+        Eigen::Index best = 0;
+        double spread = -1;
+        for (int in_i = 0; in_i < ni; ++in_i) {
+          const auto seg = U[r].col(in_i).segment(b, w);
+          const double s = seg.maxCoeff() - seg.minCoeff();
+          if (s > spread) {
+            spread = s;
+            best = in_i;
+          }
+        }
+        const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Ym[r].col(out_i).segment(b, w),
+                                         U[r](b - 1, best), Ym[r](b - 1, out_i), o.local_order);
+        for (int in_i = 0; in_i < ni; ++in_i) {
+          PairPoles& pp = pairAt(in_i, out_i);
+          if (f.usable)
+            pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
+          else if (in_i == 0) {
+            ++pp.rejected;
+            pp.rejections.push_back(logs[r].source + " window at " + std::to_string(b) + ": " + f.reason);
+          }
+        }
+      }
+}
+
+// Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
+void IdentificationRun::selectPoles() {
   model.sample_time_s = dt;
   model.inputs = o.inputs;
   model.outputs = o.outputs;
@@ -300,12 +327,15 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
           " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
     }
   }
+}
 
-  // Partition: the experiment's reference levels, else a quantile grid.
-  Eigen::MatrixXd all_ref(total, ni), all_u(total, ni);
+// Partition: the experiment's reference levels, else a quantile grid.
+void IdentificationRun::buildPartitions() {
+  all_ref.resize(total, ni);
+  all_u.resize(total, ni);
   {
     Eigen::Index row = 0;
-    for (std::size_t r = 0; r < logs.size(); ++r) {
+    for (std::size_t r = 0; r < U.size(); ++r) {
       all_ref.middleRows(row, Ref[r].rows()) = Ref[r];
       all_u.middleRows(row, U[r].rows()) = U[r];
       row += U[r].rows();
@@ -324,8 +354,13 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   std::vector<bool> schedulings;  // interpolated?
   if (o.scheduling != "switched") schedulings.push_back(true);
   if (o.scheduling != "interpolated") schedulings.push_back(false);
-  std::vector<PwlPartition> partitions;
-  for (const bool interpolated : schedulings) {
+  for (const bool interpolated : schedulings) addPartition(interpolated, levels, designed);
+  top_level = std::max(1e-12, all_u.maxCoeff());
+}
+
+// One partition (interpolated nodes or switched cells) over the scheduling
+// inputs: designed levels, or quantiles of the inputs.
+void IdentificationRun::addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed) {
   std::vector<int> sched;
   std::vector<std::vector<double>> bps;
   for (int in_i = 0; in_i < ni; ++in_i) {
@@ -376,569 +411,6 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
     if (o.direction_split) s += "; split by direction of change";
     say(s);
   }
-  }
-
-  // The structures to choose from: each partition on the output side (the
-  // paper's), and the interpolated one on the input side too.
-  struct Structure {
-    std::size_t partition;
-    ScheduleSide side;
-    const char* tag;
-  };
-  std::vector<Structure> structures;
-  for (std::size_t pi = 0; pi < partitions.size(); ++pi) {
-    const bool interp = partitions[pi].scheduling() == Scheduling::kInterpolated;
-    if (o.scheduling != "input") structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
-    if (interp && !o.direction_split && (o.scheduling == "input" || o.scheduling == "auto"))
-      structures.push_back({pi, ScheduleSide::kInput, "N"});
-  }
-  PLSA_CHECK(!structures.empty(), "identify: input-side scheduling cannot split by direction");
-  auto applyStructure = [&](const Structure& st) {
-    model.partition = partitions[st.partition];
-    model.schedule_side = st.side;
-  };
-
-  // Step 7: coefficients, for each candidate set of play channels; keep the
-  // set whose model predicts the training data best k steps ahead.
-  PLSA_CHECK(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
-  std::vector<double> range(static_cast<std::size_t>(ni));
-  for (int in_i = 0; in_i < ni; ++in_i) range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
-  auto applyPlay = [&](const std::vector<PlayChannel>& set) {
-    model.input_play.assign(static_cast<std::size_t>(ni), {});
-    for (int in_i = 0; in_i < ni; ++in_i)
-      for (const PlayChannel& c : set) {
-        PLSA_CHECK(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
-                "identify: play widths and slopes must be finite and >= 0");
-        model.input_play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
-                                                                      c.slope);
-      }
-  };
-  // Cross-validation folds (IdentifyOptions::cv_layout). Contiguous: every
-  // log cut into time blocks, each scored by a model fitted on the others.
-  // Interleaved: chunks dealt to the folds in turn, held-out rows weighted out.
-  PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
-  PLSA_CHECK(o.cv_layout == "interleaved" || o.cv_layout == "contiguous",
-          "identify: cross-validation layout '" + o.cv_layout + "': expected interleaved or contiguous");
-  const bool interleaved = o.cv_layout == "interleaved";
-  PLSA_CHECK(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
-          "identify: cross-validation chunks must last a positive, finite number of seconds");
-  std::vector<Eigen::MatrixXd> BU, BY;
-  std::vector<Eigen::VectorXd> BT;
-  std::vector<int> fold_of;
-  // Contiguous blocks hold out a stretch of the experiment, often a part of
-  // the grid the other blocks never visit, so they score extrapolation and
-  // favour structures that extrapolate rather than fit; interleaved chunks
-  // leave every fold the whole grid.
-  std::vector<Eigen::VectorXi> fold_rows;  // interleaved: each sample's fold, per log
-  if (interleaved) {
-    const auto chunk = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(o.cv_chunk_s / dt)));
-    for (std::size_t r = 0; r < U.size(); ++r) {
-      Eigen::VectorXi f(U[r].rows());
-      for (Eigen::Index k = 0; k < f.size(); ++k) f(k) = static_cast<int>((k / chunk) % o.play_selection_folds);
-      fold_rows.push_back(f);
-    }
-  }
-  for (std::size_t r = 0; !interleaved && r < U.size(); ++r) {
-    const Eigen::Index len = U[r].rows() / o.play_selection_folds;
-    for (int f = 0; f < o.play_selection_folds; ++f) {
-      const Eigen::Index b = f * len, n = f + 1 == o.play_selection_folds ? U[r].rows() - b : len;
-      BU.push_back(U[r].middleRows(b, n));
-      BY.push_back(Y[r].middleRows(b, n));
-      BT.push_back(times[r].segment(b, n));
-      fold_of.push_back(f);
-    }
-  }
-  double best_score = -INFINITY;
-  std::vector<PlayChannel> best_set;
-  std::size_t best_structure = 0;
-  rep.play_scores.clear();
-  // Held-out fit of the model as configured now, averaged over outputs and
-  // folds: 40 steps ahead, or (input side) simulated from the model's level.
-  // Fits are always scored against the logged outputs; they are fitted to
-  // FY, the logged ones until a sensor drift is kept, or, with
-  // drift_per_fold, to each fold's own outputs less the drift estimated on them.
-  enum class Score { kStepAhead, kSimulation };
-  std::vector<Eigen::MatrixXd> FY = BY, FYlog = Y;  // per block, per log
-  bool drift_per_fold = false;
-  std::vector<ModelRegressors> regs(U.size());  // kept between scores: refilling beats reallocating
-  auto crossValidatedInterleaved = [&](Score what) {
-    const bool sim = what == Score::kSimulation;
-    const int key = sim ? 0 : o.play_selection_horizon;
-    // The regressors run over whole logs and do not depend on the fold: built
-    // once, summed once per fold, and each fold's fit is a solve.
-    for (std::size_t r = 0; r < U.size(); ++r) modelRegressors(model, U[r], regs[r]);
-    CoefficientSums sums;
-    if (!drift_per_fold) sums = coefficientSums(model, regs, FYlog, fold_rows, o.play_selection_folds);
-    double score = 0.0;
-    int n = 0;
-    for (int f = 0; f < o.play_selection_folds; ++f) {
-      SampleWeights W;
-      for (const Eigen::VectorXi& rows : fold_rows) W.push_back((rows.array() != f).cast<double>().matrix());
-      std::vector<Eigen::MatrixXd> TY = FYlog;
-      if (drift_per_fold) {
-        TY = removeOutputDrift(TY, times, estimateOutputDrift(model, U, TY, times, o.coefficients, 3, W));
-        fitCoefficients(model, U, TY, o.coefficients, W);
-      } else {
-        solveCoefficients(model, sums, f, o.coefficients);
-      }
-      std::vector<Eigen::MatrixXd> dys;
-      for (const ModelRegressors& reg : regs) dys.push_back(modelIncrements(model, reg));
-      if (sim) fitOutputLevel(model, U, TY, W, dys);
-      // One fit per output over every held-out row of the fold, all logs together.
-      std::vector<std::vector<double>> meas(static_cast<std::size_t>(no)), pred(static_cast<std::size_t>(no));
-      for (std::size_t r = 0; r < U.size(); ++r) {
-        if (U[r].rows() <= o.play_selection_horizon) continue;
-        const std::vector<std::map<int, AlignedPrediction>> p =
-            predictOutputs(model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
-        for (int out_i = 0; out_i < no; ++out_i) {
-          const AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
-          for (Eigen::Index i = 0; i < a.values.size(); ++i)
-            if (fold_rows[r](a.first + i) == f) {
-              meas[static_cast<std::size_t>(out_i)].push_back(Y[r](a.first + i, out_i));
-              pred[static_cast<std::size_t>(out_i)].push_back(a.values(i));
-            }
-        }
-      }
-      for (int out_i = 0; out_i < no; ++out_i) {
-        const auto& m = meas[static_cast<std::size_t>(out_i)];
-        if (m.size() < 2) continue;
-        score += nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
-                          Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
-                                                            static_cast<Eigen::Index>(m.size())));
-        ++n;
-      }
-    }
-    return score / std::max(1, n);
-  };
-  auto crossValidatedOnce = [&](Score what) {
-    if (interleaved) return crossValidatedInterleaved(what);
-    double score = 0.0;
-    int n = 0;
-    for (int f = 0; f < o.play_selection_folds; ++f) {
-      std::vector<Eigen::MatrixXd> TU, TY;
-      std::vector<Eigen::VectorXd> TT;
-      for (std::size_t b = 0; b < BU.size(); ++b)
-        if (fold_of[b] != f) {
-          TU.push_back(BU[b]);
-          TY.push_back(FY[b]);
-          TT.push_back(BT[b]);
-        }
-      if (drift_per_fold) TY = removeOutputDrift(TY, TT, estimateOutputDrift(model, TU, TY, TT, o.coefficients));
-      fitCoefficients(model, TU, TY, o.coefficients);
-      if (what == Score::kSimulation) fitOutputLevel(model, TU, TY);
-      for (std::size_t b = 0; b < BU.size(); ++b) {
-        if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
-        const bool sim = what == Score::kSimulation;
-        const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(
-            model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim,
-            kSameSession);
-        for (int out_i = 0; out_i < no; ++out_i, ++n)
-          score += fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
-      }
-    }
-    return score / std::max(1, n);
-  };
-  // On long logs a held-out score takes seconds and a stage minutes: after
-  // progress_interval_s without a line, one says where the search is.
-  struct Scoring {
-    std::string stage;
-    int done = 0, total = 0;
-  } scoring;
-  auto beginScoring = [&](std::string stage, std::size_t total) {
-    scoring.stage = std::move(stage);
-    scoring.done = 0;
-    scoring.total = static_cast<int>(total);
-  };
-  auto crossValidated = [&](Score what = Score::kStepAhead) {
-    const double score = crossValidatedOnce(what);
-    ++scoring.done;
-    if (std::chrono::duration<double>(Clock::now() - last_line).count() >= o.progress_interval_s)
-      say("[5/5] scoring " + scoring.stage + ": " + std::to_string(scoring.done) +
-          (scoring.total > 0 ? " of " + std::to_string(scoring.total) : std::string()) + " held-out fits, last " +
-          std::to_string(score).substr(0, 5));
-    return score;
-  };
-  beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size());
-  for (std::size_t pi = 0; pi < structures.size(); ++pi)
-    for (const auto& set : o.play_candidates) {
-      PLSA_CHECK(!set.empty(), "identify: a play channel set is empty");
-      applyStructure(structures[pi]);
-      applyPlay(set);
-      const double score = crossValidated();
-      rep.play_scores.emplace_back(set, score);
-      if (score > best_score + 1e-9) {
-        best_score = score;
-        best_set = set;
-        best_structure = pi;
-      }
-    }
-  // Coupled channels, on the chosen scheduling: every play set again with
-  // each coupling (a fraction of the largest training input level, inverted).
-  double best_coupling = 0.0;
-  const double top_level = std::max(1e-12, all_u.maxCoeff());
-  beginScoring("coupled play channels", o.play_coupling_candidates.size() * o.play_candidates.size());
-  for (double c : o.play_coupling_candidates) {
-    PLSA_CHECK(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
-    applyStructure(structures[best_structure]);
-    model.play_coupling = c / top_level;
-    for (const auto& set : o.play_candidates) {
-      applyPlay(set);
-      const double score = crossValidated();
-      rep.coupling_scores.push_back({set, c, score});
-      if (score > best_score + 1e-9) {
-        best_score = score;
-        best_set = set;
-        best_coupling = model.play_coupling;
-      }
-    }
-  }
-  model.play_coupling = best_coupling;
-  applyStructure(structures[best_structure]);
-  applyPlay(best_set);
-  if (o.play_candidates.size() * structures.size() > 1) {
-    const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;
-    const bool chosen_input = model.schedule_side == ScheduleSide::kInput;
-    std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
-                    "-step fit on held-out " + std::string(interleaved ? "chunks" : "blocks") + ": " +
-                    (chosen_input ? "input-side interpolated" : chosen_interp ? "interpolated" : "switched") +
-                    " scheduling, play channels " + formatPlaySet(best_set) +
-                    " (widths: fractions of each input's range; u: of its level). Scores (I interpolated, "
-                    "S switched, N input side):";
-    std::size_t i = 0;
-    for (const auto& [f, sc] : rep.play_scores)
-      s += std::string(" ") + structures[i++ / o.play_candidates.size()].tag + formatPlaySet(f) + "->" +
-           std::to_string(sc).substr(0, 5);
-    say(s);
-  }
-  if (!rep.coupling_scores.empty()) {
-    std::string s = "[5/5] coupled to the other inputs (kappa x top level): ";
-    s += best_coupling > 0 ? "kept " + std::to_string(best_coupling * top_level).substr(0, 4) : std::string("none kept");
-    s += ". Scores:";
-    for (const auto& c : rep.coupling_scores)
-      s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" + std::to_string(c.score).substr(0, 5);
-    say(s);
-  }
-  // A lag on the scheduling inputs, on the chosen model: it moves the
-  // coefficients with the actuator's state rather than its command.
-  if (!o.schedule_lag_candidates.empty()) {
-    double best_lag = 0.0;
-    rep.schedule_lag_scores.emplace_back(0.0, best_score);
-    beginScoring("scheduling lags", o.schedule_lag_candidates.size());
-    for (double lag : o.schedule_lag_candidates) {
-      PLSA_CHECK(lag >= 0 && std::isfinite(lag), "identify: schedule lags must be finite and >= 0");
-      model.schedule_lag_s = lag;
-      const double score = crossValidated();
-      rep.schedule_lag_scores.emplace_back(lag, score);
-      if (score > best_score + 1e-9) {
-        best_score = score;
-        best_lag = lag;
-      }
-    }
-    model.schedule_lag_s = best_lag;
-    std::string s = "[5/5] lag on the scheduling inputs: ";
-    s += best_lag > 0 ? "kept " + formatNumber(best_lag) + " s" : std::string("none kept");
-    s += ". Scores:";
-    for (const auto& [lag, sc] : rep.schedule_lag_scores)
-      s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
-    say(s);
-  }
-  // Softening and the joint refinement shape the level by the held-out k-step
-  // score, which does not see what they do to a simulation; only an input-side
-  // model can be scored in held-out simulation, which guards the refinement.
-  // On the output side a softened level kept by the k-step score was seen to
-  // cost a clean plant's simulation points (docs/identification.md, twenty-first
-  // session), so neither runs there.
-  const bool input_side_chosen = model.schedule_side == ScheduleSide::kInput;
-  if (!input_side_chosen && (!o.play_softening_candidates.empty() || o.play_refine_evaluations > 0))
-    say("[5/5] softening and joint refinement: input-side structures only (output side chosen), skipped");
-  // Where the play channels count from, on the chosen model. A threshold moves
-  // where a growing band starts and how much of a neighbour the coupling
-  // sees, so each one is tried with every growing set as well as the chosen
-  // one; each softening (none unless asked for) with each threshold, since
-  // both reshape the same level.
-  if (!o.play_threshold_candidates.empty() || !o.play_softening_candidates.empty()) {
-    std::vector<std::vector<PlayChannel>> sets{best_set};
-    for (const auto& set : o.play_candidates)
-      if (set != best_set && std::any_of(set.begin(), set.end(), [](const PlayChannel& c) { return c.slope > 0; }))
-        sets.push_back(set);
-    std::vector<double> thresholds{0.0}, softenings{0.0};
-    for (double d : o.play_threshold_candidates) {
-      PLSA_CHECK(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
-      if (d > 0) thresholds.push_back(d);
-    }
-    for (double f : o.play_softening_candidates) {
-      PLSA_CHECK(f >= 0 && f < 0.5,
-              "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
-      if (f > 0 && input_side_chosen) softenings.push_back(f);
-    }
-    // A neighbour's level now counts from the threshold: the chosen coupling
-    // is kept as a fraction of the top level above it.
-    const double coupling_fraction = best_coupling * top_level;
-    double best_threshold = 0.0, best_softening = 0.0;
-    rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, 0.0, best_score});
-    beginScoring("play thresholds", thresholds.size() * softenings.size() * sets.size() - sets.size());
-    for (double d : thresholds) {
-      model.play_threshold = d * top_level;
-      const double above = top_level - model.play_threshold;
-      model.play_coupling = coupling_fraction / above;
-      for (double f : softenings) {
-        if (d == 0 && f == 0) continue;  // scored already
-        model.play_softening = f / above;
-        for (const auto& set : sets) {
-          applyPlay(set);
-          const double score = crossValidated();
-          rep.threshold_scores.push_back({set, d, coupling_fraction, f, score});
-          if (score > best_score + 1e-9) {
-            best_score = score;
-            best_set = set;
-            best_threshold = model.play_threshold;
-            best_coupling = model.play_coupling;
-            best_softening = model.play_softening;
-          }
-        }
-      }
-    }
-    model.play_threshold = best_threshold;
-    model.play_coupling = best_coupling;
-    model.play_softening = best_softening;
-    applyPlay(best_set);
-    const double above = top_level - best_threshold;
-    const bool softened = softenings.size() > 1;
-    std::string s = softened ? "[5/5] play channels counted from a threshold and softened (x top level; coupling "
-                               "and softening x top level above it): "
-                             : "[5/5] play channels counted from a threshold (x top level; coupling x top level above "
-                               "it): ";
-    s += best_threshold > 0 || best_softening > 0
-             ? "kept " + formatNumber(best_threshold / top_level) + " (" + formatNumber(best_threshold) +
-                   " input units), coupling " + formatNumber(best_coupling * above) +
-                   (softened ? ", softening " + formatNumber(best_softening * above) : std::string()) + ", play " +
-                   formatPlaySet(best_set)
-             : std::string("none kept");
-    s += softened ? ". Scores (threshold/coupling/softening{play}):" : ". Scores (threshold/coupling{play}):";
-    for (const auto& t : rep.threshold_scores)
-      s += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) +
-           (softened ? "/" + formatNumber(t.softening) : std::string()) + formatPlaySet(t.set) + "->" +
-           std::to_string(t.score).substr(0, 5);
-    say(s);
-  }
-  // The stages above pick one setting at a time from coarse sets; the
-  // simulator's own structure scores higher than any of their picks
-  // (docs/identification.md, nineteenth session). A bounded local search
-  // over all four from the pick, on the same held-out score.
-  // Only the stages that ran are refined: a stage turned off (its candidates
-  // empty) keeps its setting, as does the channel size without a channel.
-  const bool any_channel = std::any_of(best_set.begin(), best_set.end(), [](const PlayChannel& c) {
-    return !c.passesThrough();
-  });
-  std::vector<std::size_t> refined_dims;  // of threshold, coupling, softening, channel size
-  if (input_side_chosen) {
-    if (!o.play_threshold_candidates.empty()) refined_dims.push_back(0);
-    if (!o.play_coupling_candidates.empty()) refined_dims.push_back(1);
-    if (!o.play_softening_candidates.empty()) refined_dims.push_back(2);
-    if (any_channel) refined_dims.push_back(3);
-  }
-  if (o.play_refine_evaluations > 0 && input_side_chosen && refined_dims.empty())
-    say("[5/5] joint refinement: nothing to refine (no threshold, coupling, softening or play channel in the search)");
-  if (o.play_refine_evaluations > 0 && !refined_dims.empty()) {
-    const std::vector<PlayChannel> base_set = best_set;
-    const double kept_threshold = model.play_threshold, kept_coupling = model.play_coupling,
-                 kept_softening = model.play_softening;
-    auto restoreStaged = [&] {
-      model.play_threshold = kept_threshold;
-      model.play_coupling = kept_coupling;
-      model.play_softening = kept_softening;
-      applyPlay(base_set);
-    };
-    auto scaled = [&](double k) {
-      std::vector<PlayChannel> set = base_set;
-      for (PlayChannel& c : set) c = PlayChannel(c.width * k, c.slope * k);
-      return set;
-    };
-    auto apply = [&](const std::vector<double>& x) {
-      model.play_threshold = x[0] * top_level;
-      const double above = top_level - model.play_threshold;
-      model.play_coupling = x[1] / above;
-      model.play_softening = x[2] / above;
-      applyPlay(scaled(x[3]));
-    };
-    const double above0 = top_level - model.play_threshold;
-    std::vector<double> x{model.play_threshold / top_level, model.play_coupling * above0,
-                          model.play_softening * above0, 1.0};
-    const std::vector<double> lo{0.0, 0.0, 0.0, 0.5}, hi{0.45, 0.6, 0.45, 2.0};
-    for (std::size_t i : refined_dims) x[i] = std::clamp(x[i], lo[i], hi[i]);
-    rep.refine_start = {x[0], x[1], x[2], x[3], best_score};
-    beginScoring("the joint refinement", static_cast<std::size_t>(o.play_refine_evaluations));
-    rep.refine_best = rep.refine_start;
-    auto score = [&](const std::vector<double>& free) {
-      std::vector<double> v = x;
-      for (std::size_t i = 0; i < refined_dims.size(); ++i) v[refined_dims[i]] = free[i];
-      apply(v);
-      const double sc = crossValidated();
-      ++rep.refine_evaluations;
-      if (sc > rep.refine_best.score + 1e-9) rep.refine_best = {v[0], v[1], v[2], v[3], sc};
-      if (rep.refine_evaluations % 10 == 0)
-        say("[5/5] refining threshold, coupling, softening and channel size: " +
-            std::to_string(rep.refine_evaluations) + " of at most " + std::to_string(o.play_refine_evaluations) +
-            " scores, best " + std::to_string(rep.refine_best.score).substr(0, 5));
-      return std::isfinite(sc) ? sc : -1e6;
-    };
-    const std::vector<double> step{0.05, 0.05, 0.05, 0.15};
-    std::vector<double> lo_free, hi_free, step_free, xs;
-    for (std::size_t i : refined_dims) {
-      lo_free.push_back(lo[i]);
-      hi_free.push_back(hi[i]);
-      step_free.push_back(step[i]);
-      xs.push_back(x[i]);
-    }
-    nlopt::opt opt(nlopt::LN_BOBYQA, static_cast<unsigned>(refined_dims.size()));
-    opt.set_lower_bounds(lo_free);
-    opt.set_upper_bounds(hi_free);
-    opt.set_initial_step(step_free);
-    opt.set_maxeval(o.play_refine_evaluations);
-    opt.set_xtol_abs(1e-3);
-    using Objective = decltype(score);
-    // nlopt::opt wants a plain function pointer and a context.
-    opt.set_max_objective(
-        [](const std::vector<double>& v, std::vector<double>&, void* data) {
-          return (*static_cast<Objective*>(data))(v);
-        },
-        &score);
-    double f = 0.0;
-    try {
-      opt.optimize(xs, f);
-    } catch (const nlopt::roundoff_limited&) {
-      // Stopped by round-off: the best point seen is still the answer.
-    } catch (const std::runtime_error&) {
-      // NLopt gave up (e.g. a flat score around the start): the best point seen stands.
-    }
-    const IdentifyReport::PlayRefinement& b = rep.refine_best;
-    // Kept only if held-out simulation does not fall: a higher k-step score
-    // alone was seen to cost the simulation points (twentieth session).
-    bool keep = b.score > best_score + 1e-9;
-    if (keep) {
-      beginScoring("the refinement's simulation guard", 2);
-      restoreStaged();
-      rep.refine_simulation.first = crossValidated(Score::kSimulation);
-      apply({b.threshold, b.coupling, b.softening, b.channel_scale});
-      rep.refine_simulation.second = crossValidated(Score::kSimulation);
-      keep = rep.refine_simulation.second >= rep.refine_simulation.first;
-    }
-    if (keep) {
-      best_score = b.score;
-      best_set = scaled(b.channel_scale);
-    } else {
-      restoreStaged();
-    }
-    const IdentifyReport::PlayRefinement& s0 = rep.refine_start;
-    const char* const dim_names[] = {"threshold", "coupling", "softening", "channel size"};
-    std::string over;
-    for (std::size_t i : refined_dims) over += (over.empty() ? "" : ", ") + std::string(dim_names[i]);
-    say("[5/5] refined jointly (" + std::to_string(rep.refine_evaluations) + " held-out scores over " + over +
-        "; threshold x top level, coupling and softening x top level above it, channels x the chosen size): " +
-        (keep ? "kept threshold " + formatNumber(b.threshold) + ", coupling " + formatNumber(b.coupling) +
-                    ", softening " + formatNumber(b.softening) + ", play " + formatPlaySet(best_set) + " (x" +
-                    formatNumber(b.channel_scale) + "): " + std::to_string(b.score).substr(0, 5) + " from " +
-                    std::to_string(s0.score).substr(0, 5)
-         : b.score > s0.score + 1e-9
-             ? "best point (threshold " + formatNumber(b.threshold) + ", coupling " + formatNumber(b.coupling) +
-                   ", softening " + formatNumber(b.softening) + ", x" + formatNumber(b.channel_scale) + ", " +
-                   std::to_string(b.score).substr(0, 5) + " from " + std::to_string(s0.score).substr(0, 5) +
-                   ") not kept"
-             : std::string("no better point than the choice above (") + std::to_string(s0.score).substr(0, 5) + ")") +
-        (rep.refine_simulation.first != 0.0 || rep.refine_simulation.second != 0.0
-             ? "; held-out simulation " + std::to_string(rep.refine_simulation.second).substr(0, 5) + " against " +
-                   std::to_string(rep.refine_simulation.first).substr(0, 5)
-             : std::string()));
-  }
-  // A sensor drift, on an input-side model: estimated on each fold's training
-  // blocks and taken out of them; kept if the held-out simulation, scored
-  // against the logged outputs, improves.
-  std::vector<Eigen::MatrixXd> Yfit = Y;
-  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != "off") {
-    beginScoring("sensor drift", 2);
-    const double without = crossValidated(Score::kSimulation);
-    drift_per_fold = true;
-    const double with = crossValidated(Score::kSimulation);
-    drift_per_fold = false;
-    rep.drift_scores = {without, with};
-    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
-    std::string s = "[5/5] sensor drift over the training run: ";
-    for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
-      if (frame != OutputFrame::kTipCartesian || oi == 1)
-        s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
-    rep.output_drift = drift;
-    if (o.output_drift == "on" || with > without + 1e-9) {
-      rep.drift_taken_out = true;
-      Yfit = removeOutputDrift(Y, times, drift);
-      // Later stages fit to the outputs less the drift found on all of them.
-      FYlog = Yfit;
-      for (std::size_t b = 0, r = 0; !interleaved && r < U.size(); ++r) {
-        const Eigen::Index len = U[r].rows() / o.play_selection_folds;
-        for (int f = 0; f < o.play_selection_folds; ++f, ++b)
-          FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
-      }
-      s += "taken out";
-    } else {
-      s += "left in";
-    }
-    s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
-         std::to_string(with).substr(0, 5) + " with it taken out)";
-    say(s);
-  } else if (o.output_drift != "off") {
-    say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
-        "inputs)");
-  }
-  // A slow pole in every bank, on an input-side model, scored on simulation.
-  if (model.schedule_side == ScheduleSide::kInput && !o.slow_pole_candidates.empty()) {
-    const std::vector<std::vector<PoleSet>> base_poles = model.poles;
-    auto withSlowPole = [&](double tau) {
-      model.poles = base_poles;
-      if (tau <= 0) return;
-      for (auto& row : model.poles)
-        for (PoleSet& ps : row) {
-          std::vector<std::complex<double>> p = ps.poles();
-          p.emplace_back(std::exp(-dt / tau), 0.0);
-          ps = PoleSet(p);
-        }
-    };
-    double best_tau = 0.0;
-    beginScoring("slow poles", 1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(),
-                                                                           o.slow_pole_candidates.end(),
-                                                                           [](double tau) { return tau != 0; })));
-    double best_sim = crossValidated(Score::kSimulation);
-    rep.slow_pole_scores.emplace_back(0.0, best_sim);
-    for (double tau : o.slow_pole_candidates) {
-      PLSA_CHECK(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
-      if (tau == 0) continue;  // none, scored already
-      withSlowPole(tau);
-      const double score = crossValidated(Score::kSimulation);
-      rep.slow_pole_scores.emplace_back(tau, score);
-      if (score > best_sim + 1e-9) {
-        best_sim = score;
-        best_tau = tau;
-      }
-    }
-    withSlowPole(best_tau);
-    std::string s = "[5/5] slow pole in every bank (scored on held-out simulation): ";
-    s += best_tau > 0 ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
-                      : std::string("none kept");
-    s += ". Scores:";
-    for (const auto& [tau, sc] : rep.slow_pole_scores)
-      s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);
-    say(s);
-  }
-  rep.coefficients = fitCoefficients(model, U, Yfit, o.coefficients);
-  // An input-side model's level is a function of its inputs: simulate from it.
-  if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Yfit);
-  if (rep.drift_taken_out) {
-    model.training_drift_per_s = rep.output_drift.rate;
-    model.training_drift_reference_s = rep.output_drift.reference_time_s;
-  }
-  say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
-      std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
-  for (const auto& n : rep.coefficients.notes) say("      " + n);
-  model.validate();
-  return model;
 }
 
 }  // namespace plsa

@@ -1,0 +1,119 @@
+// One identification (identifyModel) as a pipeline of named stages over a
+// shared state: the data, the model being built, the cross-validation folds
+// and the best choice so far. pipeline.cpp holds the paper's stages (data,
+// local fits, poles, partitions), structure_search.cpp plsa's search over
+// structures, each a function that reads and sets this state. Internal to
+// the identify library.
+#pragma once
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/model/dio_pwl_obf_model.hpp"
+
+namespace plsa {
+
+/// Shortest form that round-trips a plain candidate value: 0.4, 0.15.
+std::string formatNumber(double v);
+
+struct IdentificationRun {
+  using Clock = std::chrono::steady_clock;
+  enum class Score { kStepAhead, kSimulation };
+  /// A partition and the side it schedules; tag as the progress lines print it.
+  struct Structure {
+    std::size_t partition;
+    ScheduleSide side;
+    const char* tag;
+  };
+  /// The scoring stage under way, for the progress lines.
+  struct Scoring {
+    std::string stage;
+    int done = 0, total = 0;
+  };
+
+  IdentificationRun(const IdentifyOptions& options, IdentifyReport& report);
+  DioPwlObfModel identify(const std::vector<io::Log>& logs);
+
+  // The paper's stages (pipeline.cpp).
+  void checkOptions(const std::vector<io::Log>& logs) const;
+  void readData(const std::vector<io::Log>& logs);
+  void fitLocalModels(const std::vector<io::Log>& logs);
+  void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows);
+  void selectPoles();
+  void buildPartitions();
+  void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
+
+  // The structure search (structure_search.cpp).
+  void listStructures();
+  void cutFolds();
+  void searchPlayAndScheduling();
+  void searchCoupling();
+  void reportPlayChoice();
+  void searchScheduleLag();
+  void searchThreshold();
+  void refineJointly();
+  void searchOutputDrift();
+  void searchSlowPole();
+  DioPwlObfModel fitFinal();
+
+  // Scoring and the model's configuration.
+  double crossValidated(Score what = Score::kStepAhead);
+  double crossValidatedOnce(Score what) {
+    return interleaved ? crossValidatedInterleaved(what) : crossValidatedContiguous(what);
+  }
+  double crossValidatedInterleaved(Score what);
+  double crossValidatedContiguous(Score what);
+  void beginScoring(std::string stage, std::size_t count);
+  void applyStructure(const Structure& st);
+  void applyPlay(const std::vector<PlayChannel>& set);
+  void say(const std::string& line);
+  PairPoles& pairAt(int in_i, int out_i);
+
+  const IdentifyOptions& o;
+  IdentifyReport& rep;
+  Clock::time_point last_line;
+
+  // The data: per log inputs, outputs as logged and in the model's frame,
+  // step references and times; all logs stacked.
+  std::vector<Eigen::MatrixXd> U, Y, Ym, Ref;
+  std::vector<Eigen::VectorXd> times;
+  double dt = 0.0;
+  OutputFrame frame = OutputFrame::kAsLogged;
+  Eigen::Index total = 0, min_len = 0;
+  int ni = 0, no = 0;
+  Eigen::MatrixXd all_ref, all_u;
+
+  // The model being built and the structures it may take.
+  DioPwlObfModel model;
+  std::vector<PwlPartition> partitions;
+  std::vector<Structure> structures;
+  std::vector<double> range;  ///< per input: its training range (play widths are fractions of it)
+  double top_level = 1e-12;   ///< the largest training input level
+
+  // Cross-validation: interleaved chunks (fold_rows) or contiguous blocks
+  // (BU, BY, BT, fold_of); the outputs fitted per block (FY) and per log
+  // (FYlog); regressors kept between scores.
+  bool interleaved = true;
+  std::vector<Eigen::MatrixXd> BU, BY;
+  std::vector<Eigen::VectorXd> BT;
+  std::vector<int> fold_of;
+  std::vector<Eigen::VectorXi> fold_rows;
+  std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
+  bool drift_per_fold = false;
+  std::vector<ModelRegressors> regs;
+  Scoring scoring;
+
+  // The best choice so far.
+  double best_score = -INFINITY;
+  std::vector<PlayChannel> best_set;
+  std::size_t best_structure = 0;
+  double best_coupling = 0.0;
+  bool input_side_chosen = false;
+};
+
+}  // namespace plsa

@@ -2,8 +2,8 @@
 // shared state: the data, the model being built, the cross-validation folds
 // and the best choice so far. pipeline.cpp holds the paper's stages (data,
 // local fits, poles, partitions), structure_search.cpp plsa's search over
-// structures, each a function that reads and sets this state. Internal to
-// the identify library.
+// structures (joint_refinement.cpp its local search), each a function that
+// reads and sets this state. Internal to the identify library.
 #pragma once
 
 #include <chrono>
@@ -56,7 +56,7 @@ struct IdentificationRun {
   void reportPlayChoice();
   void searchScheduleLag();
   void searchThreshold();
-  void refineJointly();
+  void refineJointly();  // joint_refinement.cpp
   void searchOutputDrift();
   void searchSlowPole();
   DioPwlObfModel fitFinal();

@@ -24,6 +24,7 @@
 
 #include "plsa/model/dio_pwl_obf_model.hpp"
 #include "plsa/predict/compiled_model.hpp"
+#include "plsa/predict/held_lagged.hpp"
 #include "plsa/predict/kernels.hpp"
 #include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/model_handoff.hpp"
@@ -248,10 +249,8 @@ class NStepPredictor {
     const Eigen::Index modes = static_cast<Eigen::Index>(m.n_u) * m.n_y * m.poles;
     zeta_.setZero(modes);
     const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
-    for (Eigen::VectorXd* v : {&merged_, &g_, &g_next_}) v->setZero(slots);
-    total_.setZero(m.modal && m.input_side ? m.modal_form.block : 0);
-    held_levels_.setZero(slots * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
-    lag_drive_.setZero(static_cast<Eigen::Index>(m.poles) * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
+    for (Eigen::VectorXd* v : {&merged_, &g_}) v->setZero(slots);  // the planned path: modes, levels
+    held_lagged_.allocate(m);
     zeta_of_output_.setZero(modes);
     turn_.setZero(2 * static_cast<Eigen::Index>(options_.max_horizon));  // turns, then lengths
     sens_nominal_.setZero(options_.max_horizon, m.n_y);
@@ -515,195 +514,12 @@ class NStepPredictor {
     return predictStepByStep(m, horizon, plan, out);
   }
 
-  // Input side, input held while its lagged schedule still moves: in each
-  // stretch where every scheduling input stays in one grid cell the mode
-  // levels are polynomials in rho^h, so each stretch is a product of the
-  // closed-form tables (ModalForm::power_sum, lag_sum) with its start state;
-  // a cell change is one explicit step between two stretches.
+  // Input side, input held while its lagged schedule still moves: the modes
+  // merged at the schedule now, then the closed form (held_lagged.hpp).
   PredictorStatus predictHeldLagged(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-    const ModalForm& f = m.modal_form;
-    const int block = f.block, per_input = m.n_y * m.poles;
-    PLSA_DEBUG_ASSERT(m.node_grid.inputs.size() <= 4 && static_cast<int>(f.lag_sum.size()) == m.n_y);
     mergeModes(m, state_, us_, dir_, zeta_);
-    merged_.setZero();
-    for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
-    const int inputs = static_cast<int>(m.node_grid.inputs.size());
-    for (int s = 0; s < inputs; ++s) {
-      lag_start_[static_cast<std::size_t>(s)] = us_(m.node_grid.inputs[static_cast<std::size_t>(s)]);
-      lag_target_[static_cast<std::size_t>(s)] = u_(m.node_grid.inputs[static_cast<std::size_t>(s)]);
-    }
-    for (int o = 0; o < m.n_y; ++o) base_[static_cast<std::size_t>(o)] = work_y_(o);
-    for (int first = 0; first < horizon;) {
-      const int last = stretchEnd(m, first, horizon);
-      stretchLevels(m, first);
-      heldStretchRows(m, first, last, out);
-      if (last + 1 < horizon) stepAcrossCells(m, first, last);
-      for (int o = 0; o < m.n_y; ++o) base_[static_cast<std::size_t>(o)] = out(last, o);
-      first = last + 1;
-    }
+    held_lagged_.run(m, zeta_, us_, u_, vc_, work_y_, horizon, out);
     return PredictorStatus::kOk;
-  }
-
-  // A held input's lagged scheduling input s, h steps ahead.
-  double laggedAt(int s, int h, double pole) const noexcept {
-    const auto ss = static_cast<std::size_t>(s);
-    return lag_target_[ss] + (lag_start_[ss] - lag_target_[ss]) * std::pow(pole, h);
-  }
-
-  // The cell of a scheduling input at x (as PwlPartition::blend takes it):
-  // -1 below or at the first level, L-1 at or above the last, else i with
-  // levels[i] <= x < levels[i + 1].
-  static int cellOf(const std::vector<double>& lv, double x) noexcept {
-    if (x >= lv.back()) return static_cast<int>(lv.size()) - 1;
-    if (!(x > lv.front())) return -1;
-    return static_cast<int>(std::upper_bound(lv.begin(), lv.end(), x) - lv.begin()) - 1;
-  }
-
-  // The last step of the stretch starting at `first` in which no scheduling
-  // input changes cell (the lag moves each monotonically toward its target).
-  int stretchEnd(const CompiledModel& m, int first, int horizon) const noexcept {
-    const double pole = m.schedule_pole;
-    int last = horizon - 1;
-    for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s) {
-      const std::vector<double>& lv = m.node_grid.levels[s];
-      const int cell = cellOf(lv, laggedAt(static_cast<int>(s), first, pole));
-      // The first later step in another cell: its estimate from the logarithm, then checked.
-      const double x = laggedAt(static_cast<int>(s), first, pole), target = lag_target_[s];
-      if (cellOf(lv, target) == cell || x == target) continue;
-      const double bound = target < x ? lv[static_cast<std::size_t>(std::max(cell, 0))]
-                                      : lv[static_cast<std::size_t>(std::min(cell + 1, static_cast<int>(lv.size()) - 1))];
-      const double ratio = (bound - target) / (x - target);
-      int h = first + 1;
-      if (ratio > 0.0 && ratio < 1.0) h = std::max(first + 1, first + static_cast<int>(std::log(ratio) / std::log(pole)) - 1);
-      while (h <= last && cellOf(lv, laggedAt(static_cast<int>(s), h, pole)) == cell) ++h;
-      last = std::min(last, h - 1);
-    }
-    return last;
-  }
-
-  // The stretch's levels as polynomials in e = rho^(h - first): level_d (d =
-  // 0..D) per mode slot, from the weights of its cell's corners.
-  void stretchLevels(const CompiledModel& m, int first) noexcept {
-    const ModalForm& f = m.modal_form;
-    const NodeGrid& grid = m.node_grid;
-    const int inputs = static_cast<int>(grid.inputs.size()), block = f.block;
-    // Corners: node index and weight polynomial (degree <= inputs).
-    int corners = 1;
-    corner_node_[0] = 0;
-    std::fill(corner_poly_[0].begin(), corner_poly_[0].end(), 0.0);
-    corner_poly_[0][0] = 1.0;
-    for (int s = 0; s < inputs; ++s) {
-      const auto ss = static_cast<std::size_t>(s);
-      const std::vector<double>& lv = grid.levels[ss];
-      const double x = laggedAt(s, first, m.schedule_pole), target = lag_target_[ss];
-      const int cell = cellOf(lv, x);
-      if (cell < 0 || cell == static_cast<int>(lv.size()) - 1) {  // outside: the edge node, weight 1
-        for (int c = 0; c < corners; ++c) corner_node_[static_cast<std::size_t>(c)] += std::max(cell, 0) * grid.strides[ss];
-        continue;
-      }
-      const double width = lv[static_cast<std::size_t>(cell) + 1] - lv[static_cast<std::size_t>(cell)];
-      const double a = (target - lv[static_cast<std::size_t>(cell)]) / width, b = (x - target) / width;  // t = a + b e
-      for (int c = 0; c < corners; ++c) {
-        auto& low = corner_poly_[static_cast<std::size_t>(c)];
-        auto& high = corner_poly_[static_cast<std::size_t>(c + corners)];
-        for (int d = inputs; d >= 0; --d) {
-          const double below = d > 0 ? low[static_cast<std::size_t>(d) - 1] : 0.0;
-          high[static_cast<std::size_t>(d)] = a * low[static_cast<std::size_t>(d)] + b * below;
-          low[static_cast<std::size_t>(d)] = (1.0 - a) * low[static_cast<std::size_t>(d)] - b * below;
-        }
-        corner_node_[static_cast<std::size_t>(c + corners)] = corner_node_[static_cast<std::size_t>(c)] + (cell + 1) * grid.strides[ss];
-        corner_node_[static_cast<std::size_t>(c)] += cell * grid.strides[ss];
-      }
-      corners *= 2;
-    }
-    held_levels_.setZero();
-    for (int j = 0; j < m.n_u; ++j) {
-      const int first_channel = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
-      const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
-      for (int c = 0; c < corners; ++c)
-        for (int ch = 0; ch < channels; ++ch) {
-          const double v = vc_(first_channel + ch);
-          if (v == 0.0) continue;
-          const double* row = table + static_cast<std::ptrdiff_t>(corner_node_[static_cast<std::size_t>(c)] * channels + ch) * block;
-          for (int d = 0; d <= inputs; ++d) {
-            const double w = v * corner_poly_[static_cast<std::size_t>(c)][static_cast<std::size_t>(d)];
-            if (w == 0.0) continue;
-            double* level = held_levels_.data() + static_cast<std::ptrdiff_t>(d) * merged_.size() + j * block;
-            for (int i = 0; i < block; ++i) level[i] += w * row[i];
-          }
-        }
-    }
-  }
-
-  // Rows first..last: y = base + sum over each output's modes of
-  // S(m) zeta(first) + sum_d KS_d(m) beta level_d (rho^d - 1), m = h - first:
-  // one table product per output and input that moves.
-  void heldStretchRows(const CompiledModel& m, int first, int last, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-    const ModalForm& f = m.modal_form;
-    const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
-    const int rows = last - first + 1, width = (inputs + 1) * n;
-    const Eigen::Index slots = merged_.size();
-    std::array<double, 5> drop{};  // rho^d - 1
-    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(m.schedule_pole, d) - 1.0;
-    auto x = lag_drive_.head(width);
-    for (int o = 0; o < m.n_y; ++o) {
-      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
-      auto column = out.col(o).segment(first, rows);
-      column.setConstant(base_[static_cast<std::size_t>(o)]);
-      for (int j = 0; j < m.n_u; ++j) {
-        bool moves = false;
-        for (int i = 0; i < n; ++i) {
-          const Eigen::Index slot = j * block + o * n + i;
-          x(i) = merged_(slot);
-          for (int d = 1; d <= inputs; ++d)
-            x(d * n + i) = f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)];
-        }
-        for (int k = 0; k < width; ++k) moves = moves || x(k) != 0.0;
-        if (moves) accumulateColumns(table.data() + j * width * table.rows(), table.rows(), rows, width, x.data(), &out(first, o));
-      }
-    }
-  }
-
-  // From the last step of one stretch to the first of the next: the modes
-  // at `last` from the closed form, then one explicit step to the new cell.
-  void stepAcrossCells(const CompiledModel& m, int first, int last) noexcept {
-    const ModalForm& f = m.modal_form;
-    const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
-    const int steps = last - first;
-    const Eigen::Index slots = merged_.size();
-    const double pole = m.schedule_pole, e = std::pow(pole, steps);
-    std::array<double, 5> drop{};  // rho^d - 1
-    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(pole, d) - 1.0;
-    const int width = (inputs + 1) * n;
-    for (int o = 0; o < m.n_y; ++o) {
-      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
-      for (int j = 0; j < m.n_u; ++j)
-        for (int i = 0; i < n; ++i) {
-          const Eigen::Index slot = j * block + o * n + i;
-          // One step's term of a cumulative column: its difference.
-          auto term = [&](int d) {
-            const Eigen::Index col = j * width + d * n + i;
-            return steps == 0 ? (d == 0 ? 1.0 : 0.0) : table(steps, col) - table(steps - 1, col);
-          };
-          double z = term(0) * merged_(slot), level = held_levels_(slot);  // lambda^steps zeta
-          double ed = 1.0;
-          for (int d = 1; d <= inputs; ++d) {
-            ed *= e;
-            z += f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)] * term(d);
-            level += held_levels_(d * slots + slot) * ed;
-          }
-          merged_(slot) = z;
-          g_(slot) = level;  // the level at `last`
-        }
-    }
-    // The level one step on, in its new cell, explicitly.
-    for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s)
-      work_us_(m.node_grid.inputs[s]) = laggedAt(static_cast<int>(s), last + 1, pole);
-    ScheduleBlend blend;
-    m.node_partition.blend(work_us_, DirectionState{}, blend);
-    for (int j = 0; j < m.n_u; ++j) merged::levelsOfInput<0>(m, j, blend, vc_.data(), g_next_.data() + j * block);
-    for (Eigen::Index k = 0; k < slots; ++k)
-      merged_(k) = f.merged_lambda(k) * merged_(k) + f.merged_beta(k) * (g_next_(k) - g_(k));
   }
 
   PredictorStatus predictSettled(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
@@ -850,15 +666,9 @@ class NStepPredictor {
   Eigen::VectorXd state_, work_state_;  // filter states: modal z, or banks' x, in the model's form
   Eigen::VectorXd drive_;               // per state: what drives it this step
   Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
-  Eigen::VectorXd zeta_, merged_, g_, g_next_, total_, zeta_of_output_, blended_;
+  Eigen::VectorXd zeta_, merged_, g_, zeta_of_output_, blended_;
   std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
-  // Held input with a moving lag: the scheduling inputs' start and target,
-  // the stretch's corners (node, weight polynomial) and level polynomials.
-  std::array<double, 4> lag_start_{}, lag_target_{};
-  std::array<double, 8> base_{};
-  std::array<int, 16> corner_node_{};
-  std::array<std::array<double, 5>, 16> corner_poly_{};
-  Eigen::VectorXd held_levels_, lag_drive_;
+  HeldLaggedForm held_lagged_;  // held input with a moving lag
   Eigen::VectorXd turn_;  // tip frame: each predicted row's turn
   Eigen::MatrixXd sens_nominal_;  // sensitivity(): the nominal prediction
   PlanSensitivity sensitivity_;

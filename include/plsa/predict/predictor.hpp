@@ -410,14 +410,19 @@ class NStepPredictor {
     for (int q = begin; q < end; ++q) {
       double* __restrict z = state + f.offset[static_cast<std::size_t>(q)];
       const double lambda = f.lambda(q), beta = f.beta(q);
-      for (int k = 0; k < size; ++k) {
 #if defined(__SSE2__)
-        z[k] = lambda * z[k] + beta * d[k];
+      const merged::Quad l = {lambda, lambda, lambda, lambda}, b = {beta, beta, beta, beta};
+      merged::LooseQuad* zq = merged::quads(z);
+      const merged::LooseQuad* dq = merged::quads(d);
+      int k = 0;
+      for (; k + 4 <= size; k += 4) zq[k / 4] = l * zq[k / 4] + b * dq[k / 4];  // four copies a vector
+      for (; k < size; ++k) z[k] = lambda * z[k] + beta * d[k];
 #else
+      for (int k = 0; k < size; ++k) {
         const double next = lambda * z[k] + beta * d[k];
         z[k] = std::abs(next) < kTinyState ? 0.0 : next;
-#endif
       }
+#endif
     }
   }
 

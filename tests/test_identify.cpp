@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plsa/dio/dio_transform.hpp"
+#include "plsa/identify/model_regressors.hpp"
 #include "plsa/identify/arx.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/local_fit.hpp"

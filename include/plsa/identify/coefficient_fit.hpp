@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/identify/model_regressors.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa {

@@ -1,0 +1,84 @@
+// Batch regressors of a DIO-PWL-OBF model over whole input records, and
+// the increments and levels they give: what identification, validation and
+// the baselines run offline (the real-time predictor steps its own compiled
+// form instead and never includes this).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/model/dio_pwl_obf_model.hpp"
+
+namespace plsa {
+
+/// OBF regressors of every output and the region of every sample, for an
+/// input record u (T x n_u) starting at rest. At sample k the filters have
+/// seen du_0..du_{k-1} and the region is scheduled on u_{k-1} (strictly causal).
+/// Input side: phi holds every region's regressors side by side (T x
+/// regions * regressorSize(o)), and the schedule of sample k is the weights
+/// its own input gives the nodes.
+struct ModelRegressors {
+  std::vector<Eigen::MatrixXd> phi;    ///< [output] T x regressorSize(o), or x regions times that
+  std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
+  /// Input side: [output] the filters' settled states at the first sample
+  /// (DC gain times the first weighted input), laid out as phi's columns.
+  std::vector<Eigen::RowVectorXd> level0;
+  /// Input side: [output] for each tile of kTileRows samples and each node,
+  /// whether any of the node's regressors there exceeds the rounding of its
+  /// column's largest (machine epsilon times it). A node's regressors are zero
+  /// until the input first nears it and decay once it leaves, so most tiles
+  /// hold few live nodes; sums and products skip the rest. Empty: all live.
+  static constexpr Eigen::Index kTileRows = 256;
+  std::vector<Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>> live;
+};
+
+/// One input through a play channel, starting as `start` says.
+inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& ch, PlayStart start) {
+  Eigen::VectorXd v = u;
+  if (ch.passesThrough() || u.size() == 0) return v;
+  v(0) = playStartState(u(0), ch, start);
+  for (Eigen::Index k = 1; k < u.size(); ++k) v(k) = ch.follow(u(k), v(k - 1));
+  return v;
+}
+
+/// The regressors of a structure into `out`, whose storage is reused when its
+/// shapes already match (a long record's run to tens of megabytes). `play` as
+/// in DioPwlObfModel::input_play; empty = one raw channel per input. Long
+/// records fill each output's regressors on a thread of their own.
+void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>>& poles,
+                    const PwlPartition& partition, const Eigen::MatrixXd& u,
+                    const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
+                    double schedule_pole, ScheduleSide side, double threshold, double softening);
+
+/// The same, returned.
+ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
+                                const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
+                                PlayStart start = PlayStart::kRising, double coupling = 0.0,
+                                double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
+                                double threshold = 0.0, double softening = 0.0);
+
+/// The regressors of `model`'s own structure (poles, partition, play, start,
+/// coupling, threshold, softening, lag and side) for an input record.
+ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
+
+/// The same into `out`, reusing its storage.
+void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, ModelRegressors& out);
+
+/// The model's predicted increments dyhat (T x n_y) from regressors of its
+/// own structure (modelRegressors(model, u)), for reuse across coefficient sets.
+Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg);
+
+/// The model's predicted increments dyhat (T x n_y) for an input record.
+Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
+
+/// Input side: the filtered part of the output's level, T x n_y, so that the
+/// model's output is output_level + levels and levels(k) - levels(k-1) is the
+/// increment dy(k). The filters start settled at the first input, so only the
+/// first sample's regressors are needed beside `dy` = modelIncrements(model, u).
+Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy);
+
+/// The same, the increments computed here.
+Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
+
+}  // namespace plsa

@@ -1,0 +1,244 @@
+// Batch regressors, increments and levels of a DIO-PWL-OBF model over whole
+// input records (model_regressors.hpp): offline only, the real-time
+// predictor never runs them.
+#include "plsa/identify/model_regressors.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <limits>
+#include <thread>
+
+namespace plsa {
+
+void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>>& poles,
+                           const PwlPartition& partition, const Eigen::MatrixXd& u,
+                           const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
+                           double schedule_pole, ScheduleSide side, double threshold, double softening) {
+  PLSA_CHECK(!poles.empty(), "modelRegressors: no outputs");
+  PLSA_CHECK(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
+  const Eigen::Index T = u.rows();
+  const auto n_u = static_cast<std::size_t>(u.cols());
+  out.schedule.resize(static_cast<std::size_t>(T));
+  DirectionState dir;
+  Eigen::RowVectorXd du = Eigen::RowVectorXd::Zero(u.cols());
+  // The schedule of sample k sees the inputs up to k-1 through the lag, which
+  // starts settled at the first input.
+  Eigen::RowVectorXd lagged = T > 0 ? u.row(0) : Eigen::RowVectorXd();
+  for (Eigen::Index k = 0; k < T; ++k) {
+    const Eigen::Index prev = k == 0 ? 0 : k - 1;
+    if (k >= 2) du = u.row(k - 1) - u.row(k - 2);
+    if (k >= 2) partition.updateDirections(du, dir);
+    if (k >= 2) lagged = schedule_pole * lagged + (1.0 - schedule_pole) * u.row(prev);
+    partition.blend(lagged, dir, out.schedule[static_cast<std::size_t>(k)]);
+  }
+  // Input side: node weights at each sample's own (lagged) input, the same
+  // lag one sample on: the output side's schedule of sample k+1.
+  const int regions = partition.regionCount();
+  Eigen::MatrixXd node_weight;
+  if (side == ScheduleSide::kInput) {
+    node_weight = Eigen::MatrixXd::Zero(T, regions);
+    for (Eigen::Index k = 0; k < T; ++k) {
+      ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+      if (k + 1 < T) b = out.schedule[static_cast<std::size_t>(k + 1)];
+      else if (k > 0) partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
+    }
+    for (Eigen::Index k = 0; k < T; ++k) {
+      const ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+      for (int m = 0; m < b.count; ++m)
+        node_weight(k, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
+    }
+  }
+  PLSA_CHECK(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
+  // Channel inputs: input j above the threshold (coupled to the others)
+  // through each of its play channels.
+  Eigen::MatrixXd coupled;
+  const bool shaped = coupling != 0.0 || threshold != 0.0 || softening != 0.0;
+  if (shaped) {
+    coupled.resize(T, u.cols());
+    for (Eigen::Index k = 0; k < T; ++k) {
+      const double positive_sum = positiveSumAbove(u.row(k), threshold);
+      for (Eigen::Index j = 0; j < u.cols(); ++j)
+        coupled(k, j) = coupledLevel(levelAbove(u(k, j), threshold), positive_sum, coupling, softening);
+    }
+  }
+  const Eigen::MatrixXd& level = shaped ? coupled : u;
+  std::vector<std::vector<Eigen::VectorXd>> channels(n_u);
+  for (std::size_t j = 0; j < n_u; ++j) {
+    const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];
+    for (const PlayChannel& ch : list)
+      channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, start));
+  }
+  for (const auto& row : poles) PLSA_CHECK(row.size() == n_u, "modelRegressors: need one pole set per input");
+  const int copies = side == ScheduleSide::kInput ? regions : 1;
+  out.phi.resize(poles.size());
+  out.level0.resize(side == ScheduleSide::kInput ? poles.size() : 0);
+  out.live.resize(side == ScheduleSide::kInput ? poles.size() : 0);
+  // The filters run on every node's copy at once, a state row per copy: the
+  // copies' recursions are independent, so the loop over them vectorises.
+  // The outputs' regressors are independent: one thread each.
+  auto fill = [&](std::size_t o) {
+    Eigen::MatrixXd x, next;
+    Eigen::VectorXd step_in(copies);  // each copy's input increment
+    const std::vector<PoleSet>& row = poles[o];
+    int width = 0;
+    for (std::size_t j = 0; j < n_u; ++j) width += row[j].size() * static_cast<int>(channels[j].size());
+    Eigen::MatrixXd& phi = out.phi[o];
+    phi.resize(T, width * copies);
+    if (side == ScheduleSide::kInput) out.level0[o].setZero(width * copies);
+    int offset = 0;
+    for (std::size_t j = 0; j < n_u; ++j) {
+      const ObfBank<> bank(row[j]);
+      const int n = bank.size();
+      const Eigen::MatrixXd& A = bank.A();
+      const Eigen::VectorXd& B = bank.B();
+      const Eigen::RowVectorXd gain = bank.transfer(1.0).real().transpose();
+      for (const Eigen::VectorXd& v : channels[j]) {
+        // Input side: node r's filters see the channel weighted by the node.
+        auto f = [&](Eigen::Index k, int r) { return side == ScheduleSide::kInput ? node_weight(k, r) * v(k) : v(k); };
+        x.setZero(copies, n);
+        next.resize(copies, n);
+        // Raw loops: at five or six states Eigen's dynamic expressions cost more than the arithmetic.
+        double* now = x.data();
+        double* then = next.data();
+        double* const col0 = phi.data() + static_cast<Eigen::Index>(offset) * T;
+        for (Eigen::Index k = 0; k < T; ++k) {
+          for (int i = 0; i < n; ++i)
+            for (int r = 0; r < copies; ++r)
+              col0[(static_cast<Eigen::Index>(r) * width + i) * T + k] = now[i * copies + r];
+          for (int r = 0; r < copies; ++r) step_in(r) = k == 0 ? 0.0 : f(k, r) - f(k - 1, r);
+          for (int i = 0; i < n; ++i) {
+            double* const to = then + i * copies;
+            for (int r = 0; r < copies; ++r) to[r] = B(i) * step_in(r);
+            for (int l = 0; l < n; ++l) {
+              const double a = A(i, l);
+              if (a == 0.0) continue;
+              const double* const from = now + l * copies;
+              for (int r = 0; r < copies; ++r) to[r] += a * from[r];
+            }
+          }
+          std::swap(now, then);
+        }
+        if (side == ScheduleSide::kInput && T > 0)
+          for (int r = 0; r < copies; ++r)
+            out.level0[o].segment(static_cast<Eigen::Index>(r) * width + offset, n) = gain * f(0, r);
+        offset += n;
+      }
+    }
+    if (side != ScheduleSide::kInput) return;
+    const Eigen::Index tile = ModelRegressors::kTileRows;
+    auto& live = out.live[o];
+    live.resize((T + tile - 1) / tile, copies);
+    if (T == 0) return;
+    const Eigen::RowVectorXd negligible = std::numeric_limits<double>::epsilon() * phi.cwiseAbs().colwise().maxCoeff();
+    for (Eigen::Index t = 0; t < live.rows(); ++t)
+      for (int r = 0; r < copies; ++r)
+        live(t, r) = (phi.block(t * tile, static_cast<Eigen::Index>(r) * width, std::min(tile, T - t * tile), width)
+                          .cwiseAbs()
+                          .colwise()
+                          .maxCoeff()
+                          .array() > negligible.segment(static_cast<Eigen::Index>(r) * width, width).array())
+                         .any();
+  };
+  std::vector<std::exception_ptr> failed(poles.size());
+  auto guarded = [&](std::size_t o) {
+    try {
+      fill(o);
+    } catch (...) {
+      failed[o] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> workers;
+  const bool threaded = T >= 2048;  // below that a thread costs more than it saves
+  for (std::size_t o = 1; o < poles.size() && threaded; ++o) workers.emplace_back(guarded, o);
+  for (std::size_t o = 0; o < (threaded ? 1 : poles.size()); ++o) guarded(o);
+  for (std::thread& t : workers) t.join();
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+}
+
+ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
+                                const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play,
+                                PlayStart start, double coupling, double schedule_pole, ScheduleSide side,
+                                double threshold, double softening) {
+  ModelRegressors out;
+  fillRegressors(out, poles, partition, u, play, start, coupling, schedule_pole, side, threshold, softening);
+  return out;
+}
+
+ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  return modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
+                         model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
+}
+
+void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, ModelRegressors& out) {
+  fillRegressors(out, model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
+                 model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
+}
+
+Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
+  PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
+          "modelIncrements: the regressors were made for another model");
+  const auto T = static_cast<Eigen::Index>(reg.schedule.size());
+  Eigen::MatrixXd dy(T, model.outputCount());
+  if (model.schedule_side == ScheduleSide::kInput) {
+    const Eigen::Index tile = ModelRegressors::kTileRows;
+    for (int o = 0; o < model.outputCount(); ++o) {
+      const auto oo = static_cast<std::size_t>(o);
+      const Eigen::VectorXd c = model.stackedCoefficients(o);
+      if (reg.live.empty()) {
+        dy.col(o) = reg.phi[oo] * c;
+        continue;
+      }
+      const Eigen::Index width = model.regressorSize(o);
+      dy.col(o).setZero();
+      for (Eigen::Index t = 0; t < reg.live[oo].rows(); ++t)
+        for (Eigen::Index r = 0; r < reg.live[oo].cols(); ++r)
+          if (reg.live[oo](t, r)) {
+            const Eigen::Index rows = std::min(tile, T - t * tile);
+            dy.col(o).segment(t * tile, rows).noalias() +=
+                reg.phi[oo].block(t * tile, r * width, rows, width) * c.segment(r * width, width);
+          }
+    }
+    return dy;
+  }
+  for (Eigen::Index k = 0; k < T; ++k) {
+    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+    for (int o = 0; o < model.outputCount(); ++o) {
+      double v = 0.0;
+      for (int m = 0; m < b.count; ++m)
+        v += b.weight[static_cast<std::size_t>(m)] *
+             reg.phi[static_cast<std::size_t>(o)].row(k).dot(
+                 model.coefficients[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)]);
+      dy(k, o) = v;
+    }
+  }
+  return dy;
+}
+
+Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  PLSA_CHECK(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
+                                              " inputs, the model " + std::to_string(model.inputCount()));
+  return modelIncrements(model, modelRegressors(model, u));
+}
+
+Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {
+  PLSA_CHECK(model.schedule_side == ScheduleSide::kInput,
+          "modelLevels: only an input-side model has a level that is a function of its inputs");
+  PLSA_CHECK(u.rows() >= 1, "modelLevels: empty record");
+  PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
+  // Settled states depend on the first sample alone (its schedule, played and coupled level).
+  const ModelRegressors first = modelRegressors(model, u.topRows(1));
+  Eigen::MatrixXd level(u.rows(), model.outputCount());
+  for (int o = 0; o < model.outputCount(); ++o) {
+    double acc = first.level0[static_cast<std::size_t>(o)].dot(model.stackedCoefficients(o));
+    level(0, o) = acc;
+    for (Eigen::Index k = 1; k < u.rows(); ++k) level(k, o) = acc += dy(k, o);
+  }
+  return level;
+}
+
+Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  return modelLevels(model, u, modelIncrements(model, u));
+}
+
+}  // namespace plsa

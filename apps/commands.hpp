@@ -6,8 +6,24 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <vector>
+
+#include "plsa/identify/pipeline.hpp"
 
 namespace plsa::app {
+
+/// An option taking one of an enum's values by its spelling (OptionSpelling):
+/// the help lists the spellings and shows the default's.
+template <class E>
+CLI::Option* addChoice(CLI::App* app, const std::string& flag, E& target, const std::string& help) {
+  std::vector<std::string> names;
+  for (const auto& value : OptionSpelling<E>::values) names.emplace_back(value.second);
+  return app
+      ->add_option_function<std::string>(
+          flag, [&target](const std::string& name) { target = parseOption<E>(name); }, help)
+      ->check(CLI::IsMember(names))
+      ->default_str(optionName(target));
+}
 
 /// Number checks with a short message (CLI11's own print the largest double in full).
 inline CLI::Validator finiteNumberAtLeast(double lo, bool strict) {

@@ -140,9 +140,8 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',');
   c->add_option("--levels", a->options.quantile_levels, "Grid levels per input (quantiles)")->check(CLI::Range(1, 12));
-  c->add_option("--cv-layout", a->options.cv_layout,
-                 "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)")
-      ->check(CLI::IsMember({"interleaved", "contiguous"}));
+  addChoice(c, "--cv-layout", a->options.cv_layout,
+            "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");
   c->add_option("--play-softening", a->options.play_softening_candidates,
                  "Candidate softenings of the play channels' level, as in identify; default none")
       ->delimiter(',')

@@ -204,8 +204,7 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
   id->add_option("--poles", a->options.poles_per_pair, "OBF poles per input-output pair")->check(CLI::Range(1, 20));
   id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")->check(CLI::Range(1, 6));
-  id->add_option("--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global")
-      ->check(CLI::IsMember({"fkcm", "fcm", "kmeans", "global"}));
+  addChoice(id, "--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global");
   id->add_option("--rho-refinement", a->options.clustering.refine_on_rho,
                  "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
                  "off: the paper's FKcM alone");
@@ -226,11 +225,10 @@ void addIdentifyCommands(CLI::App& app) {
         "tip_cartesian: the model runs on bend*cos(steer), bend*sin(steer), where a constant-curvature "
         "segment's dynamics are linear; predictions come back as the logged angles")
       ->check(CLI::IsMember({"auto", "as_logged", "tip_cartesian"}));
-  id->add_option("--scheduling", a->options.scheduling,
-                 "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
-                 "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "
-                 "simulation)")
-      ->check(CLI::IsMember({"auto", "interpolated", "switched", "input"}));
+  addChoice(id, "--scheduling", a->options.scheduling,
+            "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
+            "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "
+            "simulation)");
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {
@@ -288,16 +286,14 @@ void addIdentifyCommands(CLI::App& app) {
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
-  id->add_option("--output-drift", a->options.output_drift,
-                 "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
-                 "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
-                 "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged")
-      ->check(CLI::IsMember({"auto", "on", "off"}));
-  id->add_option("--cv-layout", a->options.cv_layout,
-                 "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
-                 "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "
-                 "contiguous: each log in three time blocks, each scored by a fit on the other two")
-      ->check(CLI::IsMember({"interleaved", "contiguous"}));
+  addChoice(id, "--output-drift", a->options.output_drift,
+            "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
+            "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
+            "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged");
+  addChoice(id, "--cv-layout", a->options.cv_layout,
+            "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
+            "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "
+            "contiguous: each log in three time blocks, each scored by a fit on the other two");
   id->add_option("--cv-chunk", a->options.cv_chunk_s, "Seconds per interleaved cross-validation chunk (default 8)")
       ->check(kPositive);
   id->add_flag("!--keep-outliers", a->options.refuse_outliers,

@@ -68,7 +68,7 @@ std::vector<BenchModel> identifiedModels(std::uint64_t seed, void (*say)(const s
   say("identifying the models to measure (the demo's options on the simulator's grid run)");
   IdentifyOptions demo;
   demo.output_frame = OutputFrame::kTipCartesian;
-  demo.scheduling = "input";
+  demo.scheduling = SchedulingChoice::kInputSide;
   const DioPwlObfModel model = identifyModel({grid}, demo);
   add("demo", model);
   DioPwlObfModel no_lag = model;
@@ -90,13 +90,13 @@ std::vector<BenchModel> identifiedModels(std::uint64_t seed, void (*say)(const s
   one.output_frame = OutputFrame::kAsLogged;
   add("1 chamber", identifyModel({stairs}, one));
   IdentifyOptions paper;  // the paper's structure: switched, no play, no lag, angles as logged
-  paper.scheduling = "switched";
+  paper.scheduling = SchedulingChoice::kSwitched;
   paper.play_candidates = {{0.0}};
   paper.play_coupling_candidates = {};
   paper.play_threshold_candidates = {};
   paper.schedule_lag_candidates = {};
   paper.slow_pole_candidates = {};
-  paper.output_drift = "off";
+  paper.output_drift = OutputDriftChoice::kOff;
   add("paper's structure", identifyModel({grid}, paper));
   return out;
 }

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
     plsa::sim::Actuator rig(plsa::sim::SimConfig{}, 1);
     plsa::IdentifyOptions o;
     o.output_frame = plsa::OutputFrame::kTipCartesian;
-    o.scheduling = "input";
+    o.scheduling = plsa::SchedulingChoice::kInputSide;
     model = plsa::identifyModel({plsa::sim::runExperiment(rig, plsa::sim::gridExperiment({}))}, o);
   }
   plsa::Predictor<> predictor(model);

@@ -705,13 +705,13 @@ TEST(Pipeline, OneWeakOutputKeepsTheStaircasePartition) {
   IdentifyOptions o;
   o.inputs = {"p_1"};
   o.outputs = {"strong", "weak"};
-  o.scheduling = "switched";
+  o.scheduling = SchedulingChoice::kSwitched;
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates.clear();
   o.schedule_lag_candidates.clear();
   o.play_threshold_candidates.clear();
   o.slow_pole_candidates.clear();
-  o.output_drift = "off";
+  o.output_drift = OutputDriftChoice::kOff;
   IdentifyReport rep;
   const DioPwlObfModel m = identifyModel({log}, o, &rep);
   EXPECT_TRUE(rep.staircase);
@@ -753,9 +753,13 @@ TEST(Pipeline, SimulatedActuatorWithoutEffects) {
   }
   // A bad cross-validation layout or chunk is named, not guessed around.
   IdentifyOptions bad;
-  bad.cv_layout = "random";
-  expectThrowContaining([&] { identifyModel({train}, bad); }, "layout 'random'");
-  bad.cv_layout = "interleaved";
+  bad.cv_layout = static_cast<CvLayout>(7);  // a cast from an integer
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "cross-validation layout 7 is none of interleaved or contiguous");
+  expectThrowContaining([&] { parseOption<CvLayout>("random"); },
+                        "cross-validation layout 'random': expected interleaved or contiguous");
+  EXPECT_EQ(parseOption<SchedulingChoice>("input"), SchedulingChoice::kInputSide);
+  EXPECT_STREQ(optionName(PoleMethod::kFuzzyCMeans), "fcm");
+  bad.cv_layout = CvLayout::kInterleaved;
   bad.cv_chunk_s = 0.0;
   expectThrowContaining([&] { identifyModel({train}, bad); }, "chunks must last");
 }
@@ -771,7 +775,7 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   sim::Actuator a(c, 1);
   const io::Log train = sim::runExperiment(a, sim::gridExperiment(eo));
   IdentifyOptions o;
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.play_candidates = {{0.0}, {0.1}};  // no growing set: the threshold stage tries the chosen set only
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.2};
@@ -804,7 +808,7 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
 // level-growing, coupled play band and the rising start must hold their
 // gain over the paper's configuration (measured 93.8/94.3 at 40 steps and
 // 90.5/91.1 at 80 against 75.9/82.3 and 58.6/69.0; docs/identification.md
-// gives seeds 1 to 4).
+// gives the simulation cells of seeds 1 to 8).
 // With every effect off the simulator's nonlinearity is its kinematics, which
 // act on the bending state, after the dynamics: scheduled on the raw inputs,
 // the coefficients run ahead of that state while the inputs move, and the
@@ -822,7 +826,7 @@ TEST(Pipeline, ScheduleLagStopsTheSimulationDriftOfAStateSideNonlinearity) {
   eo.seed = 102;
   const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
   IdentifyOptions o;
-  o.scheduling = "interpolated";
+  o.scheduling = SchedulingChoice::kInterpolated;
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
@@ -859,10 +863,10 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   const DioPwlObfModel input_side = identifyModel({train}, o);
   ASSERT_EQ(input_side.schedule_side, ScheduleSide::kInput);
-  o.scheduling = "interpolated";
+  o.scheduling = SchedulingChoice::kInterpolated;
   const DioPwlObfModel output_side = identifyModel({train}, o);
   ASSERT_EQ(output_side.schedule_side, ScheduleSide::kOutput);
   // 30 s of random wandering over the grid, back to the start, then 30 s held.
@@ -922,7 +926,7 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.slow_pole_candidates = {};
   const DioPwlObfModel without = identifyModel({train}, o);
   o.slow_pole_candidates = {2.0, 8.0, 30.0};
@@ -1025,7 +1029,7 @@ DriftRuns yawDriftRuns(double yaw_rate) {
 IdentifyOptions fixedInputSide(OutputFrame frame) {
   IdentifyOptions o;
   o.output_frame = frame;
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {0.8};
@@ -1045,7 +1049,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
   for (OutputFrame frame : {OutputFrame::kTipCartesian, OutputFrame::kAsLogged}) {
     const bool tip = frame == OutputFrame::kTipCartesian;
     IdentifyOptions o = fixedInputSide(frame);
-    o.output_drift = tip ? "auto" : "on";
+    o.output_drift = tip ? OutputDriftChoice::kAuto : OutputDriftChoice::kOn;
     IdentifyReport rep;
     const DioPwlObfModel taken = identifyModel({runs.train}, o, &rep);
     ASSERT_EQ(rep.output_drift.rate.size(), 2u);
@@ -1055,7 +1059,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_EQ(taken.training_drift_per_s, rep.output_drift.rate) << toString(frame);  // recorded in the model
     if (!tip) continue;  // as logged the trend barely moves an angle model's fit (83.02 -> 83.04 held out)
     EXPECT_GT(rep.drift_scores.second, rep.drift_scores.first);
-    o.output_drift = "off";
+    o.output_drift = OutputDriftChoice::kOff;
     IdentifyReport rep_off;
     const DioPwlObfModel left = identifyModel({runs.train}, o, &rep_off);
     EXPECT_TRUE(rep_off.output_drift.rate.empty());
@@ -1254,7 +1258,7 @@ TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
   EXPECT_EQ(carried.outputs[1].fit_k.at(40), left.outputs[1].fit_k.at(40));
   // As logged a trend has no registration to anchor it: nothing is carried.
   IdentifyOptions o = fixedInputSide(OutputFrame::kAsLogged);
-  o.output_drift = "on";
+  o.output_drift = OutputDriftChoice::kOn;
   const DioPwlObfModel logged = identifyModel({runs.train}, o);
   ASSERT_FALSE(logged.training_drift_per_s.empty());
   EXPECT_EQ(carriedYawRate(logged, SimulationStart{}), 0.0);
@@ -1328,7 +1332,7 @@ TEST(OutputFrameChoice, TipFrameFromBendingAndSteeringNamesAndNonNegativeBending
 TEST(Pipeline, DefaultOutputFrameIsChosenReportedAndOverridable) {
   const io::Log& train = allEffectsRuns().train;
   IdentifyOptions o;  // a cheap structure: the frame is what is checked
-  o.scheduling = "switched";
+  o.scheduling = SchedulingChoice::kSwitched;
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
@@ -1380,7 +1384,7 @@ TEST(Pipeline, TipFrameLiftsTheKStepFits) {
   const io::Log& val = allEffectsRuns().val;
   // The demo's structure, fixed so that only the frame differs.
   IdentifyOptions o;
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.play_candidates = {{PlayChannel(0.0, 0.12)}};
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.8};
@@ -1408,7 +1412,7 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
   const io::Log& val = allEffectsRuns().val;
   IdentifyOptions o;  // the demo's structure, two growing bands to choose from
   o.output_frame = OutputFrame::kTipCartesian;
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.play_candidates = {{PlayChannel(0.0, 0.12)}, {PlayChannel(0.0, 0.16)}};
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.8};
@@ -1444,7 +1448,7 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   const io::Log& train = allEffectsRuns().train;
   IdentifyOptions o;
   o.output_frame = OutputFrame::kTipCartesian;
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
   o.play_candidates = {{PlayChannel(0.0, 0.16)}};
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {};
@@ -1452,7 +1456,7 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   o.play_softening_candidates = {0.0};
   o.play_refine_evaluations = 0;
   o.slow_pole_candidates = {};
-  o.output_drift = "off";
+  o.output_drift = OutputDriftChoice::kOff;
   IdentifyReport plain;
   const DioPwlObfModel staged = identifyModel({train}, o, &plain);
   EXPECT_EQ(plain.refine_evaluations, 0);
@@ -1503,14 +1507,14 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   EXPECT_EQ(no_threshold.refine_best.threshold, 0.0);
   // The output side has no held-out simulation to guard it: not refined.
   o.play_threshold_candidates = {0.0};
-  o.scheduling = "interpolated";
+  o.scheduling = SchedulingChoice::kInterpolated;
   IdentifyReport output_side;
   identifyModel({train}, o, &output_side);
   EXPECT_EQ(output_side.refine_evaluations, 0);
   EXPECT_TRUE(std::any_of(output_side.lines.begin(), output_side.lines.end(), [](const std::string& l) {
     return l.find("input-side structures only") != std::string::npos;
   }));
-  o.scheduling = "input";
+  o.scheduling = SchedulingChoice::kInputSide;
 
   o.play_refine_evaluations = -1;
   EXPECT_THROW(
@@ -1533,7 +1537,7 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
   IdentifyReport rep;
   const DioPwlObfModel ours = identifyModel({train}, IdentifyOptions{}, &rep);
   IdentifyOptions paper_options;
-  paper_options.scheduling = "switched";
+  paper_options.scheduling = SchedulingChoice::kSwitched;
   paper_options.play_candidates = {{0.0}};
   paper_options.play_coupling_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, paper_options);

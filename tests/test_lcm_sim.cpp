@@ -332,7 +332,7 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   // Any model serves the node; the threshold and drift stages only cost time
   // (under ASan the threshold stage pushed this test past its limit).
   io.play_threshold_candidates = {};
-  io.output_drift = "off";
+  io.output_drift = plsa::OutputDriftChoice::kOff;
   const plsa::DioPwlObfModel model = plsa::identifyModel({train}, io);
   const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), model);

@@ -39,10 +39,10 @@ const Data& data() {
     o.output_frame = OutputFrame::kAsLogged;  // the tip-frame variant is made below
     o.play_candidates = {{0.1}};
     o.play_coupling_candidates = {};
-    o.scheduling = "switched";
+    o.scheduling = SchedulingChoice::kSwitched;
     out.switched = identifyModel({train}, o);
     // The interpolated model also carries a band that grows with the level.
-    o.scheduling = "interpolated";
+    o.scheduling = SchedulingChoice::kInterpolated;
     o.play_candidates = {{0.1, PlayChannel(0.0, 0.12)}};
     o.play_coupling_candidates = {};
     out.interpolated = identifyModel({train}, o);

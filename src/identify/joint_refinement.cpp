@@ -14,7 +14,7 @@ namespace plsa {
 void IdentificationRun::refineJointly() {
   // The stages above pick one setting at a time from coarse sets; the
   // simulator's own structure scores higher than any of their picks
-  // (docs/identification.md, nineteenth session). A bounded local search
+  // (docs/identification.md, 'Joint refinement'). A bounded local search
   // over all four from the pick, on the same held-out score.
   // Only the stages that ran are refined: a stage turned off (its candidates
   // empty) keeps its setting, as does the channel size without a channel.
@@ -104,7 +104,8 @@ void IdentificationRun::refineJointly() {
     }
     const IdentifyReport::PlayRefinement& b = rep.refine_best;
     // Kept only if held-out simulation does not fall: a higher k-step score
-    // alone was seen to cost the simulation points (twentieth session).
+    // alone was seen to cost simulation points (docs/identification.md,
+    // 'Joint refinement').
     bool keep = b.score > best_score + 1e-9;
     if (keep) {
       beginScoring("the refinement's simulation guard", 2);

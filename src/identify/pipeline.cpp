@@ -30,13 +30,22 @@ std::string fmtPoles(std::vector<std::complex<double>> p) {
   return s.str();
 }
 
-ClusteringResult cluster(const std::string& method, const std::vector<std::complex<double>>& poles,
-                         const ClusteringOptions& o) {
-  if (method == "fkcm") return fkcmClustering(poles, o);
-  if (method == "fcm") return fuzzyCMeansClustering(poles, o);
-  if (method == "kmeans") return kMeansClustering(poles, o);
-  if (method == "global") return globalRhoSearch(poles, o);
-  throw std::invalid_argument("unknown pole method '" + method + "' (fkcm, fcm, kmeans, global)");
+ClusteringResult cluster(PoleMethod method, const std::vector<std::complex<double>>& poles, const ClusteringOptions& o) {
+  switch (method) {
+    case PoleMethod::kFkcm: return fkcmClustering(poles, o);
+    case PoleMethod::kFuzzyCMeans: return fuzzyCMeansClustering(poles, o);
+    case PoleMethod::kKMeans: return kMeansClustering(poles, o);
+    case PoleMethod::kGlobalRho: return globalRhoSearch(poles, o);
+  }
+  throw std::invalid_argument("identify: pole method out of range");
+}
+
+// An option set by a cast from an integer outside its enum is refused by name.
+template <class E>
+void checkOption(E value) {
+  PLSA_CHECK(optionName(value) != nullptr, std::string("identify: ") + OptionSpelling<E>::what + " " +
+                                               std::to_string(static_cast<int>(value)) + " is none of " +
+                                               optionChoices<E>());
 }
 
 }  // namespace
@@ -147,8 +156,10 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
               std::to_string(o.play_refine_evaluations));
   PLSA_CHECK(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
           "identify: the progress interval must be a finite number of seconds >= 0");
-  PLSA_CHECK(o.output_drift == "auto" || o.output_drift == "on" || o.output_drift == "off",
-          "identify: output drift '" + o.output_drift + "': expected auto, on or off");
+  checkOption(o.pole_method);
+  checkOption(o.scheduling);
+  checkOption(o.output_drift);
+  checkOption(o.cv_layout);
 }
 
 // Data and sample time; every log must agree.
@@ -348,12 +359,9 @@ void IdentificationRun::buildPartitions() {
   // One output too weak for its step fits does not make the staircase less designed.
   bool designed = rep.staircase;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
-  PLSA_CHECK(o.scheduling == "interpolated" || o.scheduling == "switched" || o.scheduling == "input" ||
-              o.scheduling == "auto",
-          "identify: scheduling must be 'auto', 'interpolated', 'switched' or 'input', not '" + o.scheduling + "'");
   std::vector<bool> schedulings;  // interpolated?
-  if (o.scheduling != "switched") schedulings.push_back(true);
-  if (o.scheduling != "interpolated") schedulings.push_back(false);
+  if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
+  if (o.scheduling != SchedulingChoice::kInterpolated) schedulings.push_back(false);
   for (const bool interpolated : schedulings) addPartition(interpolated, levels, designed);
   top_level = std::max(1e-12, all_u.maxCoeff());
 }

@@ -25,8 +25,9 @@ constexpr SimulationStart kSameSession{0, false};
 void IdentificationRun::listStructures() {
   for (std::size_t pi = 0; pi < partitions.size(); ++pi) {
     const bool interp = partitions[pi].scheduling() == Scheduling::kInterpolated;
-    if (o.scheduling != "input") structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
-    if (interp && !o.direction_split && (o.scheduling == "input" || o.scheduling == "auto"))
+    if (o.scheduling != SchedulingChoice::kInputSide) structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
+    if (interp && !o.direction_split &&
+        (o.scheduling == SchedulingChoice::kInputSide || o.scheduling == SchedulingChoice::kAuto))
       structures.push_back({pi, ScheduleSide::kInput, "N"});
   }
   PLSA_CHECK(!structures.empty(), "identify: input-side scheduling cannot split by direction");
@@ -56,9 +57,7 @@ void IdentificationRun::applyPlay(const std::vector<PlayChannel>& set) {
 // Interleaved: chunks dealt to the folds in turn, held-out rows weighted out.
 void IdentificationRun::cutFolds() {
   PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
-  PLSA_CHECK(o.cv_layout == "interleaved" || o.cv_layout == "contiguous",
-          "identify: cross-validation layout '" + o.cv_layout + "': expected interleaved or contiguous");
-  interleaved = o.cv_layout == "interleaved";
+  interleaved = o.cv_layout == CvLayout::kInterleaved;
   PLSA_CHECK(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
           "identify: cross-validation chunks must last a positive, finite number of seconds");
   // Contiguous blocks hold out a stretch of the experiment, often a part of
@@ -292,8 +291,8 @@ void IdentificationRun::searchThreshold() {
   // score, which does not see what they do to a simulation; only an input-side
   // model can be scored in held-out simulation, which guards the refinement.
   // On the output side a softened level kept by the k-step score was seen to
-  // cost a clean plant's simulation points (docs/identification.md, twenty-first
-  // session), so neither runs there.
+  // cost a clean plant's simulation points (docs/identification.md, 'Joint
+  // refinement'), so neither runs there.
   input_side_chosen = model.schedule_side == ScheduleSide::kInput;
   if (!input_side_chosen && (!o.play_softening_candidates.empty() || o.play_refine_evaluations > 0))
     say("[5/5] softening and joint refinement: input-side structures only (output side chosen), skipped");
@@ -374,7 +373,7 @@ void IdentificationRun::searchOutputDrift() {
   // blocks and taken out of them; kept if the held-out simulation, scored
   // against the logged outputs, improves.
   Yfit = Y;
-  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != "off") {
+  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != OutputDriftChoice::kOff) {
     beginScoring("sensor drift", 2);
     const double without = crossValidated(Score::kSimulation);
     drift_per_fold = true;
@@ -387,7 +386,7 @@ void IdentificationRun::searchOutputDrift() {
       if (frame != OutputFrame::kTipCartesian || oi == 1)
         s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
     rep.output_drift = drift;
-    if (o.output_drift == "on" || with > without + 1e-9) {
+    if (o.output_drift == OutputDriftChoice::kOn || with > without + 1e-9) {
       rep.drift_taken_out = true;
       Yfit = removeOutputDrift(Y, times, drift);
       // Later stages fit to the outputs less the drift found on all of them.
@@ -404,7 +403,7 @@ void IdentificationRun::searchOutputDrift() {
     s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
          std::to_string(with).substr(0, 5) + " with it taken out)";
     say(s);
-  } else if (o.output_drift != "off") {
+  } else if (o.output_drift != OutputDriftChoice::kOff) {
     say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
         "inputs)");
   }

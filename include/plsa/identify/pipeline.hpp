@@ -3,9 +3,12 @@
 // Every stage reports what it did and what it rejected.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "plsa/identify/coefficient_fit.hpp"
@@ -27,6 +30,78 @@ inline constexpr double kGrossOutlierBands = 50.0;
 /// there is none (or a column's band has no width).
 std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names);
 
+/// How each input-output pair's poles are chosen from its local poles
+/// (pole_clustering.hpp).
+enum class PoleMethod { kFkcm, kFuzzyCMeans, kKMeans, kGlobalRho };
+/// Which scheduling structures identification tries (IdentifyOptions::scheduling).
+enum class SchedulingChoice { kAuto, kInterpolated, kSwitched, kInputSide };
+/// Whether a sensor drift linear in time is taken out of the training
+/// outputs (IdentifyOptions::output_drift).
+enum class OutputDriftChoice { kAuto, kOn, kOff };
+/// How cross-validation cuts the training logs (IdentifyOptions::cv_layout).
+enum class CvLayout { kInterleaved, kContiguous };
+
+/// The spellings of an option's values, as the command line, the reports and
+/// the docs use them, and the option's name in messages.
+template <class E>
+struct OptionSpelling;
+template <>
+struct OptionSpelling<PoleMethod> {
+  static constexpr const char* what = "pole method";
+  static constexpr std::array<std::pair<PoleMethod, const char*>, 4> values{{{PoleMethod::kFkcm, "fkcm"},
+                                                                              {PoleMethod::kFuzzyCMeans, "fcm"},
+                                                                              {PoleMethod::kKMeans, "kmeans"},
+                                                                              {PoleMethod::kGlobalRho, "global"}}};
+};
+template <>
+struct OptionSpelling<SchedulingChoice> {
+  static constexpr const char* what = "scheduling";
+  static constexpr std::array<std::pair<SchedulingChoice, const char*>, 4> values{
+      {{SchedulingChoice::kAuto, "auto"},
+       {SchedulingChoice::kInterpolated, "interpolated"},
+       {SchedulingChoice::kSwitched, "switched"},
+       {SchedulingChoice::kInputSide, "input"}}};
+};
+template <>
+struct OptionSpelling<OutputDriftChoice> {
+  static constexpr const char* what = "output drift";
+  static constexpr std::array<std::pair<OutputDriftChoice, const char*>, 3> values{
+      {{OutputDriftChoice::kAuto, "auto"}, {OutputDriftChoice::kOn, "on"}, {OutputDriftChoice::kOff, "off"}}};
+};
+template <>
+struct OptionSpelling<CvLayout> {
+  static constexpr const char* what = "cross-validation layout";
+  static constexpr std::array<std::pair<CvLayout, const char*>, 2> values{
+      {{CvLayout::kInterleaved, "interleaved"}, {CvLayout::kContiguous, "contiguous"}}};
+};
+
+/// The value's spelling; nullptr for a value outside the enum (a cast).
+template <class E>
+const char* optionName(E value) noexcept {
+  for (const auto& [e, name] : OptionSpelling<E>::values)
+    if (e == value) return name;
+  return nullptr;
+}
+
+/// The values' spellings in order, e.g. "auto, on or off".
+template <class E>
+std::string optionChoices() {
+  std::string list;
+  const auto& values = OptionSpelling<E>::values;
+  for (std::size_t i = 0; i < values.size(); ++i)
+    list += (i == 0 ? "" : i + 1 == values.size() ? " or " : ", ") + std::string(values[i].second);
+  return list;
+}
+
+/// The value spelt `name`; throws std::invalid_argument naming the option and its choices.
+template <class E>
+E parseOption(const std::string& name) {
+  for (const auto& [e, spelling] : OptionSpelling<E>::values)
+    if (name == spelling) return e;
+  throw std::invalid_argument(std::string(OptionSpelling<E>::what) + " '" + name + "': expected " +
+                              optionChoices<E>());
+}
+
 struct IdentifyOptions {
   std::vector<std::string> inputs = {"p_1", "p_2", "p_3"};
   std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
@@ -40,7 +115,7 @@ struct IdentifyOptions {
   std::vector<std::string> reference;
   int poles_per_pair = 5;
   int local_order = 1;
-  std::string pole_method = "fkcm";  ///< fkcm | fcm | kmeans | global
+  PoleMethod pole_method = PoleMethod::kFkcm;
   ClusteringOptions clustering;
   /// Levels per scheduling input when the log has no staircase (quantile grid).
   int quantile_levels = 3;
@@ -49,7 +124,7 @@ struct IdentifyOptions {
   /// (the paper's PWL), "input" (interpolated on the input side:
   /// DioPwlObfModel::schedule_side) or "auto" (all three tried, chosen by
   /// blocked cross-validation; input side only without a direction split).
-  std::string scheduling = "auto";
+  SchedulingChoice scheduling = SchedulingChoice::kAuto;
   double step_threshold = 0.005;  ///< a reference change above this is a step
   double max_gap_factor = io::kToleratedGapFactor;  ///< tolerated sample-time gap (dropped samples)
   /// Refuse training data with a gross outlier (grossOutlier()); false fits them as they are.
@@ -89,7 +164,7 @@ struct IdentifyOptions {
   /// cut by 20%, less below it), tried with each threshold above, every
   /// growing set and none. Empty (default): linear levels. Input-side
   /// structures only (see play_refine_evaluations). Not chosen by default:
-  /// docs/identification.md, nineteenth and twenty-first sessions.
+  /// docs/identification.md, 'Opt-in: softening and joint refinement'.
   std::vector<double> play_softening_candidates;
   /// Then, if > 0, at most this many held-out scores spent refining the
   /// chosen threshold, coupling, softening and the chosen channels' size
@@ -106,7 +181,7 @@ struct IdentifyOptions {
   /// against the logged outputs improves; "on": always taken out; "off": the
   /// outputs as logged. Taken out, the model carries the sensor's mean state
   /// over the training run.
-  std::string output_drift = "auto";
+  OutputDriftChoice output_drift = OutputDriftChoice::kAuto;
   /// Then, for an input-side model, the time constants (s) of one extra real
   /// pole in every bank, tried against none: dynamics slower than the local
   /// fits can see (creep, drift). Scored on simulation of the held-out
@@ -122,7 +197,7 @@ struct IdentifyOptions {
   /// "contiguous": each log in play_selection_folds time blocks, each block
   /// refitted from rest, so a held-out block is a stretch of the experiment
   /// (a part of the grid) that the fit has not seen.
-  std::string cv_layout = "interleaved";
+  CvLayout cv_layout = CvLayout::kInterleaved;
   double cv_chunk_s = 8.0;
   std::function<void(const std::string&)> progress;  ///< one line per stage
   /// Stage 5's held-out scores: after this long (s) without a line, one on

@@ -2,7 +2,7 @@
 // Heuberger, Van den Hof 2009): fuzzy memberships plus a minimax centre update
 // solved in epigraph form with NLopt, by default ending with the same kind of
 // minimax on rho itself. Fuzzy c-means, k-means and a global
-// search on rho are here to judge it against (docs/pole-selection.md).
+// search on rho are here to judge it against (docs/identification.md, "Pole selection").
 #pragma once
 
 #include <complex>

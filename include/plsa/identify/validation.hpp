@@ -75,7 +75,8 @@ struct SimulationStart {
   /// rotation of the predicted onto the measured tip components over them),
   /// at least one sample when > 0; the simulation is scored after them. A
   /// window, not the first sample: one sample registers the model's own error
-  /// at the starting state with the yaw (docs/identification.md, item 15).
+  /// at the starting state with the yaw (docs/identification.md, 'Simulation
+  /// start: yaw registration').
   /// 0: carry the training yaw. Only tip_cartesian models with an
   /// output_level use it.
   double yaw_registration_s = 5.0;
@@ -84,8 +85,8 @@ struct SimulationStart {
   /// fitted with that drift taken out, and a new run's sensor drifts on (as a
   /// gyro's bias does). On the simulator the training estimate (0.0245 deg/s)
   /// is 4x nearer a new run's true rate (0.02) than no drift is
-  /// (docs/identification.md, item 16). Needs a registration to anchor the
-  /// turn. false: simulate the drift-free model.
+  /// (docs/identification.md, 'Sensor drift carried'). Needs a registration
+  /// to anchor the turn. false: simulate the drift-free model.
   bool carry_training_drift = true;
 };
 

@@ -357,7 +357,9 @@ class NStepPredictor {
           if (still) continue;
           resting[static_cast<std::size_t>(j)] = false;
         }
-        const bool avx2 = predictorUsesAvx2();
+        // The AVX2 build pays for its call where a mode has many copies (the
+        // input side's grid nodes), not for the output side's one or two.
+        const bool avx2 = width >= 8 && predictorUsesAvx2();
         if (width == 16 && avx2)
           stepModesAvx2<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
         else if (width == 16)

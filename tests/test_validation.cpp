@@ -1,0 +1,265 @@
+// Validation of a model on a log, and the sensor drift it carries.
+#include "support/identify_fixtures.hpp"
+
+using namespace plsa;
+using namespace plsa::test_fixtures;
+using C = std::complex<double>;
+
+TEST(OutputDrift, RemovalIsALinearTrendAboutTheReferenceAndChecksItsInput) {
+  Eigen::MatrixXd y(3, 2);
+  y << 1, 10, 2, 20, 3, 30;
+  const Eigen::VectorXd t = Eigen::Vector3d(0.0, 1.0, 2.0);
+  EXPECT_DOUBLE_EQ(meanSampleTime({t}), 1.0);
+  OutputDrift d;
+  d.rate = {0.0, 0.5};
+  d.reference_time_s = 1.0;
+  EXPECT_FALSE(d.none());
+  const Eigen::MatrixXd out = removeOutputDrift({y}, {t}, d)[0];
+  EXPECT_EQ(out.col(0), y.col(0));
+  EXPECT_DOUBLE_EQ(out(0, 1), 10.5);  // before the reference: the drift was below it
+  EXPECT_DOUBLE_EQ(out(1, 1), 20.0);
+  EXPECT_DOUBLE_EQ(out(2, 1), 29.5);
+  d.rate = {0.5};
+  EXPECT_THROW(removeOutputDrift({y}, {t}, d), std::invalid_argument);  // one rate for two outputs
+  d.rate = {0.0, 0.5};
+  EXPECT_THROW(removeOutputDrift({y}, {Eigen::Vector2d(0, 1)}, d), std::invalid_argument);
+  // Output side: the level is not a function of the inputs.
+  DioPwlObfModel m = knownModel();
+  try {
+    estimateOutputDrift(m, {Eigen::MatrixXd::Zero(3, m.inputCount())}, {Eigen::MatrixXd::Zero(3, m.outputCount())}, {t});
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("input-side"), std::string::npos) << e.what();
+  }
+}
+
+// A model that is exactly right plus a known trend: the estimate must find
+// the trend, skip an empty record, and give zero where nothing can show one.
+TEST(OutputDrift, EstimateFindsAKnownTrendAndToleratesUninformativeData) {
+  DioPwlObfModel truth = knownModel();
+  truth.partition = PwlPartition::interpolated({}, {});  // one node: a linear input-side model
+  truth.schedule_side = ScheduleSide::kInput;
+  truth.coefficients = {{Eigen::Vector2d(1.5, -0.2)}};
+  truth.region_fits = {RegionFit{}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> level(0.0, 1.0);
+  Eigen::MatrixXd u(2000, 1);
+  for (Eigen::Index k = 0; k < u.rows(); k += 100) u.middleRows(k, 100).setConstant(level(rng));
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(u.rows(), 0.0, 199.9);
+  const Eigen::MatrixXd clean = modelLevels(truth, u, modelIncrements(truth, u));
+  const double rate = 0.004;
+  const Eigen::MatrixXd y = clean.array() + rate * (t.array() - t.mean());
+  const std::vector<Eigen::MatrixXd> U{u, Eigen::MatrixXd(0, 1)}, Y{y, Eigen::MatrixXd(0, 1)};
+  const std::vector<Eigen::VectorXd> T{t, Eigen::VectorXd(0)};
+  const OutputDrift d = estimateOutputDrift(truth, U, Y, T);
+  ASSERT_EQ(d.rate.size(), 1u);
+  EXPECT_NEAR(d.rate[0], rate, 0.02 * rate);
+  EXPECT_NEAR(d.reference_time_s, t.mean(), 1e-9);
+  // Every sample at one time: no trend can show.
+  const OutputDrift flat = estimateOutputDrift(truth, {u}, {y}, {Eigen::VectorXd::Constant(u.rows(), 3.0)});
+  EXPECT_EQ(flat.rate[0], 0.0);
+  // A late disturbance skews the trend unless its samples are weighted out.
+  Eigen::MatrixXd bumped = y;
+  bumped.bottomRows(300).array() += 2.0;
+  Eigen::VectorXd keep = Eigen::VectorXd::Ones(u.rows());
+  keep.tail(300).setZero();
+  EXPECT_GT(estimateOutputDrift(truth, {u}, {bumped}, {t}).rate[0], 1.5 * rate);
+  EXPECT_NEAR(estimateOutputDrift(truth, {u}, {bumped}, {t}, {}, 3, {keep}).rate[0], rate, 0.02 * rate);
+}
+
+// A tip_cartesian model simulates from its output level, so it carries the
+// training run's sensor yaw; a run whose sensor is turned about the segment
+// axis must be registered on its first samples (as simulation starts from the
+// measured y(0)), turning the steering only: bending, a magnitude, must not move.
+TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  DioPwlObfModel m = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  // The grid moves two chambers over 0.20 to 0.35 bar and leaves the third at zero.
+  ASSERT_EQ(m.input_ranges.size(), 3u);
+  EXPECT_NEAR(m.input_ranges[0][0], 0.20, 0.005);
+  EXPECT_NEAR(m.input_ranges[1][1], 0.35, 0.005);
+  EXPECT_NEAR(m.input_ranges[2][1], 0.0, 1e-9);
+  EXPECT_EQ(modelFromJson(modelToJson(m)).input_ranges, m.input_ranges);
+  // The joystick goes 0.01 bar beyond the grid at either end.
+  const Eigen::MatrixXd u = runs.val.columnsOf(m.inputs);
+  Eigen::Index below = 0, any = 0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    bool out = false;
+    for (Eigen::Index c = 0; c < 3; ++c)
+      out = out || u(k, c) < m.input_ranges[static_cast<std::size_t>(c)][0] - 1e-9 ||
+            u(k, c) > m.input_ranges[static_cast<std::size_t>(c)][1] + 1e-9;
+    any += out;
+    below += u(k, 0) < 0.2 - 1e-9 || u(k, 1) < 0.2 - 1e-9;
+  }
+  ASSERT_GT(below, 0) << "the joystick run never goes below the grid";
+  const ValidationResult v = validateModel(m, runs.val, {40});
+  EXPECT_DOUBLE_EQ(v.outside_training.any, static_cast<double>(any) / static_cast<double>(u.rows()));
+  ASSERT_EQ(v.outside_training.each.size(), 3u);
+  EXPECT_GT(v.outside_training.each[0], 0.0);
+  EXPECT_GT(v.outside_training.each[1], 0.0);
+  EXPECT_EQ(v.outside_training.each[2], 0.0);
+  // Against the one range over all inputs ([0, 0.35]: the empty chamber's
+  // zero), the excursions below the grid go uncounted: what files from
+  // before input_ranges still get.
+  m.input_ranges.clear();
+  const ValidationResult old = validateModel(m, runs.val, {40});
+  EXPECT_LT(old.outside_training.any, v.outside_training.any);
+  // A malformed range is rejected by name.
+  nlohmann::json j = nlohmann::json::parse(modelToJson(m));
+  j["input_ranges"] = {{0.2, 0.35}, {0.2, 0.35}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {0.35, 0.2}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {0.2}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+  j["input_ranges"] = {{0.2, 0.35}, {"low", 0.35}, {0.0, 0.0}};
+  expectThrowContaining([&] { modelFromJson(j.dump()); }, "input_ranges");
+}
+
+// A run logged at another rate, with a gap, or scored twice at one horizon is
+// named, not scored on the wrong time scale.
+TEST(Validation, RejectsAnotherSampleRateAGapAndARepeatedHorizon) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel m = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
+  ASSERT_NO_THROW(validateModel(m, runs.val, {40}));
+  const int time = runs.val.columnIndex("time_s");
+  io::Log faster = runs.val;
+  faster.data.col(time) *= 0.8;  // 100 Hz
+  expectThrowContaining([&] { validateModel(m, faster, {40}); }, "differs from the model's 0.0125");
+  io::Log nearly = runs.val;
+  nearly.data.col(time) *= 1.01;  // within the 2% a clock may be off
+  EXPECT_NO_THROW(validateModel(m, nearly, {40}));
+  io::Log gap = runs.val;
+  gap.data.col(time).tail(gap.samples() - 1000).array() += 3 * m.sample_time_s;  // three samples lost
+  try {
+    validateModel(m, gap, {40});
+    ADD_FAILURE() << "accepted a log with three samples lost";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("time gap of 0.05 s before data row 1001"), std::string::npos) << e.what();
+  }
+  io::Log dropped = runs.val;
+  dropped.data.col(time).tail(dropped.samples() - 1000).array() += m.sample_time_s;  // one, as the real arm's logs have
+  EXPECT_NO_THROW(validateModel(m, dropped, {40}));
+  expectThrowContaining([&] { validateModel(m, runs.val, {40, 80, 40}); }, "horizon 40 is given twice");
+}
+
+TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  ASSERT_FALSE(tip.output_level.empty());
+  io::Log turned = runs.val;
+  const double yaw = 3.0;
+  const int steer = turned.columnIndex("steer_deg"), bend = turned.columnIndex("bend_deg");
+  turned.data.col(steer).array() += yaw;
+  // The registration alone: without the training drift (tiny here, but a turn along the run).
+  const SimulationStart none{0}, first{tip.sample_time_s, false}, window{0.5, false};  // 0.5 s: 40 samples
+  const ValidationResult base = validateModel(tip, runs.val, {40}, none);
+  const ValidationResult carried = validateModel(tip, turned, {40}, none);
+  const ValidationResult registered = validateModel(tip, turned, {40}, first);
+  const ValidationResult windowed = validateModel(tip, turned, {40}, window);
+  const ValidationResult by_default = validateModel(tip, turned, {40});  // 5 s
+  // Carried, the 3 deg are a standing error; registered, the fit is the
+  // unturned run's (within what the first sample's own error turns).
+  EXPECT_LT(carried.outputs[1].fit_sim, base.outputs[1].fit_sim - 5.0);
+  EXPECT_NEAR(registered.outputs[1].fit_sim, base.outputs[1].fit_sim, 1.0);
+  EXPECT_NEAR(windowed.outputs[1].fit_sim, base.outputs[1].fit_sim, 1.0);
+  EXPECT_GT(by_default.outputs[1].fit_sim, carried.outputs[1].fit_sim + 5.0);
+  EXPECT_TRUE(std::isnan(by_default.outputs[1].simulated(399)));
+  EXPECT_TRUE(std::isfinite(by_default.outputs[1].simulated(400)));
+  const Eigen::Index T = turned.samples();
+  const Eigen::VectorXd turn = registered.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1);
+  EXPECT_NEAR(turn.mean(), yaw, 0.3);
+  EXPECT_LT(turn.maxCoeff() - turn.minCoeff(), 1e-6);  // one rotation for the whole run
+  EXPECT_LT((registered.outputs[0].simulated.tail(T - 1) - carried.outputs[0].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
+            1e-9);
+  // The k-step predictions start from measurements and are untouched.
+  EXPECT_EQ(registered.outputs[1].fit_k.at(40), carried.outputs[1].fit_k.at(40));
+  // A window is registered on and not scored.
+  EXPECT_TRUE(std::isnan(windowed.outputs[1].simulated(39)));
+  EXPECT_TRUE(std::isfinite(windowed.outputs[1].simulated(40)));
+  // A tip on the axis at the start has no direction to register: the training yaw stays.
+  io::Log on_axis = turned;
+  on_axis.data(0, bend) = 0.0;
+  const ValidationResult kept = validateModel(tip, on_axis, {40}, first);
+  EXPECT_LT((kept.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1)).cwiseAbs().maxCoeff(), 1e-9);
+  // As logged there is no yaw to tell from the outputs: nothing changes.
+  const DioPwlObfModel logged = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
+  EXPECT_EQ(validateModel(logged, turned, {40}, first).outputs[1].fit_sim,
+            validateModel(logged, turned, {40}, none).outputs[1].fit_sim);
+  try {
+    validateModel(tip, turned, {40}, SimulationStart{static_cast<double>(T) * tip.sample_time_s});
+    ADD_FAILURE() << "accepted a registration window as long as the log";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("yaw registration window"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{-1.0}), std::invalid_argument);
+  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{std::nan("")}), std::invalid_argument);
+}
+
+// A model fitted with the sensor's yaw drift taken out simulates a new run
+// turning at that rate (the default): steering's error no longer grows with
+// the run, and the turn is exactly the recorded rate, nothing else.
+TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
+  const double rate = 0.03;
+  const DriftRuns runs = yawDriftRuns(rate), still = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  ASSERT_EQ(tip.training_drift_per_s.size(), 2u);
+  ASSERT_NEAR(tip.training_drift_per_s[1], rate, 0.1 * rate);
+  const SimulationStart plain{5.0, false};
+  EXPECT_EQ(carriedYawRate(tip, SimulationStart{}), tip.training_drift_per_s[1]);
+  EXPECT_EQ(carriedYawRate(tip, plain), 0.0);
+  EXPECT_EQ(carriedYawRate(tip, SimulationStart{0}), 0.0);  // nothing to anchor the turn on
+  const ValidationResult carried = validateModel(tip, runs.val, {40}), left = validateModel(tip, runs.val, {40}, plain);
+  // The same model on a run whose sensor does not drift: what steering can reach.
+  const ValidationResult reach = validateModel(tip, still.val, {40}, plain);
+  EXPECT_GT(carried.outputs[1].fit_sim, left.outputs[1].fit_sim + 5.0);
+  EXPECT_NEAR(carried.outputs[1].fit_sim, reach.outputs[1].fit_sim, 2.0);
+  const Eigen::Index T = runs.val.samples(), n = T - 400;  // scored after the 5 s registration
+  const Eigen::VectorXd turn = carried.outputs[1].simulated.tail(n) - left.outputs[1].simulated.tail(n);
+  const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 400, static_cast<double>(T - 1)) * tip.sample_time_s;
+  Eigen::MatrixXd A(n, 2);
+  A << t, Eigen::VectorXd::Ones(n);
+  const Eigen::Vector2d line = A.colPivHouseholderQr().solve(turn);
+  EXPECT_NEAR(line(0), tip.training_drift_per_s[1], 1e-9);
+  EXPECT_LT((A * line - turn).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((carried.outputs[0].simulated.tail(n) - left.outputs[0].simulated.tail(n)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(carried.outputs[1].fit_k.at(40), left.outputs[1].fit_k.at(40));
+  // As logged a trend has no registration to anchor it: nothing is carried.
+  IdentifyOptions o = fixedInputSide(OutputFrame::kAsLogged);
+  o.output_drift = OutputDriftChoice::kOn;
+  const DioPwlObfModel logged = identifyModel({runs.train}, o);
+  ASSERT_FALSE(logged.training_drift_per_s.empty());
+  EXPECT_EQ(carriedYawRate(logged, SimulationStart{}), 0.0);
+  EXPECT_EQ(validateModel(logged, runs.val, {40}).outputs[1].fit_sim,
+            validateModel(logged, runs.val, {40}, plain).outputs[1].fit_sim);
+}
+
+// Validation counts the samples beyond the grid's outer nodes per input,
+// not only those beyond the training range: a run recorded from rest spans
+// 0 while its grid starts higher.
+TEST(Validation, ReportsSamplesBeyondTheGridPerInput) {
+  DioPwlObfModel m;
+  m.inputs = {"p_1", "p_2"};
+  m.input_ranges = {{0.0, 0.4}, {0.0, 0.4}};
+  m.partition = PwlPartition::interpolated({0}, {{0.2, 0.3, 0.4}});
+  Eigen::MatrixXd u(10, 2);
+  u.col(0) << 0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45;
+  u.col(1).setConstant(0.1);
+  const InputsOutsideTraining c = inputsOutsideTraining(m, u);
+  EXPECT_DOUBLE_EQ(c.each[0], 0.1);  // 0.45 alone is beyond the range
+  ASSERT_TRUE(c.on_grid[0]);
+  EXPECT_FALSE(c.on_grid[1]);
+  EXPECT_DOUBLE_EQ(c.below_grid[0], 0.4);
+  EXPECT_DOUBLE_EQ(c.above_grid[0], 0.1);
+  EXPECT_DOUBLE_EQ(c.any_beyond_grid, 0.5);
+  const std::vector<std::string> w = inputCoverageWarnings(m, c);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("p_1 is below the training grid's lowest node 0.2 on 40.0%"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("above its highest node 0.4 on 10.0%"), std::string::npos) << w[0];
+  // A switched partition has no nodes: only the range is reported.
+  m.partition = PwlPartition({0}, {{0.25, 0.35}});
+  const InputsOutsideTraining s = inputsOutsideTraining(m, u);
+  EXPECT_FALSE(s.on_grid[0]);
+  EXPECT_DOUBLE_EQ(s.any_beyond_grid, 0.0);
+  EXPECT_NE(inputCoverageWarnings(m, s).at(0).find("outside its training range [0, 0.4] on 10.0%"), std::string::npos);
+}

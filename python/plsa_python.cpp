@@ -1,0 +1,201 @@
+// plsa's Python module (pybind11): identify a model from CSV logs, validate
+// it, run the real-time predictor, and simulate the built-in actuator. Thin:
+// every call is the C++ library's, errors arrive as ValueError with the
+// library's message, matrices as NumPy arrays (float64, samples x columns).
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/identify/validation.hpp"
+#include "plsa/io/csv_log.hpp"
+#include "plsa/model/model_file.hpp"
+#include "plsa/predict/predictor.hpp"
+#include "plsa/sim/actuator.hpp"
+#include "plsa/sim/experiment.hpp"
+
+namespace py = pybind11;
+
+namespace {
+
+std::vector<plsa::io::Log> readLogs(const std::vector<std::string>& paths) {
+  if (paths.empty()) throw std::invalid_argument("identify: no logs given");
+  std::vector<plsa::io::Log> logs;
+  for (const std::string& p : paths) logs.push_back(plsa::io::readCsvLog(p));
+  return logs;
+}
+
+plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optional<std::vector<std::string>> inputs,
+                              std::optional<std::vector<std::string>> outputs, int poles, const std::string& scheduling,
+                              const std::string& cv_layout, const std::string& output_drift,
+                              std::optional<std::string> output_frame, int refine_play,
+                              std::function<void(const std::string&)> progress) {
+  plsa::IdentifyOptions o;
+  if (inputs) o.inputs = *inputs;
+  if (outputs) o.outputs = *outputs;
+  o.poles_per_pair = poles;
+  o.scheduling = plsa::parseOption<plsa::SchedulingChoice>(scheduling);
+  o.cv_layout = plsa::parseOption<plsa::CvLayout>(cv_layout);
+  o.output_drift = plsa::parseOption<plsa::OutputDriftChoice>(output_drift);
+  if (output_frame && *output_frame != "auto") o.output_frame = plsa::outputFrameFromString(*output_frame);
+  o.play_refine_evaluations = refine_play;
+  if (progress)
+    o.progress = [progress](const std::string& line) {
+      py::gil_scoped_acquire gil;
+      progress(line);
+    };
+  const std::vector<plsa::io::Log> read = readLogs(logs);
+  py::gil_scoped_release unlocked;  // minutes on long logs: other Python threads run meanwhile
+  return plsa::identifyModel(read, o);
+}
+
+py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {
+  const plsa::ValidationResult v = plsa::validateModel(model, plsa::io::readCsvLog(log), horizons);
+  py::dict result;
+  for (const plsa::OutputValidation& o : v.outputs) {
+    py::dict entry;
+    entry["fit"] = o.fit_k;
+    entry["fit_sim"] = o.fit_sim;
+    entry["rms"] = o.rms_k;
+    entry["rms_sim"] = o.rms_sim;
+    result[py::str(o.name)] = entry;
+  }
+  return result;
+}
+
+py::dict readLog(const std::string& path) {
+  const plsa::io::Log log = plsa::io::readCsvLog(path);
+  py::dict columns;
+  for (const std::string& name : log.columns) columns[py::str(name)] = Eigen::VectorXd(log.column(name));
+  return columns;
+}
+
+void simulate(const std::string& experiment, const std::string& path, std::uint64_t seed, double duration_s) {
+  plsa::sim::ExperimentOptions eo;
+  eo.seed = seed;
+  if (duration_s > 0) eo.joystick_duration_s = duration_s;
+  plsa::sim::Experiment e;
+  if (experiment == "grid2")
+    e = plsa::sim::gridExperiment(eo);
+  else if (experiment == "joystick")
+    e = plsa::sim::joystickExperiment(eo);
+  else
+    throw std::invalid_argument("simulate: experiment '" + experiment + "': expected grid2 or joystick");
+  plsa::sim::Actuator actuator(plsa::sim::SimConfig{}, seed);
+  plsa::io::writeCsvLog(path, plsa::sim::runExperiment(actuator, e));
+}
+
+// The predictor with its buffers: status codes become exceptions for the
+// calls a Python user makes one at a time, names for update's.
+class PyPredictor {
+ public:
+  PyPredictor(const plsa::DioPwlObfModel& model, int max_horizon) : options_(optionsFor(max_horizon)), p_(model, options_) {}
+
+  std::string update(double time_s, const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
+    if (u.size() != p_.inputCount() || y.size() != p_.outputCount())
+      throw std::invalid_argument("update: the model has " + std::to_string(p_.inputCount()) + " inputs and " +
+                                  std::to_string(p_.outputCount()) + " outputs, got " + std::to_string(u.size()) +
+                                  " and " + std::to_string(y.size()));
+    return plsa::toString(p_.update(time_s, u, y));
+  }
+
+  Eigen::MatrixXd predict(int horizon, std::optional<Eigen::MatrixXd> plan) {
+    checkHorizon(horizon);
+    Eigen::MatrixXd out(horizon, p_.outputCount());
+    const Eigen::MatrixXd held(0, p_.inputCount());
+    check("predict", p_.predict(horizon, plan ? *plan : held, out));
+    return out;
+  }
+
+  Eigen::MatrixXd sensitivity(int horizon, const Eigen::MatrixXd& plan) {
+    checkHorizon(horizon);
+    Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(horizon) * p_.outputCount(),
+                             static_cast<Eigen::Index>(horizon - 1) * p_.inputCount());
+    check("sensitivity", p_.sensitivity(horizon, plan, jacobian));
+    return jacobian;
+  }
+
+  int inputs() const { return p_.inputCount(); }
+  int outputs() const { return p_.outputCount(); }
+
+ private:
+  static plsa::PredictorOptions optionsFor(int max_horizon) {
+    plsa::PredictorOptions o;
+    o.max_horizon = max_horizon;
+    return o;
+  }
+  void checkHorizon(int horizon) const {
+    if (horizon < 1 || horizon > p_.maxHorizon())
+      throw std::invalid_argument("horizon " + std::to_string(horizon) + " outside 1.." +
+                                  std::to_string(p_.maxHorizon()) + " (max_horizon at construction)");
+  }
+  static void check(const char* what, plsa::PredictorStatus s) {
+    if (static_cast<int>(s) < 0) throw std::invalid_argument(std::string(what) + ": " + plsa::toString(s));
+  }
+
+  plsa::PredictorOptions options_;
+  plsa::Predictor<> p_;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_plsa, m) {
+  m.doc() = "plsa: identification and prediction of pneumatic soft actuators (DIO-PWL-OBF)";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const std::runtime_error& e) {
+      PyErr_SetString(PyExc_RuntimeError, e.what());
+    }
+  });
+
+  py::class_<plsa::DioPwlObfModel>(m, "Model", "An identified DIO-PWL-OBF model")
+      .def_static("load", &plsa::loadModel, py::arg("path"), "Read a model file (JSON)")
+      .def("save", [](const plsa::DioPwlObfModel& self, const std::string& path) { plsa::saveModel(path, self); },
+           py::arg("path"), "Write the model file (JSON), atomically")
+      .def_readonly("inputs", &plsa::DioPwlObfModel::inputs)
+      .def_readonly("outputs", &plsa::DioPwlObfModel::outputs)
+      .def_readonly("sample_time_s", &plsa::DioPwlObfModel::sample_time_s)
+      .def_property_readonly("output_frame",
+                             [](const plsa::DioPwlObfModel& self) { return plsa::toString(self.output_frame); })
+      .def_property_readonly("regions", [](const plsa::DioPwlObfModel& self) { return self.partition.regionCount(); })
+      .def("__repr__", [](const plsa::DioPwlObfModel& self) {
+        return "<plsa.Model " + std::to_string(self.inputCount()) + " inputs, " + std::to_string(self.outputCount()) +
+               " outputs, " + std::to_string(self.partition.regionCount()) + " regions, " +
+               plsa::toString(self.output_frame) + ">";
+      });
+
+  m.def("identify", &identify, py::arg("logs"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
+        py::arg("poles") = 5, py::arg("scheduling") = "auto", py::arg("cv_layout") = "interleaved",
+        py::arg("output_drift") = "auto", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
+        py::arg("progress") = py::none(),
+        "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
+  m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
+        "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim}}");
+  m.def("read_log", &readLog, py::arg("path"),
+        "A CSV log as {column: array}, read (and checked) as the library reads it");
+  m.def("simulate", &simulate, py::arg("experiment"), py::arg("path"), py::arg("seed") = 1,
+        py::arg("duration_s") = 0.0,
+        "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
+        "joystick run's length, default 60 s) into a CSV log");
+
+  py::class_<PyPredictor>(m, "Predictor", "The real-time n-step predictor (plsa::Predictor<>)")
+      .def(py::init<const plsa::DioPwlObfModel&, int>(), py::arg("model"), py::arg("max_horizon") = 400)
+      .def("update", &PyPredictor::update, py::arg("time_s"), py::arg("u"), py::arg("y"),
+           "Feed one measured sample; returns the status ('ok', or what was rejected or restarted)")
+      .def("predict", &PyPredictor::predict, py::arg("horizon"), py::arg("plan") = py::none(),
+           "horizon x outputs: the next samples under the plan (rows: inputs from the next sample on; none: hold)")
+      .def("sensitivity", &PyPredictor::sensitivity, py::arg("horizon"), py::arg("plan"),
+           "(horizon * outputs) x ((horizon - 1) * inputs): d prediction / d plan")
+      .def_property_readonly("inputs", &PyPredictor::inputs)
+      .def_property_readonly("outputs", &PyPredictor::outputs);
+}

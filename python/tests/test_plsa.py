@@ -1,0 +1,92 @@
+"""The Python module end to end on the built-in simulated actuator."""
+import math
+
+import numpy as np
+import pytest
+
+import plsa
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("runs")
+    train, val = d / "train.csv", d / "val.csv"
+    plsa.simulate("grid2", str(train), seed=1)
+    plsa.simulate("joystick", str(val), seed=2, duration_s=40)
+    return train, val
+
+
+@pytest.fixture(scope="module")
+def model(runs):
+    lines = []
+    m = plsa.identify([str(runs[0])], scheduling="input", progress=lines.append)
+    assert any("[5/5]" in l for l in lines), "progress lines reach Python"
+    return m
+
+
+def test_identified_model_predicts_the_validation_run(model, runs, tmp_path):
+    assert model.inputs == ["p_1", "p_2", "p_3"]
+    assert model.outputs == ["bend_deg", "steer_deg"]
+    assert model.output_frame == "tip_cartesian"
+    fits = plsa.validate(model, str(runs[1]), horizons=[40, 80])
+    for name in model.outputs:
+        assert fits[name]["fit"][40] > 90.0, fits
+        assert fits[name]["fit_sim"] > 80.0, fits
+    path = tmp_path / "model.json"
+    model.save(str(path))
+    again = plsa.Model.load(str(path))
+    assert plsa.validate(again, str(runs[1]), horizons=[40]) == plsa.validate(model, str(runs[1]), horizons=[40])
+
+
+def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model, runs):
+    data = plsa.read_log(str(runs[1]))
+    u = np.column_stack([data["p_1"], data["p_2"], data["p_3"]])
+    y = np.column_stack([data["bend_deg"], data["steer_deg"]])
+    p = plsa.Predictor(model)
+    for k in range(800):
+        assert p.update(data["time_s"][k], u[k], y[k]) == "ok"
+    held = p.predict(80)
+    assert held.shape == (80, 2) and np.all(np.isfinite(held))
+    # 40 steps ahead the held prediction is within a few degrees of the run
+    assert abs(held[39, 0] - y[840, 0]) < 5.0
+    # The sensitivity is exact where the schedule holds: the grid chambers
+    # held long enough for the schedule's lag to settle (coming down, so the
+    # play channels sit on their bands' upper edges), the third chamber (no
+    # grid node: it acts through the channels' coupling) planned.
+    t = data["time_s"][799]
+    high, low = np.array([0.33, 0.33, 0.0]), np.array([0.25, 0.25, 0.0])
+    for k in range(1900):
+        t += model.sample_time_s
+        assert p.update(t, high if k < 400 else low, y[799]) == "ok"
+    plan = np.tile(low, (79, 1))
+    plan[:, 2] = 0.08 + 0.002 * np.arange(79)  # rising: pushes the channels down every step
+    jac = p.sensitivity(80, plan)
+    assert jac.shape == (160, 237)
+    eps = 1e-6
+    for s in (0, 10, 40):
+        up, down = plan.copy(), plan.copy()
+        up[s, 2] += eps
+        down[s, 2] -= eps
+        diff = (p.predict(80, up) - p.predict(80, down)) / (2 * eps)
+        column = jac[:, s * 3 + 2].reshape(80, 2)
+        assert np.abs(diff).max() > 1e-3, "the plan moves nothing: the check shows nothing"
+        assert np.allclose(column, diff, atol=1e-5 * np.abs(diff).max() + 1e-7), (s, np.abs(column - diff).max())
+
+
+def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
+    with pytest.raises(ValueError, match="no_such_column"):
+        plsa.identify([str(runs[0])], inputs=["no_such_column"])
+    with pytest.raises(ValueError, match="scheduling 'sideways'"):
+        plsa.identify([str(runs[0])], scheduling="sideways")
+    with pytest.raises(ValueError, match="experiment 'staircase9'"):
+        plsa.simulate("staircase9", str(tmp_path / "x.csv"))
+    p = plsa.Predictor(model, max_horizon=50)
+    with pytest.raises(ValueError, match="no sample yet"):
+        p.predict(10)
+    with pytest.raises(ValueError, match="horizon 80 outside 1..50"):
+        p.predict(80)
+    with pytest.raises(ValueError, match="3 inputs and 2 outputs"):
+        p.update(0.0, np.zeros(2), np.zeros(2))
+    assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "ok"
+    assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "time did not increase"
+    assert p.update(math.nan, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "sample has NaN or Inf"

@@ -33,7 +33,8 @@ struct RegionFit {
 /// before the OBF filters it gives the model the memory of the last reversal
 /// that hysteresis needs (docs/identification.md). Allocation-free.
 inline double playOperator(double input, double previous_output, double half_width) noexcept {
-  return std::clamp(previous_output, input - half_width, input + half_width);
+  // std::clamp's result (half_width >= 0), as min and max: no branch in the predictor's loops.
+  return std::min(std::max(previous_output, input - half_width), input + half_width);
 }
 
 /// One play channel: half-width `width + slope * max(0, u)`. A slope makes the

@@ -14,6 +14,7 @@
 // ones) keeps its banks' state-space form and steps them.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -123,6 +124,15 @@ struct CompiledModel {
   /// Filter states: banks x poles in either form.
   int states() const noexcept { return banks * poles; }
 };
+
+/// The scheduling inputs' lag, one sample on: its next value from `lagged`
+/// toward u; once within rounding of u it is u, so a held input settles the
+/// schedule exactly (and the predictor takes its held path).
+inline double lagTowards(double lagged, double u, double pole) noexcept {
+  const double next = pole * lagged + (1.0 - pole) * u;
+  const double scale = std::abs(u) > 1e-3 ? std::abs(u) : 1e-3;
+  return std::abs(next - u) <= 1e-12 * scale ? u : next;
+}
 
 /// Validates `model` and builds its compiled form for predictors whose
 /// options are `options` (the horizon capacity sizes the tables). Throws

@@ -36,10 +36,11 @@ inline bool fits(const CompiledModel& m) noexcept {
 /// scheduling inputs, the played channels and the grid's blend.
 struct PlannedSchedule {
   int nu = 0, nc = 0, grid_inputs = 0;
-  double pole = 0.0, gain = 1.0, threshold = 0.0, coupling = 0.0, softening = 0.0;
+  double pole = 0.0, threshold = 0.0, coupling = 0.0, softening = 0.0;
   bool shaped = false;
   std::array<double, kMaxInputs> u{}, us{};
-  std::array<double, kMaxChannels> vc{}, width{}, slope{};
+  std::array<double, kMaxChannels> vc{};
+  std::array<PlayChannel, kMaxChannels> play{};
   std::array<int, kMaxChannels> input_of{};
   std::array<int, kMaxGridInputs> grid_input{}, last_level{}, stride{}, hint{};
   std::array<const double*, kMaxGridInputs> levels{};
@@ -47,14 +48,13 @@ struct PlannedSchedule {
   PlannedSchedule(const CompiledModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& us0,
                   const Eigen::VectorXd& vc0) noexcept
       : nu(m.n_u), nc(static_cast<int>(m.play.size())), grid_inputs(static_cast<int>(m.node_grid.inputs.size())),
-        pole(m.schedule_pole), gain(1.0 - m.schedule_pole), threshold(m.threshold), coupling(m.coupling),
+        pole(m.schedule_pole), threshold(m.threshold), coupling(m.coupling),
         softening(m.softening), shaped(m.threshold != 0.0 || m.coupling != 0.0 || m.softening != 0.0) {
     for (int j = 0; j < nu; ++j) u[j] = u0(j), us[j] = us0(j);
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       vc[cc] = vc0(c);
-      width[cc] = m.play[cc].width;
-      slope[cc] = m.play[cc].slope;
+      play[cc] = m.play[cc];
       input_of[cc] = m.channel_input[cc];
     }
     for (int s = 0; s < grid_inputs; ++s) {
@@ -71,28 +71,20 @@ struct PlannedSchedule {
     for (int j = 0; j < nu; ++j) u[static_cast<std::size_t>(j)] = plan[h + j * ld];
   }
 
-  /// The lag's next value toward u; within rounding of u it is u (as the
-  /// predictor's own lag, so both settle on the same sample).
+  /// The lag's next value toward u (lagTowards, as the predictor's own).
   PLSA_ALWAYS_INLINE void lag() noexcept {
-    for (int j = 0; j < nu; ++j) {
-      const auto jj = static_cast<std::size_t>(j);
-      const double next = pole * us[jj] + gain * u[jj];
-      const double scale = std::abs(u[jj]) > 1e-3 ? std::abs(u[jj]) : 1e-3;
-      us[jj] = std::abs(next - u[jj]) <= 1e-12 * scale ? u[jj] : next;
-    }
+    for (std::size_t j = 0; j < static_cast<std::size_t>(nu); ++j) us[j] = lagTowards(us[j], u[j], pole);
   }
 
   /// The played channels moved to u (threshold, coupling, softening first).
   PLSA_ALWAYS_INLINE void moveChannels() noexcept {
-    double positive_sum = 0.0;
-    if (coupling != 0.0)
-      for (int j = 0; j < nu; ++j) positive_sum += std::max(0.0, u[static_cast<std::size_t>(j)] - threshold);
+    const double positive_sum =
+        coupling != 0.0 ? positiveSumAbove(Eigen::Map<const Eigen::VectorXd>(u.data(), nu), threshold) : 0.0;
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       double level = u[static_cast<std::size_t>(input_of[cc])];
       if (shaped) level = coupledLevel(levelAbove(level, threshold), positive_sum, coupling, softening);
-      const double half = width[cc] + slope[cc] * std::max(0.0, level);
-      vc[cc] = std::min(std::max(vc[cc], level - half), level + half);  // the play: min/max, no branch
+      vc[cc] = play[cc].follow(level, vc[cc]);
     }
   }
 

@@ -277,17 +277,9 @@ class NStepPredictor {
     samples_ = 1;
   }
 
-  // us <- the lag's next value toward u; once within rounding of u it is u,
-  // so a held input settles the schedule exactly (and takes the held path).
+  // us <- the lag's next value toward u (lagTowards).
   static void lagSchedule(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& us) noexcept {
-    const double pole = m.schedule_pole, gain = 1.0 - pole;
-    const double* in = u.data();
-    double* lagged = us.data();
-    for (Eigen::Index j = 0; j < us.size(); ++j) {
-      const double next = pole * lagged[j] + gain * in[j];
-      const double scale = std::abs(in[j]) > 1e-3 ? std::abs(in[j]) : 1e-3;
-      lagged[j] = std::abs(next - in[j]) <= 1e-12 * scale ? in[j] : next;
-    }
+    for (Eigen::Index j = 0; j < us.size(); ++j) us(j) = lagTowards(us(j), u(j), m.schedule_pole);
   }
 
   // Dense node weights (input side) at the scheduling point us.

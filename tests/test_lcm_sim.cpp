@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <system_error>
 #include <thread>
 
 #include <lcm/lcm-cpp.hpp>
@@ -107,10 +108,19 @@ class LcmSimTest : public plsa::test::IsolatedLcmTest {
 
 TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop) {
   const fs::path log_path = fs::temp_directory_path() / ("plsa_lcm_test_" + std::to_string(::getpid()) + ".lcmlog");
-  plsa::test::ChildProcess logger({"/usr/bin/lcm-logger", "-q", "-f", "-c", "PLSA_STATE", log_path.string()});
+  // lcm-logger has no ready signal: it also records a probe channel, and the
+  // test starts once a probe has reached the file (it flushes every 100 ms).
+  // A fixed sleep was not enough on a loaded CI machine (110 states lost).
+  plsa::test::ChildProcess logger(
+      {"/usr/bin/lcm-logger", "-q", "-f", "-c", "PLSA_STATE|PLSA_LOGGER_PROBE", log_path.string()});
+  ASSERT_TRUE(waitFor([&] {
+    publishRaw("PLSA_LOGGER_PROBE", "probe");
+    std::error_code ec;
+    const auto bytes = fs::file_size(log_path, ec);
+    return !ec && bytes > 0;
+  }, 20s)) << "lcm-logger recorded no probe within 20 s";
   plsa::test::ChildProcess sim({exe_, "sim", "--lockstep", "--seed", "5", "--command-timeout", "0.3"});
   ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s)) << "plsa sim never said it started";
-  std::this_thread::sleep_for(500ms);  // lcm-logger has no ready signal
 
   // Paper-style local step: rest, then 0.3 bar on chamber 1.
   std::vector<std::array<double, 3>> commands(80, {0.0, 0.0, 0.0});

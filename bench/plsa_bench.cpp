@@ -245,7 +245,7 @@ plsa::DioPwlObfModel syntheticModel(int chambers, std::uint64_t seed) {
       for (int i = 0; i < 5; ++i) p.push_back(0.84 + 0.11 * i / 4.0 + jitter(rng));
       m.poles[static_cast<std::size_t>(o)].push_back(plsa::PoleSet::real(p));
     }
-  m.input_play.assign(static_cast<std::size_t>(chambers), {0.01});
+  m.shaping.play.assign(static_cast<std::size_t>(chambers), {0.01});
   std::vector<int> inputs;
   std::vector<std::vector<double>> levels;
   for (int s = 0; s < std::min(chambers, 2); ++s) {

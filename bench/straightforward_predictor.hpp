@@ -20,7 +20,7 @@ class StraightforwardPredictor {
   explicit StraightforwardPredictor(const DioPwlObfModel& m) : m_(m) {
     const int nodes = m.schedule_side == ScheduleSide::kInput ? m.partition.regionCount() : 1;
     for (int j = 0; j < m.inputCount(); ++j)
-      for (const PlayChannel& c : m.input_play[static_cast<std::size_t>(j)]) {
+      for (const PlayChannel& c : m.shaping.play[static_cast<std::size_t>(j)]) {
         play_.push_back(c);
         channel_input_.push_back(j);
       }
@@ -30,7 +30,7 @@ class StraightforwardPredictor {
         channel = 0;
         for (int j = 0; j < m.inputCount(); ++j) {
           const ObfBank<> bank(m.poles[static_cast<std::size_t>(o)][static_cast<std::size_t>(j)]);
-          for (std::size_t c = 0; c < m.input_play[static_cast<std::size_t>(j)].size(); ++c, ++channel)
+          for (std::size_t c = 0; c < m.shaping.play[static_cast<std::size_t>(j)].size(); ++c, ++channel)
             banks_.push_back({o, r, channel, bank.A(), bank.B(), r * m.regressorSize(o) + channel * bank.size()});
         }
       }
@@ -50,11 +50,11 @@ class StraightforwardPredictor {
       for (const Bank& b : banks_) x_.push_back(Eigen::VectorXd::Zero(b.A.rows()));
       u_ = us_ = u;
       vc_ = Eigen::VectorXd(static_cast<Eigen::Index>(play_.size()));
-      const double sum = positiveSumAbove(u_, m_.play_threshold);
+      const double sum = positiveSumAbove(u_, m_.shaping.threshold);
       for (std::size_t c = 0; c < play_.size(); ++c)
         vc_(static_cast<Eigen::Index>(c)) = playStartState(
-            coupledLevel(levelAbove(u_(channel_input_[c]), m_.play_threshold), sum, m_.play_coupling, m_.play_softening),
-            play_[c], m_.play_start);
+            coupledLevel(levelAbove(u_(channel_input_[c]), m_.shaping.threshold), sum, m_.shaping.coupling, m_.shaping.softening),
+            play_[c], m_.shaping.start);
       w_ = nodeWeights(us_);
       y_ = y;
       return;
@@ -134,12 +134,12 @@ class StraightforwardPredictor {
     u = next;
     const double pole = m_.schedulePole();
     us = pole * us + (1.0 - pole) * u;
-    const double sum = positiveSumAbove(u, m_.play_threshold);
+    const double sum = positiveSumAbove(u, m_.shaping.threshold);
     Eigen::VectorXd delta(vc.size());
     for (std::size_t c = 0; c < play_.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
       const double level =
-          coupledLevel(levelAbove(u(channel_input_[c]), m_.play_threshold), sum, m_.play_coupling, m_.play_softening);
+          coupledLevel(levelAbove(u(channel_input_[c]), m_.shaping.threshold), sum, m_.shaping.coupling, m_.shaping.softening);
       const double v = play_[c].follow(level, vc(cc));
       delta(cc) = v - vc(cc);
       vc(cc) = v;

@@ -46,7 +46,7 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
   m.inputs = {"u1", "u2"};
   m.outputs = {"y", "z"};
   m.poles = {{PoleSet::real({0.9, 0.7}), PoleSet::real({0.85})}, {PoleSet::real({0.8}), PoleSet::real({0.9, 0.6})}};
-  m.input_play = {{0.0}, {0.0}};
+  m.shaping.play = {{0.0}, {0.0}};
   m.partition = PwlPartition::interpolated({0, 1}, {{0.2, 0.4, 0.6, 0.8}, {0.2, 0.4, 0.6, 0.8}});
   m.schedule_side = ScheduleSide::kInput;
   const int R = m.partition.regionCount();

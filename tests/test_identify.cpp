@@ -428,12 +428,12 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
   o.slow_pole_candidates = {2.0};
   o.play_threshold_candidates = {};
   const DioPwlObfModel from_zero = identifyModel({train}, o);
-  EXPECT_EQ(from_zero.play_threshold, 0.0);
+  EXPECT_EQ(from_zero.shaping.threshold, 0.0);
   o.play_threshold_candidates = IdentifyOptions{}.play_threshold_candidates;
   IdentifyReport rep;
   const DioPwlObfModel counted = identifyModel({train}, o, &rep);
   // Candidates 0.035, 0.07 and 0.105 bar (fractions of the 0.35 bar top level).
-  EXPECT_NEAR(counted.play_threshold, 0.06, 0.015);
+  EXPECT_NEAR(counted.shaping.threshold, 0.06, 0.015);
   ASSERT_FALSE(rep.threshold_scores.empty());
   EXPECT_EQ(rep.threshold_scores.front().threshold, 0.0);  // the model without, scored first
   const ValidationResult v = validateModel(counted, val, {40, 80});
@@ -469,8 +469,8 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   IdentifyReport plain;
   const DioPwlObfModel staged = identifyModel({train}, o, &plain);
   EXPECT_EQ(plain.refine_evaluations, 0);
-  EXPECT_EQ(staged.play_threshold, 0.0);
-  EXPECT_EQ(staged.play_softening, 0.0);
+  EXPECT_EQ(staged.shaping.threshold, 0.0);
+  EXPECT_EQ(staged.shaping.softening, 0.0);
 
   o.play_refine_evaluations = 14;
   IdentifyReport rep;
@@ -493,13 +493,13 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   EXPECT_LE(b.channel_scale, 2.0);
   // The model carries the best point, in its own units (top level 0.35 bar).
   const double top = 0.35;
-  EXPECT_NEAR(refined.play_threshold, b.threshold * top, 1e-9);
-  EXPECT_NEAR(refined.play_coupling * (top - refined.play_threshold), b.coupling, 1e-9);
-  EXPECT_NEAR(refined.play_softening * (top - refined.play_threshold), b.softening, 1e-9);
-  ASSERT_EQ(refined.input_play.size(), 3u);
-  EXPECT_NEAR(refined.input_play[0].at(0).slope, 0.16 * b.channel_scale, 1e-12);
-  EXPECT_GT(refined.play_threshold, 0.02);
-  EXPECT_LT(refined.play_threshold, 0.12);
+  EXPECT_NEAR(refined.shaping.threshold, b.threshold * top, 1e-9);
+  EXPECT_NEAR(refined.shaping.coupling * (top - refined.shaping.threshold), b.coupling, 1e-9);
+  EXPECT_NEAR(refined.shaping.softening * (top - refined.shaping.threshold), b.softening, 1e-9);
+  ASSERT_EQ(refined.shaping.play.size(), 3u);
+  EXPECT_NEAR(refined.shaping.play[0].at(0).slope, 0.16 * b.channel_scale, 1e-12);
+  EXPECT_GT(refined.shaping.threshold, 0.02);
+  EXPECT_LT(refined.shaping.threshold, 0.12);
   EXPECT_GT(rep.refine_simulation.first, 50.0) << "the staged choice's held-out simulation was not scored";
   EXPECT_GE(rep.refine_simulation.second, rep.refine_simulation.first);
   const bool said = std::any_of(rep.lines.begin(), rep.lines.end(),
@@ -512,7 +512,7 @@ TEST(Pipeline, JointRefinementRaisesTheHeldOutScoreWithinItsBoxAndBudget) {
   IdentifyReport no_threshold;
   const DioPwlObfModel kept_zero = identifyModel({train}, o, &no_threshold);
   EXPECT_GT(no_threshold.refine_evaluations, 0);
-  EXPECT_EQ(kept_zero.play_threshold, 0.0);
+  EXPECT_EQ(kept_zero.shaping.threshold, 0.0);
   EXPECT_EQ(no_threshold.refine_best.threshold, 0.0);
   // The output side has no held-out simulation to guard it: not refined.
   o.play_threshold_candidates = {0.0};
@@ -550,12 +550,12 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
   paper_options.play_candidates = {{0.0}};
   paper_options.play_coupling_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, paper_options);
-  EXPECT_EQ(paper.play_coupling, 0.0);
+  EXPECT_EQ(paper.shaping.coupling, 0.0);
   // Hysteresis that scales with the strain, on chambers that stiffen each
   // other: a growing, coupled band must be the choice.
-  ASSERT_EQ(ours.input_play[0].size(), 1u);
-  EXPECT_GT(ours.input_play[0][0].slope, 0.0);
-  EXPECT_GT(ours.play_coupling, 0.0);
+  ASSERT_EQ(ours.shaping.play[0].size(), 1u);
+  EXPECT_GT(ours.shaping.play[0][0].slope, 0.0);
+  EXPECT_GT(ours.shaping.coupling, 0.0);
   const ValidationResult v = validateModel(ours, val, {40, 80});
   const ValidationResult w = validateModel(paper, val, {40, 80});
   // A run that starts before the creep has settled.

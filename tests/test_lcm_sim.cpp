@@ -268,7 +268,7 @@ plsa::DioPwlObfModel handMadeModel() {
   m.input_min = 0.0;
   m.input_max = 0.4;
   for (int o = 0; o < 2; ++o) m.poles.push_back(std::vector<plsa::PoleSet>(3, plsa::PoleSet::real({0.9, 0.7})));
-  m.input_play.assign(3, {plsa::PlayChannel(0.0)});
+  m.shaping.play.assign(3, {plsa::PlayChannel(0.0)});
   m.coefficients = {{Eigen::VectorXd::Constant(6, 0.5), Eigen::VectorXd::Constant(6, 0.25)}};
   m.region_fits = {{100, -1, ""}};
   return m;

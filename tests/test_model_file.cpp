@@ -75,34 +75,34 @@ TEST(ModelFile, OutputFrameRoundTripsAndIsChecked) {
 
 TEST(ModelFile, PlayChannelsAndStartRoundTrip) {
   DioPwlObfModel m = knownModel();
-  m.input_play = {{0.02, PlayChannel(0.0, 0.12)}};
+  m.shaping.play = {{0.02, PlayChannel(0.0, 0.12)}};
   m.poles = {{PoleSet::real({0.9, 0.7})}};
   m.coefficients = {{Eigen::Vector4d(1, 2, 3, 4)}, {Eigen::Vector4d(-1, 0.5, 0.25, 2)}};
   const DioPwlObfModel back = modelFromJson(modelToJson(m));
-  m.play_coupling = 0.75;
+  m.shaping.coupling = 0.75;
   const DioPwlObfModel coupled = modelFromJson(modelToJson(m));
-  EXPECT_EQ(coupled.play_coupling, 0.75);
-  EXPECT_EQ(back.input_play, m.input_play);
-  EXPECT_EQ(back.play_start, PlayStart::kRising);
+  EXPECT_EQ(coupled.shaping.coupling, 0.75);
+  EXPECT_EQ(back.shaping.play, m.shaping.play);
+  EXPECT_EQ(back.shaping.start, PlayStart::kRising);
   // A file written before the fields existed keeps its centred, uncoupled channels.
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j.erase("play_start");
   j.erase("play_coupling");
   j["version"] = 1;
-  EXPECT_EQ(modelFromJson(j.dump()).play_start, PlayStart::kCentred);
-  EXPECT_EQ(modelFromJson(j.dump()).play_coupling, 0.0);
+  EXPECT_EQ(modelFromJson(j.dump()).shaping.start, PlayStart::kCentred);
+  EXPECT_EQ(modelFromJson(j.dump()).shaping.coupling, 0.0);
   j["play_coupling"] = -1.0;
   EXPECT_THROW(modelFromJson(j.dump()), std::invalid_argument);
 }
 
 TEST(ModelFile, PlayThresholdRoundTripsAndIsChecked) {
   DioPwlObfModel m = knownModel();
-  m.play_threshold = 0.07;
-  EXPECT_EQ(modelFromJson(modelToJson(m)).play_threshold, 0.07);
+  m.shaping.threshold = 0.07;
+  EXPECT_EQ(modelFromJson(modelToJson(m)).shaping.threshold, 0.07);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j.erase("play_threshold");  // version 1, written before the field existed: counted from zero
   j["version"] = 1;
-  EXPECT_EQ(modelFromJson(j.dump()).play_threshold, 0.0);
+  EXPECT_EQ(modelFromJson(j.dump()).shaping.threshold, 0.0);
   j["play_threshold"] = -0.01;
   try {
     modelFromJson(j.dump());
@@ -116,12 +116,12 @@ TEST(ModelFile, PlayThresholdRoundTripsAndIsChecked) {
 
 TEST(ModelFile, PlaySofteningRoundTripsAndIsChecked) {
   DioPwlObfModel m = knownModel();
-  m.play_softening = 0.8;
-  EXPECT_EQ(modelFromJson(modelToJson(m)).play_softening, 0.8);
+  m.shaping.softening = 0.8;
+  EXPECT_EQ(modelFromJson(modelToJson(m)).shaping.softening, 0.8);
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
   j.erase("play_softening");  // version 1, written before the field existed: linear
   j["version"] = 1;
-  EXPECT_EQ(modelFromJson(j.dump()).play_softening, 0.0);
+  EXPECT_EQ(modelFromJson(j.dump()).shaping.softening, 0.0);
   j["play_softening"] = -0.5;
   try {
     modelFromJson(j.dump());

@@ -48,9 +48,9 @@ const Data& data() {
     out.interpolated = identifyModel({train}, o);
     // ...coupled to the other inputs, counted from a threshold and softened,
     // so the predictor's channel levels are checked too.
-    out.interpolated.play_coupling = 1.0;
-    out.interpolated.play_threshold = 0.07;
-    out.interpolated.play_softening = 1.5;
+    out.interpolated.shaping.coupling = 1.0;
+    out.interpolated.shaping.threshold = 0.07;
+    out.interpolated.shaping.softening = 1.5;
     fitCoefficients(out.interpolated, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Scheduled through a lag: the predictor carries the lagged inputs, and a
     // held input keeps moving the schedule until the lag settles.

@@ -32,12 +32,12 @@ void IdentificationRun::refineJointly() {
     say("[5/5] joint refinement: nothing to refine (no threshold, coupling, softening or play channel in the search)");
   if (o.play_refine_evaluations > 0 && !refined_dims.empty()) {
     const std::vector<PlayChannel> base_set = best_set;
-    const double kept_threshold = model.play_threshold, kept_coupling = model.play_coupling,
-                 kept_softening = model.play_softening;
+    const double kept_threshold = model.shaping.threshold, kept_coupling = model.shaping.coupling,
+                 kept_softening = model.shaping.softening;
     auto restoreStaged = [&] {
-      model.play_threshold = kept_threshold;
-      model.play_coupling = kept_coupling;
-      model.play_softening = kept_softening;
+      model.shaping.threshold = kept_threshold;
+      model.shaping.coupling = kept_coupling;
+      model.shaping.softening = kept_softening;
       applyPlay(base_set);
     };
     auto scaled = [&](double k) {
@@ -46,15 +46,15 @@ void IdentificationRun::refineJointly() {
       return set;
     };
     auto apply = [&](const std::vector<double>& x) {
-      model.play_threshold = x[0] * top_level;
-      const double above = top_level - model.play_threshold;
-      model.play_coupling = x[1] / above;
-      model.play_softening = x[2] / above;
+      model.shaping.threshold = x[0] * top_level;
+      const double above = top_level - model.shaping.threshold;
+      model.shaping.coupling = x[1] / above;
+      model.shaping.softening = x[2] / above;
       applyPlay(scaled(x[3]));
     };
-    const double above0 = top_level - model.play_threshold;
-    std::vector<double> x{model.play_threshold / top_level, model.play_coupling * above0,
-                          model.play_softening * above0, 1.0};
+    const double above0 = top_level - model.shaping.threshold;
+    std::vector<double> x{model.shaping.threshold / top_level, model.shaping.coupling * above0,
+                          model.shaping.softening * above0, 1.0};
     const std::vector<double> lo{0.0, 0.0, 0.0, 0.5}, hi{0.45, 0.6, 0.45, 2.0};
     for (std::size_t i : refined_dims) x[i] = std::clamp(x[i], lo[i], hi[i]);
     rep.refine_start = {x[0], x[1], x[2], x[3], best_score};

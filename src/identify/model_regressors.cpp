@@ -10,10 +10,15 @@
 
 namespace plsa {
 
-void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>>& poles,
-                           const PwlPartition& partition, const Eigen::MatrixXd& u,
-                           const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
-                           double schedule_pole, ScheduleSide side, double threshold, double softening) {
+namespace {
+
+void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  const std::vector<std::vector<PoleSet>>& poles = model.poles;
+  const PwlPartition& partition = model.partition;
+  const InputShaping& shaping = model.shaping;
+  const std::vector<std::vector<PlayChannel>>& play = shaping.play;
+  const double schedule_pole = model.schedulePole();
+  const ScheduleSide side = model.schedule_side;
   PLSA_CHECK(!poles.empty(), "modelRegressors: no outputs");
   PLSA_CHECK(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
   const Eigen::Index T = u.rows();
@@ -49,16 +54,14 @@ void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>
     }
   }
   PLSA_CHECK(play.empty() || play.size() == n_u, "modelRegressors: need one play list per input");
-  // Channel inputs: input j above the threshold (coupled to the others)
-  // through each of its play channels.
+  // Channel inputs: input j's shaped level through each of its play channels.
   Eigen::MatrixXd coupled;
-  const bool shaped = coupling != 0.0 || threshold != 0.0 || softening != 0.0;
+  const bool shaped = shaping.shapesLevels();
   if (shaped) {
     coupled.resize(T, u.cols());
     for (Eigen::Index k = 0; k < T; ++k) {
-      const double positive_sum = positiveSumAbove(u.row(k), threshold);
-      for (Eigen::Index j = 0; j < u.cols(); ++j)
-        coupled(k, j) = coupledLevel(levelAbove(u(k, j), threshold), positive_sum, coupling, softening);
+      const double positive_sum = shaping.positiveSum(u.row(k));
+      for (Eigen::Index j = 0; j < u.cols(); ++j) coupled(k, j) = shaping.level(u(k, j), positive_sum);
     }
   }
   const Eigen::MatrixXd& level = shaped ? coupled : u;
@@ -66,7 +69,7 @@ void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>
   for (std::size_t j = 0; j < n_u; ++j) {
     const std::vector<PlayChannel> list = play.empty() ? std::vector<PlayChannel>{PlayChannel{}} : play[j];
     for (const PlayChannel& ch : list)
-      channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, start));
+      channels[j].push_back(playedInput(level.col(static_cast<Eigen::Index>(j)), ch, shaping.start));
   }
   for (const auto& row : poles) PLSA_CHECK(row.size() == n_u, "modelRegressors: need one pole set per input");
   const int copies = side == ScheduleSide::kInput ? regions : 1;
@@ -156,23 +159,16 @@ void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>
     if (e) std::rethrow_exception(e);
 }
 
-ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
-                                const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play,
-                                PlayStart start, double coupling, double schedule_pole, ScheduleSide side,
-                                double threshold, double softening) {
+}  // namespace
+
+ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   ModelRegressors out;
-  fillRegressors(out, poles, partition, u, play, start, coupling, schedule_pole, side, threshold, softening);
+  fillRegressors(out, model, u);
   return out;
 }
 
-ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  return modelRegressors(model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
-                         model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
-}
-
 void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, ModelRegressors& out) {
-  fillRegressors(out, model.poles, model.partition, u, model.input_play, model.play_start, model.play_coupling,
-                 model.schedulePole(), model.schedule_side, model.play_threshold, model.play_softening);
+  fillRegressors(out, model, u);
 }
 
 Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {

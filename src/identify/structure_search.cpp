@@ -42,12 +42,12 @@ void IdentificationRun::applyStructure(const Structure& st) {
 }
 
 void IdentificationRun::applyPlay(const std::vector<PlayChannel>& set) {
-  model.input_play.assign(static_cast<std::size_t>(ni), {});
+  model.shaping.play.assign(static_cast<std::size_t>(ni), {});
   for (int in_i = 0; in_i < ni; ++in_i)
     for (const PlayChannel& c : set) {
       PLSA_CHECK(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
               "identify: play widths and slopes must be finite and >= 0");
-      model.input_play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
+      model.shaping.play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
                                                                     c.slope);
     }
 }
@@ -216,7 +216,7 @@ void IdentificationRun::searchCoupling() {
   for (double c : o.play_coupling_candidates) {
     PLSA_CHECK(c >= 0 && std::isfinite(c), "identify: play couplings must be finite and >= 0");
     applyStructure(structures[best_structure]);
-    model.play_coupling = c / top_level;
+    model.shaping.coupling = c / top_level;
     for (const auto& set : o.play_candidates) {
       applyPlay(set);
       const double score = crossValidated();
@@ -224,11 +224,11 @@ void IdentificationRun::searchCoupling() {
       if (score > best_score + 1e-9) {
         best_score = score;
         best_set = set;
-        best_coupling = model.play_coupling;
+        best_coupling = model.shaping.coupling;
       }
     }
   }
-  model.play_coupling = best_coupling;
+  model.shaping.coupling = best_coupling;
   applyStructure(structures[best_structure]);
   applyPlay(best_set);
   reportPlayChoice();
@@ -323,12 +323,12 @@ void IdentificationRun::searchThreshold() {
     rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, 0.0, best_score});
     beginScoring("play thresholds", thresholds.size() * softenings.size() * sets.size() - sets.size());
     for (double d : thresholds) {
-      model.play_threshold = d * top_level;
-      const double above = top_level - model.play_threshold;
-      model.play_coupling = coupling_fraction / above;
+      model.shaping.threshold = d * top_level;
+      const double above = top_level - model.shaping.threshold;
+      model.shaping.coupling = coupling_fraction / above;
       for (double f : softenings) {
         if (d == 0 && f == 0) continue;  // scored already
-        model.play_softening = f / above;
+        model.shaping.softening = f / above;
         for (const auto& set : sets) {
           applyPlay(set);
           const double score = crossValidated();
@@ -336,16 +336,16 @@ void IdentificationRun::searchThreshold() {
           if (score > best_score + 1e-9) {
             best_score = score;
             best_set = set;
-            best_threshold = model.play_threshold;
-            best_coupling = model.play_coupling;
-            best_softening = model.play_softening;
+            best_threshold = model.shaping.threshold;
+            best_coupling = model.shaping.coupling;
+            best_softening = model.shaping.softening;
           }
         }
       }
     }
-    model.play_threshold = best_threshold;
-    model.play_coupling = best_coupling;
-    model.play_softening = best_softening;
+    model.shaping.threshold = best_threshold;
+    model.shaping.coupling = best_coupling;
+    model.shaping.softening = best_softening;
     applyPlay(best_set);
     const double above = top_level - best_threshold;
     const bool softened = softenings.size() > 1;

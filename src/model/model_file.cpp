@@ -55,7 +55,7 @@ std::string modelToJson(const DioPwlObfModel& m) {
   j["poles"] = poles;
   // A fixed band is a plain number (as in files written before slopes existed).
   json play = json::array();
-  for (const auto& list : m.input_play) {
+  for (const auto& list : m.shaping.play) {
     json l = json::array();
     for (const PlayChannel& c : list) {
       if (c.slope == 0.0)
@@ -66,10 +66,10 @@ std::string modelToJson(const DioPwlObfModel& m) {
     play.push_back(l);
   }
   j["input_play"] = play;
-  j["play_start"] = m.play_start == PlayStart::kRising ? "rising" : "centred";
-  j["play_coupling"] = m.play_coupling;
-  j["play_threshold"] = m.play_threshold;
-  j["play_softening"] = m.play_softening;
+  j["play_start"] = m.shaping.start == PlayStart::kRising ? "rising" : "centred";
+  j["play_coupling"] = m.shaping.coupling;
+  j["play_threshold"] = m.shaping.threshold;
+  j["play_softening"] = m.shaping.softening;
   j["schedule_lag_s"] = m.schedule_lag_s;
   j["schedule_side"] = m.schedule_side == ScheduleSide::kInput ? "input" : "output";
   if (!m.output_level.empty()) j["output_level"] = m.output_level;
@@ -267,14 +267,14 @@ class ModelReader {
           channels.emplace_back(number(v, "input_play[][]"));
         }
       }
-      m.input_play.push_back(std::move(channels));
+      m.shaping.play.push_back(std::move(channels));
     }
     // Files from before the field existed started their bands centred.
-    m.play_start = choice("play_start", {"rising", "centred"}, "centred") == "rising" ? PlayStart::kRising
+    m.shaping.start = choice("play_start", {"rising", "centred"}, "centred") == "rising" ? PlayStart::kRising
                                                                                       : PlayStart::kCentred;
-    m.play_coupling = scalar("play_coupling", 0.0);
-    m.play_threshold = scalar("play_threshold", 0.0);
-    m.play_softening = scalar("play_softening", 0.0);
+    m.shaping.coupling = scalar("play_coupling", 0.0);
+    m.shaping.threshold = scalar("play_threshold", 0.0);
+    m.shaping.softening = scalar("play_softening", 0.0);
   }
 
   void readSchedule(DioPwlObfModel& m) const {

@@ -46,14 +46,11 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
       stride *= static_cast<int>(l.size());
     }
   }
-  c.play_start = m.play_start;
-  c.coupling = m.play_coupling;
-  c.threshold = m.play_threshold;
-  c.softening = m.play_softening;
+  c.shaping = m.shaping;
   c.schedule_pole = m.schedulePole();
   c.first_channel.push_back(0);
   for (int j = 0; j < c.n_u; ++j) {
-    for (const PlayChannel& r : m.input_play[static_cast<std::size_t>(j)]) {
+    for (const PlayChannel& r : m.shaping.play[static_cast<std::size_t>(j)]) {
       c.play.push_back(r);
       c.channel_input.push_back(j);
     }

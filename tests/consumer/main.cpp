@@ -21,7 +21,7 @@ int main() {
   m.input_min = 0.0;
   m.input_max = 0.4;
   m.poles = {{plsa::PoleSet::real({0.9, 0.8})}};
-  m.input_play = {{plsa::PlayChannel(0.0)}};
+  m.shaping.play = {{plsa::PlayChannel(0.0)}};
   m.coefficients = {{Eigen::Vector2d(1.0, 0.5)}};
   m.region_fits = {plsa::RegionFit{}};
   plsa::Predictor<> predictor(m);

@@ -60,7 +60,7 @@ plsa::DioPwlObfModel smallModel() {
   m.input_min = 0.0;
   m.input_max = 0.4;
   m.poles = {{plsa::PoleSet({{0.5, 0.0}, {0.8, 0.0}}), plsa::PoleSet({{0.6, 0.1}, {0.6, -0.1}})}};
-  m.input_play = {{plsa::PlayChannel(0.0)}, {plsa::PlayChannel(0.0), plsa::PlayChannel(0.05)}};
+  m.shaping.play = {{plsa::PlayChannel(0.0)}, {plsa::PlayChannel(0.0), plsa::PlayChannel(0.05)}};
   m.partition = plsa::PwlPartition({0}, {{0.2}});
   for (int r = 0; r < 2; ++r) {
     m.coefficients.push_back({Eigen::VectorXd::LinSpaced(m.regressorSize(0), 0.1, 1.0 + r)});

@@ -50,7 +50,7 @@ inline DioPwlObfModel knownModel() {
   m.inputs = {"u"};
   m.outputs = {"y"};
   m.poles = {{PoleSet::real({0.9, 0.7})}};
-  m.input_play = {{0.0}};
+  m.shaping.play = {{0.0}};
   m.partition = PwlPartition({0}, {{0.5}});
   Eigen::VectorXd lo(2), hi(2);
   lo << 1.0, -0.3;

@@ -42,27 +42,14 @@ inline Eigen::VectorXd playedInput(const Eigen::VectorXd& u, const PlayChannel& 
   return v;
 }
 
-/// The regressors of a structure into `out`, whose storage is reused when its
-/// shapes already match (a long record's run to tens of megabytes). `play` as
-/// in DioPwlObfModel::input_play; empty = one raw channel per input. Long
-/// records fill each output's regressors on a thread of their own.
-void fillRegressors(ModelRegressors& out, const std::vector<std::vector<PoleSet>>& poles,
-                    const PwlPartition& partition, const Eigen::MatrixXd& u,
-                    const std::vector<std::vector<PlayChannel>>& play, PlayStart start, double coupling,
-                    double schedule_pole, ScheduleSide side, double threshold, double softening);
-
-/// The same, returned.
-ModelRegressors modelRegressors(const std::vector<std::vector<PoleSet>>& poles, const PwlPartition& partition,
-                                const Eigen::MatrixXd& u, const std::vector<std::vector<PlayChannel>>& play = {},
-                                PlayStart start = PlayStart::kRising, double coupling = 0.0,
-                                double schedule_pole = 0.0, ScheduleSide side = ScheduleSide::kOutput,
-                                double threshold = 0.0, double softening = 0.0);
-
-/// The regressors of `model`'s own structure (poles, partition, play, start,
-/// coupling, threshold, softening, lag and side) for an input record.
+/// The regressors of `model`'s own structure (poles, partition, input
+/// shaping, lag and side) for an input record. An input without play
+/// channels (shaping.play empty) takes one raw channel. Long records fill
+/// each output's regressors on a thread of their own.
 ModelRegressors modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
 
-/// The same into `out`, reusing its storage.
+/// The same into `out`, whose storage is reused when its shapes already match
+/// (a long record's run to tens of megabytes).
 void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, ModelRegressors& out);
 
 /// The model's predicted increments dyhat (T x n_y) from regressors of its

@@ -144,7 +144,7 @@ struct IdentifyOptions {
   std::vector<std::vector<PlayChannel>> play_candidates = {
       {0.0}, {0.02}, {0.04}, {0.07}, {0.1}, {0.15}, {0.2}, {{0.0, 0.08}}, {{0.0, 0.12}}, {{0.0, 0.16}}, {{0.0, 0.2}}};
   /// Then, on the chosen scheduling, every play set again with its channels
-  /// coupled to the other inputs (DioPwlObfModel::play_coupling), kappa
+  /// coupled to the other inputs (InputShaping::coupling), kappa
   /// given as a fraction of the largest training input level: 0.3 lets a
   /// full neighbour cut a chamber's level by 30%. Empty: no coupling.
   std::vector<double> play_coupling_candidates = {0.15, 0.3};
@@ -153,13 +153,13 @@ struct IdentifyOptions {
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
   std::vector<double> schedule_lag_candidates = {0.1, 0.2, 0.4, 0.8};
   /// Then, on the chosen model, levels the play channels count from
-  /// (DioPwlObfModel::play_threshold), as fractions of the largest training
+  /// (InputShaping::threshold), as fractions of the largest training
   /// input level, tried against zero with the chosen and every growing play
   /// set; the kept coupling stays the same fraction of the top level above
   /// the threshold. A chamber that only stretches past an opening pressure.
   /// Empty: from zero.
   std::vector<double> play_threshold_candidates = {0.1, 0.2, 0.3};
-  /// Softenings of the channels' level (DioPwlObfModel::play_softening), as
+  /// Softenings of the channels' level (InputShaping::softening), as
   /// fractions of the top level above the threshold (0.2: the top level is
   /// cut by 20%, less below it), tried with each threshold above, every
   /// growing set and none. Empty (default): linear levels. Input-side

@@ -15,6 +15,7 @@
 
 #include "plsa/core/check.hpp"
 #include "plsa/core/pole_set.hpp"
+#include "plsa/model/input_shaping.hpp"
 #include "plsa/model/output_frame.hpp"
 #include "plsa/model/pwl_partition.hpp"
 #include "plsa/obf/obf_bank.hpp"
@@ -27,71 +28,6 @@ struct RegionFit {
   int fallback_from = -1;  ///< -1: fitted on its own; else the source (region index, or -2 = global)
   std::string note;
 };
-
-/// Play (backlash) operator: the output follows the input only once it leaves
-/// a band of half-width r around it; r = 0 passes the input through. Placed
-/// before the OBF filters it gives the model the memory of the last reversal
-/// that hysteresis needs (docs/identification.md). Allocation-free.
-inline double playOperator(double input, double previous_output, double half_width) noexcept {
-  // std::clamp's result (half_width >= 0), as min and max: no branch in the predictor's loops.
-  return std::min(std::max(previous_output, input - half_width), input + half_width);
-}
-
-/// One play channel: half-width `width + slope * max(0, u)`. A slope makes the
-/// band grow with the level, as when the friction behind hysteresis scales
-/// with the strain; slope 0 is a fixed band (implicit from a plain width).
-struct PlayChannel {
-  double width = 0.0;  ///< input units
-  double slope = 0.0;  ///< fraction of the (non-negative) input level
-  PlayChannel(double w = 0.0, double s = 0.0) : width(w), slope(s) {}  // NOLINT: a plain width is a channel
-  double halfWidth(double u) const noexcept { return width + slope * std::max(0.0, u); }
-  /// The played output after `previous` once the input reaches u (the band taken at u).
-  double follow(double u, double previous) const noexcept { return playOperator(u, previous, halfWidth(u)); }
-  bool passesThrough() const noexcept { return width == 0.0 && slope == 0.0; }
-  bool operator==(const PlayChannel& o) const { return width == o.width && slope == o.slope; }
-};
-
-/// Where a play channel starts: every run begins from a vented actuator, so
-/// at the first sample the pressure has just risen and the band trails below
-/// it (rising). Centred was the convention of models written before this
-/// field existed; starting centred hides a band's worth of output from the
-/// first rise and leaves a lasting offset in simulation (docs/identification.md).
-enum class PlayStart { kRising, kCentred };
-
-inline double playStartState(double u, const PlayChannel& ch, PlayStart start) noexcept {
-  return start == PlayStart::kRising ? u - ch.halfWidth(u) : u;
-}
-
-/// What input j's play channels see: its positive level softened, `x - s x^2`
-/// (a wall whose strain saturates; flat past its peak at x = 1/2s, so it never
-/// falls as the input rises), then less kappa times that times the other
-/// inputs' positive parts: a chamber's wall stiffened by its pressurised
-/// neighbours, to first order. kappa = s = 0 passes u_j through.
-/// `positive_sum` is sum_k max(0, u_k).
-inline double coupledLevel(double u_j, double positive_sum, double kappa, double softening = 0.0) noexcept {
-  const double own = std::max(0.0, u_j);
-  double level = u_j;
-  if (softening > 0.0 && own > 0.0) {
-    const double x = std::min(own, 0.5 / softening);
-    level = x - softening * x * x;
-  }
-  return level - kappa * std::max(0.0, level) * (positive_sum - own);
-}
-
-/// An input's level counted from `threshold` (DioPwlObfModel::play_threshold):
-/// zero below it, as a chamber that has not reached its opening pressure.
-/// Threshold 0 passes the input through, negative levels included.
-inline double levelAbove(double u, double threshold) noexcept {
-  return threshold > 0.0 ? std::max(0.0, u - threshold) : u;
-}
-
-/// coupledLevel's `positive_sum` for levels counted from `threshold`.
-template <typename Derived>
-double positiveSumAbove(const Eigen::MatrixBase<Derived>& u, double threshold) noexcept {
-  double s = 0.0;
-  for (Eigen::Index j = 0; j < u.size(); ++j) s += std::max(0.0, u(j) - threshold);
-  return s;
-}
 
 /// Where the schedule acts. Output side (the paper): the filters run on the
 /// input increments and the region's coefficients weigh their outputs. Input
@@ -119,21 +55,9 @@ struct DioPwlObfModel {
   /// Empty in files written before it existed.
   std::vector<std::array<double, 2>> input_ranges;
   std::vector<std::vector<PoleSet>> poles;  ///< [output][input]
-  /// [input][channel] play half-widths: each input feeds one OBF bank per
-  /// channel, through a play operator of that width (0 = the raw input, as in
-  /// the paper). Several channels form an identified Prandtl-Ishlinskii operator.
-  std::vector<std::vector<PlayChannel>> input_play;
-  PlayStart play_start = PlayStart::kRising;
-  double play_coupling = 0.0;  ///< kappa of coupledLevel, 1/input unit; 0 = each channel sees its own input
-  /// Input level the play channels count from: they see max(0, u - play_threshold)
-  /// (levelAbove), so a growing band and the coupling start there, as a
-  /// chamber's wall only stretches once its pressure passes an opening
-  /// threshold. 0 = the inputs as they are. Input units.
-  double play_threshold = 0.0;
-  /// s of coupledLevel, 1/input unit: the level above the threshold softens to
-  /// x - s x^2 before the coupling and the play, as a strain that saturates
-  /// with pressure. 0 = linear (files written before it existed).
-  double play_softening = 0.0;
+  /// What each input goes through before its filters: levels counted from a
+  /// threshold, softened and coupled, then play channels (input_shaping.hpp).
+  InputShaping shaping;
   /// The partition is looked up at the inputs through a first-order lag of
   /// this time constant (unit gain), 0 = at the raw inputs (the paper). The
   /// coefficients then follow the actuator's state rather than its command,
@@ -158,7 +82,7 @@ struct DioPwlObfModel {
   /// Pole of that lag per sample (0 when there is none).
   double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
-  int channelCount(int input) const { return static_cast<int>(input_play[static_cast<std::size_t>(input)].size()); }
+  int channelCount(int input) const { return shaping.channelCount(input); }
   PwlPartition partition = PwlPartition::single();
   std::vector<std::vector<Eigen::VectorXd>> coefficients;  ///< [region][output]
   std::vector<RegionFit> region_fits;                       ///< [region]
@@ -178,7 +102,7 @@ struct DioPwlObfModel {
     int n = 0;
     for (std::size_t j = 0; j < poles[static_cast<std::size_t>(output)].size(); ++j)
       n += poles[static_cast<std::size_t>(output)][j].size() *
-           (j < input_play.size() ? static_cast<int>(input_play[j].size()) : 1);
+           (j < shaping.play.size() ? static_cast<int>(shaping.play[j].size()) : 1);
     return n;
   }
 
@@ -206,16 +130,7 @@ struct DioPwlObfModel {
       PLSA_CHECK(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1],
               "model: every input_ranges entry must be finite with min <= max");
     PLSA_CHECK(poles.size() == outputs.size(), "model: need one row of pole sets per output");
-    PLSA_CHECK(input_play.size() == inputs.size(), "model: need one input_play list per input");
-    for (const auto& ch : input_play) {
-      PLSA_CHECK(!ch.empty(), "model: every input needs at least one play channel (width 0 for the raw input)");
-      for (const PlayChannel& c : ch)
-        PLSA_CHECK(std::isfinite(c.width) && c.width >= 0 && std::isfinite(c.slope) && c.slope >= 0,
-                "model: input_play widths and slopes must be finite and >= 0");
-    }
-    PLSA_CHECK(std::isfinite(play_coupling) && play_coupling >= 0, "model: play_coupling must be finite and >= 0");
-    PLSA_CHECK(std::isfinite(play_threshold) && play_threshold >= 0, "model: play_threshold must be finite and >= 0");
-    PLSA_CHECK(std::isfinite(play_softening) && play_softening >= 0, "model: play_softening must be finite and >= 0");
+    shaping.validate(inputs.size());
     PLSA_CHECK(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     PLSA_CHECK(output_level.empty() || schedule_side == ScheduleSide::kInput,
             "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");

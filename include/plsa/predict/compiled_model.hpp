@@ -108,8 +108,7 @@ struct CompiledModel {
   std::vector<PlayChannel> play;           ///< per channel
   std::vector<int> channel_input;          ///< per channel: its input
   std::vector<int> first_channel;          ///< [inputs + 1]: input j's channels are [first, first + 1)
-  PlayStart play_start = PlayStart::kRising;
-  double coupling = 0.0, threshold = 0.0, softening = 0.0;
+  InputShaping shaping;                    ///< the model's: levels and start (channels flattened in `play`)
   double schedule_pole = 0.0;  ///< the scheduling inputs' lag, per sample
   std::vector<double> pole_values;  ///< [o][j][i], to tell whether two models share their bases
   int max_horizon = 0;

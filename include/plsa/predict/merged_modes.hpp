@@ -36,7 +36,8 @@ inline bool fits(const CompiledModel& m) noexcept {
 /// scheduling inputs, the played channels and the grid's blend.
 struct PlannedSchedule {
   int nu = 0, nc = 0, grid_inputs = 0;
-  double pole = 0.0, threshold = 0.0, coupling = 0.0, softening = 0.0;
+  double pole = 0.0;
+  const InputShaping* shaping = nullptr;  ///< the compiled model's (outlives the run)
   bool shaped = false;
   std::array<double, kMaxInputs> u{}, us{};
   std::array<double, kMaxChannels> vc{};
@@ -48,8 +49,7 @@ struct PlannedSchedule {
   PlannedSchedule(const CompiledModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& us0,
                   const Eigen::VectorXd& vc0) noexcept
       : nu(m.n_u), nc(static_cast<int>(m.play.size())), grid_inputs(static_cast<int>(m.node_grid.inputs.size())),
-        pole(m.schedule_pole), threshold(m.threshold), coupling(m.coupling),
-        softening(m.softening), shaped(m.threshold != 0.0 || m.coupling != 0.0 || m.softening != 0.0) {
+        pole(m.schedule_pole), shaping(&m.shaping), shaped(m.shaping.shapesLevels()) {
     for (int j = 0; j < nu; ++j) u[j] = u0(j), us[j] = us0(j);
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
@@ -79,11 +79,11 @@ struct PlannedSchedule {
   /// The played channels moved to u (threshold, coupling, softening first).
   PLSA_ALWAYS_INLINE void moveChannels() noexcept {
     const double positive_sum =
-        coupling != 0.0 ? positiveSumAbove(Eigen::Map<const Eigen::VectorXd>(u.data(), nu), threshold) : 0.0;
+        shaping->coupling != 0.0 ? shaping->positiveSum(Eigen::Map<const Eigen::VectorXd>(u.data(), nu)) : 0.0;
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       double level = u[static_cast<std::size_t>(input_of[cc])];
-      if (shaped) level = coupledLevel(levelAbove(level, threshold), positive_sum, coupling, softening);
+      if (shaped) level = shaping->level(level, positive_sum);
       vc[cc] = play[cc].follow(level, vc[cc]);
     }
   }

@@ -93,7 +93,7 @@ class PlanSensitivity {
   void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan, const Eigen::VectorXd& vc_now) noexcept {
     const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
     const int nu = m.n_u;  // at most kMaxSensitivityInputs (sensitivity() checks)
-    const double threshold = m.threshold, kappa = m.coupling, softening = m.softening;
+    const InputShaping& shaping = m.shaping;
     vc_ = vc_now;
     double* vc = vc_.data();
     double* drive = drive_.data();  // row-major: (s * channels + c) * nu + k
@@ -103,13 +103,12 @@ class PlanSensitivity {
       double positive_sum = 0.0;
       for (int j = 0; j < nu; ++j) {
         u[j] = plan(s, j);
-        positive_sum += std::max(0.0, u[j] - threshold);
+        positive_sum += std::max(0.0, u[j] - shaping.threshold);
       }
       for (Eigen::Index c = 0; c < channels; ++c) {
         const PlayChannel& play = m.play[static_cast<std::size_t>(c)];
         const int j = m.channel_input[static_cast<std::size_t>(c)];
-        const double above = levelAbove(u[j], threshold);
-        const double level = coupledLevel(above, positive_sum, kappa, softening);
+        const double level = shaping.level(u[j], positive_sum);
         const double before = vc[c], after = play.follow(level, before);
         vc[c] = after;
         double* d = drive + (s * channels + c) * nu;
@@ -124,21 +123,12 @@ class PlanSensitivity {
         // d after / d level: 1 -+ the band's growth on the side it was pushed.
         const double growth = level > 0.0 ? play.slope : 0.0;
         const double band = after <= level ? 1.0 - growth : 1.0 + growth;
-        // d level / d (own level above the threshold) and / d (each other's).
-        const double own = std::max(0.0, above), others = positive_sum - own;
-        double soft = 1.0, softened = above;
-        if (softening > 0.0 && own > 0.0) {
-          const double x = std::min(own, 0.5 / softening);
-          softened = x - softening * x * x;
-          soft = own < 0.5 / softening ? 1.0 - 2.0 * softening * own : 0.0;
-        }
-        const double d_own = soft * (1.0 - kappa * (softened > 0.0 ? 1.0 : 0.0) * others);
-        const bool gated = threshold > 0.0;  // d levelAbove / d u: 0 below the threshold
-        d[j] = gated && !(u[j] > threshold) ? 0.0 : band * d_own;
-        if (kappa == 0.0) continue;
-        const double by_others = band * -kappa * std::max(0.0, softened);
+        const InputShaping::Slopes slope = shaping.slopes(u[j], positive_sum);
+        d[j] = band * slope.own;
+        if (shaping.coupling == 0.0) continue;
+        const double by_others = band * slope.other;
         for (int k = 0; k < nu; ++k)
-          if (k != j && u[k] > (gated ? threshold : 0.0)) d[k] = by_others;
+          if (k != j && shaping.pushesOthers(u[k])) d[k] = by_others;
       }
     }
     for (Eigen::Index c = 0; c < channels; ++c) {  // the next push of each channel after each step

@@ -266,11 +266,10 @@ class NStepPredictor {
     resting_.fill(true);
     for (int j = 0; j < m.n_u; ++j) u_(j) = u[j];
     us_ = u_;  // the schedule's lag starts settled
-    const double positive_sum = positiveSumAbove(u_, m.threshold);
+    const double positive_sum = m.shaping.positiveSum(u_);
     for (std::size_t c = 0; c < m.play.size(); ++c)
-      vc_(static_cast<Eigen::Index>(c)) = playStartState(
-          coupledLevel(levelAbove(u_(m.channel_input[c]), m.threshold), positive_sum, m.coupling, m.softening),
-          m.play[c], m.play_start);
+      vc_(static_cast<Eigen::Index>(c)) =
+          playStartState(m.shaping.level(u_(m.channel_input[c]), positive_sum), m.play[c], m.shaping.start);
     dir_ = DirectionState{};
     if (m.input_side) nodeWeights(m, us_, node_w_);
     y_ = y_sim_ = ym_;
@@ -292,11 +291,10 @@ class NStepPredictor {
 
   // Moves the played channels to the input u (delta_: how far each moved).
   void moveChannels(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& vc) noexcept {
-    const double positive_sum = m.coupling != 0.0 ? positiveSumAbove(u, m.threshold) : 0.0;  // unused when uncoupled
+    const double positive_sum = m.shaping.coupling != 0.0 ? m.shaping.positiveSum(u) : 0.0;  // unused when uncoupled
     for (std::size_t c = 0; c < m.play.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double level =
-          coupledLevel(levelAbove(u(m.channel_input[c]), m.threshold), positive_sum, m.coupling, m.softening);
+      const double level = m.shaping.level(u(m.channel_input[c]), positive_sum);
       const double next = m.play[c].follow(level, vc(cc));
       delta_(cc) = next - vc(cc);
       vc(cc) = next;

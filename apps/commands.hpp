@@ -17,12 +17,12 @@ namespace plsa::app {
 template <class E>
 CLI::Option* addChoice(CLI::App* app, const std::string& flag, E& target, const std::string& help) {
   std::vector<std::string> names;
-  for (const auto& value : OptionSpelling<E>::values) names.emplace_back(value.second);
+  for (const auto& value : identify::OptionSpelling<E>::values) names.emplace_back(value.second);
   return app
       ->add_option_function<std::string>(
-          flag, [&target](const std::string& name) { target = parseOption<E>(name); }, help)
+          flag, [&target](const std::string& name) { target = identify::parseOption<E>(name); }, help)
       ->check(CLI::IsMember(names))
-      ->default_str(optionName(target));
+      ->default_str(identify::optionName(target));
 }
 
 /// Number checks with a short message (CLI11's own print the largest double in full).

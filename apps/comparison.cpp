@@ -7,9 +7,10 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/eval/fit.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 
 namespace plsa::app {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {

@@ -8,8 +8,8 @@
 
 #include <Eigen/Dense>
 
-#include "plsa/identify/arx.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/arx.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa::app {

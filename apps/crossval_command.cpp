@@ -17,6 +17,7 @@
 namespace fs = std::filesystem;
 
 namespace plsa::app {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 struct CrossvalArgs {

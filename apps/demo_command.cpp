@@ -25,6 +25,7 @@
 namespace fs = std::filesystem;
 
 namespace plsa::app {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 struct DemoOptions {

@@ -10,10 +10,11 @@
 #include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/model/model_file.hpp"
 
 namespace plsa::app {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 struct IdentifyArgs {

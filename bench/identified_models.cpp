@@ -7,6 +7,7 @@
 #include "plsa/sim/experiment.hpp"
 
 namespace plsa::bench {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 io::Log run(const sim::Experiment& e, std::uint64_t seed) {

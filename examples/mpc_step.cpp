@@ -39,10 +39,10 @@ int main(int argc, char** argv) {
   } else {
     std::printf("identifying a model on the simulator's grid run...\n");
     plsa::sim::Actuator rig(plsa::sim::SimConfig{}, 1);
-    plsa::IdentifyOptions o;
+    plsa::identify::IdentifyOptions o;
     o.output_frame = plsa::OutputFrame::kTipCartesian;
-    o.scheduling = plsa::SchedulingChoice::kInputSide;
-    model = plsa::identifyModel({plsa::sim::runExperiment(rig, plsa::sim::gridExperiment({}))}, o);
+    o.scheduling = plsa::identify::SchedulingChoice::kInputSide;
+    model = plsa::identify::identifyModel({plsa::sim::runExperiment(rig, plsa::sim::gridExperiment({}))}, o);
   }
   plsa::Predictor<> predictor(model);
   const int nu = model.inputCount();

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/predict/predictor.hpp"
@@ -37,13 +37,13 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
                               const std::string& cv_layout, const std::string& output_drift,
                               std::optional<std::string> output_frame, int refine_play,
                               std::function<void(const std::string&)> progress) {
-  plsa::IdentifyOptions o;
+  plsa::identify::IdentifyOptions o;
   if (inputs) o.inputs = *inputs;
   if (outputs) o.outputs = *outputs;
   o.poles_per_pair = poles;
-  o.scheduling = plsa::parseOption<plsa::SchedulingChoice>(scheduling);
-  o.cv_layout = plsa::parseOption<plsa::CvLayout>(cv_layout);
-  o.output_drift = plsa::parseOption<plsa::OutputDriftChoice>(output_drift);
+  o.scheduling = plsa::identify::parseOption<plsa::identify::SchedulingChoice>(scheduling);
+  o.cv_layout = plsa::identify::parseOption<plsa::identify::CvLayout>(cv_layout);
+  o.output_drift = plsa::identify::parseOption<plsa::identify::OutputDriftChoice>(output_drift);
   if (output_frame && *output_frame != "auto") o.output_frame = plsa::outputFrameFromString(*output_frame);
   o.play_refine_evaluations = refine_play;
   if (progress)
@@ -53,7 +53,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
     };
   const std::vector<plsa::io::Log> read = readLogs(logs);
   py::gil_scoped_release unlocked;  // minutes on long logs: other Python threads run meanwhile
-  return plsa::identifyModel(read, o);
+  return plsa::identify::identifyModel(read, o);
 }
 
 py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {

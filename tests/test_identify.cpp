@@ -2,6 +2,7 @@
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
+using namespace plsa::identify;
 using namespace plsa::test_fixtures;
 using C = std::complex<double>;
 

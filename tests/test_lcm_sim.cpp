@@ -337,13 +337,13 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   eo.joystick_duration_s = 20;
   plsa::sim::Actuator rig(plsa::sim::SimConfig{}, 11);
   const plsa::io::Log train = plsa::sim::runExperiment(rig, plsa::sim::gridExperiment(eo));
-  plsa::IdentifyOptions io;
+  plsa::identify::IdentifyOptions io;
   io.play_candidates = {{0.1}};
   // Any model serves the node; the threshold and drift stages only cost time
   // (under ASan the threshold stage pushed this test past its limit).
   io.play_threshold_candidates = {};
-  io.output_drift = plsa::OutputDriftChoice::kOff;
-  const plsa::DioPwlObfModel model = plsa::identifyModel({train}, io);
+  io.output_drift = plsa::identify::OutputDriftChoice::kOff;
+  const plsa::DioPwlObfModel model = plsa::identify::identifyModel({train}, io);
   const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), model);
 

@@ -10,12 +10,13 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/testing/alloc_guard.hpp"
 
 using namespace plsa;
+using namespace plsa::identify;
 
 namespace {
 

@@ -5,9 +5,10 @@
 #include <stdexcept>
 
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 
 namespace plsa::diagnose {
+using namespace plsa::identify;  // this command drives identification
 namespace {
 
 bool allHavePressures(const std::vector<RunData>& runs) {

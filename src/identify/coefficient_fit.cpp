@@ -5,7 +5,7 @@
 #include <exception>
 #include <thread>
 
-namespace plsa {
+namespace plsa::identify {
 namespace {
 
 // Steps between two regions: cell moves per scheduling input plus direction flips.
@@ -382,4 +382,4 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
   for (int o = 0; o < model.outputCount(); ++o) model.output_level[static_cast<std::size_t>(o)] = sum(o) / n;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -16,7 +16,7 @@
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 /// Shortest form that round-trips a plain candidate value: 0.4, 0.15.
 std::string formatNumber(double v);
@@ -116,4 +116,4 @@ struct IdentificationRun {
   bool input_side_chosen = false;
 };
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -9,7 +9,7 @@
 
 #include "identification_run.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 void IdentificationRun::refineJointly() {
   // The stages above pick one setting at a time from coarse sets; the
@@ -144,4 +144,4 @@ void IdentificationRun::refineJointly() {
   }
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -3,7 +3,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
                                  const Eigen::MatrixXd& u, DioStart start) {
@@ -64,4 +64,4 @@ Eigen::MatrixXd LinearDioObf::increments(const Eigen::MatrixXd& u) const {
   return dioObfRegressors(poles_per_input, u) * coefficients;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -7,7 +7,7 @@
 
 #include "plsa/core/check.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order,
                        double max_std_error, double min_snr) {
@@ -81,4 +81,4 @@ LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
   return fit;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

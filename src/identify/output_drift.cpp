@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-namespace plsa {
+namespace plsa::identify {
 
 double meanSampleTime(const std::vector<Eigen::VectorXd>& t) {
   double sum = 0.0;
@@ -94,4 +94,4 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
   return drift;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

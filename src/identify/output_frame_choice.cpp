@@ -4,7 +4,7 @@
 #include <cctype>
 #include <cstdio>
 
-namespace plsa {
+namespace plsa::identify {
 namespace {
 
 std::string lowered(std::string s) {
@@ -66,4 +66,4 @@ OutputFrameChoice chooseOutputFrame(const std::vector<std::string>& outputs, con
   return c;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -10,10 +10,10 @@
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/segmentation.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 #include "identification_run.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 namespace {
 
 // Printed in ascending order (the clustering returns centres in no particular order).
@@ -421,4 +421,4 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
   }
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

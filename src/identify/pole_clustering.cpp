@@ -10,7 +10,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/obf/decay_rate.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 namespace {
 
 using C = std::complex<double>;
@@ -416,4 +416,4 @@ ClusteringResult globalRhoSearch(const std::vector<C>& poles, const ClusteringOp
   return finish("global search (DIRECT-L + Nelder-Mead)", L, best, poles, best_f, o.global_evaluations);
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -6,7 +6,7 @@
 
 #include "plsa/core/check.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& ref, double min_step, Eigen::Index min_length) {
   PLSA_CHECK(min_step > 0, "segmentSteps: min_step must be positive");
@@ -50,4 +50,4 @@ std::vector<std::vector<double>> referenceLevels(const Eigen::MatrixXd& ref, dou
   return levels;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -8,9 +8,9 @@
 #include "identification_run.hpp"
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/identify/output_drift.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 namespace {
 
 // Cross-validation scores rows of the training logs themselves, whose sensor
@@ -466,4 +466,4 @@ DioPwlObfModel IdentificationRun::fitFinal() {
   return model;
 }
 
-}  // namespace plsa
+}  // namespace plsa::identify

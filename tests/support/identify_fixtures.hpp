@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "plsa/dio/dio_transform.hpp"
-#include "plsa/identify/model_regressors.hpp"
-#include "plsa/identify/arx.hpp"
+#include "plsa/eval/model_regressors.hpp"
+#include "plsa/eval/arx.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
@@ -25,7 +25,7 @@
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/identify/pole_clustering.hpp"
 #include "plsa/identify/segmentation.hpp"
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/obf/decay_rate.hpp"
 #include "plsa/sim/actuator.hpp"
@@ -33,6 +33,7 @@
 #include "plsa/testing/alloc_guard.hpp"
 
 namespace plsa::test_fixtures {
+using namespace plsa::identify;
 
 template <class F>
 inline void expectThrowContaining(F f, const std::string& words) {

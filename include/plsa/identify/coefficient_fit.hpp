@@ -9,10 +9,10 @@
 
 #include <Eigen/Dense>
 
-#include "plsa/identify/model_regressors.hpp"
+#include "plsa/eval/model_regressors.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 struct CoefficientFitOptions {
   double ridge = 1e-6;              ///< on the global solution, relative to the regressors' scale
@@ -75,4 +75,4 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
 /// Throws unless `weights` is empty or has one finite, non-negative weight per sample of every record.
 void checkSampleWeights(const std::vector<Eigen::MatrixXd>& U, const SampleWeights& weights, const char* who);
 
-}  // namespace plsa
+}  // namespace plsa::identify

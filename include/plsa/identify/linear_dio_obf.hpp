@@ -11,7 +11,7 @@
 #include "plsa/core/pole_set.hpp"
 #include "plsa/dio/dio_transform.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 /// OBF states of every input's bank, side by side: row t holds the states at
 /// time t (driven by du up to t-1). Inputs are the T x n_u matrix u.
@@ -30,4 +30,4 @@ struct LinearDioObf {
   Eigen::MatrixXd increments(const Eigen::MatrixXd& u) const;
 };
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -9,7 +9,7 @@
 
 #include <Eigen/Dense>
 
-namespace plsa {
+namespace plsa::identify {
 
 struct LocalFit {
   std::vector<std::complex<double>> poles;    ///< physical poles passed on
@@ -28,4 +28,4 @@ struct LocalFit {
 LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order = 1,
                        double max_std_error = 0.02, double min_snr = 8.0);
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -9,10 +9,10 @@
 #include <Eigen/Dense>
 
 #include "plsa/identify/coefficient_fit.hpp"
-#include "plsa/identify/model_regressors.hpp"
+#include "plsa/eval/model_regressors.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 /// Drift rates per logged output (output units per second) about a reference
 /// time, where the correction is zero: the logs' mean sample time, so the
@@ -52,4 +52,4 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model, const std::vector<E
                                 const CoefficientFitOptions& options = {}, int iterations = 3,
                                 const SampleWeights& weights = {});
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -13,7 +13,7 @@
 
 #include "plsa/model/output_frame.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 struct OutputFrameChoice {
   OutputFrame frame = OutputFrame::kAsLogged;
@@ -29,4 +29,4 @@ struct OutputFrameChoice {
 /// bending samples lie below -0.5 deg; as_logged otherwise. Case-insensitive.
 OutputFrameChoice chooseOutputFrame(const std::vector<std::string>& outputs, const std::vector<Eigen::MatrixXd>& Y);
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -18,7 +18,7 @@
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::identify {
 
 /// A value of a training column this far from the column's median, in
 /// widths of its 1-99% band, is taken for a glitch, not a measurement.
@@ -271,4 +271,4 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
 std::vector<double> midpoints(const std::vector<double>& levels);
 std::vector<double> quantileBreakpoints(std::vector<double> values, int levels);
 
-}  // namespace plsa
+}  // namespace plsa::identify

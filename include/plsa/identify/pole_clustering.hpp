@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace plsa {
+namespace plsa::identify {
 
 struct ClusteringOptions {
   int centres = 5;          ///< OBF poles to choose (a complex pair counts as two)
@@ -41,4 +41,4 @@ ClusteringResult kMeansClustering(const std::vector<std::complex<double>>& poles
 /// Nelder-Mead polishing of that and of the other methods' answers.
 ClusteringResult globalRhoSearch(const std::vector<std::complex<double>>& poles, const ClusteringOptions& o);
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -6,7 +6,7 @@
 
 #include <Eigen/Dense>
 
-namespace plsa {
+namespace plsa::identify {
 
 struct LocalDataSet {
   Eigen::Index begin = 0;  ///< first sample after the step
@@ -27,4 +27,4 @@ std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& reference, double 
 std::vector<std::vector<double>> referenceLevels(const Eigen::MatrixXd& reference, double resolution,
                                                  Eigen::Index min_length);
 
-}  // namespace plsa
+}  // namespace plsa::identify

@@ -8,7 +8,7 @@
 
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/io/csv_log.hpp"
-#include "plsa/identify/model_regressors.hpp"
+#include "plsa/eval/model_regressors.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa {

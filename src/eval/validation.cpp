@@ -1,4 +1,4 @@
-#include "plsa/identify/validation.hpp"
+#include "plsa/eval/validation.hpp"
 
 #include <algorithm>
 #include <cmath>

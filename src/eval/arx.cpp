@@ -1,4 +1,4 @@
-#include "plsa/identify/arx.hpp"
+#include "plsa/eval/arx.hpp"
 
 #include <algorithm>
 

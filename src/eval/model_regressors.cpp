@@ -1,7 +1,7 @@
 // Batch regressors, increments and levels of a DIO-PWL-OBF model over whole
 // input records (model_regressors.hpp): offline only, the real-time
 // predictor never runs them.
-#include "plsa/identify/model_regressors.hpp"
+#include "plsa/eval/model_regressors.hpp"
 
 #include <algorithm>
 #include <exception>

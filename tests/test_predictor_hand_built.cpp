@@ -284,3 +284,161 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
   ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 1), out), PredictorStatus::kOk);
   EXPECT_EQ((out.array() - 7.0).abs().maxCoeff(), 0.0);
 }
+
+// ---------------------------------------------------------------------------
+// Every pole count: the template's fixed sizes and Eigen::Dynamic.
+
+namespace {
+
+// The first n_u inputs and n_y outputs of the run.
+Eigen::MatrixXd inputsFor(const DioPwlObfModel& m) { return run().u.leftCols(m.inputCount()); }
+Eigen::MatrixXd outputsFor(const DioPwlObfModel& m) { return run().y.leftCols(m.outputCount()); }
+
+template <int NP>
+struct PoleCount {
+  static constexpr int kTemplate = NP;
+  static constexpr int kPoles = NP == Eigen::Dynamic ? 4 : NP;  // the model's, for Predictor<>
+};
+
+struct PoleCountNames {
+  template <class T>
+  static std::string GetName(int) {
+    return T::kTemplate == Eigen::Dynamic ? "Dynamic" : "NP" + std::to_string(T::kTemplate);
+  }
+};
+
+template <class T>
+class PredictorSizes : public ::testing::Test {
+ protected:
+  using P = Predictor<T::kTemplate>;
+  static constexpr int kPoles = T::kPoles;
+  // The variants this pole count can have (a conjugate pair needs two poles).
+  static std::vector<Variant> variants() {
+    std::vector<Variant> v = {Variant::kOneRegion, Variant::kGridOutputSide, Variant::kGridInputSide};
+    if (kPoles >= 2) v.push_back(Variant::kGridComplexPoles);
+    return v;
+  }
+  static bool modal(Variant v) { return v != Variant::kGridComplexPoles; }
+};
+
+using Sizes = ::testing::Types<PoleCount<1>, PoleCount<2>, PoleCount<3>, PoleCount<5>, PoleCount<8>,
+                               PoleCount<Eigen::Dynamic>>;
+TYPED_TEST_SUITE(PredictorSizes, Sizes, PoleCountNames);
+
+}  // namespace
+
+// The 1-, 10- and 40-step predictions along the run against the offline
+// predictions of the same model (predictOutputs), and free simulation
+// against the offline simulation.
+TYPED_TEST(PredictorSizes, PredictionsEqualTheOfflineOnes) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int H = 40;
+    const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, H});
+    P p(m);
+    EXPECT_EQ(p.heldPathIsModal(), TestFixture::modal(v));
+    Eigen::MatrixXd out(H, m.outputCount());
+    double worst = 0.0, moved = 0.0;
+    int compared = 0;
+    for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
+      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk) << "t=" << t;
+      if (t % 5 != 0) continue;
+      ASSERT_EQ(p.predict(H, u.middleRows(t + 1, H - 1), out), PredictorStatus::kOk);
+      for (int o = 0; o < m.outputCount(); ++o)
+        for (int k : {1, 10, H}) {
+          worst = std::max(worst, std::abs(out(k - 1, o) - offline[static_cast<std::size_t>(o)].at(k).values(t)));
+          moved = std::max(moved, std::abs(out(k - 1, o) - y(t, o)));
+        }
+      ++compared;
+    }
+    EXPECT_GT(compared, 100);
+    EXPECT_GT(moved, 1e-2) << "the predictions never moved: the check shows nothing";
+    EXPECT_LT(worst, 1e-9) << "predictor and offline predictions differ";
+    // Free simulation.
+    PredictorOptions so;
+    so.simulate = true;
+    P s(m, so);
+    for (Eigen::Index t = 0; t + 1 < u.rows(); ++t) ASSERT_EQ(s.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+    const Eigen::Index last = u.rows() - 2;
+    ASSERT_EQ(s.predict(1, Eigen::MatrixXd(0, m.inputCount()), out), PredictorStatus::kOk);
+    for (int o = 0; o < m.outputCount(); ++o)
+      EXPECT_NEAR(out(0, o), offline[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
+  }
+}
+
+// A held input (no plan) takes the predictor's closed-form paths; it must
+// equal a plan repeating the last input at every horizon up to the longest.
+TYPED_TEST(PredictorSizes, HeldInputEqualsARepeatedPlan) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int HL = 400;
+    P p(m);
+    Eigen::MatrixXd held(HL, m.outputCount()), repeated(HL, m.outputCount());
+    double worst = 0.0, moved = 0.0;
+    for (Eigen::Index t = 0; t < u.rows(); ++t) {
+      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+      if (t % 11 != 5) continue;
+      ASSERT_EQ(p.predict(HL, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
+      ASSERT_EQ(p.predict(HL, u.row(t).replicate(HL - 1, 1), repeated), PredictorStatus::kOk);
+      worst = std::max(worst, (held - repeated).cwiseAbs().maxCoeff());
+      moved = std::max(moved, (held.row(HL - 1) - held.row(0)).norm());
+    }
+    EXPECT_GT(moved, 1e-3) << "the held predictions never moved: the check shows nothing";
+    EXPECT_LT(worst, 1e-9) << "held-input path and a repeated plan differ";
+  }
+}
+
+// Neither update, predict (planned and held) nor sensitivity allocates, on
+// any variant's paths, over the run twice.
+TYPED_TEST(PredictorSizes, NoAllocationInUpdatePredictOrSensitivity) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int H = 40, HL = 400, n_y = m.outputCount(), n_u = m.inputCount();
+    P p(m);
+    Eigen::MatrixXd out(HL, n_y), jacobian(H * n_y, (H - 1) * n_u), none(0, n_u);
+    const PredictorStatus sensitivity_status = TestFixture::modal(v) ? PredictorStatus::kOk : PredictorStatus::kUnsupported;
+    int failures = 0;
+    std::uint64_t allocations = 0;
+    {
+      plsa::testing::AllocGuard guard;
+      int tick = 0;
+      for (int lap = 0; lap < 2; ++lap)
+        for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
+          failures += p.update(tick++ * kDt, u.row(t), y.row(t)) != PredictorStatus::kOk;
+          failures += p.predict(H, u.middleRows(t + 1, H - 1), out) != PredictorStatus::kOk;
+          failures += p.predict(HL, none, out) != PredictorStatus::kOk;
+          if (t % 10 == 0) failures += p.sensitivity(H, u.middleRows(t + 1, H - 1), jacobian) != sensitivity_status;
+        }
+      allocations = guard.allocations();
+    }
+    EXPECT_EQ(failures, 0);
+    EXPECT_EQ(allocations, 0u);
+    EXPECT_TRUE(out.allFinite());
+  }
+}
+
+// A fixed size refuses a model of another pole count at set-up, by name.
+TYPED_TEST(PredictorSizes, RefusesAModelOfAnotherPoleCount) {
+  using P = typename TestFixture::P;
+  if constexpr (TypeParam::kTemplate == Eigen::Dynamic) {
+    for (int n : {1, 3, 6}) EXPECT_NO_THROW(P{variant(Variant::kOneRegion, n)}) << n << " poles";
+  } else {
+    const DioPwlObfModel other = variant(Variant::kOneRegion, TestFixture::kPoles + 1);
+    try {
+      P p(other);
+      ADD_FAILURE() << "a model of " << TestFixture::kPoles + 1 << " poles accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("Predictor<" + std::to_string(TypeParam::kTemplate) + ">"), std::string::npos)
+          << e.what();
+    }
+  }
+}

@@ -6,10 +6,13 @@
 #include <functional>
 #include <ostream>
 
+#include "support/hand_built_models.hpp"  // the shaping fields' accessors
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
 using namespace plsa::test_fixtures;
+using plsa::hand_built::playChannels, plsa::hand_built::playCoupling, plsa::hand_built::playSoftening,
+    plsa::hand_built::playStart, plsa::hand_built::playThreshold;
 using C = std::complex<double>;
 
 namespace {
@@ -44,7 +47,7 @@ DioPwlObfModel readBack(const nlohmann::json& j) { return modelFromJson(j.dump()
 
 // A model with two play channels on its one input (the rows on play fields).
 void setPlayChannels(DioPwlObfModel& m) {
-  m.input_play = {{0.02, PlayChannel(0.0, 0.12)}};
+  playChannels(m) = {{0.02, PlayChannel(0.0, 0.12)}};
   m.poles = {{PoleSet::real({0.9, 0.7})}};
   m.coefficients = {{Eigen::Vector4d(1, 2, 3, 4)}, {Eigen::Vector4d(-1, 0.5, 0.25, 2)}};
 }
@@ -118,29 +121,29 @@ std::vector<FieldCase> fieldCases() {
       "PlayChannelsAndStart",
       setPlayChannels,
       [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.input_play, m.input_play);
-        EXPECT_EQ(back.play_start, PlayStart::kRising);
+        EXPECT_EQ(playChannels(back), playChannels(m));
+        EXPECT_EQ(playStart(back), PlayStart::kRising);
       },
       "",
       {"play_start"},  // a file written before the field keeps its centred channels
-      [](const J& v1) { EXPECT_EQ(readBack(v1).play_start, PlayStart::kCentred); },
+      [](const J& v1) { EXPECT_EQ(playStart(readBack(v1)), PlayStart::kCentred); },
       {}});
 
   cases.push_back(FieldCase{
       "PlayCoupling",
       [](DioPwlObfModel& m) {
         setPlayChannels(m);
-        m.play_coupling = 0.75;
+        playCoupling(m) = 0.75;
       },
       [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.play_coupling, 0.75);
-        EXPECT_EQ(back.input_play, m.input_play);
+        EXPECT_EQ(playCoupling(back), 0.75);
+        EXPECT_EQ(playChannels(back), playChannels(m));
       },
       "",
       {"play_start", "play_coupling"},  // ...and its uncoupled ones
       [](const J& v1) {
-        EXPECT_EQ(readBack(v1).play_start, PlayStart::kCentred);
-        EXPECT_EQ(readBack(v1).play_coupling, 0.0);
+        EXPECT_EQ(playStart(readBack(v1)), PlayStart::kCentred);
+        EXPECT_EQ(playCoupling(readBack(v1)), 0.0);
       },
       {
           {"a negative coupling", true, [](J& j) { j["play_coupling"] = -1.0; }, ""},
@@ -148,11 +151,11 @@ std::vector<FieldCase> fieldCases() {
 
   cases.push_back(FieldCase{
       "PlayThreshold",
-      [](DioPwlObfModel& m) { m.play_threshold = 0.07; },
-      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.play_threshold, 0.07); },
+      [](DioPwlObfModel& m) { playThreshold(m) = 0.07; },
+      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(playThreshold(back), 0.07); },
       "",
       {"play_threshold"},  // version 1, written before the field existed: counted from zero
-      [](const J& v1) { EXPECT_EQ(readBack(v1).play_threshold, 0.0); },
+      [](const J& v1) { EXPECT_EQ(playThreshold(readBack(v1)), 0.0); },
       {
           {"a negative threshold", true, [](J& j) { j["play_threshold"] = -0.01; }, "play_threshold"},
           {"a threshold that is text", true, [](J& j) { j["play_threshold"] = "high"; }, ""},
@@ -160,11 +163,11 @@ std::vector<FieldCase> fieldCases() {
 
   cases.push_back(FieldCase{
       "PlaySoftening",
-      [](DioPwlObfModel& m) { m.play_softening = 0.8; },
-      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.play_softening, 0.8); },
+      [](DioPwlObfModel& m) { playSoftening(m) = 0.8; },
+      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(playSoftening(back), 0.8); },
       "",
       {"play_softening"},  // version 1, written before the field existed: linear
-      [](const J& v1) { EXPECT_EQ(readBack(v1).play_softening, 0.0); },
+      [](const J& v1) { EXPECT_EQ(playSoftening(readBack(v1)), 0.0); },
       {
           {"a negative softening", true, [](J& j) { j["play_softening"] = -0.5; }, "play_softening"},
           {"a softening that is text", true, [](J& j) { j["play_softening"] = "soft"; }, ""},

@@ -14,6 +14,7 @@
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/testing/alloc_guard.hpp"
+#include "support/hand_built_models.hpp"  // the shaping fields' accessors
 
 using namespace plsa;
 
@@ -48,9 +49,9 @@ const Data& data() {
     out.interpolated = identifyModel({train}, o);
     // ...coupled to the other inputs, counted from a threshold and softened,
     // so the predictor's channel levels are checked too.
-    out.interpolated.play_coupling = 1.0;
-    out.interpolated.play_threshold = 0.07;
-    out.interpolated.play_softening = 1.5;
+    hand_built::playCoupling(out.interpolated) = 1.0;
+    hand_built::playThreshold(out.interpolated) = 0.07;
+    hand_built::playSoftening(out.interpolated) = 1.5;
     fitCoefficients(out.interpolated, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
     // Scheduled through a lag: the predictor carries the lagged inputs, and a
     // held input keeps moving the schedule until the lag settles.

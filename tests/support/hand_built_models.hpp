@@ -3,9 +3,10 @@
 // coefficients chosen by a formula (no simulator, no identification), so a
 // test can work out what the predictor must answer in closed form.
 //
-// Every assignment of the model's input-shaping fields (the play channels,
-// their start, coupling, threshold and softening) is in this file, in
-// build(): when those fields move, this is the one place to follow them.
+// The model's input-shaping fields (the play channels, their start,
+// coupling, threshold and softening) are named in this file only, in the
+// accessors below: the tests read and set them through those (build() too),
+// so when the fields move this is the one place to follow them.
 #pragma once
 
 #include <algorithm>
@@ -21,6 +22,18 @@
 #include "plsa/model/pwl_partition.hpp"
 
 namespace plsa::hand_built {
+
+// The input-shaping fields of a model, the only place the tests name them.
+inline std::vector<std::vector<PlayChannel>>& playChannels(DioPwlObfModel& m) { return m.input_play; }
+inline const std::vector<std::vector<PlayChannel>>& playChannels(const DioPwlObfModel& m) { return m.input_play; }
+inline PlayStart& playStart(DioPwlObfModel& m) { return m.play_start; }
+inline PlayStart playStart(const DioPwlObfModel& m) { return m.play_start; }
+inline double& playCoupling(DioPwlObfModel& m) { return m.play_coupling; }
+inline double playCoupling(const DioPwlObfModel& m) { return m.play_coupling; }
+inline double& playThreshold(DioPwlObfModel& m) { return m.play_threshold; }
+inline double playThreshold(const DioPwlObfModel& m) { return m.play_threshold; }
+inline double& playSoftening(DioPwlObfModel& m) { return m.play_softening; }
+inline double playSoftening(const DioPwlObfModel& m) { return m.play_softening; }
 
 /// Grid nodes of the 2x2 partition, on inputs 0 and 1 alike.
 inline constexpr double kNodeLow = 0.2;
@@ -82,12 +95,11 @@ inline DioPwlObfModel build(const Spec& spec) {
   m.input_max = kInputMax;
   m.poles.assign(static_cast<std::size_t>(spec.outputs),
                  std::vector<PoleSet>(static_cast<std::size_t>(spec.inputs), PoleSet(spec.poles)));
-  // The input-shaping fields: set here and nowhere else in the tests.
-  m.input_play.assign(static_cast<std::size_t>(spec.inputs), spec.channels);
-  m.play_start = spec.start;
-  m.play_coupling = spec.coupling;
-  m.play_threshold = spec.threshold;
-  m.play_softening = spec.softening;
+  playChannels(m).assign(static_cast<std::size_t>(spec.inputs), spec.channels);
+  playStart(m) = spec.start;
+  playCoupling(m) = spec.coupling;
+  playThreshold(m) = spec.threshold;
+  playSoftening(m) = spec.softening;
   m.schedule_lag_s = spec.schedule_lag_s;
   m.schedule_side = spec.side;
   if (spec.grid == Grid::kGrid2x2)

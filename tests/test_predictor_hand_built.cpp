@@ -1,0 +1,446 @@
+// The predictor on small models built by hand (support/hand_built_models.hpp):
+// its answers against closed forms worked out here (the one-pole recursion,
+// the DC gain of the basis, the play band, the shaped level, the grid's
+// bilinear weights), and, for every pole count the template is stamped with,
+// against the offline predictions, its own planned path and the allocator.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "plsa/eval/validation.hpp"
+#include "plsa/predict/predictor.hpp"
+#include "plsa/testing/alloc_guard.hpp"
+#include "support/hand_built_models.hpp"
+
+using namespace plsa;
+using namespace plsa::hand_built;
+
+namespace {
+
+constexpr double kDt = 1.0 / 80.0;  // every hand-built model's sample time
+
+// An OBF basis function's gain at z = 1: sqrt(1 - a^2) / (1 - a), the
+// all-pass sections before it being 1 there.
+double basisDcGain(double a) { return std::sqrt((1.0 + a) / (1.0 - a)); }
+
+// A run of two inputs inside the models' range, crossing both grid nodes:
+// stretches of sines, of held steps and of faster swings; two outputs.
+struct Run {
+  Eigen::MatrixXd u, y;
+};
+const Run& run() {
+  static const Run r = [] {
+    const int T = 720;
+    Run out{Eigen::MatrixXd(T, 2), Eigen::MatrixXd(T, 2)};
+    const double pi = std::acos(-1.0);
+    for (int k = 0; k < T; ++k) {
+      const int stretch = k / 60;
+      for (int j = 0; j < 2; ++j) {
+        double u = 0.0;
+        if (stretch % 3 == 0) u = 0.3 + 0.22 * std::sin(2 * pi * k / 150.0 + 1.3 * j);
+        if (stretch % 3 == 1) u = 0.1 + 0.08 * ((stretch * 3 + j * 5) % 6);
+        if (stretch % 3 == 2) u = 0.3 + 0.2 * std::cos(2 * pi * k / 47.0 + j);
+        out.u(k, j) = u;
+        out.y(k, j) = 5.0 * std::sin(0.013 * k + j) + 0.3 * std::cos(0.21 * k);
+      }
+    }
+    return out;
+  }();
+  return r;
+}
+
+// The held-input prediction after one step: a sample at u0 (rest), then one at U.
+Eigen::MatrixXd heldAfterStep(const DioPwlObfModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& U,
+                              const Eigen::VectorXd& y0, const Eigen::VectorXd& y1, int horizon = 400) {
+  Predictor<> p(m);
+  Eigen::MatrixXd out(horizon, m.outputCount());
+  EXPECT_EQ(p.update(0.0, u0, y0), PredictorStatus::kOk);
+  EXPECT_EQ(p.update(kDt, U, y1), PredictorStatus::kOk);
+  EXPECT_EQ(p.predict(horizon, Eigen::MatrixXd(0, m.inputCount()), out), PredictorStatus::kOk);
+  return out;
+}
+
+// The 2x2 grid's bilinear weights of the nodes (region r = i0 + 2 i1, i_s = 0
+// at kNodeLow, 1 at kNodeHigh) at u; outside the grid the nearest edge holds.
+Eigen::Vector4d gridWeights(const Eigen::Vector2d& u) {
+  Eigen::Vector2d t;
+  for (int s = 0; s < 2; ++s) t(s) = std::clamp((u(s) - kNodeLow) / (kNodeHigh - kNodeLow), 0.0, 1.0);
+  return Eigen::Vector4d((1 - t(0)) * (1 - t(1)), t(0) * (1 - t(1)), (1 - t(0)) * t(1), t(0) * t(1));
+}
+
+}  // namespace
+
+// y_k = y_{k-1} + c x_k, x_{k+1} = a x_k + sqrt(1 - a^2) (u_k - u_{k-1}):
+// the predictions of every horizon, planned and held, in both of the
+// predictor's forms, against that recursion run here.
+TEST(PredictorHandBuilt, OnePoleFollowsTheHandRecursionAtEveryHorizon) {
+  const double a = 0.8, c = 1.7, b = std::sqrt(1.0 - a * a);
+  const DioPwlObfModel m = onePole(a, c);
+  const Eigen::VectorXd u = run().u.col(0), y = run().y.col(0);
+  const int H = 40;
+  for (const bool modal : {true, false}) {
+    SCOPED_TRACE(modal ? "modal form" : "state-space form");
+    PredictorOptions o;
+    o.modal = modal;
+    Predictor<1> p(m, o);
+    EXPECT_EQ(p.heldPathIsModal(), modal);
+    Eigen::MatrixXd planned(H, 1), held(H, 1);
+    double x = 0.0, worst = 0.0, moved = 0.0;  // x: the state after the last sample, x_{t+1}
+    for (Eigen::Index t = 0; t + H < u.size(); ++t) {
+      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+      if (t > 0) x = a * x + b * (u(t) - u(t - 1));
+      if (t % 3 != 0) continue;
+      ASSERT_EQ(p.predict(H, u.segment(t + 1, H - 1), planned), PredictorStatus::kOk);
+      ASSERT_EQ(p.predict(H, Eigen::MatrixXd(0, 1), held), PredictorStatus::kOk);
+      double xp = x, yp = y(t), xh = x, yh = y(t);
+      for (int h = 0; h < H; ++h) {
+        yp += c * xp;
+        yh += c * xh;
+        worst = std::max({worst, std::abs(planned(h, 0) - yp), std::abs(held(h, 0) - yh)});
+        moved = std::max(moved, std::abs(yp - y(t)));
+        xp = a * xp + b * (u(t + 1 + h) - u(t + h));  // the plan's next input
+        xh = a * xh;                                  // the input held
+      }
+    }
+    EXPECT_GT(moved, 0.1) << "the predictions never moved: the check shows nothing";
+    EXPECT_LT(worst, 1e-11) << "the predictor parts from the one-pole recursion";
+  }
+}
+
+// A step held from then on: after the step du the prediction is
+// y1 + c sqrt(1 - a^2) du (1 - a^(h+1)) / (1 - a) at horizon h + 1 and settles at
+// the DC gain; with several poles and inputs, at sum c_ji sqrt((1 + a_i) / (1 - a_i)) du_j.
+TEST(PredictorHandBuilt, HeldStepSettlesAtTheHandDcGain) {
+  {
+    const double a = 0.8, c = 1.7, du = 0.35;
+    const Eigen::MatrixXd out = heldAfterStep(onePole(a, c), Eigen::VectorXd::Constant(1, 0.1),
+                                              Eigen::VectorXd::Constant(1, 0.1 + du), Eigen::VectorXd::Constant(1, 2.0),
+                                              Eigen::VectorXd::Constant(1, 2.5));
+    double worst = 0.0;
+    for (int h = 0; h < out.rows(); ++h)
+      worst = std::max(worst, std::abs(out(h, 0) - (2.5 + c * std::sqrt(1 - a * a) * du * (1 - std::pow(a, h + 1)) / (1 - a))));
+    EXPECT_LT(worst, 1e-12);
+    EXPECT_NEAR(out(out.rows() - 1, 0), 2.5 + c * basisDcGain(a) * du, 1e-12);
+  }
+  {  // three poles, two inputs, two outputs, one region
+    Spec s;
+    s.inputs = s.outputs = 2;
+    s.poles = realPoles(3);
+    const DioPwlObfModel m = build(s);
+    const Eigen::Vector2d u0(0.1, 0.5), U(0.45, 0.2), y0(1.0, -1.0), y1(1.5, -0.5);
+    const Eigen::MatrixXd out = heldAfterStep(m, u0, U, y0, y1);
+    for (int o = 0; o < 2; ++o) {
+      double expected = y1(o);
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 3; ++i)
+          expected += m.coefficients[0][static_cast<std::size_t>(o)](3 * j + i) * basisDcGain(s.poles[static_cast<std::size_t>(i)].real()) *
+                      (U(j) - u0(j));
+      EXPECT_NEAR(out(out.rows() - 1, o), expected, 1e-9) << "output " << o;
+    }
+  }
+}
+
+// On the 2x2 grid a held input fixes the schedule: the output side weighs the
+// nodes' coefficients bilinearly at the input and filters its step; the input
+// side filters each node's weighted input, whose step is w_r(U) U - w_r(u0) u0.
+TEST(PredictorHandBuilt, HeldStepOnTheGridSettlesAtTheBlendedDcGain) {
+  Spec s;
+  s.inputs = 2;
+  s.poles = realPoles(2);
+  s.grid = Grid::kGrid2x2;
+  const Eigen::VectorXd y0_1 = Eigen::VectorXd::Constant(1, 3.0), y1_1 = Eigen::VectorXd::Constant(1, 3.25);
+  for (const ScheduleSide side : {ScheduleSide::kOutput, ScheduleSide::kInput}) {
+    s.side = side;
+    const DioPwlObfModel m = build(s);
+    // Inside the grid, and outside it on both inputs (the nearest nodes hold).
+    for (const auto& [u0, U] : {std::pair{Eigen::Vector2d(0.25, 0.3), Eigen::Vector2d(0.33, 0.22)},
+                                std::pair{Eigen::Vector2d(0.3, 0.35), Eigen::Vector2d(0.5, 0.1)}}) {
+      SCOPED_TRACE(std::string(side == ScheduleSide::kInput ? "input side" : "output side") + ", to (" +
+                   std::to_string(U(0)) + ", " + std::to_string(U(1)) + ")");
+      const Eigen::Vector4d w0 = gridWeights(u0), w = gridWeights(U);
+      double expected = y1_1(0);
+      for (int r = 0; r < 4; ++r)
+        for (int j = 0; j < 2; ++j) {
+          double gain = 0.0;  // node r's DC gain from input j
+          for (int i = 0; i < 2; ++i)
+            gain += m.coefficients[static_cast<std::size_t>(r)][0](2 * j + i) * basisDcGain(s.poles[static_cast<std::size_t>(i)].real());
+          expected += side == ScheduleSide::kOutput ? w(r) * gain * (U(j) - u0(j)) : gain * (w(r) * U(j) - w0(r) * u0(j));
+        }
+      const Eigen::MatrixXd out = heldAfterStep(m, u0, U, y0_1, y1_1);
+      EXPECT_NEAR(out(out.rows() - 1, 0), expected, 1e-9);
+      EXPECT_GT(std::abs(expected - y1_1(0)), 1e-2) << "the step moves nothing: the check shows nothing";
+    }
+  }
+}
+
+// A play channel of half-width r starts a band below the first input (rising)
+// and moves only once the input leaves the band: a fall of less than 2r
+// predicts no motion at all, a larger one only its part beyond the band.
+TEST(PredictorHandBuilt, PlayChannelMovesOnlyOutsideItsBand) {
+  const double a = 0.8, c = 1.7, G = c * basisDcGain(a);
+  struct Case {
+    PlayChannel channel;
+    double u0, U, moved;  // moved: the channel's move, worked out by hand
+  };
+  const Case cases[] = {
+      {PlayChannel(0.05), 0.3, 0.4, 0.1},    // v0 = 0.25 -> 0.4 - 0.05
+      {PlayChannel(0.05), 0.3, 0.25, 0.0},   // inside the band: stays at 0.25
+      {PlayChannel(0.05), 0.3, 0.1, -0.1},   // 0.25 -> 0.1 + 0.05
+      {PlayChannel(0.02, 0.1), 0.3, 0.5, 0.18},  // r(u) = 0.02 + 0.1 u: 0.3 - 0.05 -> 0.5 - 0.07
+  };
+  const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(1, 1.0), y1 = Eigen::VectorXd::Constant(1, 1.25);
+  for (const Case& k : cases) {
+    SCOPED_TRACE("from " + std::to_string(k.u0) + " to " + std::to_string(k.U));
+    const Eigen::MatrixXd out = heldAfterStep(onePoleWithPlay(a, c, k.channel), Eigen::VectorXd::Constant(1, k.u0),
+                                              Eigen::VectorXd::Constant(1, k.U), y0, y1);
+    if (k.moved == 0.0)
+      EXPECT_EQ((out.array() - y1(0)).abs().maxCoeff(), 0.0) << "inside the band nothing may move";
+    else
+      EXPECT_NEAR(out(out.rows() - 1, 0), y1(0) + G * k.moved, 1e-12);
+  }
+}
+
+// The channels see each input's level above the threshold, softened to
+// x - s x^2 and less kappa times it times the other inputs' levels above the
+// threshold (InputShaping's threshold, softening and coupling):
+// worked out here from that description, not from the library's functions.
+TEST(PredictorHandBuilt, ThresholdSofteningAndCouplingShapeTheLevel) {
+  const double a = 0.8, threshold = 0.1, coupling = 0.8, softening = 0.6;
+  const Eigen::Vector2d c(1.2, -0.7);
+  const DioPwlObfModel m = onePoleShaped(a, c, threshold, coupling, softening);
+  const auto level = [&](const Eigen::Vector2d& u) {
+    const Eigen::Vector2d above = (u.array() - threshold).max(0.0);
+    Eigen::Vector2d v;
+    for (int j = 0; j < 2; ++j) {
+      const double soft = above(j) - softening * above(j) * above(j);  // above(j) < 1 / (2 s): before the peak
+      v(j) = soft - coupling * std::max(0.0, soft) * (above.sum() - above(j));
+    }
+    return v;
+  };
+  const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(1, -2.0), y1 = Eigen::VectorXd::Constant(1, -1.5);
+  {  // below the threshold throughout: nothing moves
+    const Eigen::MatrixXd out = heldAfterStep(m, Eigen::Vector2d(0.05, 0.0), Eigen::Vector2d(0.08, 0.09), y0, y1);
+    EXPECT_EQ((out.array() - y1(0)).abs().maxCoeff(), 0.0);
+  }
+  for (const auto& [u0, U] : {std::pair{Eigen::Vector2d(0.05, 0.0), Eigen::Vector2d(0.4, 0.3)},
+                              std::pair{Eigen::Vector2d(0.5, 0.2), Eigen::Vector2d(0.15, 0.55)}}) {
+    const Eigen::Vector2d dv = level(U) - level(u0);
+    const double expected = y1(0) + basisDcGain(a) * c.dot(dv);
+    const Eigen::MatrixXd out = heldAfterStep(m, u0, U, y0, y1);
+    EXPECT_NEAR(out(out.rows() - 1, 0), expected, 1e-12);
+    EXPECT_GT(std::abs(expected - y1(0)), 1e-2);
+  }
+}
+
+// Rejected samples (NaN or Inf, outside the accepted range, stale or
+// repeated time, wrong size) leave the state alone: the next prediction is
+// still the hand recursion's. A time gap restarts at rest.
+TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
+  const double a = 0.8, c = 1.7, b = std::sqrt(1.0 - a * a);
+  Predictor<1> p(onePole(a, c));
+  const Eigen::VectorXd u = run().u.col(0), y = run().y.col(0);
+  Eigen::MatrixXd out(40, 1);
+  EXPECT_EQ(p.predict(10, Eigen::MatrixXd(0, 1), out), PredictorStatus::kNotReady);
+  double x = 0.0;
+  const int t = 50;
+  for (Eigen::Index k = 0; k < t; ++k) {
+    ASSERT_EQ(p.update(k * kDt, u.row(k), y.row(k)), PredictorStatus::kOk);
+    if (k > 0) x = a * x + b * (u(k) - u(k - 1));
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const Eigen::VectorXd yt = y.row(t);
+  const auto one = [](double v) -> Eigen::VectorXd { return Eigen::VectorXd::Constant(1, v); };
+  EXPECT_EQ(p.update(t * kDt, one(nan), yt), PredictorStatus::kNotFinite);
+  EXPECT_EQ(p.update(t * kDt, one(0.3), one(inf)), PredictorStatus::kNotFinite);
+  EXPECT_EQ(p.update(nan, one(0.3), yt), PredictorStatus::kNotFinite);
+  // Accepted: the range [0, 0.6] widened by a quarter of it each way.
+  EXPECT_EQ(p.update(t * kDt, one(0.751), yt), PredictorStatus::kInputOutOfRange);
+  EXPECT_EQ(p.update(t * kDt, one(-0.151), yt), PredictorStatus::kInputOutOfRange);
+  EXPECT_EQ(p.update((t - 1) * kDt, one(0.3), yt), PredictorStatus::kTimeNotIncreasing);  // repeated
+  EXPECT_EQ(p.update((t - 20) * kDt, one(0.3), yt), PredictorStatus::kTimeNotIncreasing);  // stale
+  EXPECT_EQ(p.update(t * kDt, Eigen::Vector2d(0.3, 0.3), yt), PredictorStatus::kBadShape);
+  EXPECT_EQ(p.update(t * kDt, one(0.3), Eigen::Vector2d(1, 1)), PredictorStatus::kBadShape);
+  // None of that moved the state.
+  ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 1), out), PredictorStatus::kOk);
+  double yh = y(t - 1), worst = 0.0;
+  for (int h = 0; h < 40; ++h, x *= a) {
+    yh += c * x;
+    worst = std::max(worst, std::abs(out(h, 0) - yh));
+  }
+  EXPECT_LT(worst, 1e-11);
+  EXPECT_EQ(p.predict(0, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonTooLong);
+  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonTooLong);
+  EXPECT_EQ(p.predict(41, Eigen::MatrixXd(0, 1), out), PredictorStatus::kBadShape);
+  EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Zero(4, 2), out), PredictorStatus::kBadShape);
+  EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Constant(4, 1, nan), out), PredictorStatus::kNotFinite);
+  // A gap (more than 2.5 sample times): restarted at rest, the prediction is the sample itself.
+  EXPECT_EQ(p.update((t + 3) * kDt, one(0.45), one(7.0)), PredictorStatus::kTimeGap);
+  ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 1), out), PredictorStatus::kOk);
+  EXPECT_EQ((out.array() - 7.0).abs().maxCoeff(), 0.0);
+}
+
+// ---------------------------------------------------------------------------
+// Every pole count: the template's fixed sizes and Eigen::Dynamic.
+
+namespace {
+
+// The first n_u inputs and n_y outputs of the run.
+Eigen::MatrixXd inputsFor(const DioPwlObfModel& m) { return run().u.leftCols(m.inputCount()); }
+Eigen::MatrixXd outputsFor(const DioPwlObfModel& m) { return run().y.leftCols(m.outputCount()); }
+
+}  // namespace
+
+// The sizes, in a named namespace: ctest's test names carry the type's name
+// (gtest_discover_tests reads it from the default numbered suites).
+namespace sizes {
+template <int NP>
+struct PoleCount {
+  static constexpr int kTemplate = NP;
+  static constexpr int kPoles = NP == Eigen::Dynamic ? 4 : NP;  // the model's, for Predictor<>
+};
+struct Dynamic : PoleCount<Eigen::Dynamic> {};
+}  // namespace sizes
+
+namespace {
+
+template <class T>
+class PredictorSizes : public ::testing::Test {
+ protected:
+  using P = Predictor<T::kTemplate>;
+  static constexpr int kPoles = T::kPoles;
+  // The variants this pole count can have (a conjugate pair needs two poles).
+  static std::vector<Variant> variants() {
+    std::vector<Variant> v = {Variant::kOneRegion, Variant::kGridOutputSide, Variant::kGridInputSide};
+    if (kPoles >= 2) v.push_back(Variant::kGridComplexPoles);
+    return v;
+  }
+  static bool modal(Variant v) { return v != Variant::kGridComplexPoles; }
+};
+
+using Sizes = ::testing::Types<sizes::PoleCount<1>, sizes::PoleCount<2>, sizes::PoleCount<3>, sizes::PoleCount<5>,
+                               sizes::PoleCount<8>, sizes::Dynamic>;
+TYPED_TEST_SUITE(PredictorSizes, Sizes);
+
+}  // namespace
+
+// The 1-, 10- and 40-step predictions along the run against the offline
+// predictions of the same model (predictOutputs), and free simulation
+// against the offline simulation.
+TYPED_TEST(PredictorSizes, PredictionsEqualTheOfflineOnes) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int H = 40;
+    const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, H});
+    P p(m);
+    EXPECT_EQ(p.heldPathIsModal(), TestFixture::modal(v));
+    Eigen::MatrixXd out(H, m.outputCount());
+    double worst = 0.0, moved = 0.0;
+    int compared = 0;
+    for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
+      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk) << "t=" << t;
+      if (t % 5 != 0) continue;
+      ASSERT_EQ(p.predict(H, u.middleRows(t + 1, H - 1), out), PredictorStatus::kOk);
+      for (int o = 0; o < m.outputCount(); ++o)
+        for (int k : {1, 10, H}) {
+          worst = std::max(worst, std::abs(out(k - 1, o) - offline[static_cast<std::size_t>(o)].at(k).values(t)));
+          moved = std::max(moved, std::abs(out(k - 1, o) - y(t, o)));
+        }
+      ++compared;
+    }
+    EXPECT_GT(compared, 100);
+    EXPECT_GT(moved, 1e-2) << "the predictions never moved: the check shows nothing";
+    EXPECT_LT(worst, 1e-9) << "predictor and offline predictions differ";
+    // Free simulation.
+    PredictorOptions so;
+    so.simulate = true;
+    P s(m, so);
+    for (Eigen::Index t = 0; t + 1 < u.rows(); ++t) ASSERT_EQ(s.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+    const Eigen::Index last = u.rows() - 2;
+    ASSERT_EQ(s.predict(1, Eigen::MatrixXd(0, m.inputCount()), out), PredictorStatus::kOk);
+    for (int o = 0; o < m.outputCount(); ++o)
+      EXPECT_NEAR(out(0, o), offline[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
+  }
+}
+
+// A held input (no plan) takes the predictor's closed-form paths; it must
+// equal a plan repeating the last input at every horizon up to the longest.
+TYPED_TEST(PredictorSizes, HeldInputEqualsARepeatedPlan) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int HL = 400;
+    P p(m);
+    Eigen::MatrixXd held(HL, m.outputCount()), repeated(HL, m.outputCount());
+    double worst = 0.0, moved = 0.0;
+    for (Eigen::Index t = 0; t < u.rows(); ++t) {
+      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+      if (t % 11 != 5) continue;
+      ASSERT_EQ(p.predict(HL, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
+      ASSERT_EQ(p.predict(HL, u.row(t).replicate(HL - 1, 1), repeated), PredictorStatus::kOk);
+      worst = std::max(worst, (held - repeated).cwiseAbs().maxCoeff());
+      moved = std::max(moved, (held.row(HL - 1) - held.row(0)).norm());
+    }
+    EXPECT_GT(moved, 1e-3) << "the held predictions never moved: the check shows nothing";
+    EXPECT_LT(worst, 1e-9) << "held-input path and a repeated plan differ";
+  }
+}
+
+// Neither update, predict (planned and held) nor sensitivity allocates, on
+// any variant's paths, over the run twice.
+TYPED_TEST(PredictorSizes, NoAllocationInUpdatePredictOrSensitivity) {
+  using P = typename TestFixture::P;
+  for (const Variant v : TestFixture::variants()) {
+    SCOPED_TRACE(name(v));
+    const DioPwlObfModel m = variant(v, TestFixture::kPoles);
+    const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
+    const int H = 40, HL = 400, n_y = m.outputCount(), n_u = m.inputCount();
+    P p(m);
+    Eigen::MatrixXd out(HL, n_y), jacobian(H * n_y, (H - 1) * n_u), none(0, n_u);
+    const PredictorStatus sensitivity_status = TestFixture::modal(v) ? PredictorStatus::kOk : PredictorStatus::kUnsupported;
+    int failures = 0;
+    std::uint64_t allocations = 0;
+    {
+      plsa::testing::AllocGuard guard;
+      int tick = 0;
+      for (int lap = 0; lap < 2; ++lap)
+        for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
+          failures += p.update(tick++ * kDt, u.row(t), y.row(t)) != PredictorStatus::kOk;
+          failures += p.predict(H, u.middleRows(t + 1, H - 1), out) != PredictorStatus::kOk;
+          failures += p.predict(HL, none, out) != PredictorStatus::kOk;
+          if (t % 10 == 0) failures += p.sensitivity(H, u.middleRows(t + 1, H - 1), jacobian) != sensitivity_status;
+        }
+      allocations = guard.allocations();
+    }
+    EXPECT_EQ(failures, 0);
+    EXPECT_EQ(allocations, 0u);
+    EXPECT_TRUE(out.allFinite());
+  }
+}
+
+// A fixed size refuses a model of another pole count at set-up, by name.
+TYPED_TEST(PredictorSizes, RefusesAModelOfAnotherPoleCount) {
+  using P = typename TestFixture::P;
+  if constexpr (TypeParam::kTemplate == Eigen::Dynamic) {
+    for (int n : {1, 3, 6}) EXPECT_NO_THROW(P{variant(Variant::kOneRegion, n)}) << n << " poles";
+  } else {
+    const DioPwlObfModel other = variant(Variant::kOneRegion, TestFixture::kPoles + 1);
+    try {
+      P p(other);
+      ADD_FAILURE() << "a model of " << TestFixture::kPoles + 1 << " poles accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("Predictor<" + std::to_string(TypeParam::kTemplate) + ">"), std::string::npos)
+          << e.what();
+    }
+  }
+}

@@ -13,6 +13,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace fs = std::filesystem;
 
@@ -22,8 +23,8 @@ namespace {
 
 struct CrossvalArgs {
   std::vector<std::string> logs;
-  std::vector<std::string> inputs{"p_1", "p_2", "p_3"};
-  std::vector<std::string> outputs{"bend_deg", "steer_deg"};
+  std::vector<std::string> inputs = io::standard_columns::pressures();
+  std::vector<std::string> outputs = io::standard_columns::tipAngles();
   std::vector<int> horizons{1, 12};
   int arx_na = 4, arx_nb = 4;
   std::string json;
@@ -75,7 +76,7 @@ void runCrossval(CrossvalArgs& a) {
         train.push_back(logs[r]);
         U.push_back(logs[r].columnsOf(a.inputs));
         Y.push_back(logs[r].columnsOf(a.outputs));
-        T.push_back(logs[r].column("time_s"));
+        T.push_back(logs[r].column(io::standard_columns::kTime));
       }
     IdentifyReport report;
     const DioPwlObfModel model = identifyModel(train, o, &report);

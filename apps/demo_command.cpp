@@ -21,6 +21,7 @@
 #include "plsa/model/model_file.hpp"
 #include "plsa/report/svg_chart.hpp"
 #include "plsa/sim/experiment.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace fs = std::filesystem;
 
@@ -93,7 +94,7 @@ void runDemo(const DemoOptions& opt) {
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs);
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
   Eigen::MatrixXd Yt = train.columnsOf(model.outputs);
-  if (report.drift_taken_out) Yt = removeOutputDrift({Yt}, {train.column("time_s")}, report.output_drift)[0];
+  if (report.drift_taken_out) Yt = removeOutputDrift({Yt}, {train.column(io::standard_columns::kTime)}, report.output_drift)[0];
   const std::string drift_text =
       report.drift_taken_out
           ? "A sensor yaw drift of " + std::to_string(report.output_drift.rate[1]).substr(0, 6) +
@@ -139,7 +140,7 @@ void runDemo(const DemoOptions& opt) {
   }
   const auto scores_all = commonScores(all, Yv);
   const Eigen::Index scored_from = commonScoringStart(all);
-  const Eigen::VectorXd tv = val.column("time_s").array() - val.column("time_s")(0);
+  const Eigen::VectorXd tv = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
   const std::string window = "samples " + std::to_string(scored_from) + " to " + std::to_string(Yv.rows() - 1) +
                              ", t = " + fmt(tv(scored_from), "%g") + " to " + fmt(tv(tv.size() - 1), "%g") + " s";
   const std::size_t nm = preds.size();
@@ -197,7 +198,7 @@ void runDemo(const DemoOptions& opt) {
   writeTextFile(path("fits.json"), j.dump(2) + "\n", "fits file");
 
   // 4. Report.
-  const Eigen::VectorXd t = val.column("time_s").array() - val.column("time_s")(0);
+  const Eigen::VectorXd t = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
        << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"

@@ -12,6 +12,7 @@
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
 #include "plsa/sim/sim_config.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::app {
 namespace {
@@ -22,7 +23,7 @@ struct DiagnoseArgs {
   std::string out;
   diagnose::RunColumns columns;
   std::string output_map = "angles";
-  std::vector<std::string> pressures{"p_1", "p_2", "p_3"};
+  std::vector<std::string> pressures = io::standard_columns::pressures();
   diagnose::DiagnoseOptions options;
   std::string channel = "PLSA_STATE";
 };

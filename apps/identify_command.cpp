@@ -12,6 +12,7 @@
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/eval/validation.hpp"
 #include "plsa/model/model_file.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::app {
 using namespace plsa::identify;  // this command drives identification
@@ -19,8 +20,8 @@ namespace {
 
 struct IdentifyArgs {
   std::vector<std::string> logs;
-  std::vector<std::string> inputs{"p_1", "p_2", "p_3"};
-  std::vector<std::string> outputs{"bend_deg", "steer_deg"};
+  std::vector<std::string> inputs = io::standard_columns::pressures();
+  std::vector<std::string> outputs = io::standard_columns::tipAngles();
   std::vector<std::string> reference;
   std::string out;
   bool compare_poles = false;
@@ -108,7 +109,7 @@ void runValidate(const ValidateArgs& a) {
   const DioPwlObfModel model = loadModel(a.model);
   std::vector<std::string> required = model.inputs;
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
-  required.push_back("time_s");  // the sample rate and gaps are checked against the model's
+  required.push_back(io::standard_columns::kTime);  // the sample rate and gaps are checked against the model's
   const io::Log log = readLogs({a.log}, required, "validate", a.channel).front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   for (const std::string& w : inputCoverageWarnings(model, v.outside_training))

@@ -6,6 +6,7 @@
 
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/eval/validation.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::diagnose {
 using namespace plsa::identify;  // this command drives identification
@@ -20,7 +21,8 @@ bool allHavePressures(const std::vector<RunData>& runs) {
 io::Log asLog(const RunData& run, bool pressures) {
   io::Log log;
   log.source = run.name;
-  log.columns = {"time_s", "u_1", "u_2", "u_3", "cmd_1", "cmd_2", "cmd_3", "y_1", "y_2"};
+  const std::vector<std::string> commands = io::standard_columns::commands();
+  log.columns = {io::standard_columns::kTime, "u_1", "u_2", "u_3", commands[0], commands[1], commands[2], "y_1", "y_2"};
   const Eigen::Index n = run.samples();
   log.data.resize(n, 9);
   for (Eigen::Index i = 0; i < n; ++i) log.data(i, 0) = static_cast<double>(i) * run.sample_time_s;
@@ -34,7 +36,7 @@ IdentifyOptions referenceOptions() {
   IdentifyOptions o;
   o.inputs = {"u_1", "u_2", "u_3"};
   o.outputs = {"y_1", "y_2"};
-  o.reference = {"cmd_1", "cmd_2", "cmd_3"};
+  o.reference = io::standard_columns::commands();
   o.output_frame = OutputFrame::kAsLogged;
   o.refuse_outliers = false;  // a reference, not a product: fit what is there
   return o;

@@ -1,4 +1,5 @@
 #include "plsa/diagnose/run_data.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -21,11 +22,12 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
   if (c.inputs.empty() || c.inputs.size() > 3) throw std::invalid_argument(where + "needs 1 to 3 input columns");
   if (c.outputs.size() != 2) throw std::invalid_argument(where + "needs exactly 2 output columns");
   if (!(c.input_scale > 0) || !std::isfinite(c.input_scale)) throw std::invalid_argument(where + "input scale must be positive");
-  if (!log.hasColumn("time_s")) throw std::invalid_argument(where + "has no time_s column");
+  if (!log.hasColumn(io::standard_columns::kTime))
+    throw std::invalid_argument(where + "has no " + io::standard_columns::kTime + " column");
   if (log.samples() < 50) throw std::invalid_argument(where + "has " + std::to_string(log.samples()) + " samples; at least 50 needed");
   RunData r;
   r.name = log.source;
-  const Eigen::VectorXd t = log.column("time_s");
+  const Eigen::VectorXd t = log.column(io::standard_columns::kTime);
   std::vector<double> steps;
   for (Eigen::Index i = 1; i < t.size(); ++i) steps.push_back(t(i) - t(i - 1));
   std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());

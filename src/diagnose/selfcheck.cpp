@@ -10,6 +10,7 @@
 
 #include "plsa/io/csv_log.hpp"
 #include "plsa/sim/independent_actuator.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 
 namespace plsa::diagnose {
@@ -277,7 +278,7 @@ void saveRuns(const std::vector<RunData>& runs, const std::string& dir, const st
   for (std::size_t k = 0; k < runs.size() && k < 2; ++k) {
     const RunData& r = runs[k];
     io::Log log;
-    log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
+    log.columns = io::standard_columns::recorded();
     log.metadata["source"] = "plsa diagnose-selfcheck, case " + case_name;
     log.data.resize(r.samples(), 9);
     for (Eigen::Index i = 0; i < r.samples(); ++i) {

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "plsa/eval/dio_prediction.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa {
 
@@ -257,8 +258,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
                                const SimulationStart& start) {
   requireHorizons(horizons, "validate");
   // A log at another rate would be scored on the wrong time scale without a word.
-  if (log.hasColumn("time_s")) {
-    const double dt = io::checkedSampleTime(log, "time_s", io::kToleratedGapFactor);
+  if (log.hasColumn(io::standard_columns::kTime)) {
+    const double dt = io::checkedSampleTime(log, io::standard_columns::kTime, io::kToleratedGapFactor);
     if (!io::sameSampleTime(dt, model.sample_time_s))
       throw std::invalid_argument(log.source + ": sample time " + std::to_string(dt) + " s differs from the model's " +
                                   std::to_string(model.sample_time_s) + " s; resample the log or identify at its rate");
@@ -273,7 +274,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
   ValidationResult res;
-  res.time = log.hasColumn("time_s") ? log.column("time_s") : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
+  res.time = log.hasColumn(io::standard_columns::kTime) ? log.column(io::standard_columns::kTime)
+                                                       : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.outside_training = inputsOutsideTraining(model, u);
   // One window for every score: from the first sample every prediction covers.
   res.scored_from = scoringStart(pred);
@@ -309,7 +311,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
 
 io::Log predictionLog(const ValidationResult& v) {
   io::Log log;
-  log.columns.push_back("time_s");
+  log.columns.push_back(io::standard_columns::kTime);
   for (const auto& o : v.outputs) {
     log.columns.push_back(o.name);
     for (const auto& [k, p] : o.predicted_k) log.columns.push_back(o.name + "_k" + std::to_string(k));

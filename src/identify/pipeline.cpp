@@ -12,6 +12,7 @@
 #include "plsa/identify/segmentation.hpp"
 #include "plsa/eval/validation.hpp"
 #include "identification_run.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -166,9 +167,10 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
 void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   std::vector<std::string> reference = o.reference;
   if (reference.empty()) {
-    const bool have_cmd = logs[0].hasColumn("cmd_1") && o.inputs.size() <= 3;
+    namespace columns = io::standard_columns;
+    const bool have_cmd = logs[0].hasColumn(columns::command(1)) && o.inputs.size() <= columns::kChambers;
     for (std::size_t j = 0; j < o.inputs.size(); ++j)
-      reference.push_back(have_cmd ? "cmd_" + std::to_string(j + 1) : o.inputs[j]);
+      reference.push_back(have_cmd ? columns::command(static_cast<int>(j) + 1) : o.inputs[j]);
   }
   PLSA_CHECK(reference.size() == o.inputs.size(), "identify: need one reference column per input");
   for (const auto& log : logs) {
@@ -180,7 +182,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
         throw std::invalid_argument(outlier + ": a glitch would shape the whole model; remove the sample (or "
                                     "identify with --keep-outliers)");
     }
-    const double t = io::checkedSampleTime(log, "time_s", o.max_gap_factor);
+    const double t = io::checkedSampleTime(log, io::standard_columns::kTime, o.max_gap_factor);
     if (dt == 0.0) dt = t;
     if (!io::sameSampleTime(t, dt))
       throw std::invalid_argument(log.source + ": sample time " + std::to_string(t) + " s differs from the first log's " +
@@ -188,7 +190,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     U.push_back(log.columnsOf(o.inputs));
     Y.push_back(log.columnsOf(o.outputs));
     Ref.push_back(log.columnsOf(reference));
-    times.push_back(log.column("time_s"));
+    times.push_back(log.column(io::standard_columns::kTime));
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
   rep.output_frame = o.output_frame ? OutputFrameChoice{*o.output_frame, std::string("output frame ") +

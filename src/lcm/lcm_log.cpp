@@ -11,12 +11,12 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/lcm/message_codec.hpp"
 #include "plsa/lcm/state_codec.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::lcm {
 namespace {
 
-const std::vector<std::string> kColumns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1",
-                                           "p_2",    "p_3",   "bend_deg", "steer_deg"};
+const std::vector<std::string> kColumns = io::standard_columns::recorded();
 
 std::uint64_t bigEndian(const unsigned char* p, int bytes) {
   std::uint64_t v = 0;

@@ -14,6 +14,7 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/core/check.hpp"
+#include "plsa/io/standard_columns.hpp"
 #include "plsa/lcm/message_codec.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/predict/realtime_thread.hpp"
@@ -30,13 +31,15 @@ struct Field {
 };
 
 Field fieldFor(const std::string& name) {
-  if (name == "bend_deg") return {Field::kBend, 0};
-  if (name == "steer_deg") return {Field::kSteer, 0};
-  for (const auto& [prefix, kind] : {std::pair{"p_", Field::kPressure}, std::pair{"cmd_", Field::kCommand}}) {
+  namespace columns = io::standard_columns;
+  if (name == columns::kBend) return {Field::kBend, 0};
+  if (name == columns::kSteer) return {Field::kSteer, 0};
+  for (const auto& [prefix, kind] : {std::pair{columns::kPressurePrefix, Field::kPressure},
+                                     std::pair{columns::kCommandPrefix, Field::kCommand}}) {
     const std::string p = prefix;
     if (name.rfind(p, 0) == 0) {
       const int i = std::atoi(name.c_str() + p.size());
-      if (i >= 1 && i <= 3) return {kind, i - 1};
+      if (i >= 1 && i <= columns::kChambers) return {kind, i - 1};
     }
   }
   throw std::invalid_argument("plsa predict: model column '" + name +

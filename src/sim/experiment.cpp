@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "plsa/core/check.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::sim {
 namespace {
@@ -272,7 +273,7 @@ io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
     actuator.step({experiment.commands(k, 0), experiment.commands(k, 1), experiment.commands(k, 2)});
   io::Log log;
   log.source = "plsa simulate (" + experiment.name + ")";
-  log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3", "bend_deg", "steer_deg"};
+  log.columns = io::standard_columns::recorded();
   log.data.resize(T, 9);
   for (Eigen::Index k = 0; k < T; ++k) {
     const Eigen::RowVector3d c = experiment.commands.row(first + k);

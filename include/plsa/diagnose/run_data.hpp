@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "plsa/io/csv_log.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::diagnose {
 
@@ -28,9 +29,9 @@ enum class RunStart {
 };
 
 struct RunColumns {
-  std::vector<std::string> inputs = {"cmd_1", "cmd_2", "cmd_3"};  ///< 1 to 3 chambers; the rest get 0
-  std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
-  std::vector<std::string> pressures = {"p_1", "p_2", "p_3"};  ///< used when every one is present
+  std::vector<std::string> inputs = io::standard_columns::commands();  ///< 1 to 3 chambers; the rest get 0
+  std::vector<std::string> outputs = io::standard_columns::tipAngles();
+  std::vector<std::string> pressures = io::standard_columns::pressures();  ///< used when every one is present
   double input_scale = 1.0;  ///< bar per input unit
   OutputMap map = OutputMap::kAngles;
   RunStart start = RunStart::kAuto;

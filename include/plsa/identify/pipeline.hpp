@@ -17,6 +17,7 @@
 #include "plsa/identify/pole_clustering.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::identify {
 
@@ -103,8 +104,8 @@ E parseOption(const std::string& name) {
 }
 
 struct IdentifyOptions {
-  std::vector<std::string> inputs = {"p_1", "p_2", "p_3"};
-  std::vector<std::string> outputs = {"bend_deg", "steer_deg"};
+  std::vector<std::string> inputs = io::standard_columns::pressures();
+  std::vector<std::string> outputs = io::standard_columns::tipAngles();
   /// tip_cartesian: the two outputs are a tip's bending and steering angles
   /// (deg) and the model runs on the tip direction's components (output_frame.hpp).
   /// Unset (the default): chosen from the outputs' names and data

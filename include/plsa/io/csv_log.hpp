@@ -11,6 +11,8 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/io/standard_columns.hpp"
+
 namespace plsa::io {
 
 /// A log in memory: one row per sample, one column per named signal.
@@ -36,7 +38,7 @@ struct Log {
 
 struct CsvReadOptions {
   /// Strictly increasing time is required when this column exists ("" to skip).
-  std::string time_column = "time_s";
+  std::string time_column = standard_columns::kTime;
   /// Columns that must be present.
   std::vector<std::string> required;
   /// When the file is an LCM event log (lcm::readLogFile): the channel whose
@@ -64,7 +66,7 @@ void writeCsvLog(const std::string& path, const Log& log);
 
 /// Median sample time of the time column; throws if any step is more than
 /// `max_gap_factor` times the median, naming the row and the gap.
-double checkedSampleTime(const Log& log, const std::string& time_column = "time_s",
+double checkedSampleTime(const Log& log, const std::string& time_column = standard_columns::kTime,
                          double max_gap_factor = 1.5);
 
 /// The gap identification and validation tolerate, in sample times: a

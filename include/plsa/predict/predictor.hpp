@@ -24,18 +24,16 @@
 
 #include "plsa/model/dio_pwl_obf_model.hpp"
 #include "plsa/predict/compiled_model.hpp"
+#include "plsa/predict/filter_states.hpp"
 #include "plsa/predict/held_lagged.hpp"
 #include "plsa/predict/kernels.hpp"
 #include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/model_handoff.hpp"
 #include "plsa/predict/plan_sensitivity.hpp"
 #include "plsa/predict/predictor_options.hpp"
+#include "plsa/predict/tip_angles.hpp"
 
 namespace plsa {
-
-/// Inputs whose resting (never driven) filters a predictor skips; beyond
-/// this many, every input's filters step.
-inline constexpr int kMaxRestingInputs = 16;
 
 /// The predictor for any number of poles per bank. update() and predict()
 /// belong to one (real-time) thread; install() may be called from any other.
@@ -79,7 +77,9 @@ class NStepPredictor {
   template <class U, class Y>
   PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
     const SubnormalsFlushed flushed;
-    handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) { carryStates(from, to); });
+    handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
+      carryFilterStates(from, to, state_, work_state_, bank_x_);
+    });
     const CompiledModel& m = model();
     if (static_cast<int>(u.size()) != m.n_u || static_cast<int>(y.size()) != m.n_y) return PredictorStatus::kBadShape;
     if (!std::isfinite(time_s)) return PredictorStatus::kNotFinite;
@@ -143,7 +143,7 @@ class NStepPredictor {
     const SubnormalsFlushed flushed;
     const PredictorStatus status = predictInModelFrame(horizon, plan, out);
     if (status != PredictorStatus::kOk || model().frame != OutputFrame::kTipCartesian) return status;
-    toTipAngles(horizon, out);
+    tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, out);
     return status;
   }
 
@@ -196,42 +196,6 @@ class NStepPredictor {
 
  private:
   const CompiledModel& model() const noexcept { return handoff_.current(); }
-
-  // Rows of tip components back to bending and steering. Each steering angle
-  // is the one before it plus the turn between the two directions (so on the
-  // branch nearest it, as tipAngles picks). The turns are computed for all
-  // rows at once by the arctangent series where they are small (every step
-  // of a smooth prediction); a large turn or a straight tip (no direction:
-  // it keeps the steering it had) sends the rows through atan2 one by one.
-  void toTipAngles(int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-    const double reference = steer_reference_;
-    double* turn = turn_.data();
-    double* bend = turn_.data() + options_.max_horizon;
-    if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, std::cos(reference * kRadPerDeg),
-                  std::sin(reference * kRadPerDeg), turn, bend))
-      return toTipAnglesRowByRow(horizon, out);
-    double steer = reference;
-    for (int h = 0; h < horizon; ++h) {
-      steer += turn[h] / kRadPerDeg;
-      out(h, 0) = bend[h];
-      out(h, 1) = steer;
-    }
-  }
-
-  void toTipAnglesRowByRow(int horizon, Eigen::Ref<Eigen::MatrixXd> out) const noexcept {
-    double steer = steer_reference_;
-    double px = std::cos(steer * kRadPerDeg), py = std::sin(steer * kRadPerDeg);
-    for (int h = 0; h < horizon; ++h) {
-      const double x = out(h, 0), y = out(h, 1);
-      if (x != 0.0 || y != 0.0) {
-        steer += std::atan2(px * y - py * x, px * x + py * y) / kRadPerDeg;
-        px = x;
-        py = y;
-      }
-      out(h, 0) = std::sqrt(x * x + y * y);
-      out(h, 1) = steer;
-    }
-  }
 
   void allocate(const CompiledModel& m) {
     shape_ = handoff_.currentShared();
@@ -327,97 +291,6 @@ class NStepPredictor {
     }
   }
 
-  // One step of every filter: z <- lambda z + beta d (modal), or each bank's
-  // x <- A x + B d. On x86 every call runs with subnormals flushed
-  // (SubnormalsFlushed); elsewhere states below kTinyState are set to zero
-  // here. `resting[j]`: input j's states are all zero; they stay so, and are
-  // skipped, while its drive is zero (a chamber never pressurised).
-  void stepFilters(const CompiledModel& m, Eigen::VectorXd& state, std::array<bool, kMaxRestingInputs>& resting) noexcept {
-    const int n = m.poles;
-    PLSA_DEBUG_ASSERT(state.size() == m.states() && drive_.size() >= m.nodes * static_cast<Eigen::Index>(m.play.size()));
-    if (m.modal) {
-      const ModalForm& f = m.modal_form;
-      const int per_input = m.n_y * n;
-      for (int j = 0; j < m.n_u; ++j) {
-        const int width = m.nodes * m.channels(j);
-        const double* __restrict d = drive_.data() + m.nodes * m.first_channel[static_cast<std::size_t>(j)];
-        if (j < kMaxRestingInputs && resting[static_cast<std::size_t>(j)]) {
-          bool still = true;
-          for (int k = 0; k < width; ++k) still = still && d[k] == 0.0;
-          if (still) continue;
-          resting[static_cast<std::size_t>(j)] = false;
-        }
-        // The AVX2 build pays for its call where a mode has many copies (the
-        // input side's grid nodes), not for the output side's one or two.
-        const bool avx2 = width >= 8 && predictorUsesAvx2();
-        if (width == 16 && avx2)
-          stepModesAvx2<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
-        else if (width == 16)
-          stepModes<16>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
-        else if (avx2)
-          stepModesAvx2<0>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
-        else
-          stepModes<0>(f, j * per_input, (j + 1) * per_input, width, d, state.data());
-      }
-      return;
-    }
-    resting.fill(false);  // tracked in modal form only
-    const StateSpaceForm& s = m.state_space;
-    for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
-      const int j = s.bank_input[b];
-      const auto g = static_cast<std::size_t>(s.bank_output[b] * m.n_u + j);
-      auto x = state.segment(static_cast<Eigen::Index>(b) * n, n);
-      const int k = s.bank_node[b] * m.channels(j) + (s.bank_channel[b] - m.first_channel[static_cast<std::size_t>(j)]);
-      const double d = drive_(m.nodes * m.first_channel[static_cast<std::size_t>(j)] + k);
-      if (s.cascade) {
-        double w = d;
-        for (Eigen::Index i = 0; i < n; ++i) {
-          const double st = x(i);
-          x(i) = s.xi[g](i) * st + s.gain[g](i) * w;
-          w = s.gain[g](i) * st - s.xi[g](i) * w;
-        }
-      } else {
-        bank_x_.noalias() = s.A[g] * x;
-        x = bank_x_ + s.B[g] * d;
-      }
-      x = (x.array().abs() < kTinyState).select(0.0, x);
-    }
-  }
-
-  // Modes [begin, end) of one input, each over its `width` copies (W: fixed
-  // at compile time, or 0): z <- lambda z + beta d.
-  template <int W>
-  static void stepModes(const ModalForm& f, int begin, int end, int width, const double* d, double* state) noexcept {
-    stepModesBody<W>(f, begin, end, width, d, state);
-  }
-  template <int W>
-  PLSA_TARGET_AVX2 static void stepModesAvx2(const ModalForm& f, int begin, int end, int width, const double* d,
-                                             double* state) noexcept {
-    stepModesBody<W>(f, begin, end, width, d, state);
-  }
-  template <int W>
-  PLSA_ALWAYS_INLINE static void stepModesBody(const ModalForm& f, int begin, int end, int width,
-                                               const double* __restrict d, double* __restrict state) noexcept {
-    const int size = W > 0 ? W : width;
-    for (int q = begin; q < end; ++q) {
-      double* __restrict z = state + f.offset[static_cast<std::size_t>(q)];
-      const double lambda = f.lambda(q), beta = f.beta(q);
-#if defined(__SSE2__)
-      const merged::Quad l = {lambda, lambda, lambda, lambda}, b = {beta, beta, beta, beta};
-      merged::LooseQuad* zq = merged::quads(z);
-      const merged::LooseQuad* dq = merged::quads(d);
-      int k = 0;
-      for (; k + 4 <= size; k += 4) zq[k / 4] = l * zq[k / 4] + b * dq[k / 4];  // four copies a vector
-      for (; k < size; ++k) z[k] = lambda * z[k] + beta * d[k];
-#else
-      for (int k = 0; k < size; ++k) {
-        const double next = lambda * z[k] + beta * d[k];
-        z[k] = std::abs(next) < kTinyState ? 0.0 : next;
-      }
-#endif
-    }
-  }
-
   // Moves the channels to u and steps every filter with its drive; on the
   // input side the node weights move to the lagged input us (node_w holds
   // the previous ones).
@@ -426,7 +299,7 @@ class NStepPredictor {
     moveChannels(m, u, vc);
     if (m.input_side) nodeWeights(m, us, next_node_w_);
     driveInputs(m, vc, node_w);
-    stepFilters(m, state, resting);
+    stepFilters(m, drive_, state, resting, bank_x_);
     if (m.input_side) node_w = next_node_w_;
   }
 
@@ -618,39 +491,6 @@ class NStepPredictor {
       advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_, work_resting);
     }
     return PredictorStatus::kOk;
-  }
-
-  // At a swap the filter states carry over: each bank's state x = V z in the
-  // old basis becomes z = V^-1 x in the new (nothing to do when both share
-  // their poles, so a swap of coefficients alone changes no state at all).
-  void carryStates(const CompiledModel& from, const CompiledModel& to) noexcept {
-    if (from.modal == to.modal && (!from.modal || from.pole_values == to.pole_values)) return;
-    const StateSpaceForm& s = from.state_space;
-    const int n = from.poles;
-    for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
-      const int o = s.bank_output[b], j = s.bank_input[b], r = s.bank_node[b];
-      const int k = r * from.channels(j) + (s.bank_channel[b] - from.first_channel[static_cast<std::size_t>(j)]);
-      const auto g = static_cast<std::size_t>(o * from.n_u + j);
-      // In bank order, x of this bank...
-      for (int i = 0; i < n; ++i)
-        bank_x_(i) = from.modal ? state_(from.modal_form.offset[static_cast<std::size_t>((j * from.n_y + o) * n + i)] + k)
-                                : state_(static_cast<Eigen::Index>(b) * n + i);
-      if (from.modal) bank_x_ = from.modal_form.basis[g] * bank_x_.eval();
-      if (to.modal) bank_x_ = to.modal_form.basis_inverse[g] * bank_x_.eval();
-      // ...written where the new form keeps it (one scratch row per bank).
-      work_state_.segment(static_cast<Eigen::Index>(b) * n, n) = bank_x_;
-    }
-    for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
-      const int o = s.bank_output[b], j = s.bank_input[b], r = s.bank_node[b];
-      const int k = r * to.channels(j) + (s.bank_channel[b] - to.first_channel[static_cast<std::size_t>(j)]);
-      for (int i = 0; i < n; ++i) {
-        const double v = work_state_(static_cast<Eigen::Index>(b) * n + i);
-        if (to.modal)
-          state_(to.modal_form.offset[static_cast<std::size_t>((j * to.n_y + o) * n + i)] + k) = v;
-        else
-          state_(static_cast<Eigen::Index>(b) * n + i) = v;
-      }
-    }
   }
 
   PredictorOptions options_;

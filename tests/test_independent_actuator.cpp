@@ -1,0 +1,87 @@
+// The independently written actuator (the diagnosis self-check's "real"
+// data): its start, its laws, its refusals.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "plsa/sim/independent_actuator.hpp"
+#include "plsa/sim/sim_config.hpp"
+
+using namespace plsa::sim;
+
+namespace {
+
+std::vector<IndependentSample> holdIndependent(IndependentActuator& a, std::array<double, 3> cmd, double seconds) {
+  std::vector<IndependentSample> out;
+  for (int k = 0; k < static_cast<int>(std::lround(seconds * 80.0)); ++k) out.push_back(a.step(cmd));
+  return out;
+}
+
+IndependentPhysics quietIndependent() {
+  IndependentPhysics p;
+  p.noise_deg = 0.0;
+  p.pressure_noise_bar = 0.0;
+  return p;
+}
+
+}  // namespace
+
+TEST(IndependentActuator, StartsAtRestAndBendsTowardTheChamber) {
+  IndependentActuator a(quietIndependent(), 1);
+  const IndependentSample first = a.step({0.3, 0, 0});
+  EXPECT_LT(first.bending_deg.norm(), 0.5);  // vented and straight when recording begins
+  EXPECT_LT(first.pressure_bar[0], 0.1);
+  const auto r = holdIndependent(a, {0.3, 0, 0}, 6.0);
+  EXPECT_NEAR(r.back().pressure_bar[0], 0.3, 0.01);
+  EXPECT_GT(r.back().bending_deg.x(), 5.0);
+  EXPECT_NEAR(r.back().bending_deg.y(), 0.0, 0.05 * r.back().bending_deg.x());
+}
+
+TEST(IndependentActuator, EveryLawChangesTheResponseAndEachDiffersFromTheOthers) {
+  for (const std::string& effect : effectNames()) {
+    const auto& laws = independentLawsOf(effect);
+    ASSERT_GE(laws.size(), 3u) << effect;
+    // A staircase up and down on two chambers: every law shows on it.
+    const std::map<std::string, double> strength = {{"deadzone", 0.06}, {"hysteresis", 0.15}, {"stiffening", 1.0},
+                                                    {"coupling", 0.8},  {"pneumatic_lag", 0.3}, {"creep", 0.1},
+                                                    {"sensor_bias", 1.5}};
+    auto response = [&](const std::string& law) {
+      IndependentPhysics p = quietIndependent();
+      if (!law.empty()) setIndependentEffect(p, effect, law, strength.at(effect));
+      IndependentActuator a(p, 7);
+      std::vector<double> trace;
+      for (double c : {0.1, 0.25, 0.35, 0.2, 0.05, 0.0})
+        for (const auto& s : holdIndependent(a, {c, 0.5 * c, 0}, 3.0)) {
+          trace.push_back(s.bending_deg.x());
+          trace.push_back(s.bending_deg.y());
+        }
+      return Eigen::Map<Eigen::VectorXd>(trace.data(), static_cast<Eigen::Index>(trace.size())).eval();
+    };
+    const Eigen::VectorXd off = response("");
+    std::vector<Eigen::VectorXd> each;
+    for (const auto& law : laws) {
+      each.push_back(response(law));
+      EXPECT_GT((each.back() - off).cwiseAbs().maxCoeff(), 0.2) << effect << " / " << law << " changes nothing";
+    }
+    for (std::size_t i = 0; i < each.size(); ++i)
+      for (std::size_t j = i + 1; j < each.size(); ++j)
+        EXPECT_GT((each[i] - each[j]).cwiseAbs().maxCoeff(), 0.05) << effect << ": " << laws[i] << " = " << laws[j];
+  }
+}
+
+TEST(IndependentActuator, RejectsUnknownLawsValuesAndCommands) {
+  IndependentPhysics p;
+  EXPECT_THROW(setIndependentEffect(p, "friction", "coulomb", 1.0), std::invalid_argument);
+  EXPECT_THROW(setIndependentEffect(p, "creep", "maxwell", 1.0), std::invalid_argument);
+  p.hysteresis = "play";  // plsa's own law is not one of the independent ones
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = IndependentPhysics{};
+  p.natural_freq_hz = -1.0;
+  EXPECT_THROW(IndependentActuator(p, 1), std::invalid_argument);
+  IndependentActuator a(IndependentPhysics{}, 1);
+  EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
+}

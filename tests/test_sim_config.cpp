@@ -1,0 +1,70 @@
+// The simulator's configuration (JSON round trip, addressable parameters)
+// and the actuator's checks on its commands.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "plsa/sim/actuator.hpp"
+#include "plsa/sim/experiment.hpp"
+#include "support/sim_probes.hpp"
+
+using namespace plsa::sim;
+using namespace plsa::sim::probes;
+
+// --- configuration, input checks, determinism ----------------------------------
+
+TEST(SimConfig, JsonRoundTripAndErrors) {
+  SimConfig c;
+  c.creep.enabled = false;
+  c.hysteresis.formulation = "prandtl_ishlinskii";
+  c.coupling.per_bar = 0.5;
+  const SimConfig back = simConfigFromJson(simConfigToJson(c));
+  EXPECT_FALSE(back.creep.enabled);
+  EXPECT_EQ(back.hysteresis.formulation, "prandtl_ishlinskii");
+  EXPECT_EQ(back.coupling.per_bar, 0.5);
+  auto error = [](const std::string& text) {
+    try {
+      simConfigFromJson(text, "cfg.json");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(error(R"({"creep": {"fraktion": 0.1}})").find("unknown key 'creep.fraktion'"), std::string::npos);
+  EXPECT_NE(error(R"({"creep": {"fraction": 3}})").find("creep.fraction = 3 is outside"), std::string::npos);
+  EXPECT_NE(error(R"({"creep": {"enabled": "yes"}})").find("true or false"), std::string::npos);
+  EXPECT_NE(error(R"({"deadzone": {"formulation": "round"}})").find("formulation 'round'"), std::string::npos);
+  EXPECT_NE(error(R"({"bogus": {}})").find("unknown section 'bogus'"), std::string::npos);
+  EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
+  // A number beyond double range escaped as a raw library exception; a key given twice kept the last.
+  EXPECT_NE(error(R"({"sample_rate_hz": 1e400})").find("cfg.json: not valid JSON"), std::string::npos);
+  EXPECT_NE(error(R"({"creep": {"fraction": 0.1, "fraction": 0.2}})").find("key 'creep.fraction' is given twice"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, null, 240]}})").find("must be a number"), std::string::npos);
+  // 0.75 p - 1 p^2 peaks at 0.375 bar, inside the 0.4 bar range; -0.9 peaks beyond it.
+  EXPECT_NE(error(R"({"elongation": {"quadratic": -1.0}})").find("stops rising at 0.375 bar"), std::string::npos);
+  EXPECT_EQ(error(R"({"elongation": {"quadratic": -0.9}})"), "accepted");
+  EXPECT_EQ(error(R"({"elongation": {"quadratic": -1.0}, "max_pressure_bar": 0.35})"), "accepted");
+}
+
+TEST(SimConfig, ParametersAreAddressableByModule) {
+  SimConfig c;
+  auto p = c.parameters("pneumatic_lag");
+  ASSERT_EQ(p.size(), 3u);
+  *p[2].value = 0.07;
+  EXPECT_EQ(c.pneumatic_lag.delay_s, 0.07);
+  EXPECT_GE(c.parameters("nominal").size(), 6u);
+  EXPECT_THROW(c.parameters("friction"), std::invalid_argument);
+}
+
+TEST(SimActuator, ClampsCommandsAndRejectsNaN) {
+  Actuator a(SimConfig{}, 1);
+  const auto s = a.step({0.9, -0.2, 0.1});
+  EXPECT_EQ(s.command_bar[0], 0.4);
+  EXPECT_EQ(s.command_bar[1], 0.0);
+  EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
+}

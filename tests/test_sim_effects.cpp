@@ -1,0 +1,303 @@
+// The simulated actuator's physics: what the paper's Fig. 3 shows, each
+// effect's signature with it on and gone with it off, the kinematics and
+// sensor equations, and the other formulations of each effect.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "plsa/sim/actuator.hpp"
+#include "plsa/sim/experiment.hpp"
+#include "support/sim_probes.hpp"
+
+using namespace plsa::sim;
+using namespace plsa::sim::probes;
+
+// --- what the paper's Fig. 3 shows, in the default configuration -----------
+
+TEST(SimFig3, DeadzoneAtLowPressure) {
+  SimConfig c;
+  Actuator a(c, 1);
+  EXPECT_LT(settled(a, {0.04, 0, 0}), 0.2);
+  EXPECT_GT(settled(a, {0.12, 0, 0}), 5.0);
+}
+
+TEST(SimFig3, NonlinearSteadyState) {
+  Actuator a(SimConfig{}, 1);
+  const double b10 = settled(a, {0.10, 0, 0}), b15 = settled(a, {0.15, 0, 0});
+  const double b30 = settled(a, {0.30, 0, 0}), b35 = settled(a, {0.35, 0, 0});
+  const double low_gain = (b15 - b10) / 0.05, high_gain = (b35 - b30) / 0.05;
+  EXPECT_GT(low_gain, 1.3 * high_gain) << low_gain << " vs " << high_gain << " deg/bar";
+}
+
+TEST(SimFig3, HysteresisLoopBetweenIncreaseAndDecrease) {
+  const auto [up, down] = upDownAt(SimConfig{}, 0.2);
+  EXPECT_GT(down - up, 3.0) << "up " << up << " down " << down;
+}
+
+TEST(SimFig3, SteeperLocalStepsAtHigherPressure) {
+  Actuator a(SimConfig{}, 1);
+  const double low = riseTime(a, 0.10, 0.125);
+  const double high = riseTime(a, 0.30, 0.325);
+  EXPECT_LT(high, 0.8 * low) << "rise time " << low << " s at low, " << high << " s at high pressure";
+}
+
+// --- each effect: its signature with it on, gone with it off ---------------
+
+TEST(SimEffects, Deadzone) {
+  for (const std::string f : {"sharp", "smooth"}) {
+    SimConfig on = only("deadzone");
+    on.deadzone.formulation = f;
+    Actuator a(on, 1), b(allOff(), 1);
+    EXPECT_LT(settled(a, {0.03, 0, 0}), 0.5) << f;
+    EXPECT_GT(settled(b, {0.03, 0, 0}), 4.0);
+  }
+}
+
+TEST(SimEffects, Hysteresis) {
+  for (const std::string f : {"play", "prandtl_ishlinskii"}) {
+    SimConfig on = only("hysteresis");
+    on.hysteresis.formulation = f;
+    const auto [up, down] = upDownAt(on, 0.2);
+    EXPECT_GT(down - up, 3.0) << f;
+  }
+  const auto [up, down] = upDownAt(allOff(), 0.2);
+  EXPECT_LT(std::abs(down - up), 0.05);
+}
+
+TEST(SimEffects, Stiffening) {
+  Actuator on(only("stiffening"), 1), off(allOff(), 1);
+  EXPECT_LT(riseTime(on, 0.30, 0.325), 0.75 * riseTime(on, 0.05, 0.075));
+  const double ratio = riseTime(off, 0.30, 0.325) / riseTime(off, 0.05, 0.075);
+  EXPECT_NEAR(ratio, 1.0, 0.05);
+}
+
+TEST(SimEffects, CouplingBreaksSuperposition) {
+  auto gap = [](const SimConfig& c) {
+    auto vec = [&](std::array<double, 3> cmd) {
+      Actuator a(c, 1);
+      const auto s = hold(a, cmd, 6.0).back();
+      const double t = s.true_bend_deg, p = s.true_steer_deg * M_PI / 180;
+      return Eigen::Vector2d(t * std::cos(p), t * std::sin(p));
+    };
+    return (vec({0.25, 0.25, 0}) - vec({0.25, 0, 0}) - vec({0, 0.25, 0})).norm();
+  };
+  EXPECT_GT(gap(only("coupling")), 3.0);
+  EXPECT_LT(gap(allOff()), 0.05);
+}
+
+TEST(SimEffects, PneumaticLagFillsSlowerThanVentAfterADelay) {
+  auto times = [](const SimConfig& c) {
+    Actuator a(c, 1);
+    const auto fill = hold(a, {0.3, 0, 0}, 3.0);
+    const auto vent = hold(a, {0.0, 0, 0}, 3.0);
+    // Counted from the first sample the pressure moves, so the delay is not in it.
+    int f0 = 0, tf = 0, v0 = 0, tv = 0;
+    while (fill[static_cast<std::size_t>(f0)].pressure_bar[0] == 0.0) ++f0;
+    while (fill[static_cast<std::size_t>(tf)].pressure_bar[0] < 0.3 * 0.63) ++tf;
+    while (vent[static_cast<std::size_t>(v0)].pressure_bar[0] >= fill.back().pressure_bar[0]) ++v0;
+    while (vent[static_cast<std::size_t>(tv)].pressure_bar[0] > 0.3 * 0.37) ++tv;
+    return std::tuple{tf - f0, tv - v0, fill[0].pressure_bar[0]};
+  };
+  const auto [tf_on, tv_on, first_on] = times(only("pneumatic_lag"));
+  EXPECT_GT(tf_on, 2 * tv_on);
+  EXPECT_EQ(first_on, 0.0);  // 30 ms transport delay: nothing in the first 12.5 ms sample
+  const auto [tf_off, tv_off, first_off] = times(allOff());
+  EXPECT_LE(std::abs(tf_off - tv_off), 1);
+  EXPECT_GT(first_off, 0.0);
+}
+
+TEST(SimEffects, CreepDriftsUnderConstantPressure) {
+  auto drift = [](const SimConfig& c) {
+    Actuator a(c, 1);
+    const auto r = hold(a, {0.3, 0, 0}, 30.0);
+    return r.back().true_bend_deg - r[5 * 80].true_bend_deg;
+  };
+  EXPECT_GT(drift(only("creep")), 2.0);
+  EXPECT_LT(std::abs(drift(allOff())), 0.01);
+}
+
+TEST(SimEffects, SensorBiasOffsetsAndDrifts) {
+  Actuator on(only("sensor_bias"), 1), off(allOff(), 1);
+  const auto s_on = hold(on, {0, 0, 0}, 1.0).back();
+  EXPECT_NEAR(s_on.bend_deg, on.config().sensor_bias.tilt_deg, 0.05);
+  EXPECT_NEAR(hold(off, {0, 0, 0}, 1.0).back().bend_deg, 0.0, 1e-6);
+  // Yaw drift moves the measured steering while the tip holds still.
+  Actuator d(only("sensor_bias"), 1);
+  const auto r = hold(d, {0.3, 0, 0}, 40.0);
+  const double moved = r.back().steer_deg - r[10 * 80].steer_deg;
+  EXPECT_NEAR(moved, 30.0 * d.config().sensor_bias.yaw_drift_deg_per_s, 0.1);
+  EXPECT_NEAR(r.back().true_steer_deg, r[10 * 80].true_steer_deg, 1e-9);
+}
+
+// --- kinematics and sensor equations -----------------------------------------
+
+TEST(SimKinematics, SensorEquationsRecoverBendAndSteer) {
+  for (double theta : {5.0, 45.0, 100.0})
+    for (double phi : {-150.0, -10.0, 30.0, 170.0}) {
+      const double t = theta * M_PI / 180, p = phi * M_PI / 180;
+      const Eigen::Matrix3d g_r_tip = Eigen::AngleAxisd(p, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                      Eigen::AngleAxisd(t, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                                      Eigen::AngleAxisd(-p, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Matrix3d g_r_b =
+          g_r_tip * Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      double bend, steer;
+      anglesFromRotation(g_r_b.transpose(), bend, steer);
+      EXPECT_NEAR(bend, theta, 1e-9);
+      EXPECT_NEAR(steer, phi, 1e-9);
+    }
+}
+
+TEST(SimKinematics, TipPositionIsWebsterJonesArc) {
+  const double l = 0.09;
+  const Eigen::Vector3d straight = tipPosition(l, 0.0, 0.3);
+  EXPECT_NEAR(straight.z(), l, 1e-15);
+  const Eigen::Vector3d quarter = tipPosition(l, M_PI / 2, 0.0);  // quarter circle, radius l/(pi/2)
+  const double r = l / (M_PI / 2);
+  EXPECT_NEAR(quarter.x(), r, 1e-12);
+  EXPECT_NEAR(quarter.z(), r, 1e-12);
+}
+
+TEST(SimKinematics, SingleChamberBendsTowardItsDirectionAndSubspaces) {
+  SimConfig c = allOff();
+  for (int ch = 0; ch < 3; ++ch) {
+    Actuator a(c, 1);
+    std::array<double, 3> cmd{0, 0, 0};
+    cmd[static_cast<std::size_t>(ch)] = 0.3;
+    const auto s = hold(a, cmd, 5.0).back();
+    const double want = c.geometry.bend_direction_deg[static_cast<std::size_t>(ch)];
+    EXPECT_NEAR(std::remainder(s.steer_deg - want, 360.0), 0.0, 1e-6);
+  }
+  Actuator a(c, 1);
+  const auto s = hold(a, {0.3, 0.3, 0}, 5.0).back();
+  const Subspace sub = configurationSubspace(c.geometry, s.steer_deg);
+  EXPECT_EQ(sub.index, 1);
+  EXPECT_NEAR(sub.angle_deg, 60.0, 1e-6);
+  EXPECT_EQ(configurationSubspace(c.geometry, 180.0).index, 2);
+  EXPECT_EQ(configurationSubspace(c.geometry, -60.0).index, 3);
+}
+
+TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers) {
+  // What the diagnosis self-check generates "real" data with: the same
+  // phenomenon, a different law. Each alternative must differ from the
+  // default and still show the effect's signature.
+  for (const auto& e : effectNames()) {
+    const auto& forms = formulationsOf(e);
+    ASSERT_GE(forms.size(), 2u) << e;
+    for (std::size_t f = 1; f < forms.size(); ++f) {
+      SimConfig a = only(e), b = only(e);
+      EXPECT_EQ(a.formulationOf(e), forms[0]) << e << ": the default comes first";
+      b.formulationOf(e) = forms[f];
+      if (forms[f] == "weighted_pi") b.hysteresis.weight_wide = 0.5;  // its defaults are the play's
+      Actuator x(a, 1), y(b, 1), off(allOff(), 1);
+      double differs = 0.0, effect = 0.0;
+      for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
+        const auto rx = hold(x, cmd, 4.0), ry = hold(y, cmd, 4.0), ro = hold(off, cmd, 4.0);
+        // Measured bending vector and chamber pressure: every effect shows in one of them.
+        auto v = [](const ActuatorSample& s) {
+          const double p = s.steer_deg * M_PI / 180;
+          return Eigen::Vector3d(s.bend_deg * std::cos(p), s.bend_deg * std::sin(p), 100.0 * s.pressure_bar[0]);
+        };
+        for (std::size_t k = 0; k < rx.size(); ++k) {
+          differs = std::max(differs, (v(rx[k]) - v(ry[k])).norm());
+          effect = std::max(effect, (v(ry[k]) - v(ro[k])).norm());
+          ASSERT_TRUE(std::isfinite(ry[k].bend_deg)) << e << " " << forms[f];
+        }
+      }
+      EXPECT_GT(differs, 1e-3) << e << ": " << forms[f] << " behaves exactly like " << forms[0];
+      EXPECT_GT(effect, 0.05) << e << ": " << forms[f] << " shows no effect at all";
+    }
+  }
+  SimConfig bad;
+  bad.creep.formulation = "logarithmic";
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The diagnosis's flexible laws must contain the fixed ones they generalise:
+// power stiffening at exponents 1 and 2 is linear and quadratic; power flow at
+// 0.5 and 1 is orifice and linear. Same runs, sample for sample (to rounding:
+// the laws are written differently, and the square root's infinite gain at a
+// zero difference magnifies it).
+TEST(SimEffects, PowerLawsReduceToTheFixedOnes) {
+  struct Case {
+    std::string effect, fixed;
+    double exponent;
+  };
+  for (const Case& c : {Case{"stiffening", "linear", 1.0}, Case{"stiffening", "quadratic", 2.0},
+                        Case{"pneumatic_lag", "linear", 1.0}, Case{"pneumatic_lag", "orifice", 0.5}}) {
+    SimConfig a = only(c.effect), b = only(c.effect);
+    a.formulationOf(c.effect) = c.fixed;
+    b.formulationOf(c.effect) = "power";
+    (c.effect == "stiffening" ? b.stiffening.exponent : b.pneumatic_lag.exponent) = c.exponent;
+    Actuator x(a, 1), y(b, 1);
+    for (std::array<double, 3> cmd : {std::array<double, 3>{0.3, 0.2, 0}, {0.05, 0, 0.35}}) {
+      const auto rx = hold(x, cmd, 2.0), ry = hold(y, cmd, 2.0);
+      for (std::size_t k = 0; k < rx.size(); ++k) {
+        ASSERT_NEAR(rx[k].bend_deg, ry[k].bend_deg, 1e-4) << c.effect << " " << c.fixed << " k=" << k;
+        ASSERT_NEAR(rx[k].pressure_bar[0], ry[k].pressure_bar[0], 1e-6) << c.effect << " " << c.fixed;
+      }
+    }
+  }
+}
+
+TEST(SimEffects, StiffeningsStaticShareHoldsTheBendBack) {
+  SimConfig dynamic = only("stiffening");
+  dynamic.stiffening.formulation = "power";
+  SimConfig hardening = dynamic;
+  hardening.stiffening.static_share = 1.0;
+  Actuator a(dynamic, 1), b(hardening, 1), off(allOff(), 1);
+  const double low_a = settled(a, {0.04, 0, 0}, 6.0), low_b = settled(b, {0.04, 0, 0}, 6.0);
+  const double high_a = settled(a, {0.35, 0, 0}, 6.0), high_b = settled(b, {0.35, 0, 0}, 6.0);
+  const double high_off = settled(off, {0.35, 0, 0}, 6.0);
+  EXPECT_NEAR(high_a, high_off, 0.01 * high_off);  // share 0: the same static bend, only sooner
+  EXPECT_LT(high_b, 0.6 * high_a);                 // share 1: held back by the stiffer spring
+  EXPECT_GT(low_b / low_a, 2.0 * high_b / high_a);  // far less held back at low pressure
+}
+
+TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
+  SimConfig play = only("hysteresis"), pi = only("hysteresis"), none = allOff();
+  pi.hysteresis.formulation = "weighted_pi";
+  pi.hysteresis.weight_narrow = pi.hysteresis.weight_wide = 0.0;
+  pi.hysteresis.weight_mid = 1.0;
+  SimConfig flat = pi;
+  flat.hysteresis.weight_mid = 0.0;
+  SimConfig spread = pi;
+  spread.hysteresis.weight_narrow = spread.hysteresis.weight_wide = 0.5;
+  spread.hysteresis.weight_mid = 0.5;  // sums to 1.5: scaled to 1
+  Actuator a(play, 1), b(pi, 1), c(none, 1), d(flat, 1), e(spread, 1);
+  double differs = 0.0;
+  for (std::array<double, 3> cmd : {std::array<double, 3>{0.3, 0.1, 0}, {0.1, 0, 0.2}, {0.35, 0.3, 0}}) {
+    const auto ra = hold(a, cmd, 2.0), rb = hold(b, cmd, 2.0), rc = hold(c, cmd, 2.0), rd = hold(d, cmd, 2.0),
+               re = hold(e, cmd, 2.0);
+    for (std::size_t k = 0; k < ra.size(); ++k) {
+      ASSERT_NEAR(ra[k].bend_deg, rb[k].bend_deg, 1e-9);
+      ASSERT_NEAR(rc[k].bend_deg, rd[k].bend_deg, 1e-9);
+      ASSERT_TRUE(std::isfinite(re[k].bend_deg));
+      differs = std::max(differs, std::abs(re[k].bend_deg - ra[k].bend_deg));
+    }
+  }
+  EXPECT_GT(differs, 0.05);  // other weights give another loop
+  EXPECT_EQ(flexibleFormulationOf("hysteresis"), "weighted_pi");
+  EXPECT_EQ(pi.parameters("hysteresis").size(), 4u);
+}
+
+TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
+  SimConfig c = only("sensor_bias");
+  c.sensor_bias.tilt_deg = c.sensor_bias.yaw_drift_deg_per_s = 0.0;
+  SimConfig biased = c;
+  biased.sensor_bias.offset_x_deg = 1.0;
+  biased.sensor_bias.drift_y_deg_per_s = 0.1;
+  Actuator a(c, 1), b(biased, 1);
+  const auto ra = hold(a, {0.2, 0.1, 0}, 10.0), rb = hold(b, {0.2, 0.1, 0}, 10.0);
+  auto vec = [](const ActuatorSample& s) {
+    return Eigen::Vector2d(s.bend_deg * std::cos(s.steer_deg * M_PI / 180), s.bend_deg * std::sin(s.steer_deg * M_PI / 180));
+  };
+  for (std::size_t k : {std::size_t{79}, std::size_t{799}}) {
+    const Eigen::Vector2d d = vec(rb[k]) - vec(ra[k]);
+    EXPECT_NEAR(d.x(), 1.0, 1e-9);
+    EXPECT_NEAR(d.y(), 0.1 * rb[k].time_s, 1e-9);
+  }
+}

@@ -60,5 +60,6 @@ void addCrossvalCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);
 void addCanBridgeCommand(CLI::App& app);
 void addDiagnoseCommands(CLI::App& app);
+void addGeneraliseCommand(CLI::App& app);
 
 }  // namespace plsa::app

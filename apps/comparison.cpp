@@ -86,6 +86,20 @@ std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vec
   return scores;
 }
 
+identify::IdentifyOptions paperConfiguration(identify::IdentifyOptions o) {
+  using namespace identify;
+  o.progress = nullptr;
+  o.scheduling = SchedulingChoice::kSwitched;
+  o.output_frame = OutputFrame::kAsLogged;
+  o.play_candidates = {{0.0}};
+  o.play_coupling_candidates = {};
+  o.play_threshold_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.slow_pole_candidates = {};
+  o.output_drift = OutputDriftChoice::kOff;
+  return o;
+}
+
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
                               const std::vector<Eigen::MatrixXd>& Y) {
   DioPwlObfModel g = m;

@@ -10,6 +10,7 @@
 
 #include "plsa/eval/arx.hpp"
 #include "plsa/eval/validation.hpp"
+#include "plsa/identify/pipeline.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa::app {
@@ -44,6 +45,10 @@ Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models);
 /// commonScoringStart(models) to the end.
 std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
                                                                   const Eigen::MatrixXd& y);
+
+/// `o` with plsa's extensions off: the paper's configuration (switched PWL,
+/// no play, the outputs as logged, no lag, drift or slow pole); no progress.
+identify::IdentifyOptions paperConfiguration(identify::IdentifyOptions o);
 
 /// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

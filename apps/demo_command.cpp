@@ -81,16 +81,7 @@ void runDemo(const DemoOptions& opt) {
   io_.progress = [](const std::string& l) { std::printf("  identify: %s\n", l.c_str()); };
   IdentifyReport report;
   const DioPwlObfModel model = identifyModel({train}, io_, &report);
-  io_.progress = nullptr;
-  io_.scheduling = SchedulingChoice::kSwitched;
-  io_.output_frame = OutputFrame::kAsLogged;
-  io_.play_candidates = {{0.0}};
-  io_.play_coupling_candidates = {};
-  io_.play_threshold_candidates = {};
-  io_.schedule_lag_candidates = {};
-  io_.slow_pole_candidates = {};
-  io_.output_drift = OutputDriftChoice::kOff;
-  const DioPwlObfModel paper = identifyModel({train}, io_);
+  const DioPwlObfModel paper = identifyModel({train}, paperConfiguration(io_));
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs);
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
   Eigen::MatrixXd Yt = train.columnsOf(model.outputs);

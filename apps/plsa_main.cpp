@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
 #endif
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
+  plsa::app::addGeneraliseCommand(app);
 #if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);
   plsa::app::addCanBridgeCommand(app);

@@ -10,41 +10,12 @@
 
 #include "plsa/eval/fit.hpp"
 #include "plsa/io/csv_log.hpp"
+#include "support/cli_run.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-class Cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    exe_ = std::getenv("PLSA_EXE") ? std::getenv("PLSA_EXE") : "";
-    ASSERT_TRUE(fs::exists(exe_)) << "PLSA_EXE does not name the plsa binary";
-    dir_ = fs::temp_directory_path() / ("plsa_cli_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  // Runs plsa with args; returns the exit code, stderr in err_.
-  int run(const std::string& args) {
-    const std::string err = (dir_ / "stderr.txt").string();
-    const int rc = std::system((exe_ + " " + args + " >" + (dir_ / "stdout.txt").string() + " 2>" + err).c_str());
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    err_ = ss.str();
-    return WEXITSTATUS(rc);
-  }
-  std::string file(const std::string& name) const { return (dir_ / name).string(); }
-  static std::string slurp(const std::string& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-  std::string exe_, err_;
-  fs::path dir_;
-};
-
+using Cli = plsa::test::CliTest;
 }  // namespace
 
 TEST_F(Cli, SimulateIsDeterministicPerSeed) {

@@ -63,6 +63,33 @@ const std::vector<std::string>& independentLawsOf(const std::string& effect) {
   return it->second;
 }
 
+std::pair<double, double> independentStrengthRange(const std::string& effect, const std::string& law) {
+  static const std::map<std::string, std::pair<double, double>> r = {
+      {"deadzone", {0.04, 0.10}},           {"hysteresis.bouc_wen", {0.25, 0.5}},
+      {"hysteresis.preisach", {0.25, 0.5}}, {"hysteresis.backlash", {0.05, 0.15}},
+      {"stiffening.duffing", {0.4, 1.2}},   {"stiffening.tanh_strain", {0.7, 1.3}},
+      {"stiffening.saturating_exp", {2.0, 5.0}}, {"coupling.exponential", {1.0, 2.5}},
+      {"coupling.quadratic", {0.1, 0.3}},   {"coupling.crosstalk", {0.15, 0.35}},
+      {"pneumatic_lag.two_volume", {0.06, 0.15}}, {"pneumatic_lag.pressure_dependent", {1.0, 3.0}},
+      {"pneumatic_lag.quantised_valve", {0.0, 0.0}}, {"creep", {0.06, 0.15}},
+      {"sensor_bias", {1.0, 3.0}}};
+  const auto it = r.find(effect + "." + law);
+  return it != r.end() ? it->second : r.at(effect);
+}
+
+std::vector<std::pair<std::string, double>> drawNominal(IndependentPhysics& t, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  auto between = [&](double lo, double hi) { return lo + (hi - lo) * uni(rng); };
+  t.natural_freq_hz *= between(0.5, 1.5);
+  t.damping_ratio = between(0.3, 2.0);
+  const double gain = between(0.6, 1.4);
+  t.strain_per_bar *= gain;
+  t.strain_quadratic *= gain;
+  t.time_constant_s *= between(0.5, 3.0);
+  return {{"nominal.natural_freq_hz", t.natural_freq_hz}, {"nominal.damping_ratio", t.damping_ratio},
+          {"nominal.gain", gain}, {"nominal.time_constant_s", t.time_constant_s}};
+}
+
 void setIndependentEffect(IndependentPhysics& physics, const std::string& effect, const std::string& law,
                           double strength) {
   const auto& known = independentLawsOf(effect);

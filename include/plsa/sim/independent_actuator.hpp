@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -84,6 +85,17 @@ struct IndependentPhysics {
 /// The laws IndependentPhysics offers for an effect named as in
 /// sim::effectNames() (deadzone, hysteresis, ...); throws for other names.
 const std::vector<std::string>& independentLawsOf(const std::string& effect);
+
+/// The range of strengths (setIndependentEffect's) over which `law` of
+/// `effect` shows clearly without swamping the nominal response: what the
+/// diagnosis self-check and the generalisation benchmark draw from.
+std::pair<double, double> independentStrengthRange(const std::string& effect, const std::string& law);
+
+/// Draws the nominal physics widely around the defaults (natural frequency
+/// x0.5-1.5, damping ratio 0.3-2.0, strain gain x0.6-1.4, chamber time
+/// constant x0.5-3), the draws in this order from `rng`; returns them named
+/// "nominal.<name>".
+std::vector<std::pair<std::string, double>> drawNominal(IndependentPhysics& physics, std::mt19937_64& rng);
 
 /// Sets the law of `effect` (a name from sim::effectNames()) and its strength.
 void setIndependentEffect(IndependentPhysics& physics, const std::string& effect, const std::string& law,

@@ -32,6 +32,10 @@ struct CrossvalArgs {
   std::string channel = "PLSA_STATE";
 };
 
+// The models' keys in the JSON (MATLAB's jsondecode and pandas take them as
+// they are); "labels" maps them to the names printed.
+const char* const kKeys[] = {"plsa", "arx"};
+
 void runCrossval(CrossvalArgs& a) {
   std::vector<std::string> files = logPaths(a.logs, "crossval", true);
   std::sort(files.begin(), files.end());
@@ -99,7 +103,7 @@ void runCrossval(CrossvalArgs& a) {
     for (std::size_t m = 0; m < preds.size(); ++m)
       for (std::size_t out = 0; out < a.outputs.size(); ++out) {
         std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), preds[m].name.c_str());
-        auto& jf = j["folds"][name][preds[m].name][a.outputs[out]];
+        auto& jf = j["folds"][name][kKeys[m]][a.outputs[out]];
         for (int k : a.horizons) {
           const CommonScore& sc = scores[m][out].at(k);
           std::printf(" %8.1f", sc.fit);
@@ -112,22 +116,23 @@ void runCrossval(CrossvalArgs& a) {
         sums[m][out][0] += sim.fit;
         jf["fit_sim"] = sim.fit;
         jf["rms_sim"] = sim.rms;
-        jf["std_sim"] = sim.spread;
+        jf["std"] = sim.spread;
       }
     std::fflush(stdout);
   }
   const char* names[] = {"DIO-PWL-OBF", "ARX"};
+  for (std::size_t m = 0; m < 2; ++m) j["labels"][kKeys[m]] = names[m];
   for (std::size_t m = 0; m < 2; ++m)
     for (std::size_t out = 0; out < a.outputs.size(); ++out) {
       std::printf("%-12s %-8s %-14s", "mean", a.outputs[out].c_str(), names[m]);
       for (int k : a.horizons) {
         const double v = sums[m][out][k] / static_cast<double>(logs.size());
         std::printf(" %8.1f", v);
-        j["mean"][names[m]][a.outputs[out]]["fit_k" + std::to_string(k)] = v;
+        j["mean"][kKeys[m]][a.outputs[out]]["fit_k" + std::to_string(k)] = v;
       }
       const double v = sums[m][out][0] / static_cast<double>(logs.size());
       std::printf(" %8.1f\n", v);
-      j["mean"][names[m]][a.outputs[out]]["fit_sim"] = v;
+      j["mean"][kKeys[m]][a.outputs[out]]["fit_sim"] = v;
     }
   if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
 }

@@ -366,8 +366,8 @@ def test_crossval_fits(out):
     doc = load(path)
     assert_valid("crossval-fits", doc, "plsa crossval --json")
     assert set(doc["folds"]) == {"joystick2", "joystick3"}
-    assert_refused("crossval-fits", broken(doc, without("mean", "ARX")), "no mean ARX entry")
-    assert_refused("crossval-fits", broken(doc, without("folds", "joystick2", "DIO-PWL-OBF")), "a fold without the model")
+    assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")
+    assert_refused("crossval-fits", broken(doc, without("folds", "joystick2", "plsa")), "a fold without the model")
     assert_refused("crossval-fits", broken(doc, setting({}, "folds", "joystick2", "LSTM")), "an unknown model 'LSTM'")
 
 

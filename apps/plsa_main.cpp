@@ -5,6 +5,9 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#if PLSA_WITH_LCM
+#include "plsa/lcm/lcm_log.hpp"
+#endif
 
 // Exit codes: 0 done; 1 the tool failed (bad input, a failed check, a
 // target not met), with the reason on standard error; 2 the command line
@@ -14,6 +17,9 @@ constexpr int kExitFailed = 1, kExitUsage = 2;
 int main(int argc, char** argv) {
   // Progress reaches a pipe or a log line by line, not in one burst at exit.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+#if PLSA_WITH_LCM
+  plsa::lcm::registerLogFormats();  // LCM event logs, read and written wherever a tool takes a log
+#endif
   CLI::App app{"plsa: identify and predict pneumatic soft actuators (DIO-PWL-OBF)"};
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.footer("Exit codes: 0 done; 1 failed (reason on standard error); 2 usage error.");

@@ -1,6 +1,8 @@
 // `plsa`: the command-line front end to identification, prediction and diagnosis.
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -35,6 +37,15 @@ int main(int argc, char** argv) {
 #if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);
   plsa::app::addCanBridgeCommand(app);
+#else
+  // The LCM nodes are not in this build: absent from --help, named if asked for.
+  for (const std::string name : {"sim", "predict", "can-bridge"})
+    app.add_subcommand(name, "Needs a build with LCM (this one has PLSA_WITH_LCM=OFF)")
+        ->group("")
+        ->prefix_command()
+        ->callback([name] {
+          throw std::invalid_argument("plsa " + name + " needs a build with LCM; this one has PLSA_WITH_LCM=OFF");
+        });
 #endif
   plsa::app::addDiagnoseCommands(app);
   try {

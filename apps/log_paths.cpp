@@ -2,25 +2,14 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <stdexcept>
+
+#include "plsa/io/log_readers.hpp"
 
 namespace fs = std::filesystem;
 
 namespace plsa::app {
-
-namespace {
-
-// lcm-logger names its files lcmlog-YYYY-MM-DD.NN: a log is known by its first word.
-bool startsWithLcmSyncWord(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char head[4] = {};
-  return in.read(reinterpret_cast<char*>(head), 4) && head[0] == 0xED && head[1] == 0xA1 && head[2] == 0xDA &&
-         head[3] == 0x01;
-}
-
-}  // namespace
 
 std::vector<std::string> logPaths(const std::vector<std::string>& paths, const std::string& tool, bool folders) {
   std::vector<std::string> files;
@@ -28,11 +17,9 @@ std::vector<std::string> logPaths(const std::vector<std::string>& paths, const s
     if (folders && fs::is_directory(p)) {
       std::vector<std::string> in;
       for (const auto& e : fs::directory_iterator(p))
-        if (e.is_regular_file() && (e.path().extension() == ".csv" || e.path().extension() == ".lcmlog" ||
-                                    startsWithLcmSyncWord(e.path())))
-          in.push_back(e.path().string());
+        if (e.is_regular_file() && io::logReaders().looksLikeLog(e.path().string())) in.push_back(e.path().string());
       if (in.empty())
-        throw std::invalid_argument(tool + ": " + p + ": no logs in this folder (.csv, .lcmlog, or LCM event logs by content)");
+        throw std::invalid_argument(tool + ": " + p + ": no logs in this folder " + io::logReaders().logFileKinds());
       std::sort(in.begin(), in.end());
       files.insert(files.end(), in.begin(), in.end());
     } else if (fs::is_regular_file(p) || fs::is_fifo(p)) {
@@ -57,12 +44,6 @@ std::vector<std::string> logPaths(const std::vector<std::string>& paths, const s
 
 #include <cstdio>
 #include <system_error>
-
-#if PLSA_WITH_LCM
-#include "plsa/lcm/lcm_log.hpp"
-#else
-#include <fstream>
-#endif
 
 namespace plsa::app {
 
@@ -90,18 +71,7 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
 }
 
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool) {
-#if PLSA_WITH_LCM
-  io::Log log = lcm::readLogFile(path, options);
-#else
-  {  // an LCM event log starts with its sync word, 0xEDA1DA01
-    std::ifstream in(path, std::ios::binary);
-    unsigned char head[4] = {};
-    if (in.read(reinterpret_cast<char*>(head), 4) && head[0] == 0xED && head[1] == 0xA1 && head[2] == 0xDA &&
-        head[3] == 0x01)
-      throw std::invalid_argument(path + ": an LCM event log, and this build has no LCM (PLSA_WITH_LCM=OFF)");
-  }
-  io::Log log = io::readCsvLog(path, options);
-#endif
+  io::Log log = io::readLog(path, options);
   for (const auto& w : log.warnings) std::fprintf(stderr, "plsa %s: warning: %s\n", tool.c_str(), w.c_str());
   return log;
 }

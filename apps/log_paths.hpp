@@ -25,7 +25,8 @@ namespace plsa::app {
 void refuseOverwritingInputs(const std::string& output, const std::string& option,
                              const std::vector<std::string>& inputs, const std::string& tool);
 
-/// Reads a log (CSV or LCM event log), printing its warnings as "TOOL: warning: ...".
+/// Reads a log in any format this build reads (io::logReaders(): CSV, and LCM
+/// event logs in a build with LCM), printing its warnings as "TOOL: warning: ...".
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);
 
 }  // namespace plsa::app

@@ -1,10 +1,15 @@
 // `plsa`: the command-line front end to identification, prediction and diagnosis.
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#if PLSA_WITH_LCM
+#include "plsa/lcm/lcm_log.hpp"
+#endif
 
 // Exit codes: 0 done; 1 the tool failed (bad input, a failed check, a
 // target not met), with the reason on standard error; 2 the command line
@@ -14,6 +19,9 @@ constexpr int kExitFailed = 1, kExitUsage = 2;
 int main(int argc, char** argv) {
   // Progress reaches a pipe or a log line by line, not in one burst at exit.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+#if PLSA_WITH_LCM
+  plsa::lcm::registerLogFormats();  // LCM event logs, read and written wherever a tool takes a log
+#endif
   CLI::App app{"plsa: identify and predict pneumatic soft actuators (DIO-PWL-OBF)"};
   app.option_defaults()->always_capture_default();  // --help shows every default
   app.footer("Exit codes: 0 done; 1 failed (reason on standard error); 2 usage error.");
@@ -30,6 +38,15 @@ int main(int argc, char** argv) {
 #if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);
   plsa::app::addCanBridgeCommand(app);
+#else
+  // The LCM nodes are not in this build: absent from --help, named if asked for.
+  for (const std::string name : {"sim", "predict", "can-bridge"})
+    app.add_subcommand(name, "Needs a build with LCM (this one has PLSA_WITH_LCM=OFF)")
+        ->group("")
+        ->prefix_command()
+        ->callback([name] {
+          throw std::invalid_argument("plsa " + name + " needs a build with LCM; this one has PLSA_WITH_LCM=OFF");
+        });
 #endif
   plsa::app::addDiagnoseCommands(app);
   try {

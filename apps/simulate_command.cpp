@@ -7,9 +7,7 @@
 #include "commands.hpp"
 #include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
-#if PLSA_WITH_LCM
-#include "plsa/lcm/lcm_log.hpp"
-#endif
+#include "plsa/io/log_readers.hpp"
 #include "plsa/sim/experiment.hpp"
 
 namespace plsa::app {
@@ -75,16 +73,9 @@ void runSimulate(const SimulateOptions& o) {
   sim::Actuator actuator(config, o.seed);
   io::Log log = sim::runExperiment(actuator, ex);
   log.metadata["seed"] = std::to_string(o.seed);
-  const bool lcm_out = o.out.size() > 7 && o.out.compare(o.out.size() - 7, 7, ".lcmlog") == 0;
-  if (lcm_out) {
-#if PLSA_WITH_LCM
-    lcm::writeLcmLog(o.out, log, o.channel);
-#else
-    throw std::invalid_argument("plsa simulate: this build has no LCM (PLSA_WITH_LCM=OFF): write a .csv log");
-#endif
-  } else {
-    io::writeCsvLog(o.out, log);
-  }
+  io::WriteOptions wo;
+  wo.lcm_channel = o.channel;
+  io::writeLog(o.out, log, wo);  // by the extension: .lcmlog an LCM event log, else CSV
   std::fprintf(stderr, "plsa simulate: wrote %lld samples to %s (effects: %s)\n",
                static_cast<long long>(log.samples()), o.out.c_str(), log.metadata["effects"].c_str());
 }

@@ -115,3 +115,35 @@ TEST(LcmLog, HostileLengthsAreNamedErrorsAndLogsAreKnownByTheirMagicNumber) {
   EXPECT_NE(errorOf(patched(0, 0x12345678u)).find("no LCM sync word: not an LCM event log"), std::string::npos);
   fs::remove(path);
 }
+
+// The codec's format takes the placeholder's place in a registry (the one a
+// build without LCM keeps): same name, rank and magic bytes, now readable and
+// writable; registering it again changes nothing.
+TEST(LcmLog, RegisteredFormatReplacesThePlaceholder) {
+  plsa::io::LogReaderRegistry r;
+  r.add(plsa::io::csvLogFormat());
+  r.add(plsa::io::lcmLogPlaceholder());
+  EXPECT_EQ(plsa::lcm::lcmLogFormat().magic, plsa::io::lcmLogPlaceholder().magic);
+  plsa::lcm::registerLogFormats(r);
+  plsa::lcm::registerLogFormats(r);
+  EXPECT_EQ(r.names(), (std::vector<std::string>{"csv", "lcm"}));
+  EXPECT_EQ(r.readable(), (std::vector<std::string>{"csv", "lcm"}));
+  EXPECT_EQ(r.writable(), (std::vector<std::string>{"csv", "lcm"}));
+
+  plsa::sim::ExperimentOptions o;
+  o.joystick_duration_s = 2;
+  plsa::sim::Actuator a(plsa::sim::SimConfig{}, 3);
+  const plsa::io::Log log = plsa::sim::runExperiment(a, plsa::sim::joystickExperiment(o));
+  const std::string path = tempPath("registry.lcmlog"), bare = tempPath("lcmlog-registry.00");
+  plsa::io::WriteOptions wo;
+  wo.lcm_channel = "OTHER";
+  r.write(path, log, wo);  // by the extension
+  EXPECT_TRUE(plsa::lcm::isLcmLog(path));
+  fs::rename(path, bare);
+  plsa::io::ReadOptions ro;
+  ro.lcm_channel = "OTHER";
+  EXPECT_EQ(r.read(bare, ro).samples(), log.samples());  // by the content
+  ro.required = {"no_such_column"};
+  EXPECT_THROW(r.read(bare, ro), std::runtime_error);
+  fs::remove(bare);
+}

@@ -200,26 +200,33 @@ bool isLcmLog(const std::string& path) {
   return isLcmLog(in);
 }
 
+io::LogFormat lcmLogFormat() {
+  io::LogFormat f = io::lcmLogPlaceholder();
+  f.missing.clear();
+  f.magic.clear();
+  putBigEndian(f.magic, kLcmLogSyncWord, 4);
+  f.read = [](std::istream& in, const std::string& source, const io::ReadOptions& options) {
+    io::Log log = readLcmLog(in, source, options.lcm_channel);
+    for (const auto& r : options.required)
+      if (!log.hasColumn(r)) throw std::runtime_error(source + ": LCM log has no column '" + r + "'");
+    return log;
+  };
+  f.write = [](const std::string& path, const io::Log& log, const io::WriteOptions& options) {
+    writeLcmLog(path, log, options.lcm_channel);
+  };
+  return f;
+}
+
+void registerLogFormats(io::LogReaderRegistry& registry) { registry.add(lcmLogFormat(), io::OnDuplicate::Replace); }
+
 io::Log readLogFile(const std::string& path, const io::CsvReadOptions& options) {
-  // A pipe can be read once: take it whole (bounded), then look at its first bytes.
-  std::error_code ec;
-  const bool regular = std::filesystem::is_regular_file(path, ec);
-  std::istringstream piped;
-  if (!regular) piped.str(readTextFile(path, "log", kMaxPipedLogBytes));
-  std::ifstream file;
-  if (regular) {
-    file.open(path, std::ios::binary);
-    if (!file) throw std::runtime_error(path + ": cannot open for reading");
-  }
-  std::istream& in = regular ? static_cast<std::istream&>(file) : piped;
-  const bool lcm_log = isLcmLog(in);
-  in.clear();
-  in.seekg(0);
-  if (!lcm_log) return io::readCsvLog(in, path, options);
-  io::Log log = readLcmLog(in, path, options.lcm_channel);
-  for (const auto& r : options.required)
-    if (!log.hasColumn(r)) throw std::runtime_error(path + ": LCM log has no column '" + r + "'");
-  return log;
+  static const io::LogReaderRegistry* const formats = [] {
+    auto* r = new io::LogReaderRegistry;  // never destroyed, as io::logReaders()
+    r->add(io::csvLogFormat());
+    r->add(lcmLogFormat());
+    return r;
+  }();
+  return formats->read(path, options);
 }
 
 }  // namespace plsa::lcm

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "plsa/io/csv_log.hpp"
+#include "plsa/io/log_readers.hpp"
 
 namespace plsa::lcm {
 
@@ -36,11 +37,21 @@ void writeLcmLog(const std::string& path, const io::Log& log, const std::string&
 bool isLcmLog(const std::string& path);
 
 /// Most bytes read from a log that is not a regular file (a pipe is read whole).
-inline constexpr std::size_t kMaxPipedLogBytes = std::size_t{1} << 30;
+inline constexpr std::size_t kMaxPipedLogBytes = io::kMaxPipedLogBytes;
 
 /// Reads `path` as an LCM event log when it starts with the sync word
 /// (lcm-logger's names, such as lcmlog-2026-11-25.00, have no extension),
 /// else as CSV.
 io::Log readLogFile(const std::string& path, const io::CsvReadOptions& options = {});
+
+/// The LCM event log as a log format: known by its sync word (and .lcmlog),
+/// read on ReadOptions::lcm_channel (every required column checked), written
+/// on WriteOptions::lcm_channel.
+io::LogFormat lcmLogFormat();
+/// Puts lcmLogFormat() in `registry` in place of the placeholder a build
+/// without LCM has there (so repeating it changes nothing). Call it once at
+/// start-up where LCM logs are to be read: it is not done by a static
+/// initialiser, which the linker drops from a static library.
+void registerLogFormats(io::LogReaderRegistry& registry = io::logReaders());
 
 }  // namespace plsa::lcm

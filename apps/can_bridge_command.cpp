@@ -14,7 +14,8 @@ void addCanBridgeCommand(CLI::App& app) {
   auto o = std::make_shared<lcm::CanBridgeOptions>();
   auto iface = std::make_shared<std::string>();
   auto profile = std::make_shared<std::string>();
-  CLI::App* c = app.add_subcommand("can-bridge", "Bridge LCM pressure commands and actuator state to CAN valves and sensors");
+  CLI::App* c =
+      app.add_subcommand("can-bridge", "Bridge LCM pressure commands and actuator state to CAN valves and sensors");
   c->add_option("--iface", *iface, "can0, socketcan:<iface>, or udp:<listen-port>:<peer-port>[?drop=..&delay_us=..]")
       ->required();
   c->add_option("--profile", *profile, "Signal map (JSON; default: the built-in profile, docs/can.md)")
@@ -28,10 +29,9 @@ void addCanBridgeCommand(CLI::App& app) {
   c->add_option("--command-timeout", o->limits.command_timeout_s, "Vent when commands stop for this long (s)")
       ->check(kPositive);
   c->add_option("--overpressure-margin", o->limits.overpressure_margin_bar,
-                 "Vent and latch a fault when a chamber reads this far above --max-pressure (bar)")
+                "Vent and latch a fault when a chamber reads this far above --max-pressure (bar)")
       ->check(kPositive);
-  c->add_option("--duration", o->duration_s, "Stop after this many seconds (0: until signalled)")
-      ->check(kNonNegative);
+  c->add_option("--duration", o->duration_s, "Stop after this many seconds (0: until signalled)")->check(kNonNegative);
   c->add_option("--command-channel", o->command_channel, "Channel of pressure commands");
   c->add_option("--state-channel", o->state_channel, "Channel for actuator state");
   c->add_option("--status-channel", o->status_channel, "Channel for status");
@@ -39,7 +39,8 @@ void addCanBridgeCommand(CLI::App& app) {
   c->callback([o, iface, profile] {
     const can::SignalMap map = profile->empty() ? can::defaultSignalMap() : can::loadSignalMap(*profile);
     lcm::checkCanBridgeOptions(*o, map);  // before the bus is opened
-    for (const auto& w : can::driverProfileWarnings(map)) std::fprintf(stderr, "plsa can-bridge: warning: %s\n", w.c_str());
+    for (const auto& w : can::driverProfileWarnings(map))
+      std::fprintf(stderr, "plsa can-bridge: warning: %s\n", w.c_str());
     std::vector<std::uint32_t> ids{map.message("pressure_sensor").id};
     if (const can::MessageLayout* tip = map.find("tip_angle")) ids.push_back(tip->id);
     auto transport = can::openTransport(*iface, ids);
@@ -48,10 +49,12 @@ void addCanBridgeCommand(CLI::App& app) {
                  iface->c_str(), map.profile.c_str(), o->command_channel.c_str(), o->state_channel.c_str(),
                  o->limits.max_pressure_bar);
     const lcm::CanBridgeStats s = lcm::runCanBridge(*o, *transport, map, stop);
-    std::fprintf(stderr, "plsa can-bridge: stopped, vent frame sent; %lld states, %lld commands, %lld rejected, %lld faults%s%s\n",
-                 static_cast<long long>(s.states), static_cast<long long>(s.commands),
-                 static_cast<long long>(s.rejected_commands), static_cast<long long>(s.faults),
-                 s.faults ? "; last: " : "", s.faults ? can::toString(s.last_fault) : "");
+    std::fprintf(
+        stderr,
+        "plsa can-bridge: stopped, vent frame sent; %lld states, %lld commands, %lld rejected, %lld faults%s%s\n",
+        static_cast<long long>(s.states), static_cast<long long>(s.commands),
+        static_cast<long long>(s.rejected_commands), static_cast<long long>(s.faults), s.faults ? "; last: " : "",
+        s.faults ? can::toString(s.last_fault) : "");
   });
 }
 

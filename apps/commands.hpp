@@ -44,8 +44,8 @@ inline const CLI::Validator kNonNegative = finiteNumberAtLeast(0.0, false);
 /// overlong one to 2^64 - 1, each a different run from the one asked for.
 inline const CLI::Validator kSeed = CLI::Validator(
     [](std::string& text) -> std::string {
-      const bool digits = !text.empty() && text.size() <= 20 &&
-                          text.find_first_not_of("0123456789") == std::string::npos;
+      const bool digits =
+          !text.empty() && text.size() <= 20 && text.find_first_not_of("0123456789") == std::string::npos;
       // 20 digits may still pass 2^64 - 1; the comparison is as text of equal length.
       const bool fits = digits && (text.size() < 20 || text <= "18446744073709551615");
       return fits ? std::string() : "'" + text + "' is not a seed (a whole number from 0 to 18446744073709551615)";

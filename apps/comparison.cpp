@@ -22,8 +22,7 @@ Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
 }  // namespace
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
-                            const Eigen::MatrixXd& y, const std::vector<int>& horizons,
-                            const SimulationStart& start) {
+                            const Eigen::MatrixXd& y, const std::vector<int>& horizons, const SimulationStart& start) {
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(m, u, y, horizons, true, start);
   ModelPredictions out{name, {}};
   for (const auto& by_horizon : pred) {
@@ -38,8 +37,8 @@ ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Ei
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                             const std::vector<double>& sim_drift_per_s, double sample_time_s) {
   PLSA_CHECK(sim_drift_per_s.empty() || (static_cast<Eigen::Index>(sim_drift_per_s.size()) == y.cols() &&
-                                      std::isfinite(sample_time_s) && sample_time_s > 0),
-          "predictArx: need one drift rate per output and a sample time > 0");
+                                         std::isfinite(sample_time_s) && sample_time_s > 0),
+             "predictArx: need one drift rate per output and a sample time > 0");
   ModelPredictions out{name, {}};
   for (Eigen::Index o = 0; o < y.cols(); ++o) {
     std::map<int, Eigen::VectorXd> byh;
@@ -69,7 +68,8 @@ Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models) {
 std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
                                                                   const Eigen::MatrixXd& y) {
   const Eigen::Index from = commonScoringStart(models), n = y.rows() - from;
-  PLSA_CHECK(n >= 2, "commonScores: " + std::to_string(y.rows()) + " samples leave " + std::to_string(std::max<Eigen::Index>(n, 0)) +
+  PLSA_CHECK(n >= 2, "commonScores: " + std::to_string(y.rows()) + " samples leave " +
+                         std::to_string(std::max<Eigen::Index>(n, 0)) +
                          " to score after every model's longest horizon; a fit needs 2");
   std::vector<std::vector<std::map<int, CommonScore>>> scores(models.size());
   for (std::size_t i = 0; i < models.size(); ++i) {

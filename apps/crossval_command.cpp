@@ -65,7 +65,8 @@ void runCrossval(CrossvalArgs& a) {
   o.inputs = a.inputs;
   o.outputs = a.outputs;
   o.reference = a.inputs;  // measured data: segment on the inputs themselves
-  std::printf("plsa crossval: %zu logs, leave one out; NRMSE fit %% (models scored on the same samples)\n", logs.size());
+  std::printf("plsa crossval: %zu logs, leave one out; NRMSE fit %% (models scored on the same samples)\n",
+              logs.size());
   std::printf("%-12s %-8s %-14s", "held out", "output", "model");
   for (int k : a.horizons) std::printf(" %8s", (std::to_string(k) + "-step").c_str());
   std::printf(" %8s\n", "sim");
@@ -150,7 +151,7 @@ void addCrossvalCommand(CLI::App& app) {
   addChoice(c, "--cv-layout", a->options.cv_layout,
             "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");
   c->add_option("--play-softening", a->options.play_softening_candidates,
-                 "Candidate softenings of the play channels' level, as in identify; default none")
+                "Candidate softenings of the play channels' level, as in identify; default none")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.49));
   c->add_option("--refine-play", a->options.play_refine_evaluations,

@@ -85,7 +85,8 @@ void runDemo(const DemoOptions& opt) {
   const Eigen::MatrixXd Ut = train.columnsOf(model.inputs);
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
   Eigen::MatrixXd Yt = train.columnsOf(model.outputs);
-  if (report.drift_taken_out) Yt = removeOutputDrift({Yt}, {train.column(io::standard_columns::kTime)}, report.output_drift)[0];
+  if (report.drift_taken_out)
+    Yt = removeOutputDrift({Yt}, {train.column(io::standard_columns::kTime)}, report.output_drift)[0];
   const std::string drift_text =
       report.drift_taken_out
           ? "A sensor yaw drift of " + std::to_string(report.output_drift.rate[1]).substr(0, 6) +
@@ -104,9 +105,10 @@ void runDemo(const DemoOptions& opt) {
   const std::vector<int> horizons = {40, 80};
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
   const InputsOutsideTraining coverage = inputsOutsideTraining(model, Uv);
-  std::printf("  the joystick run has an input outside its training range on %.1f%% of its samples and beyond the "
-              "training grid's outer nodes on %.1f%%\n",
-              100 * coverage.any, 100 * coverage.any_beyond_grid);
+  std::printf(
+      "  the joystick run has an input outside its training range on %.1f%% of its samples and beyond the "
+      "training grid's outer nodes on %.1f%%\n",
+      100 * coverage.any, 100 * coverage.any_beyond_grid);
   for (const std::string& w : inputCoverageWarnings(model, coverage)) std::printf("    %s\n", w.c_str());
   // ARX was fitted to the same drift-free outputs: its simulation gets the same drift back.
   const std::vector<double> arx_drift = report.drift_taken_out ? report.output_drift.rate : std::vector<double>{};
@@ -131,7 +133,8 @@ void runDemo(const DemoOptions& opt) {
   }
   const auto scores_all = commonScores(all, Yv);
   const Eigen::Index scored_from = commonScoringStart(all);
-  const Eigen::VectorXd tv = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
+  const Eigen::VectorXd tv =
+      val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
   const std::string window = "samples " + std::to_string(scored_from) + " to " + std::to_string(Yv.rows() - 1) +
                              ", t = " + fmt(tv(scored_from), "%g") + " to " + fmt(tv(tv.size() - 1), "%g") + " s";
   const std::size_t nm = preds.size();
@@ -140,10 +143,11 @@ void runDemo(const DemoOptions& opt) {
   auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return scores_all[2 * nm + m][o].at(0).fit; };
   std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; every model, horizon and error on the same %s)\n",
               window.c_str());
-  std::printf("  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
-              "  from its first sample, and the models fitted without the grid run's sensor drift turn at its rate;\n"
-              "  no drift: they do not; training yaw: the tip-frame models carry the grid run's yaw, no drift\n",
-              reg_s.c_str());
+  std::printf(
+      "  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
+      "  from its first sample, and the models fitted without the grid run's sensor drift turn at its rate;\n"
+      "  no drift: they do not; training yaw: the tip-frame models carry the grid run's yaw, no drift\n",
+      reg_s.c_str());
   std::printf("  %-36s %-10s %8s %8s %8s %9s %13s\n", "model", "output", "40-step", "80-step", "sim", "no drift",
               "training yaw");
   nlohmann::json j;
@@ -161,10 +165,10 @@ void runDemo(const DemoOptions& opt) {
       const double f_nd = fitNoDrift(m, o), f_ty = fitTrainingYaw(m, o);
       std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %9.1f %13.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(),
                   f.at(40).fit, f.at(80).fit, f.at(0).fit, f_nd, f_ty);
-      j["models"][keys[m]][model.outputs[o]] = {
-          {"fit_k40", f.at(40).fit},  {"fit_k80", f.at(80).fit},     {"fit_sim", f.at(0).fit},
-          {"fit_sim_no_drift", f_nd}, {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms},
-          {"rms_k80", f.at(80).rms},  {"rms_sim", f.at(0).rms}};
+      j["models"][keys[m]][model.outputs[o]] = {{"fit_k40", f.at(40).fit},      {"fit_k80", f.at(80).fit},
+                                                {"fit_sim", f.at(0).fit},       {"fit_sim_no_drift", f_nd},
+                                                {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms},
+                                                {"rms_k80", f.at(80).rms},      {"rms_sim", f.at(0).rms}};
     }
   // A fit divides by the run's spread, and a run that hardly bends makes a
   // small error a large miss: say both.
@@ -173,15 +177,20 @@ void runDemo(const DemoOptions& opt) {
     const auto& f = scores[0][o];
     std::printf("    %-10s %.3f / %.3f / %.3f deg rms, spread %.2f deg\n", model.outputs[o].c_str(), f.at(40).rms,
                 f.at(80).rms, f.at(0).rms, f.at(0).spread);
-    j["outputs"][model.outputs[o]] = {{"fit_k40", f.at(40).fit},   {"fit_k80", f.at(80).fit},
-                                      {"fit_sim", f.at(0).fit},    {"fit_sim_no_drift", fitNoDrift(0, o)},
+    j["outputs"][model.outputs[o]] = {{"fit_k40", f.at(40).fit},
+                                      {"fit_k80", f.at(80).fit},
+                                      {"fit_sim", f.at(0).fit},
+                                      {"fit_sim_no_drift", fitNoDrift(0, o)},
                                       {"fit_sim_training_yaw", fitTrainingYaw(0, o)},
-                                      {"rms_k40", f.at(40).rms},   {"rms_k80", f.at(80).rms},
-                                      {"rms_sim", f.at(0).rms},    {"std", f.at(0).spread}};
+                                      {"rms_k40", f.at(40).rms},
+                                      {"rms_k80", f.at(80).rms},
+                                      {"rms_sim", f.at(0).rms},
+                                      {"std", f.at(0).spread}};
   }
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
-  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in degrees; std: the measured output's standard deviation; "
-                    "every fit, rms and std over the same samples (scored_samples)";
+  j["rms_metric"] =
+      "rms_*: sqrt(mean (y - yhat)^2) in degrees; std: the measured output's standard deviation; "
+      "every fit, rms and std over the same samples (scored_samples)";
   j["scored_samples"] = {{"first", scored_from},
                          {"count", Yv.rows() - scored_from},
                          {"first_time_s", tv(scored_from)},
@@ -189,14 +198,16 @@ void runDemo(const DemoOptions& opt) {
   writeTextFile(path("fits.json"), j.dump(2) + "\n", "fits file");
 
   // 4. Report.
-  const Eigen::VectorXd t = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
+  const Eigen::VectorXd t =
+      val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
        << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
        << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child,th:first-child{text-align:left}"
        << "pre{white-space:pre-wrap;font-size:12px}"
        << "</style></head><body><h1>plsa demo: DIO-PWL-OBF on the simulated actuator</h1>"
-       << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving at a "
+       << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving "
+          "at a "
        << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ". plsa's model runs "
        << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
        << "coupling, schedule lag, play threshold, sensor drift and slow pole chosen by cross-validation on the grid. "
@@ -219,9 +230,9 @@ void runDemo(const DemoOptions& opt) {
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t o = 0; o < model.outputs.size(); ++o)
       html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
-           << fmt(scores[m][o].at(40).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(80).rms, "%.3f")
-           << "</td><td>" << fmt(scores[m][o].at(0).rms, "%.3f") << "</td><td>"
-           << fmt(scores[m][o].at(0).spread, "%.2f") << "</td></tr>";
+           << fmt(scores[m][o].at(40).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(80).rms, "%.3f") << "</td><td>"
+           << fmt(scores[m][o].at(0).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(0).spread, "%.2f")
+           << "</td></tr>";
   html << "</table>";
   for (std::size_t o = 0; o < model.outputs.size(); ++o) {
     const auto& p = preds[0].by_output[o];
@@ -254,9 +265,10 @@ void runDemo(const DemoOptions& opt) {
   html << "</pre></body></html>\n";
   writeTextFile(path("report.html"), html.str(), "HTML report");
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv,\n"
-              "    baseline_paper.json, baseline_global_linear.json} in %.1f s\n",
-              opt.out_dir.c_str(), secs);
+  std::printf(
+      "\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv,\n"
+      "    baseline_paper.json, baseline_global_linear.json} in %.1f s\n",
+      opt.out_dir.c_str(), secs);
 }
 
 }  // namespace

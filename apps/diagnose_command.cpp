@@ -31,7 +31,8 @@ struct DiagnoseArgs {
 void runDiagnose(DiagnoseArgs& a) {
   std::vector<std::string> inputs = a.real;
   inputs.push_back(a.sim);
-  for (const char* name : {"diagnosis.json", "report.html", "calibrated_sim.json", "trace.csv", "gap_map.csv", "shrink.csv"})
+  for (const char* name :
+       {"diagnosis.json", "report.html", "calibrated_sim.json", "trace.csv", "gap_map.csv", "shrink.csv"})
     refuseOverwritingInputs((std::filesystem::path(a.out) / name).string(), "--out", inputs, "plsa diagnose");
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
@@ -62,8 +63,9 @@ void runDiagnose(DiagnoseArgs& a) {
   for (const auto& c : d.ranking)
     std::printf("  %-14s %-18s -> %5.1f%%  shrink %5.1f%%%s\n", c.effect.c_str(), ("(" + c.formulation + ")").c_str(),
                 c.heldout_after.percent(), c.shrink_percent, c.signature.present ? "  (signature supports it)" : "");
-  std::printf("wrote %s/diagnosis.json, report.html (with trace.csv, gap_map.csv, shrink.csv), calibrated_sim.json (%.0f s)\n",
-              a.out.c_str(), d.elapsed_s);
+  std::printf(
+      "wrote %s/diagnosis.json, report.html (with trace.csv, gap_map.csv, shrink.csv), calibrated_sim.json (%.0f s)\n",
+      a.out.c_str(), d.elapsed_s);
 }
 
 struct SelfcheckArgs {
@@ -81,23 +83,39 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
     nlohmann::json j;
     j["cases"] = nlohmann::json::array();
     for (const auto& c : r.cases)
-      j["cases"].push_back({{"name", c.name}, {"withheld", c.withheld}, {"formulation", c.formulation},
-                            {"selected", c.selected}, {"top2", c.top2}, {"gap_before", c.gap_before},
-                            {"gap_after", c.gap_after}, {"noise", c.noise}, {"true_effect_shrink", c.true_effect_shrink},
-                            {"spurious", c.spurious}, {"verdict", c.verdict}, {"confidence", c.confidence},
-                            {"effect_size_percent", c.effect_size}, {"truth", c.truth},
-                            {"pass", c.pass}, {"elapsed_s", c.elapsed_s}});
+      j["cases"].push_back({{"name", c.name},
+                            {"withheld", c.withheld},
+                            {"formulation", c.formulation},
+                            {"selected", c.selected},
+                            {"top2", c.top2},
+                            {"gap_before", c.gap_before},
+                            {"gap_after", c.gap_after},
+                            {"noise", c.noise},
+                            {"true_effect_shrink", c.true_effect_shrink},
+                            {"spurious", c.spurious},
+                            {"verdict", c.verdict},
+                            {"confidence", c.confidence},
+                            {"effect_size_percent", c.effect_size},
+                            {"truth", c.truth},
+                            {"pass", c.pass},
+                            {"elapsed_s", c.elapsed_s}});
     j["labels"] = r.labels;
     j["confusion"] = r.confusion;
     j["targets_met"] = r.targets_met;
     j["truth"] = r.truth;
-    j["summary"] = {{"single_cases", r.single_cases},   {"single_top1", r.single_top1},
-                    {"pair_cases", r.pair_cases},       {"pair_top2", r.pair_top2},
-                    {"null_cases", r.null_cases},       {"null_clean", r.null_clean},
+    j["summary"] = {{"single_cases", r.single_cases},
+                    {"single_top1", r.single_top1},
+                    {"pair_cases", r.pair_cases},
+                    {"pair_top2", r.pair_top2},
+                    {"null_cases", r.null_cases},
+                    {"null_clean", r.null_clean},
                     {"cases_with_spurious", r.cases_with_spurious},
-                    {"gap_single_cases", r.gap_single_cases},   {"gap_single_top1", r.gap_single_top1},
-                    {"uncertain", r.uncertain},                 {"qualified", r.qualified},
-                    {"median_true_shrink", r.median_true_shrink}, {"min_true_shrink", r.min_true_shrink}};
+                    {"gap_single_cases", r.gap_single_cases},
+                    {"gap_single_top1", r.gap_single_top1},
+                    {"uncertain", r.uncertain},
+                    {"qualified", r.qualified},
+                    {"median_true_shrink", r.median_true_shrink},
+                    {"min_true_shrink", r.min_true_shrink}};
     writeTextFile(a.out, j.dump(2), "self-check results");
   }
   if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");
@@ -107,11 +125,13 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
 
 void addDiagnoseCommands(CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
-  CLI::App* c = app.add_subcommand("diagnose", "Where and why a simulator disagrees with real runs, and what fixing it buys");
+  CLI::App* c =
+      app.add_subcommand("diagnose", "Where and why a simulator disagrees with real runs, and what fixing it buys");
   c->add_option("--sim", a->sim, "Simulator configuration (JSON; its switched-off effects are the candidates)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--real", a->real, "Real run(s): CSV or LCM event logs (known by content); several: split by run, one: split by time")
+  c->add_option("--real", a->real,
+                "Real run(s): CSV or LCM event logs (known by content); several: split by run, one: split by time")
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
@@ -120,13 +140,16 @@ void addDiagnoseCommands(CLI::App& app) {
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');
   c->add_option("--pressures", a->pressures, "Measured chamber pressure columns, or 'none'")->delimiter(',');
   c->add_option("--input-scale", a->columns.input_scale, "Bar per input unit")->check(kPositive);
-  c->add_option("--output-map", a->output_map,
-                "angles (outputs are bend, steer in deg) or affine (an unknown affine image of the bending vector, fitted)")
+  c->add_option(
+       "--output-map", a->output_map,
+       "angles (outputs are bend, steer in deg) or affine (an unknown affine image of the bending vector, fitted)")
       ->check(CLI::IsMember({"angles", "affine"}));
-  c->add_option("--candidates", a->options.candidates, "Effects to try (default: every one switched off)")->delimiter(',');
-  c->add_flag("--fixed-laws", [a](std::int64_t n) { a->options.flexible_laws = n == 0; },
-              "Calibrate each candidate with the formulation its configuration names, instead of its flexible "
-              "law (stiffening and pneumatic_lag: a power law spanning the fixed ones)");
+  c->add_option("--candidates", a->options.candidates, "Effects to try (default: every one switched off)")
+      ->delimiter(',');
+  c->add_flag(
+      "--fixed-laws", [a](std::int64_t n) { a->options.flexible_laws = n == 0; },
+      "Calibrate each candidate with the formulation its configuration names, instead of its flexible "
+      "law (stiffening and pneumatic_lag: a power law spanning the fixed ones)");
   c->add_option("--evaluations-per-parameter", a->options.calibration.evaluations_per_parameter,
                 "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
       ->check(CLI::Range(0, 1000));
@@ -150,11 +173,13 @@ void addDiagnoseCommands(CLI::App& app) {
         "candidate's family, nominal physics randomised widely; own: plsa's simulator and its formulations (a "
         "check of the machinery, not of generalisation)")
       ->check(CLI::IsMember({"independent", "own"}));
-  sc->add_flag("--settled", [s](std::int64_t n) { s->options.from_rest = n == 0; },
-               "own laws: record the runs settled at their first command instead of from rest");
+  sc->add_flag(
+      "--settled", [s](std::int64_t n) { s->options.from_rest = n == 0; },
+      "own laws: record the runs settled at their first command instead of from rest");
   sc->add_option("--effects", s->options.effects, "Single-effect cases (default: all seven)")->delimiter(',');
-  sc->add_flag("--fixed-laws", [s](std::int64_t n) { s->options.diagnose.flexible_laws = n == 0; },
-               "Diagnose with each candidate's configured formulation instead of its flexible law");
+  sc->add_flag(
+      "--fixed-laws", [s](std::int64_t n) { s->options.diagnose.flexible_laws = n == 0; },
+      "Diagnose with each candidate's configured formulation instead of its flexible law");
   sc->add_option("--seeds", s->options.seeds_per_effect,
                  "Cases per effect (independent: its three laws in turn; own: odd ones with a law the candidate's "
                  "cannot express); default 4")
@@ -169,7 +194,8 @@ void addDiagnoseCommands(CLI::App& app) {
       ->check(CLI::Range(0, 1000));
   sc->add_option("--evaluations", s->options.diagnose.calibration.max_evaluations, "Simulator runs per calibration")
       ->check(CLI::Range(20, 100000));
-  sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
+  sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")
+      ->check(CLI::Range(1, 64));
   sc->add_option("--out", s->out, "Results as JSON");
   sc->add_flag("--verbose", s->options.verbose, "Show each diagnosis's progress");
   sc->add_option("--save-runs", s->options.save_runs_dir,

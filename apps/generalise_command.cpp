@@ -46,6 +46,7 @@ struct PhysicsCase {
 
 const char* kModels[] = {"plsa", "paper", "global_linear", "arx"};
 const std::vector<int> kHorizons = {40, 80};
+constexpr double kStraightDeg = 1.0;  ///< below this bend the recorded steering holds
 
 std::vector<PhysicsCase> listCases(const GeneraliseArgs& a) {
   std::vector<PhysicsCase> all = {{"nominal", {}}};
@@ -86,7 +87,9 @@ sim::IndependentPhysics drawPhysics(const PhysicsCase& c, std::mt19937_64& rng, 
 
 /// The experiment's whole command trajectory, pre-roll included, recorded
 /// from a vented actuator at rest; the bending vector read as bend and
-/// (unwrapped) steering angles, as a tip sensor's software reports them.
+/// steering angles, as a tip sensor's software reports them: steering
+/// unwrapped (continuous), and held at its last value while the tip is
+/// within kStraightDeg of straight, where its direction is noise (from 0).
 io::Log recordFromRest(const sim::IndependentPhysics& physics, const sim::Experiment& e, std::uint64_t seed) {
   sim::IndependentActuator a(physics, seed);
   io::Log log;
@@ -96,9 +99,11 @@ io::Log recordFromRest(const sim::IndependentPhysics& physics, const sim::Experi
   double steer = 0.0;
   for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
     const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
-    const double turn = std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * kRadPerDeg,
-                                       2.0 * 3.14159265358979323846);
-    steer += turn / kRadPerDeg;
+    if (s.bending_deg.norm() > kStraightDeg) {
+      const double turn = std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * kRadPerDeg,
+                                         2.0 * 3.14159265358979323846);
+      steer += turn / kRadPerDeg;
+    }
     log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),
         e.commands(k, 2), s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2], s.bending_deg.norm(), steer;
   }
@@ -195,11 +200,12 @@ void printSummary(const nlohmann::json& s) {
 void runGeneralise(const GeneraliseArgs& a) {
   const std::vector<PhysicsCase> cases = listCases(a);
   const int seeds = a.quick ? 1 : a.seeds;
-  std::printf("plsa generalise: %zu cases x %d seeds on the independent actuator, recorded from rest; fit %% on the\n"
-              "joystick run, every model and horizon on the same samples; beyond: share of its samples beyond plsa's grid\n",
-              cases.size(), seeds);
-  std::printf("  %-32s %4s %6s | %-39s | %-39s | %-39s | %-39s\n", "case", "seed", "beyond", "plsa (bend 40 80 sim, steer)",
-              "paper", "global linear OBF", "ARX(4,4)");
+  std::printf(
+      "plsa generalise: %zu cases x %d seeds on the independent actuator, recorded from rest; fit %% on the\n"
+      "joystick run, every model and horizon on the same samples; beyond: share of its samples beyond plsa's grid\n",
+      cases.size(), seeds);
+  std::printf("  %-32s %4s %6s | %-39s | %-39s | %-39s | %-39s\n", "case", "seed", "beyond",
+              "plsa (bend 40 80 sim, steer)", "paper", "global linear OBF", "ARX(4,4)");
   nlohmann::json rows = nlohmann::json::array();
   const auto t0 = std::chrono::steady_clock::now();
   for (const PhysicsCase& c : cases)
@@ -222,7 +228,8 @@ void runGeneralise(const GeneraliseArgs& a) {
   printSummary(summary);
   std::printf("  %.0f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   if (!a.json.empty())
-    writeTextFile(a.json, nlohmann::json{{"rows", rows}, {"summary", summary}}.dump(1) + "\n", "generalisation results");
+    writeTextFile(a.json, nlohmann::json{{"rows", rows}, {"summary", summary}}.dump(1) + "\n",
+                  "generalisation results");
 }
 
 }  // namespace
@@ -230,8 +237,9 @@ void runGeneralise(const GeneraliseArgs& a) {
 void addGeneraliseCommand(CLI::App& app) {
   auto a = std::make_shared<GeneraliseArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "generalise", "Identification scored on an independently written actuator: every law of every effect, "
-                    "nominal physics randomised, recorded from rest; plsa against the paper, global linear OBF and ARX");
+      "generalise",
+      "Identification scored on an independently written actuator: every law of every effect, "
+      "nominal physics randomised, recorded from rest; plsa against the paper, global linear OBF and ARX");
   cmd->add_option("--seeds", a->seeds, "Physics drawn per case")->check(CLI::Range(1, 100));
   cmd->add_option("--seed", a->seed, "First seed")->check(kSeed);
   cmd->add_option("--case", a->cases, "Cases to run (effect.law, nominal or all; default every one)");

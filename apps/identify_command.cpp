@@ -63,7 +63,8 @@ void runIdentify(IdentifyArgs& a) {
   const DioPwlObfModel model = identifyModel(logs, o, &report);
   for (const auto& pp : report.pairs)
     for (const auto& why : pp.rejections)
-      std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n", a.inputs[static_cast<std::size_t>(pp.input)].c_str(),
+      std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n",
+                   a.inputs[static_cast<std::size_t>(pp.input)].c_str(),
                    a.outputs[static_cast<std::size_t>(pp.output)].c_str(), why.c_str());
   if (a.compare_poles) {
     // FKcM against fuzzy c-means, k-means and a global search on rho, same poles.
@@ -78,8 +79,10 @@ void runIdentify(IdentifyArgs& a) {
       co.refine_on_rho = true;
       const double fr = fkcmClustering(pp.identified, co).rho;
       const double k = kMeansClustering(pp.identified, co).rho, g = globalRhoSearch(pp.identified, co).rho;
-      const std::string name = a.inputs[static_cast<std::size_t>(pp.input)] + " -> " + a.outputs[static_cast<std::size_t>(pp.output)];
-      std::printf("%-22s %6zu %12.3e %12.3e %12.3e %12.3e %12.3e\n", name.c_str(), pp.identified.size(), f, fr, c, k, g);
+      const std::string name =
+          a.inputs[static_cast<std::size_t>(pp.input)] + " -> " + a.outputs[static_cast<std::size_t>(pp.output)];
+      std::printf("%-22s %6zu %12.3e %12.3e %12.3e %12.3e %12.3e\n", name.c_str(), pp.identified.size(), f, fr, c, k,
+                  g);
     }
   }
   saveModel(a.out, model);
@@ -143,8 +146,8 @@ void runValidate(const ValidateArgs& a) {
   }
   const Eigen::Index scored = v.time.size() - v.scored_from;
   std::fprintf(table, "(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
-              static_cast<long long>(scored), static_cast<long long>(v.scored_from),
-              seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
+               static_cast<long long>(scored), static_cast<long long>(v.scored_from),
+               seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
   j["scored_samples"] = {{"first", v.scored_from},
                          {"count", scored},
                          {"first_time_s", v.time(v.scored_from)},
@@ -152,15 +155,15 @@ void runValidate(const ValidateArgs& a) {
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
-  j["rms_metric"] = "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
-                    "deviation; every fit, rms and std over the same samples (scored_samples)";
+  j["rms_metric"] =
+      "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
+      "deviation; every fit, rms and std over the same samples (scored_samples)";
   // Say how the simulation started: the ways differ when the log starts unsettled.
   const bool registered = yawRegistrationSamples(model, a.start) > 0;
-  std::string start =
-      model.output_level.empty() ? "first measured sample"
-      : registered ? "model output level, sensor yaw registered on the first " +
-                         seconds(a.start.yaw_registration_s) + " s (not scored)"
-                   : "model output level";
+  std::string start = model.output_level.empty() ? "first measured sample"
+                      : registered               ? "model output level, sensor yaw registered on the first " +
+                                         seconds(a.start.yaw_registration_s) + " s (not scored)"
+                                   : "model output level";
   const double yaw_rate = carriedYawRate(model, a.start);
   if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
@@ -199,13 +202,17 @@ CLI::Validator secondsValidator(const std::string& example) {
 void addIdentifyCommands(CLI::App& app) {
   auto a = std::make_shared<IdentifyArgs>();
   CLI::App* id = app.add_subcommand("identify", "Identify a DIO-PWL-OBF model from logs (paper Table I)");
-  id->add_option("--log", a->logs, "Training log(s): CSV, or LCM event logs (known by their content, any name); repeat for more")->required()->check(CLI::ExistingFile);
+  id->add_option("--log", a->logs,
+                 "Training log(s): CSV, or LCM event logs (known by their content, any name); repeat for more")
+      ->required()
+      ->check(CLI::ExistingFile);
   id->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
   id->add_option("--poles", a->options.poles_per_pair, "OBF poles per input-output pair")->check(CLI::Range(1, 20));
-  id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")->check(CLI::Range(1, 6));
+  id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")
+      ->check(CLI::Range(1, 6));
   addChoice(id, "--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global");
   id->add_option("--rho-refinement", a->options.clustering.refine_on_rho,
                  "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
@@ -245,7 +252,8 @@ void addIdentifyCommands(CLI::App& app) {
               const std::string number = slope ? item.substr(0, item.size() - 1) : item;
               double v = NAN;
               if (!parseNonNegative(number, v))
-                throw CLI::ValidationError("--play", "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)");
+                throw CLI::ValidationError("--play",
+                                           "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)");
               set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
             }
             a->options.play_candidates.push_back(set);
@@ -308,7 +316,9 @@ void addIdentifyCommands(CLI::App& app) {
   auto v = std::make_shared<ValidateArgs>();
   CLI::App* va = app.add_subcommand("validate", "k-step-ahead and simulation NRMSE fits of a model on a log");
   va->add_option("--model", v->model, "Model file")->required()->check(CLI::ExistingFile);
-  va->add_option("--log", v->log, "Validation log: CSV, or an LCM event log (known by its content, any name)")->required()->check(CLI::ExistingFile);
+  va->add_option("--log", v->log, "Validation log: CSV, or an LCM event log (known by its content, any name)")
+      ->required()
+      ->check(CLI::ExistingFile);
   va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
   va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");

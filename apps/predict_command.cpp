@@ -29,7 +29,8 @@ void addPredictCommand(CLI::App& app) {
     for (int h : o->horizons) std::fprintf(stderr, " %d", h);
     std::fprintf(stderr, ", %s -> %s\n", o->state_channel.c_str(), o->prediction_channel.c_str());
     const lcm::PredictorNodeStats s = lcm::runPredictorNode(m, *o, stop);
-    std::fprintf(stderr, "plsa predict: stopped; %lld states, %lld predictions, %lld rejected samples, %lld over a "
+    std::fprintf(stderr,
+                 "plsa predict: stopped; %lld states, %lld predictions, %lld rejected samples, %lld over a "
                  "sample time\n",
                  static_cast<long long>(s.states), static_cast<long long>(s.predictions),
                  static_cast<long long>(s.rejected), static_cast<long long>(s.deadline_misses));

@@ -41,13 +41,14 @@ void runSimNodeCommand(SimNodeArgs& a) {
   if (!a.can.empty()) return runSimCan(a);
   const std::atomic<bool>& stop = stopOnSignals();
   std::fprintf(stderr, "plsa sim: %s at %.0f Hz, command timeout %.3f s, LCM %s\n",
-               a.node.lockstep ? "lock-step" : "real time", a.node.config.sample_rate_hz,
-               a.node.command_timeout_s, a.node.url.empty() ? "(LCM_DEFAULT_URL or LCM default)" : a.node.url.c_str());
+               a.node.lockstep ? "lock-step" : "real time", a.node.config.sample_rate_hz, a.node.command_timeout_s,
+               a.node.url.empty() ? "(LCM_DEFAULT_URL or LCM default)" : a.node.url.c_str());
   const lcm::SimNodeStats s = lcm::runSimNode(a.node, stop);
-  std::fprintf(stderr,
-               "plsa sim: stopped, chambers vented; %lld states, %lld commands accepted, %lld rejected, %lld vent events\n",
-               static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),
-               static_cast<long long>(s.commands_rejected), static_cast<long long>(s.vent_events));
+  std::fprintf(
+      stderr,
+      "plsa sim: stopped, chambers vented; %lld states, %lld commands accepted, %lld rejected, %lld vent events\n",
+      static_cast<long long>(s.states_published), static_cast<long long>(s.commands_accepted),
+      static_cast<long long>(s.commands_rejected), static_cast<long long>(s.vent_events));
 }
 
 }  // namespace
@@ -59,7 +60,8 @@ void addSimNodeCommand(CLI::App& app) {
   cmd->add_option("--url", a->node.url, "LCM URL (default: LCM_DEFAULT_URL)");
   cmd->add_option("--seed", a->node.seed, "Noise seed")->check(kSeed);
   cmd->add_flag("--lockstep", a->node.lockstep, "Advance one sample per command instead of in real time");
-  cmd->add_option("--command-timeout", a->node.command_timeout_s, "Vent when no command (behind CAN: no valid valve frame) for this long (s)")
+  cmd->add_option("--command-timeout", a->node.command_timeout_s,
+                  "Vent when no command (behind CAN: no valid valve frame) for this long (s)")
       ->check(kPositive);
   cmd->add_option("--duration", a->node.duration_s, "Stop after this many simulated seconds (0: run until signalled)")
       ->check(kNonNegative);

@@ -33,7 +33,8 @@ void runSimulate(const SimulateOptions& o) {
       eo.joystick_duration_s = o.duration_s;
     } else if (o.experiment == "static_map") {
       char msg[160];
-      std::snprintf(msg, sizeof msg, "--duration does not apply to static_map: it holds each of its %d x %d points %g s",
+      std::snprintf(msg, sizeof msg,
+                    "--duration does not apply to static_map: it holds each of its %d x %d points %g s",
                     eo.static_map_points, eo.static_map_points, eo.static_map_hold_s);
       throw std::invalid_argument(msg);
     } else {
@@ -63,8 +64,8 @@ void runSimulate(const SimulateOptions& o) {
   if (o.experiment == "joystick")
     std::snprintf(shape, sizeof shape, "bandwidth %.2f Hz", eo.joystick_bandwidth_hz);
   else if (o.experiment == "static_map")
-    std::snprintf(shape, sizeof shape, "%d x %d points, hold %.0f s each", eo.static_map_points,
-                  eo.static_map_points, eo.static_map_hold_s);
+    std::snprintf(shape, sizeof shape, "%d x %d points, hold %.0f s each", eo.static_map_points, eo.static_map_points,
+                  eo.static_map_hold_s);
   else
     std::snprintf(shape, sizeof shape, "hold %.2f s per level", eo.hold_s);
   std::fprintf(stderr, "plsa simulate: %s, %.1f s recorded at %.0f Hz after a %.1f s pre-roll (%s), seed %llu\n",
@@ -76,8 +77,8 @@ void runSimulate(const SimulateOptions& o) {
   io::WriteOptions wo;
   wo.lcm_channel = o.channel;
   io::writeLog(o.out, log, wo);  // by the extension: .lcmlog an LCM event log, else CSV
-  std::fprintf(stderr, "plsa simulate: wrote %lld samples to %s (effects: %s)\n",
-               static_cast<long long>(log.samples()), o.out.c_str(), log.metadata["effects"].c_str());
+  std::fprintf(stderr, "plsa simulate: wrote %lld samples to %s (effects: %s)\n", static_cast<long long>(log.samples()),
+               o.out.c_str(), log.metadata["effects"].c_str());
 }
 
 }  // namespace
@@ -105,9 +106,8 @@ void addSimulateCommands(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   CLI::App* cfg = app.add_subcommand("sim-config", "Write the default simulator configuration (JSON)");
   cfg->add_option("--out", *path, "Output file")->required();
-  cfg->callback([path] {
-    writeTextFile(*path, sim::simConfigToJson(sim::SimConfig{}) + "\n", "simulator configuration");
-  });
+  cfg->callback(
+      [path] { writeTextFile(*path, sim::simConfigToJson(sim::SimConfig{}) + "\n", "simulator configuration"); });
 }
 
 }  // namespace plsa::app

@@ -40,7 +40,8 @@ std::string describe(const DioPwlObfModel& m) {
   char b[256];
   const bool slow = m.poles[0][0].poles().back().real() > 0.99;
   std::string grid;
-  for (const auto& levels : m.partition.breakpoints()) grid += (grid.empty() ? "" : "x") + std::to_string(levels.size());
+  for (const auto& levels : m.partition.breakpoints())
+    grid += (grid.empty() ? "" : "x") + std::to_string(levels.size());
   std::snprintf(b, sizeof b, "%d in, %s side %s%s, lag %g s, %d poles%s, %s", m.inputCount(),
                 m.schedule_side == ScheduleSide::kInput ? "input" : "output", grid.empty() ? "1" : grid.c_str(),
                 m.partition.scheduling() == Scheduling::kSwitched ? " switched" : "", m.schedule_lag_s,

@@ -44,7 +44,9 @@ struct Stats {
 
 Stats stats(std::vector<double>& ns) {
   std::sort(ns.begin(), ns.end());
-  auto at = [&](double q) { return ns[std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size())))]; };
+  auto at = [&](double q) {
+    return ns[std::min(ns.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ns.size())))];
+  };
   return {at(0.5), at(0.99), at(0.999), ns.back()};
 }
 
@@ -200,9 +202,10 @@ void measureModel(const BenchModel& bm, const Drive& d, long calls) {
       slow_planned.p50 / (upd + g_results[tag + ": predict 80, planned input"].p50);
   g_figures[tag + ": speed-up over straightforward, held (p50)"] =
       slow_held.p50 / (upd + g_results[tag + ": predict 80, input held, moving"].p50);
-  std::printf("  speed-up over the straightforward implementation (update + predict 80, p50): planned %.0fx, held %.0fx\n",
-              g_figures[tag + ": speed-up over straightforward, planned (p50)"],
-              g_figures[tag + ": speed-up over straightforward, held (p50)"]);
+  std::printf(
+      "  speed-up over the straightforward implementation (update + predict 80, p50): planned %.0fx, held %.0fx\n",
+      g_figures[tag + ": speed-up over straightforward, planned (p50)"],
+      g_figures[tag + ": speed-up over straightforward, held (p50)"]);
 }
 
 // N segments, each its own compiled copy of the demo's model: update and
@@ -270,7 +273,8 @@ Drive syntheticDrive(int chambers) {
   d.u.resize(8000, chambers);
   d.y.resize(8000, 2);
   for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
-    for (int j = 0; j < chambers; ++j) d.u(k, j) = 0.275 + 0.09 * std::sin(0.003 * static_cast<double>(k) * (j + 1) + j);
+    for (int j = 0; j < chambers; ++j)
+      d.u(k, j) = 0.275 + 0.09 * std::sin(0.003 * static_cast<double>(k) * (j + 1) + j);
     d.y.row(k) << 10.0 + std::sin(0.01 * static_cast<double>(k)), 20.0;
   }
   return d;
@@ -333,7 +337,8 @@ void runLoop(double seconds, int segments) {
     }
     timespec done{};
     clock_gettime(CLOCK_MONOTONIC, &done);
-    const double elapsed = static_cast<double>((done.tv_sec - next.tv_sec) * 1'000'000'000L + (done.tv_nsec - next.tv_nsec));
+    const double elapsed =
+        static_cast<double>((done.tv_sec - next.tv_sec) * 1'000'000'000L + (done.tv_nsec - next.tv_nsec));
     work.push_back(elapsed - jitter.back());
     if (elapsed > static_cast<double>(period_ns)) ++misses;
   }
@@ -375,12 +380,18 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--latency") latency = true;
-    else if (a == "--calls") calls = std::stol(value("--calls"));
-    else if (a == "--loop") loop_s = std::stod(value("--loop"));
-    else if (a == "--segments") segments = std::stoi(value("--segments"));
-    else if (a == "--json") json = value("--json");
-    else rest.push_back(argv[i]);
+    if (a == "--latency")
+      latency = true;
+    else if (a == "--calls")
+      calls = std::stol(value("--calls"));
+    else if (a == "--loop")
+      loop_s = std::stod(value("--loop"));
+    else if (a == "--segments")
+      segments = std::stoi(value("--segments"));
+    else if (a == "--json")
+      json = value("--json");
+    else
+      rest.push_back(argv[i]);
   }
   if (calls < 1000 || segments < 1 || loop_s < 0) {
     std::fprintf(stderr, "plsa-bench: --calls >= 1000, --segments >= 1, --loop >= 0\n");

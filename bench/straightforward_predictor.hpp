@@ -52,9 +52,10 @@ class StraightforwardPredictor {
       vc_ = Eigen::VectorXd(static_cast<Eigen::Index>(play_.size()));
       const double sum = positiveSumAbove(u_, m_.shaping.threshold);
       for (std::size_t c = 0; c < play_.size(); ++c)
-        vc_(static_cast<Eigen::Index>(c)) = playStartState(
-            coupledLevel(levelAbove(u_(channel_input_[c]), m_.shaping.threshold), sum, m_.shaping.coupling, m_.shaping.softening),
-            play_[c], m_.shaping.start);
+        vc_(static_cast<Eigen::Index>(c)) =
+            playStartState(coupledLevel(levelAbove(u_(channel_input_[c]), m_.shaping.threshold), sum,
+                                        m_.shaping.coupling, m_.shaping.softening),
+                           play_[c], m_.shaping.start);
       w_ = nodeWeights(us_);
       y_ = y;
       return;
@@ -104,7 +105,8 @@ class StraightforwardPredictor {
     Eigen::VectorXd w = Eigen::VectorXd::Zero(m_.partition.regionCount());
     ScheduleBlend blend;
     m_.partition.blend(us, DirectionState{}, blend);
-    for (int k = 0; k < blend.count; ++k) w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
+    for (int k = 0; k < blend.count; ++k)
+      w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
     return w;
   }
 
@@ -123,7 +125,8 @@ class StraightforwardPredictor {
       for (int k = 0; k < blend.count; ++k) {
         const Eigen::VectorXd& c = coefficients_[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(k)])]
                                                 [static_cast<std::size_t>(banks_[b].output)];
-        dy(banks_[b].output) += blend.weight[static_cast<std::size_t>(k)] * c.segment(banks_[b].offset, x[b].size()).dot(x[b]);
+        dy(banks_[b].output) +=
+            blend.weight[static_cast<std::size_t>(k)] * c.segment(banks_[b].offset, x[b].size()).dot(x[b]);
       }
     return dy;
   }
@@ -138,8 +141,8 @@ class StraightforwardPredictor {
     Eigen::VectorXd delta(vc.size());
     for (std::size_t c = 0; c < play_.size(); ++c) {
       const auto cc = static_cast<Eigen::Index>(c);
-      const double level =
-          coupledLevel(levelAbove(u(channel_input_[c]), m_.shaping.threshold), sum, m_.shaping.coupling, m_.shaping.softening);
+      const double level = coupledLevel(levelAbove(u(channel_input_[c]), m_.shaping.threshold), sum,
+                                        m_.shaping.coupling, m_.shaping.softening);
       const double v = play_[c].follow(level, vc(cc));
       delta(cc) = v - vc(cc);
       vc(cc) = v;
@@ -148,8 +151,9 @@ class StraightforwardPredictor {
     const Eigen::VectorXd w_next = input_side ? nodeWeights(us) : w;
     for (std::size_t b = 0; b < banks_.size(); ++b) {
       const Bank& bank = banks_[b];
-      const double d = input_side ? w_next(bank.node) * vc(bank.channel) - w(bank.node) * (vc(bank.channel) - delta(bank.channel))
-                                  : delta(bank.channel);
+      const double d =
+          input_side ? w_next(bank.node) * vc(bank.channel) - w(bank.node) * (vc(bank.channel) - delta(bank.channel))
+                     : delta(bank.channel);
       x[b] = bank.A * x[b] + bank.B * d;
     }
     w = w_next;

@@ -15,12 +15,13 @@
 
 namespace {
 
-constexpr int kHorizon = 80;        // 1 s at 80 Hz
+constexpr int kHorizon = 80;  // 1 s at 80 Hz
 constexpr double kMinBar = 0.0, kMaxBar = 0.35;
 constexpr double kSmoothness = 200.0;  // weight on the plan's steps (deg^2 per bar^2)
 
 // Bending error over the horizon plus the plan's roughness.
-double cost(const Eigen::MatrixXd& predicted, double target, const Eigen::MatrixXd& plan, const Eigen::RowVectorXd& now) {
+double cost(const Eigen::MatrixXd& predicted, double target, const Eigen::MatrixXd& plan,
+            const Eigen::RowVectorXd& now) {
   double c = (predicted.col(0).array() - target).square().sum();
   Eigen::RowVectorXd before = now;
   for (Eigen::Index s = 0; s < plan.rows(); ++s) {
@@ -95,8 +96,8 @@ int main(int argc, char** argv) {
     state = arm.step({u(0), nu > 1 ? u(1) : 0.0, nu > 2 ? u(2) : 0.0});
     predictor.update(state.time_s, u, Eigen::Vector2d(state.bend_deg, state.steer_deg));
     if (tick % 20 == 0 || tick == 159)
-      std::printf("t %5.3f s  pressures %.3f %.3f bar  bend %6.2f deg (target %.2f)  cost %.3g\n", tick * 0.0125,
-                  u(0), nu > 1 ? u(1) : 0.0, state.bend_deg, target, now);
+      std::printf("t %5.3f s  pressures %.3f %.3f bar  bend %6.2f deg (target %.2f)  cost %.3g\n", tick * 0.0125, u(0),
+                  nu > 1 ? u(1) : 0.0, state.bend_deg, target, now);
   }
   return 0;
 }

@@ -96,7 +96,8 @@ void simulate(const std::string& experiment, const std::string& path, std::uint6
 // calls a Python user makes one at a time, names for update's.
 class PyPredictor {
  public:
-  PyPredictor(const plsa::DioPwlObfModel& model, int max_horizon) : options_(optionsFor(max_horizon)), p_(model, options_) {}
+  PyPredictor(const plsa::DioPwlObfModel& model, int max_horizon)
+      : options_(optionsFor(max_horizon)), p_(model, options_) {}
 
   std::string update(double time_s, const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
     if (u.size() != p_.inputCount() || y.size() != p_.outputCount())
@@ -160,8 +161,9 @@ PYBIND11_MODULE(_plsa, m) {
 
   py::class_<plsa::DioPwlObfModel>(m, "Model", "An identified DIO-PWL-OBF model")
       .def_static("load", &plsa::loadModel, py::arg("path"), "Read a model file (JSON)")
-      .def("save", [](const plsa::DioPwlObfModel& self, const std::string& path) { plsa::saveModel(path, self); },
-           py::arg("path"), "Write the model file (JSON), atomically")
+      .def(
+          "save", [](const plsa::DioPwlObfModel& self, const std::string& path) { plsa::saveModel(path, self); },
+          py::arg("path"), "Write the model file (JSON), atomically")
       .def_readonly("inputs", &plsa::DioPwlObfModel::inputs)
       .def_readonly("outputs", &plsa::DioPwlObfModel::outputs)
       .def_readonly("sample_time_s", &plsa::DioPwlObfModel::sample_time_s)
@@ -183,8 +185,7 @@ PYBIND11_MODULE(_plsa, m) {
         "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim}}");
   m.def("read_log", &readLog, py::arg("path"),
         "A CSV log as {column: array}, read (and checked) as the library reads it");
-  m.def("simulate", &simulate, py::arg("experiment"), py::arg("path"), py::arg("seed") = 1,
-        py::arg("duration_s") = 0.0,
+  m.def("simulate", &simulate, py::arg("experiment"), py::arg("path"), py::arg("seed") = 1, py::arg("duration_s") = 0.0,
         "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
         "joystick run's length, default 60 s) into a CSV log");
 

@@ -96,11 +96,15 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
   ASSERT_EQ(decodeFrame(map.messages[0], f, out, c), DecodeStatus::kOk);
   EXPECT_NEAR(out[0], -3.21, 1e-9);
   EXPECT_EQ(out[1], 123456.0);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 5, "bits": 16, "scale": 1})")).find("overlaps"), std::string::npos);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 12, "scale": 1})")).find("8, 16 or 32"), std::string::npos);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 0})")).find("non-zero"), std::string::npos);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1, "endian": "middle"})")).find("endian"),
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 5, "bits": 16, "scale": 1})")).find("overlaps"),
             std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 12, "scale": 1})")).find("8, 16 or 32"),
+            std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 0})")).find("non-zero"),
+            std::string::npos);
+  EXPECT_NE(
+      errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1, "endian": "middle"})")).find("endian"),
+      std::string::npos);
   EXPECT_NE(errorOf(R"({"profile": "t"})").find("map.json"), std::string::npos);
   EXPECT_NE(errorOf("{").find("not valid JSON"), std::string::npos);
   // Found by fuzz_signal_map: a number too large for a double is a JSON error too, not a crash.
@@ -111,9 +115,13 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
   // integer type was converted before any check. Integer fields are now
   // type- and range-checked first.
   EXPECT_NE(errorOf(R"({"profile": "p", "messages": [{"name": "m", "id": 2564444444444444444001722586, "dlc": 8,
-    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})").find("'id' must be an integer"), std::string::npos);
+    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})")
+                .find("'id' must be an integer"),
+            std::string::npos);
   EXPECT_NE(errorOf(R"({"profile": "p", "messages": [{"name": "m", "id": 256, "dlc": 8.5,
-    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})").find("'dlc' must be an integer"), std::string::npos);
+    "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})")
+                .find("'dlc' must be an integer"),
+            std::string::npos);
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": -3, "bits": 16, "scale": 1})")).find("'byte' must be in 0..7"),
             std::string::npos);
 }
@@ -150,8 +158,7 @@ TEST(InProcessBus, DeliversToOthersAndInjectsFaults) {
   EXPECT_EQ(a->receive(got, 1ms), TransportStatus::kTimeout);  // not its own
   for (int i = 0; i < 6; ++i) a->send(f);
   EXPECT_EQ(b->stats().overflows, 2u);
-  while (b->receive(got, 0us) == TransportStatus::kOk) {
-  }
+  while (b->receive(got, 0us) == TransportStatus::kOk) {}
   bus->setFaults({1.0, 0.0, 0us, 3});
   a->send(f);
   EXPECT_EQ(b->receive(got, 2ms), TransportStatus::kTimeout);
@@ -284,8 +291,8 @@ TEST(ValveDriverSetup, RefusesAClampTheSetPointSignalCannotCarry) {
   limits.max_pressure_bar = 0.65;
   EXPECT_NO_THROW(ValveDriver(*port, map, limits, 0.0));
   // An infinite timeout or rate would switch that protection off.
-  for (double SafetyLimits::*field : {&SafetyLimits::max_rate_bar_per_s, &SafetyLimits::sensor_timeout_s,
-                                      &SafetyLimits::command_timeout_s}) {
+  for (double SafetyLimits::*field :
+       {&SafetyLimits::max_rate_bar_per_s, &SafetyLimits::sensor_timeout_s, &SafetyLimits::command_timeout_s}) {
     SafetyLimits off;
     off.*field = std::numeric_limits<double>::infinity();
     try {
@@ -438,5 +445,6 @@ TEST(SignalMap, RefusesAmbiguousProfilesAndWarnsOfUnguardedOnes) {
   ASSERT_EQ(w.size(), 3u);
   EXPECT_NE(w[0].find("no rolling counter"), std::string::npos) << w[0];
   EXPECT_NE(w[1].find("no checksum"), std::string::npos) << w[1];
-  EXPECT_NE(w[2].find("taken by position, in this order: setpoint_2, setpoint_1, setpoint_3"), std::string::npos) << w[2];
+  EXPECT_NE(w[2].find("taken by position, in this order: setpoint_2, setpoint_1, setpoint_3"), std::string::npos)
+      << w[2];
 }

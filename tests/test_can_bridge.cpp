@@ -30,8 +30,12 @@ namespace {
 struct Inbox {
   std::vector<plsa_lcm::actuator_state_t> bridge, truth;
   std::vector<plsa_lcm::status_t> statuses;
-  void onBridge(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) { bridge.push_back(*m); }
-  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) { truth.push_back(*m); }
+  void onBridge(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
+    bridge.push_back(*m);
+  }
+  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::actuator_state_t* m) {
+    truth.push_back(*m);
+  }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&, const plsa_lcm::status_t* m) { statuses.push_back(*m); }
 };
 

@@ -100,7 +100,8 @@ TEST(UdpCan, InjectedDropCorruptAndDelay) {
     CanFrame got;
     int n = 0;
     for (int batch = 0; batch < 8; ++batch) {  // bursts the socket buffer holds
-      for (int i = 0; i < 50; ++i) ASSERT_EQ(p.a->send(frame(0x200, static_cast<std::uint8_t>(i))), TransportStatus::kOk);
+      for (int i = 0; i < 50; ++i)
+        ASSERT_EQ(p.a->send(frame(0x200, static_cast<std::uint8_t>(i))), TransportStatus::kOk);
       while (p.b->receive(got, 50ms) == TransportStatus::kOk) ++n;
     }
     EXPECT_EQ(static_cast<std::uint64_t>(n) + p.b->stats().dropped, 400u);
@@ -116,7 +117,8 @@ TEST(UdpCan, InjectedDropCorruptAndDelay) {
     CanFrame got;
     ASSERT_EQ(p.b->receive(got, 500ms), TransportStatus::kOk);
     int flipped = 0;
-    for (std::size_t i = 0; i < 8; ++i) flipped += __builtin_popcount(static_cast<unsigned>(got.data[i] ^ sent.data[i]));
+    for (std::size_t i = 0; i < 8; ++i)
+      flipped += __builtin_popcount(static_cast<unsigned>(got.data[i] ^ sent.data[i]));
     EXPECT_EQ(flipped, 1);
     EXPECT_EQ(p.b->stats().corrupted, 1u);
   }
@@ -308,8 +310,8 @@ TEST(SocketCanSeam, FramesErrorFramesAndBackPressure) {
   SocketCanOptions o;
   o.interface = "vcan0";
   SocketCanTransport t(o, ops);
-  ops->push(0x200, 5, 3);                      // a data frame; the kernel dropped 3 before it
-  ops->push(0x200 | CAN_EFF_FLAG);             // extended: ignored
+  ops->push(0x200, 5, 3);           // a data frame; the kernel dropped 3 before it
+  ops->push(0x200 | CAN_EFF_FLAG);  // extended: ignored
   ops->push(CAN_ERR_FLAG | CAN_ERR_CRTL, CAN_ERR_CRTL_TX_PASSIVE);
   CanFrame got;
   ASSERT_EQ(t.receive(got, 10ms), TransportStatus::kOk);

@@ -53,8 +53,10 @@ TEST_F(Cli, SimulateRecordsTheDurationAsked) {
 TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
   ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;
-  ASSERT_EQ(run("identify --log " + file("train.csv") + " --output-frame tip_cartesian --play-coupling 0.3 "
-                "--play-threshold 0.2 --out " + file("model.json")),
+  ASSERT_EQ(run("identify --log " + file("train.csv") +
+                " --output-frame tip_cartesian --play-coupling 0.3 "
+                "--play-threshold 0.2 --out " +
+                file("model.json")),
             0)
       << err_;
   EXPECT_NE(err_.find("[5/5] coefficients"), std::string::npos) << "progress lines missing: " << err_;
@@ -63,7 +65,8 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
     const std::size_t at = err_.find(head);
     return at == std::string::npos ? std::string() : err_.substr(at, err_.find('\n', at) - at);
   };
-  const std::string coupling = line("[5/5] coupled to the other inputs"), threshold = line("[5/5] play channels counted");
+  const std::string coupling = line("[5/5] coupled to the other inputs"),
+                    threshold = line("[5/5] play channels counted");
   EXPECT_NE(coupling.find(" 0.30{"), std::string::npos) << coupling;
   EXPECT_EQ(coupling.find(" 0.15{"), std::string::npos) << coupling;
   EXPECT_NE(threshold.find(" 0.2/"), std::string::npos) << threshold;
@@ -102,8 +105,8 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
                   1e-6)
           << out << " " << h;
       // ...and the same fit recomputed from the written predictions.
-      EXPECT_NEAR(o["fit_" + h].get<double>(),
-                  plsa::nrmseFit(pred_log.column(out), pred_log.column(out + "_" + h)), 1e-6)
+      EXPECT_NEAR(o["fit_" + h].get<double>(), plsa::nrmseFit(pred_log.column(out), pred_log.column(out + "_" + h)),
+                  1e-6)
           << out << " " << h;
     }
   }
@@ -118,8 +121,7 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   // A horizon as long as the log leaves nothing to score: said in the tool's words, before any work.
   const std::string validate = "validate --model " + file("model.json") + " --log " + file("val.lcmlog");
   EXPECT_EQ(run(validate + " --horizons 40,100000"), 1);
-  EXPECT_NE(err_.find("val.lcmlog: 2480 samples leave 0 to score at horizon 100000 (a fit needs 2)"),
-            std::string::npos)
+  EXPECT_NE(err_.find("val.lcmlog: 2480 samples leave 0 to score at horizon 100000 (a fit needs 2)"), std::string::npos)
       << err_;
   EXPECT_EQ(run(validate + " --horizons 2479"), 1);
   EXPECT_NE(err_.find("leave 1 to score at horizon 2479"), std::string::npos) << err_;
@@ -134,9 +136,9 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   EXPECT_EQ(run(validate + " --json - --csv -"), 1);
   EXPECT_NE(err_.find("cannot both be '-'"), std::string::npos) << err_;
   // An LCM log under lcm-logger's own kind of name, on another channel: known by its content, read by --channel.
-  ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --channel ARM_7_STATE --out " +
-                file("other.lcmlog")),
-            0)
+  ASSERT_EQ(
+      run("simulate --experiment joystick --duration 30 --seed 2 --channel ARM_7_STATE --out " + file("other.lcmlog")),
+      0)
       << err_;
   fs::rename(file("other.lcmlog"), file("lcmlog-2026-11-25.00"));
   const std::string other = "validate --model " + file("model.json") + " --log " + file("lcmlog-2026-11-25.00");
@@ -212,8 +214,8 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
       EXPECT_EQ(v["simulation_yaw_drift_deg_per_s"].get<double>(), flag.empty() ? drift : 0.0) << model << flag;
     }
   }
-  ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " + file("demo/validate_joystick.csv") +
-                " --horizons 40 --json " + file("v.json")),
+  ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " +
+                file("demo/validate_joystick.csv") + " --horizons 40 --json " + file("v.json")),
             0)
       << err_;
   EXPECT_EQ(nlohmann::json::parse(slurp(file("demo/baseline_paper.json")))["partition"]["scheduling"], "switched");
@@ -225,9 +227,9 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
 TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   fs::create_directories(file("runs"));
   for (const std::string seed : {"1", "2"})
-    ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed " + seed + " --out " +
-                  file("runs/j" + seed + ".csv")),
-              0)
+    ASSERT_EQ(
+        run("simulate --experiment joystick --duration 5 --seed " + seed + " --out " + file("runs/j" + seed + ".csv")),
+        0)
         << err_;
   EXPECT_EQ(run("crossval --log " + file("runs") + " --log " + file("runs/j1.csv")), 1);
   EXPECT_NE(err_.find("crossval: " + file("runs/j1.csv") + " is given twice"), std::string::npos) << err_;
@@ -245,7 +247,8 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
   fs::create_directories(file("empty"));
   EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
-  EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, or LCM event logs by content)"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, or LCM event logs by content)"), std::string::npos)
+      << err_;
 }
 
 TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
@@ -307,16 +310,18 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'-0.1u' is not a width"), std::string::npos) << err_;
-  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " +
-                file("m.json")),
+  EXPECT_NE(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " + file("m.json")),
             0);
   EXPECT_NE(err_.find("'-1' is not a time constant in seconds"), std::string::npos) << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --slow-pole 5,slow --out " +
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'slow' is not a time constant in seconds (e.g. 5)"), std::string::npos) << err_;
-  EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --output-frame tip_cartesian "
-                "--out " + file("m.json")),
+  EXPECT_NE(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --output-frame tip_cartesian "
+                "--out " +
+                file("m.json")),
             0);
   EXPECT_NE(err_.find("tip_cartesian output frame needs exactly two outputs"), std::string::npos) << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --output-frame polar --out " +
@@ -339,11 +344,13 @@ TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
   // asked about two candidates.
   ASSERT_EQ(run("sim-config --out " + file("full.json")), 0) << err_;
   auto j = nlohmann::json::parse(slurp(file("full.json")));
-  for (const char* e : {"deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"}) j[e]["enabled"] = false;
+  for (const char* e : {"deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"})
+    j[e]["enabled"] = false;
   std::ofstream(file("truth.json")) << j.dump();
   j["hysteresis"]["enabled"] = false;
   std::ofstream(file("sim.json")) << j.dump();
-  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment staircase1 --seed 3 --out " + file("a.csv")), 0)
+  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment staircase1 --seed 3 --out " + file("a.csv")),
+            0)
       << err_;
   ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment joystick --duration 30 --seed 4 --out " +
                 file("b.csv")),
@@ -380,7 +387,8 @@ TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {
   // perturbed nominal physics, and a null case; the full set is in docs/diagnosis.md.
   ASSERT_EQ(run("diagnose-selfcheck --truth own --settled --effects hysteresis --seeds 2 --no-pairs --null 1 "
                 "--train-s 40 --heldout-s 30 "
-                "--out " + file("sc.json")),
+                "--out " +
+                file("sc.json")),
             0)
       << err_ << slurp(file("stdout.txt"));
   const auto j = nlohmann::json::parse(slurp(file("sc.json")));
@@ -398,8 +406,10 @@ TEST_F(Cli, IndependentSelfcheckCasesAreSavedForDiagnoseAndScored) {
   fs::create_directories(file("runs"));
   // Exit 1 when a target is missed (here, on two cases, the shrink target
   // may be), after the results are written.
-  const int rc = run("diagnose-selfcheck --effects deadzone --seeds 1 --no-pairs --null 1 --train-s 40 --heldout-s 30 "
-                     "--save-runs " + file("runs") + " --out " + file("sc.json"));
+  const int rc =
+      run("diagnose-selfcheck --effects deadzone --seeds 1 --no-pairs --null 1 --train-s 40 --heldout-s 30 "
+          "--save-runs " +
+          file("runs") + " --out " + file("sc.json"));
   ASSERT_TRUE(rc == 0 || rc == 1) << err_;
   const auto j = nlohmann::json::parse(slurp(file("sc.json")));
   EXPECT_EQ(rc == 0, j["targets_met"].get<bool>());
@@ -537,7 +547,8 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
     std::ofstream out(file("spike.csv"));
     int data_row = 0;
     for (std::string line; std::getline(in, line);) {
-      if (line[0] != '#' && line[0] != 't' && ++data_row == 500) line = line.substr(0, line.rfind(',', line.rfind(',') - 1)) + ",1e6," + line.substr(line.rfind(',') + 1);
+      if (line[0] != '#' && line[0] != 't' && ++data_row == 500)
+        line = line.substr(0, line.rfind(',', line.rfind(',') - 1)) + ",1e6," + line.substr(line.rfind(',') + 1);
       out << line << "\n";
     }
   }

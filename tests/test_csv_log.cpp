@@ -14,8 +14,8 @@ class CsvLogTest : public ::testing::Test {
  protected:
   std::string write(const std::string& text) {
     const std::string path = (fs::temp_directory_path() /
-                              ("plsa_csv_" + std::to_string(::getpid()) + "_" +
-                               std::to_string(counter_++) + ".csv")).string();
+                              ("plsa_csv_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++) + ".csv"))
+                                 .string();
     std::ofstream(path) << text;
     files_.push_back(path);
     return path;

@@ -83,8 +83,10 @@ TEST(Diagnose, CalibrationRecoversPerturbedNominalPhysics) {
   const CalibrationResult r = calibrate(start, {"nominal"}, {run}, o);
   EXPECT_LT(r.train_gap.total, 0.1 * before.total);
   EXPECT_NEAR(r.config.bending.natural_freq_hz, truth.bending.natural_freq_hz, 0.1 * truth.bending.natural_freq_hz);
-  EXPECT_NEAR(r.config.elongation.strain_per_bar, truth.elongation.strain_per_bar, 0.05 * truth.elongation.strain_per_bar);
-  EXPECT_THROW(calibrate(start, {"hysteresis"}, {run}, o), std::invalid_argument) << "a switched-off effect cannot be fitted";
+  EXPECT_NEAR(r.config.elongation.strain_per_bar, truth.elongation.strain_per_bar,
+              0.05 * truth.elongation.strain_per_bar);
+  EXPECT_THROW(calibrate(start, {"hysteresis"}, {run}, o), std::invalid_argument)
+      << "a switched-off effect cannot be fitted";
 }
 
 TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
@@ -174,7 +176,8 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   }
 
   // How sure: the margins behind the confidence, and the identified reference.
-  EXPECT_TRUE(d.confidence == "confident" || d.confidence == "qualified" || d.confidence == "uncertain") << d.confidence;
+  EXPECT_TRUE(d.confidence == "confident" || d.confidence == "qualified" || d.confidence == "uncertain")
+      << d.confidence;
   EXPECT_EQ(j["confidence"]["level"], d.confidence);
   EXPECT_EQ(j["confidence"]["runner_up"], d.ranking[1].effect);
   EXPECT_GT(d.margin_over_recalibration, 0.0);
@@ -190,7 +193,9 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   // Every plotted series is exported: the trace row for row, the map cell for cell, one row per candidate.
   const auto series = reportSeriesCsv(d);
   ASSERT_EQ(series.size(), 3u);
-  auto lines = [](const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); };
+  auto lines = [](const std::string& text) {
+    return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  };
   EXPECT_EQ(series[0].first, "trace.csv");
   EXPECT_EQ(lines(series[0].second), static_cast<std::size_t>(d.trace_real.rows()) + 1);
   EXPECT_EQ(lines(series[1].second), static_cast<std::size_t>(d.where.gap_map.size()) + 1);
@@ -205,8 +210,9 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   const std::string cmd = std::string(chromium) +
                           " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
                           " --disable-background-networking --disable-component-update --disable-sync"
-                          " --user-data-dir=" + (dir / "profile").string() + " --dump-dom file://" +
-                          (dir / "report.html").string() + " > " + (dir / "dom.html").string() + " 2>/dev/null";
+                          " --user-data-dir=" +
+                          (dir / "profile").string() + " --dump-dom file://" + (dir / "report.html").string() + " > " +
+                          (dir / "dom.html").string() + " 2>/dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::stringstream dom;
   dom << std::ifstream(dir / "dom.html").rdbuf();

@@ -85,7 +85,8 @@ TEST(Pipeline, SimulatedActuatorWithoutEffects) {
   // A bad cross-validation layout or chunk is named, not guessed around.
   IdentifyOptions bad;
   bad.cv_layout = static_cast<CvLayout>(7);  // a cast from an integer
-  expectThrowContaining([&] { identifyModel({train}, bad); }, "cross-validation layout 7 is none of interleaved or contiguous");
+  expectThrowContaining([&] { identifyModel({train}, bad); },
+                        "cross-validation layout 7 is none of interleaved or contiguous");
   expectThrowContaining([&] { parseOption<CvLayout>("random"); },
                         "cross-validation layout 'random': expected interleaved or contiguous");
   EXPECT_EQ(parseOption<SchedulingChoice>("input"), SchedulingChoice::kInputSide);
@@ -118,11 +119,16 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   std::vector<std::string> ticks;
   for (const std::string& l : rep.lines)
     if (l.rfind("[5/5] scoring ", 0) == 0) ticks.push_back(l.substr(14, l.find(" held-out") - 14));
-  const std::vector<std::string> expected{"play channels and scheduling: 1 of 2", "play channels and scheduling: 2 of 2",
-                                          "coupled play channels: 1 of 2",        "coupled play channels: 2 of 2",
-                                          "scheduling lags: 1 of 1",              "play thresholds: 1 of 1",
-                                          "sensor drift: 1 of 2",                 "sensor drift: 2 of 2",
-                                          "slow poles: 1 of 2",                   "slow poles: 2 of 2"};
+  const std::vector<std::string> expected{"play channels and scheduling: 1 of 2",
+                                          "play channels and scheduling: 2 of 2",
+                                          "coupled play channels: 1 of 2",
+                                          "coupled play channels: 2 of 2",
+                                          "scheduling lags: 1 of 1",
+                                          "play thresholds: 1 of 1",
+                                          "sensor drift: 1 of 2",
+                                          "sensor drift: 2 of 2",
+                                          "slow poles: 1 of 2",
+                                          "slow poles: 2 of 2"};
   EXPECT_EQ(ticks, expected);
   // An interval longer than the run prints none.
   o.progress_interval_s = 1e6;
@@ -292,7 +298,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     const DioPwlObfModel taken = identifyModel({runs.train}, o, &rep);
     ASSERT_EQ(rep.output_drift.rate.size(), 2u);
     EXPECT_NEAR(rep.output_drift.rate[1], rate, 0.1 * rate) << toString(frame);  // 0.02997 and 0.03025 when written
-    EXPECT_NEAR(rep.output_drift.rate[0], 0.0, 0.1 * rate) << toString(frame);  // a yaw leaves the bend alone
+    EXPECT_NEAR(rep.output_drift.rate[0], 0.0, 0.1 * rate) << toString(frame);   // a yaw leaves the bend alone
     EXPECT_TRUE(rep.drift_taken_out) << toString(frame);
     EXPECT_EQ(taken.training_drift_per_s, rep.output_drift.rate) << toString(frame);  // recorded in the model
     if (!tip) continue;  // as logged the trend barely moves an angle model's fit (83.02 -> 83.04 held out)
@@ -306,13 +312,15 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     // Simulated carrying the training run's yaw, so that steering shows what
     // the drift did to the model's level.
     const SimulationStart carry{0};
-    const ValidationResult v = validateModel(taken, runs.val, {40}, carry), w = validateModel(left, runs.val, {40}, carry);
+    const ValidationResult v = validateModel(taken, runs.val, {40}, carry),
+                           w = validateModel(left, runs.val, {40}, carry);
     // When written, simulation as bending / steering: 95.6 / 76.4 taken out
     // against 93.5 / 75.3 left in. Steering stays low: the validation run's
     // own yaw drifts on.
     EXPECT_GT(v.outputs[0].fit_sim, w.outputs[0].fit_sim + 1.0);
     EXPECT_GT(v.outputs[1].fit_sim, w.outputs[1].fit_sim + 0.5);
-    for (std::size_t i = 0; i < 2; ++i) EXPECT_GT(v.outputs[i].fit_k.at(40), w.outputs[i].fit_k.at(40) - 0.2) << v.outputs[i].name;
+    for (std::size_t i = 0; i < 2; ++i)
+      EXPECT_GT(v.outputs[i].fit_k.at(40), w.outputs[i].fit_k.at(40) - 0.2) << v.outputs[i].name;
     // Registering the validation run's yaw without carrying the drift takes
     // the standing part of steering's error out of both, so the two are close
     // there (83.94 taken out, 83.73 left in, when written); bending cannot move.

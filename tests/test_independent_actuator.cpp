@@ -46,8 +46,8 @@ TEST(IndependentActuator, EveryLawChangesTheResponseAndEachDiffersFromTheOthers)
     const auto& laws = independentLawsOf(effect);
     ASSERT_GE(laws.size(), 3u) << effect;
     // A staircase up and down on two chambers: every law shows on it.
-    const std::map<std::string, double> strength = {{"deadzone", 0.06}, {"hysteresis", 0.15}, {"stiffening", 1.0},
-                                                    {"coupling", 0.8},  {"pneumatic_lag", 0.3}, {"creep", 0.1},
+    const std::map<std::string, double> strength = {{"deadzone", 0.06},  {"hysteresis", 0.15},   {"stiffening", 1.0},
+                                                    {"coupling", 0.8},   {"pneumatic_lag", 0.3}, {"creep", 0.1},
                                                     {"sensor_bias", 1.5}};
     auto response = [&](const std::string& law) {
       IndependentPhysics p = quietIndependent();

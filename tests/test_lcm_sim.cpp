@@ -113,12 +113,15 @@ TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop
   // A fixed sleep was not enough on a loaded CI machine (110 states lost).
   plsa::test::ChildProcess logger(
       {"/usr/bin/lcm-logger", "-q", "-f", "-c", "PLSA_STATE|PLSA_LOGGER_PROBE", log_path.string()});
-  ASSERT_TRUE(waitFor([&] {
-    publishRaw("PLSA_LOGGER_PROBE", "probe");
-    std::error_code ec;
-    const auto bytes = fs::file_size(log_path, ec);
-    return !ec && bytes > 0;
-  }, 20s)) << "lcm-logger recorded no probe within 20 s";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        publishRaw("PLSA_LOGGER_PROBE", "probe");
+        std::error_code ec;
+        const auto bytes = fs::file_size(log_path, ec);
+        return !ec && bytes > 0;
+      },
+      20s))
+      << "lcm-logger recorded no probe within 20 s";
   plsa::test::ChildProcess sim({exe_, "sim", "--lockstep", "--seed", "5", "--command-timeout", "0.3"});
   ASSERT_TRUE(waitFor([&] { return !inbox_.statuses.empty(); }, 10s)) << "plsa sim never said it started";
 
@@ -142,16 +145,19 @@ TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop
     EXPECT_EQ(inbox_.states[k].vented, 0);
   }
   EXPECT_EQ(max_diff, 0.0);
-  EXPECT_LT(inbox_.states[79].bend_deg, 2.5);   // at rest: sensor tilt and noise only
+  EXPECT_LT(inbox_.states[79].bend_deg, 2.5);    // at rest: sensor tilt and noise only
   EXPECT_GT(inbox_.states[399].bend_deg, 45.0);  // settled step response
   EXPECT_GT(inbox_.states[399].pressure_bar[0], 0.29);
 
   // Stop commanding: after the timeout the node vents on its own.
   const std::size_t before = inbox_.states.size();
-  ASSERT_TRUE(waitFor([&] {
-    return inbox_.states.size() > before && inbox_.states.back().vented == 1 &&
-           inbox_.states.back().pressure_bar[0] < 0.005;
-  }, 5s)) << "chambers did not vent after commands stopped";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return inbox_.states.size() > before && inbox_.states.back().vented == 1 &&
+               inbox_.states.back().pressure_bar[0] < 0.005;
+      },
+      5s))
+      << "chambers did not vent after commands stopped";
   EXPECT_TRUE(sawStatus(plsa_lcm::status_t::VENTED, "no command for 0.300 s"));
 
   EXPECT_EQ(sim.stop(SIGTERM), 0);
@@ -286,7 +292,8 @@ struct PredictionSink {
 // stamped at INT64_MAX microseconds once stopped every later prediction while
 // the status said "running": now the node restarts and says so.
 TEST_F(LcmSimTest, PredictorNodeSurvivesHostileStatesAndRecoversFromAJumpInTime) {
-  const fs::path model_path = fs::temp_directory_path() / ("plsa_hostile_model_" + std::to_string(::getpid()) + ".json");
+  const fs::path model_path =
+      fs::temp_directory_path() / ("plsa_hostile_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), handMadeModel());
   PredictionSink sink;
   std::vector<plsa_lcm::prediction_t>& predictions = sink.received;
@@ -310,8 +317,7 @@ TEST_F(LcmSimTest, PredictorNodeSurvivesHostileStatesAndRecoversFromAJumpInTime)
   ASSERT_TRUE(sendState(std::numeric_limits<std::int64_t>::max()));
   int predicted_after = 0;
   for (int k = 6; k < 12; ++k) predicted_after += sendState(12500 * (k + 1)) ? 1 : 0;
-  EXPECT_GE(predicted_after, 6 - (plsa::kClockStepSamples - 1))
-      << "the node did not recover from the jump in time";
+  EXPECT_GE(predicted_after, 6 - (plsa::kClockStepSamples - 1)) << "the node did not recover from the jump in time";
   // Its last status, sent as it stops, counts everything.
   inbox_.statuses.clear();
   EXPECT_EQ(pred.stop(SIGTERM), 0);
@@ -344,7 +350,8 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   io.play_threshold_candidates = {};
   io.output_drift = plsa::identify::OutputDriftChoice::kOff;
   const plsa::DioPwlObfModel model = plsa::identify::identifyModel({train}, io);
-  const fs::path model_path = fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
+  const fs::path model_path =
+      fs::temp_directory_path() / ("plsa_predict_model_" + std::to_string(::getpid()) + ".json");
   plsa::saveModel(model_path.string(), model);
 
   PredictionSink sink;
@@ -401,8 +408,9 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
       actual.push_back(inbox_.states[later].bend_deg);
     }
   }
-  const double fit = plsa::nrmseFit(Eigen::Map<Eigen::VectorXd>(actual.data(), static_cast<Eigen::Index>(actual.size())),
-                                    Eigen::Map<Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
+  const double fit =
+      plsa::nrmseFit(Eigen::Map<Eigen::VectorXd>(actual.data(), static_cast<Eigen::Index>(actual.size())),
+                     Eigen::Map<Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
   std::printf("40-step bend fit of the LCM predictor node against the simulator, held inputs: %.1f%%\n", fit);
   EXPECT_GT(fit, 50.0);
   // Its status names latency figures and no rejected samples.

@@ -25,8 +25,8 @@ struct BadValue {
 };
 
 struct FieldCase {
-  std::string name;                                  ///< the case's name in the test list
-  std::function<void(DioPwlObfModel&)> set;          ///< sets the field on knownModel()
+  std::string name;                          ///< the case's name in the test list
+  std::function<void(DioPwlObfModel&)> set;  ///< sets the field on knownModel()
   /// What was written against what was read back.
   std::function<void(const DioPwlObfModel& written, const DioPwlObfModel& read)> expect_same;
   /// Left out of the file when the field is unset (knownModel()); "" = always written.
@@ -73,7 +73,8 @@ std::vector<FieldCase> fieldCases() {
           {"a newer version", false, [](J& j) { j["version"] = 7; }, "version 7 is newer than this build reads"},
           {"a fractional version", false, [](J& j) { j["version"] = 1.0; }, "'version' must be an integer"},
           {"an unknown key", false, [](J& j) { j["extra"] = 1; }, "unknown key 'extra'"},
-          {"an unknown region key", false, [](J& j) { j["regions"][0]["extra"] = 1; }, "unknown key 'regions[0].extra'"},
+          {"an unknown region key", false, [](J& j) { j["regions"][0]["extra"] = 1; },
+           "unknown key 'regions[0].extra'"},
           {"an output twice", false, [](J& j) { j["outputs"].push_back(j["outputs"][0]); }, "twice"},
           {"a null range", false, [](J& j) { j["input_range"][0] = nullptr; }, "'input_range[0]' must be a number"},
           {"a range of \"-inf\"", false, [](J& j) { j["input_range"][1] = "-inf"; },
@@ -84,166 +85,173 @@ std::vector<FieldCase> fieldCases() {
           {"no play_start in version 2", false, [](J& j) { j.erase("play_start"); }, "missing field 'play_start'"},
           {"a coefficient too many", false, [](J& j) { j["regions"][1]["coefficients"][0].push_back(1.0); },
            "expected 3"},
-          {"an unstable pole", false, [](J& j) { j["poles"][0][0][0] = {1.5, 0.0}; }, ">= 1"},
+          {"an unstable pole", false,
+           [](J& j) {
+             j["poles"][0][0][0] = {1.5, 0.0};
+           },
+           ">= 1"},
           {"fuzzy scheduling", false, [](J& j) { j["partition"]["scheduling"] = "fuzzy"; },
            "'switched' or 'interpolated'"},
           {"a coefficient that is text", false, [](J& j) { j["regions"][0]["coefficients"][0][0] = "x"; },
            "must be a number"},
           {"play_start 'middle'", false, [](J& j) { j["play_start"] = "middle"; }, "'rising' or 'centred'"},
-          {"a play channel without a slope", false, [](J& j) { j["input_play"][0][0] = {{"width", 0.1}}; },
+          {"a play channel without a slope", false,
+           [](J& j) {
+             j["input_play"][0][0] = {{"width", 0.1}};
+           },
            "input_play[][].slope"},
       }});
 
-  cases.push_back(FieldCase{
-      "OutputFrame",
-      [](DioPwlObfModel& m) {
-        m.poles = {{PoleSet::real({0.9, 0.7})}, {PoleSet::real({0.8, 0.5})}};
-        m.outputs = {"bend_deg", "steer_deg"};
-        m.coefficients = {{Eigen::Vector2d(1, 2), Eigen::Vector2d(3, 4)},
-                          {Eigen::Vector2d(-1, 0.5), Eigen::Vector2d(0, 1)}};
-        m.output_frame = OutputFrame::kTipCartesian;
-      },
-      [](const DioPwlObfModel&, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.output_frame, OutputFrame::kTipCartesian);
-      },
-      "",
-      {"output_frame"},  // version 1 files from before the field: the logged frame
-      [](const J& v1) { EXPECT_EQ(readBack(v1).output_frame, OutputFrame::kAsLogged); },
-      {
-          {"frame 'polar'", true, [](J& j) { j["output_frame"] = "polar"; },
-           "'output_frame' must be 'as_logged' or 'tip_cartesian'"},
-      }});
+  cases.push_back(FieldCase{"OutputFrame",
+                            [](DioPwlObfModel& m) {
+                              m.poles = {{PoleSet::real({0.9, 0.7})}, {PoleSet::real({0.8, 0.5})}};
+                              m.outputs = {"bend_deg", "steer_deg"};
+                              m.coefficients = {{Eigen::Vector2d(1, 2), Eigen::Vector2d(3, 4)},
+                                                {Eigen::Vector2d(-1, 0.5), Eigen::Vector2d(0, 1)}};
+                              m.output_frame = OutputFrame::kTipCartesian;
+                            },
+                            [](const DioPwlObfModel&, const DioPwlObfModel& back) {
+                              EXPECT_EQ(back.output_frame, OutputFrame::kTipCartesian);
+                            },
+                            "",
+                            {"output_frame"},  // version 1 files from before the field: the logged frame
+                            [](const J& v1) { EXPECT_EQ(readBack(v1).output_frame, OutputFrame::kAsLogged); },
+                            {
+                                {"frame 'polar'", true, [](J& j) { j["output_frame"] = "polar"; },
+                                 "'output_frame' must be 'as_logged' or 'tip_cartesian'"},
+                            }});
 
-  cases.push_back(FieldCase{
-      "PlayChannelsAndStart",
-      setPlayChannels,
-      [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.shaping.play, m.shaping.play);
-        EXPECT_EQ(back.shaping.start, PlayStart::kRising);
-      },
-      "",
-      {"play_start"},  // a file written before the field keeps its centred channels
-      [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.start, PlayStart::kCentred); },
-      {}});
+  cases.push_back(FieldCase{"PlayChannelsAndStart",
+                            setPlayChannels,
+                            [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+                              EXPECT_EQ(back.shaping.play, m.shaping.play);
+                              EXPECT_EQ(back.shaping.start, PlayStart::kRising);
+                            },
+                            "",
+                            {"play_start"},  // a file written before the field keeps its centred channels
+                            [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.start, PlayStart::kCentred); },
+                            {}});
 
-  cases.push_back(FieldCase{
-      "PlayCoupling",
-      [](DioPwlObfModel& m) {
-        setPlayChannels(m);
-        m.shaping.coupling = 0.75;
-      },
-      [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.shaping.coupling, 0.75);
-        EXPECT_EQ(back.shaping.play, m.shaping.play);
-      },
-      "",
-      {"play_start", "play_coupling"},  // ...and its uncoupled ones
-      [](const J& v1) {
-        EXPECT_EQ(readBack(v1).shaping.start, PlayStart::kCentred);
-        EXPECT_EQ(readBack(v1).shaping.coupling, 0.0);
-      },
-      {
-          {"a negative coupling", true, [](J& j) { j["play_coupling"] = -1.0; }, ""},
-      }});
+  cases.push_back(FieldCase{"PlayCoupling",
+                            [](DioPwlObfModel& m) {
+                              setPlayChannels(m);
+                              m.shaping.coupling = 0.75;
+                            },
+                            [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+                              EXPECT_EQ(back.shaping.coupling, 0.75);
+                              EXPECT_EQ(back.shaping.play, m.shaping.play);
+                            },
+                            "",
+                            {"play_start", "play_coupling"},  // ...and its uncoupled ones
+                            [](const J& v1) {
+                              EXPECT_EQ(readBack(v1).shaping.start, PlayStart::kCentred);
+                              EXPECT_EQ(readBack(v1).shaping.coupling, 0.0);
+                            },
+                            {
+                                {"a negative coupling", true, [](J& j) { j["play_coupling"] = -1.0; }, ""},
+                            }});
 
-  cases.push_back(FieldCase{
-      "PlayThreshold",
-      [](DioPwlObfModel& m) { m.shaping.threshold = 0.07; },
-      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.shaping.threshold, 0.07); },
-      "",
-      {"play_threshold"},  // version 1, written before the field existed: counted from zero
-      [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.threshold, 0.0); },
-      {
-          {"a negative threshold", true, [](J& j) { j["play_threshold"] = -0.01; }, "play_threshold"},
-          {"a threshold that is text", true, [](J& j) { j["play_threshold"] = "high"; }, ""},
-      }});
+  cases.push_back(
+      FieldCase{"PlayThreshold",
+                [](DioPwlObfModel& m) { m.shaping.threshold = 0.07; },
+                [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.shaping.threshold, 0.07); },
+                "",
+                {"play_threshold"},  // version 1, written before the field existed: counted from zero
+                [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.threshold, 0.0); },
+                {
+                    {"a negative threshold", true, [](J& j) { j["play_threshold"] = -0.01; }, "play_threshold"},
+                    {"a threshold that is text", true, [](J& j) { j["play_threshold"] = "high"; }, ""},
+                }});
 
-  cases.push_back(FieldCase{
-      "PlaySoftening",
-      [](DioPwlObfModel& m) { m.shaping.softening = 0.8; },
-      [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.shaping.softening, 0.8); },
-      "",
-      {"play_softening"},  // version 1, written before the field existed: linear
-      [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.softening, 0.0); },
-      {
-          {"a negative softening", true, [](J& j) { j["play_softening"] = -0.5; }, "play_softening"},
-          {"a softening that is text", true, [](J& j) { j["play_softening"] = "soft"; }, ""},
-      }});
+  cases.push_back(
+      FieldCase{"PlaySoftening",
+                [](DioPwlObfModel& m) { m.shaping.softening = 0.8; },
+                [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.shaping.softening, 0.8); },
+                "",
+                {"play_softening"},  // version 1, written before the field existed: linear
+                [](const J& v1) { EXPECT_EQ(readBack(v1).shaping.softening, 0.0); },
+                {
+                    {"a negative softening", true, [](J& j) { j["play_softening"] = -0.5; }, "play_softening"},
+                    {"a softening that is text", true, [](J& j) { j["play_softening"] = "soft"; }, ""},
+                }});
 
-  cases.push_back(FieldCase{
-      "TrainingDrift",
-      [](DioPwlObfModel& m) {
-        ASSERT_EQ(m.outputCount(), 1);
-        m.training_drift_per_s = {0.0244};
-        m.training_drift_reference_s = 115.5;
-      },
-      [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.training_drift_per_s, m.training_drift_per_s);
-        EXPECT_EQ(back.training_drift_reference_s, 115.5);
-      },
-      "training_output_drift",  // none: not written
-      {},
-      nullptr,
-      {
-          {"two rates for one output", false,
-           [](J& j) { j["training_output_drift"]["rate_per_s"] = {0.01, 0.02}; }, "training_output_drift"},
-          {"a rate that is text", false, [](J& j) { j["training_output_drift"]["rate_per_s"] = {"fast"}; },
-           "training_output_drift.rate_per_s"},
-          {"no reference time", false,
-           [](J& j) {
-             j["training_output_drift"]["rate_per_s"] = {0.01};
-             j["training_output_drift"].erase("reference_time_s");
-           },
-           "training_output_drift.reference_time_s"},
-      }});
+  cases.push_back(
+      FieldCase{"TrainingDrift",
+                [](DioPwlObfModel& m) {
+                  ASSERT_EQ(m.outputCount(), 1);
+                  m.training_drift_per_s = {0.0244};
+                  m.training_drift_reference_s = 115.5;
+                },
+                [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+                  EXPECT_EQ(back.training_drift_per_s, m.training_drift_per_s);
+                  EXPECT_EQ(back.training_drift_reference_s, 115.5);
+                },
+                "training_output_drift",  // none: not written
+                {},
+                nullptr,
+                {
+                    {"two rates for one output", false,
+                     [](J& j) {
+                       j["training_output_drift"]["rate_per_s"] = {0.01, 0.02};
+                     },
+                     "training_output_drift"},
+                    {"a rate that is text", false, [](J& j) { j["training_output_drift"]["rate_per_s"] = {"fast"}; },
+                     "training_output_drift.rate_per_s"},
+                    {"no reference time", false,
+                     [](J& j) {
+                       j["training_output_drift"]["rate_per_s"] = {0.01};
+                       j["training_output_drift"].erase("reference_time_s");
+                     },
+                     "training_output_drift.reference_time_s"},
+                }});
 
   // The schedule's lag and side, and the output level only the input side may have.
-  cases.push_back(FieldCase{
-      "ScheduleLagAndSide",
-      [](DioPwlObfModel& m) { m.schedule_lag_s = 0.4; },
-      [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
-        EXPECT_EQ(back.schedule_lag_s, 0.4);
-        EXPECT_NEAR(m.schedulePole(), std::exp(-m.sample_time_s / 0.4), 1e-15);
-      },
-      "",
-      {"schedule_lag_s", "schedule_side"},
-      [](const J& v1) {
-        EXPECT_EQ(readBack(v1).schedule_lag_s, 0.0);
-        EXPECT_EQ(readBack(v1).schedulePole(), 0.0);
-        J lagged = v1;
-        lagged["schedule_lag_s"] = 0.4;
-        EXPECT_EQ(readBack(lagged).schedule_side, ScheduleSide::kOutput);  // files from before the field
-        EXPECT_TRUE(readBack(lagged).output_level.empty());
-      },
-      {
-          {"a negative lag", true, [](J& j) { j["schedule_lag_s"] = -0.1; }, ""},
-          {"a lag that is text", true, [](J& j) { j["schedule_lag_s"] = "slow"; }, ""},
-          // The level of an output-side model is no function of its inputs.
-          {"output_level on the output side", true,
-           [](J& j) {
-             j["schedule_lag_s"] = 0.4;
-             j["output_level"] = {1.5};
-           },
-           "output_level needs input-side"},
-          {"an output_level that is text", true,
-           [](J& j) {
-             j["schedule_lag_s"] = 0.4;
-             j["output_level"] = {"high"};
-           },
-           ""},
-          {"schedule_side 'sideways'", true,
-           [](J& j) {
-             j["schedule_lag_s"] = 0.4;
-             j["schedule_side"] = "sideways";
-           },
-           "'output' or 'input'"},
-          {"an input-side switched partition", true,  // input side needs an interpolated partition
-           [](J& j) {
-             j["schedule_lag_s"] = 0.4;
-             j["schedule_side"] = "input";
-           },
-           "interpolated partition"},
-      }});
+  cases.push_back(
+      FieldCase{"ScheduleLagAndSide",
+                [](DioPwlObfModel& m) { m.schedule_lag_s = 0.4; },
+                [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+                  EXPECT_EQ(back.schedule_lag_s, 0.4);
+                  EXPECT_NEAR(m.schedulePole(), std::exp(-m.sample_time_s / 0.4), 1e-15);
+                },
+                "",
+                {"schedule_lag_s", "schedule_side"},
+                [](const J& v1) {
+                  EXPECT_EQ(readBack(v1).schedule_lag_s, 0.0);
+                  EXPECT_EQ(readBack(v1).schedulePole(), 0.0);
+                  J lagged = v1;
+                  lagged["schedule_lag_s"] = 0.4;
+                  EXPECT_EQ(readBack(lagged).schedule_side, ScheduleSide::kOutput);  // files from before the field
+                  EXPECT_TRUE(readBack(lagged).output_level.empty());
+                },
+                {
+                    {"a negative lag", true, [](J& j) { j["schedule_lag_s"] = -0.1; }, ""},
+                    {"a lag that is text", true, [](J& j) { j["schedule_lag_s"] = "slow"; }, ""},
+                    // The level of an output-side model is no function of its inputs.
+                    {"output_level on the output side", true,
+                     [](J& j) {
+                       j["schedule_lag_s"] = 0.4;
+                       j["output_level"] = {1.5};
+                     },
+                     "output_level needs input-side"},
+                    {"an output_level that is text", true,
+                     [](J& j) {
+                       j["schedule_lag_s"] = 0.4;
+                       j["output_level"] = {"high"};
+                     },
+                     ""},
+                    {"schedule_side 'sideways'", true,
+                     [](J& j) {
+                       j["schedule_lag_s"] = 0.4;
+                       j["schedule_side"] = "sideways";
+                     },
+                     "'output' or 'input'"},
+                    {"an input-side switched partition", true,  // input side needs an interpolated partition
+                     [](J& j) {
+                       j["schedule_lag_s"] = 0.4;
+                       j["schedule_side"] = "input";
+                     },
+                     "interpolated partition"},
+                }});
   return cases;
 }
 

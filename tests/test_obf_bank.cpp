@@ -141,8 +141,7 @@ TEST(ObfBank, KnownPolesNeedFewFunctions) {
   const int T = 3000;
   Eigen::VectorXd g(T);
   for (int k = 1; k <= T; ++k)
-    g(k - 1) = 0.5 * std::pow(0.9, k - 1) + 0.3 * std::pow(0.6, k - 1) +
-               2.0 * (0.4 * std::pow(p, k - 1)).real();
+    g(k - 1) = 0.5 * std::pow(0.9, k - 1) + 0.3 * std::pow(0.6, k - 1) + 2.0 * (0.4 * std::pow(p, k - 1)).real();
   auto residual = [&](const PoleSet& poles) {
     const Eigen::MatrixXd h = ObfBank<>(poles).impulseResponse(T);
     const Eigen::VectorXd c = h.transpose() * g;  // orthonormal: projection

@@ -76,7 +76,8 @@ const Data& data() {
     out.repeated_poles = out.switched;
     for (auto& row : out.repeated_poles.poles)
       for (auto& ps : row) ps = PoleSet({{0.9, 0.0}, {0.9, 0.0}, {0.8, 0.0}, {0.6, 0.0}, {0.3, 0.0}});
-    fitCoefficients(out.repeated_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    fitCoefficients(out.repeated_poles, {train.columnsOf(out.switched.inputs)},
+                    {train.columnsOf(out.switched.outputs)});
     out.close_poles = out.repeated_poles;
     for (auto& row : out.close_poles.poles)
       for (auto& ps : row) ps = PoleSet({{0.9, 0.0}, {0.900001, 0.0}, {0.8, 0.0}, {0.6, 0.0}, {0.3, 0.0}});
@@ -137,7 +138,8 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   DioPwlObfModel from_first_sample = m;  // the predictor's simulation starts from the measured sample
   from_first_sample.output_level.clear();
   const auto sims = predictOutputs(from_first_sample, u, y, {}, true);
-  for (int o = 0; o < m.outputCount(); ++o) EXPECT_NEAR(out(0, o), sims[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
+  for (int o = 0; o < m.outputCount(); ++o)
+    EXPECT_NEAR(out(0, o), sims[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
 }
 
 }  // namespace
@@ -184,10 +186,12 @@ TEST(Predictor, NoAllocationOverFortyThousandTicksWithRegionSwitching) {
     plan.col(1).setConstant(u(1));
     plan.col(2).setZero();
     if (p.update(k * d.dt, u, y) != PredictorStatus::kOk || q.update(k * d.dt, u, y) != PredictorStatus::kOk) FAIL();
-    if (p.predict(80, plan, out) != PredictorStatus::kOk || q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk ||
+    if (p.predict(80, plan, out) != PredictorStatus::kOk ||
+        q.predict(40, plan.topRows(0), out) != PredictorStatus::kOk ||
         p.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
-    if (lagged.update(k * d.dt, u, y) != PredictorStatus::kOk || lagged.predict(80, plan, out) != PredictorStatus::kOk ||
+    if (lagged.update(k * d.dt, u, y) != PredictorStatus::kOk ||
+        lagged.predict(80, plan, out) != PredictorStatus::kOk ||
         lagged.predict(80, plan.topRows(0), out) != PredictorStatus::kOk)
       FAIL();
     if (input_side.update(k * d.dt, u, y) != PredictorStatus::kOk || tip.update(k * d.dt, u, y) != PredictorStatus::kOk)
@@ -401,8 +405,8 @@ TEST(Predictor, HeldInputWhoseLagCrossesCellsMatchesTheSteppedPlan) {
     for (; t < 200; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
     // Both scheduling inputs jump across the 0.2..0.35 grid, both ways, and the
     // horizon starts at several points of the lag's approach.
-    for (const Eigen::Vector3d& u : {Eigen::Vector3d(0.34, 0.21, 0.0), Eigen::Vector3d(0.19, 0.36, 0.0),
-                                     Eigen::Vector3d(0.27, 0.27, 0.0)})
+    for (const Eigen::Vector3d& u :
+         {Eigen::Vector3d(0.34, 0.21, 0.0), Eigen::Vector3d(0.19, 0.36, 0.0), Eigen::Vector3d(0.27, 0.27, 0.0)})
       for (int k = 0; k < 12; ++k, ++t) {
         ASSERT_EQ(p.update(t * d.dt, u, d.y.row(200)), PredictorStatus::kOk);
         ASSERT_EQ(p.predict(400, Eigen::MatrixXd(0, 3), held), PredictorStatus::kOk);
@@ -445,7 +449,7 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
       plan(s, 2) = 0.15 + 0.12 * std::sin(0.2 * s);  // across the channels' threshold: coupled to the others
       if (c.move_all) plan.row(s).head(2) += Eigen::RowVector2d(0.15 * std::sin(0.15 * s), -0.12 * std::cos(0.1 * s));
     }
-    Eigen::MatrixXd jac((H) * 2, (H - 1) * 3), up(H, 2), down(H, 2);
+    Eigen::MatrixXd jac((H)*2, (H - 1) * 3), up(H, 2), down(H, 2);
     ASSERT_EQ(p.sensitivity(H, plan, jac), PredictorStatus::kOk);
     double worst = 0.0, scale = 0.0;
     int compared = 0;

@@ -119,12 +119,13 @@ TEST(PredictorHandBuilt, OnePoleFollowsTheHandRecursionAtEveryHorizon) {
 TEST(PredictorHandBuilt, HeldStepSettlesAtTheHandDcGain) {
   {
     const double a = 0.8, c = 1.7, du = 0.35;
-    const Eigen::MatrixXd out = heldAfterStep(onePole(a, c), Eigen::VectorXd::Constant(1, 0.1),
-                                              Eigen::VectorXd::Constant(1, 0.1 + du), Eigen::VectorXd::Constant(1, 2.0),
-                                              Eigen::VectorXd::Constant(1, 2.5));
+    const Eigen::MatrixXd out =
+        heldAfterStep(onePole(a, c), Eigen::VectorXd::Constant(1, 0.1), Eigen::VectorXd::Constant(1, 0.1 + du),
+                      Eigen::VectorXd::Constant(1, 2.0), Eigen::VectorXd::Constant(1, 2.5));
     double worst = 0.0;
     for (int h = 0; h < out.rows(); ++h)
-      worst = std::max(worst, std::abs(out(h, 0) - (2.5 + c * std::sqrt(1 - a * a) * du * (1 - std::pow(a, h + 1)) / (1 - a))));
+      worst = std::max(
+          worst, std::abs(out(h, 0) - (2.5 + c * std::sqrt(1 - a * a) * du * (1 - std::pow(a, h + 1)) / (1 - a))));
     EXPECT_LT(worst, 1e-12);
     EXPECT_NEAR(out(out.rows() - 1, 0), 2.5 + c * basisDcGain(a) * du, 1e-12);
   }
@@ -139,8 +140,8 @@ TEST(PredictorHandBuilt, HeldStepSettlesAtTheHandDcGain) {
       double expected = y1(o);
       for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 3; ++i)
-          expected += m.coefficients[0][static_cast<std::size_t>(o)](3 * j + i) * basisDcGain(s.poles[static_cast<std::size_t>(i)].real()) *
-                      (U(j) - u0(j));
+          expected += m.coefficients[0][static_cast<std::size_t>(o)](3 * j + i) *
+                      basisDcGain(s.poles[static_cast<std::size_t>(i)].real()) * (U(j) - u0(j));
       EXPECT_NEAR(out(out.rows() - 1, o), expected, 1e-9) << "output " << o;
     }
   }
@@ -169,8 +170,10 @@ TEST(PredictorHandBuilt, HeldStepOnTheGridSettlesAtTheBlendedDcGain) {
         for (int j = 0; j < 2; ++j) {
           double gain = 0.0;  // node r's DC gain from input j
           for (int i = 0; i < 2; ++i)
-            gain += m.coefficients[static_cast<std::size_t>(r)][0](2 * j + i) * basisDcGain(s.poles[static_cast<std::size_t>(i)].real());
-          expected += side == ScheduleSide::kOutput ? w(r) * gain * (U(j) - u0(j)) : gain * (w(r) * U(j) - w0(r) * u0(j));
+            gain += m.coefficients[static_cast<std::size_t>(r)][0](2 * j + i) *
+                    basisDcGain(s.poles[static_cast<std::size_t>(i)].real());
+          expected +=
+              side == ScheduleSide::kOutput ? w(r) * gain * (U(j) - u0(j)) : gain * (w(r) * U(j) - w0(r) * u0(j));
         }
       const Eigen::MatrixXd out = heldAfterStep(m, u0, U, y0_1, y1_1);
       EXPECT_NEAR(out(out.rows() - 1, 0), expected, 1e-9);
@@ -189,9 +192,9 @@ TEST(PredictorHandBuilt, PlayChannelMovesOnlyOutsideItsBand) {
     double u0, U, moved;  // moved: the channel's move, worked out by hand
   };
   const Case cases[] = {
-      {PlayChannel(0.05), 0.3, 0.4, 0.1},    // v0 = 0.25 -> 0.4 - 0.05
-      {PlayChannel(0.05), 0.3, 0.25, 0.0},   // inside the band: stays at 0.25
-      {PlayChannel(0.05), 0.3, 0.1, -0.1},   // 0.25 -> 0.1 + 0.05
+      {PlayChannel(0.05), 0.3, 0.4, 0.1},        // v0 = 0.25 -> 0.4 - 0.05
+      {PlayChannel(0.05), 0.3, 0.25, 0.0},       // inside the band: stays at 0.25
+      {PlayChannel(0.05), 0.3, 0.1, -0.1},       // 0.25 -> 0.1 + 0.05
       {PlayChannel(0.02, 0.1), 0.3, 0.5, 0.18},  // r(u) = 0.02 + 0.1 u: 0.3 - 0.05 -> 0.5 - 0.07
   };
   const Eigen::VectorXd y0 = Eigen::VectorXd::Constant(1, 1.0), y1 = Eigen::VectorXd::Constant(1, 1.25);
@@ -262,7 +265,7 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
   // Accepted: the range [0, 0.6] widened by a quarter of it each way.
   EXPECT_EQ(p.update(t * kDt, one(0.751), yt), PredictorStatus::kInputOutOfRange);
   EXPECT_EQ(p.update(t * kDt, one(-0.151), yt), PredictorStatus::kInputOutOfRange);
-  EXPECT_EQ(p.update((t - 1) * kDt, one(0.3), yt), PredictorStatus::kTimeNotIncreasing);  // repeated
+  EXPECT_EQ(p.update((t - 1) * kDt, one(0.3), yt), PredictorStatus::kTimeNotIncreasing);   // repeated
   EXPECT_EQ(p.update((t - 20) * kDt, one(0.3), yt), PredictorStatus::kTimeNotIncreasing);  // stale
   EXPECT_EQ(p.update(t * kDt, Eigen::Vector2d(0.3, 0.3), yt), PredictorStatus::kBadShape);
   EXPECT_EQ(p.update(t * kDt, one(0.3), Eigen::Vector2d(1, 1)), PredictorStatus::kBadShape);
@@ -363,7 +366,8 @@ TYPED_TEST(PredictorSizes, PredictionsEqualTheOfflineOnes) {
     PredictorOptions so;
     so.simulate = true;
     P s(m, so);
-    for (Eigen::Index t = 0; t + 1 < u.rows(); ++t) ASSERT_EQ(s.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+    for (Eigen::Index t = 0; t + 1 < u.rows(); ++t)
+      ASSERT_EQ(s.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
     const Eigen::Index last = u.rows() - 2;
     ASSERT_EQ(s.predict(1, Eigen::MatrixXd(0, m.inputCount()), out), PredictorStatus::kOk);
     for (int o = 0; o < m.outputCount(); ++o)
@@ -407,7 +411,8 @@ TYPED_TEST(PredictorSizes, NoAllocationInUpdatePredictOrSensitivity) {
     const int H = 40, HL = 400, n_y = m.outputCount(), n_u = m.inputCount();
     P p(m);
     Eigen::MatrixXd out(HL, n_y), jacobian(H * n_y, (H - 1) * n_u), none(0, n_u);
-    const PredictorStatus sensitivity_status = TestFixture::modal(v) ? PredictorStatus::kOk : PredictorStatus::kUnsupported;
+    const PredictorStatus sensitivity_status =
+        TestFixture::modal(v) ? PredictorStatus::kOk : PredictorStatus::kUnsupported;
     int failures = 0;
     std::uint64_t allocations = 0;
     {
@@ -439,7 +444,8 @@ TYPED_TEST(PredictorSizes, RefusesAModelOfAnotherPoleCount) {
       P p(other);
       ADD_FAILURE() << "a model of " << TestFixture::kPoles + 1 << " poles accepted";
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("Predictor<" + std::to_string(TypeParam::kTemplate) + ">"), std::string::npos)
+      EXPECT_NE(std::string(e.what()).find("Predictor<" + std::to_string(TypeParam::kTemplate) + ">"),
+                std::string::npos)
           << e.what();
     }
   }

@@ -31,8 +31,10 @@ TEST(PwlPartition, InterpolatedBlendIsMultilinearAndClamped) {
   for (int m = 0; m < b.count; ++m) {
     sum += b.weight[static_cast<std::size_t>(m)];
     const int r = b.region[static_cast<std::size_t>(m)];
-    ux += b.weight[static_cast<std::size_t>(m)] * std::vector<double>{0.2, 0.3}[static_cast<std::size_t>(p.cellOf(r, 0))];
-    uy += b.weight[static_cast<std::size_t>(m)] * std::vector<double>{0.1, 0.2, 0.4}[static_cast<std::size_t>(p.cellOf(r, 1))];
+    ux +=
+        b.weight[static_cast<std::size_t>(m)] * std::vector<double>{0.2, 0.3}[static_cast<std::size_t>(p.cellOf(r, 0))];
+    uy += b.weight[static_cast<std::size_t>(m)] *
+          std::vector<double>{0.1, 0.2, 0.4}[static_cast<std::size_t>(p.cellOf(r, 1))];
   }
   EXPECT_NEAR(sum, 1.0, 1e-15);
   EXPECT_NEAR(ux, 0.225, 1e-15);  // weights reproduce the point: multilinear

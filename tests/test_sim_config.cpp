@@ -44,7 +44,8 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
   EXPECT_NE(error(R"({"sample_rate_hz": 1e400})").find("cfg.json: not valid JSON"), std::string::npos);
   EXPECT_NE(error(R"({"creep": {"fraction": 0.1, "fraction": 0.2}})").find("key 'creep.fraction' is given twice"),
             std::string::npos);
-  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, null, 240]}})").find("must be a number"), std::string::npos);
+  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, null, 240]}})").find("must be a number"),
+            std::string::npos);
   // 0.75 p - 1 p^2 peaks at 0.375 bar, inside the 0.4 bar range; -0.9 peaks beyond it.
   EXPECT_NE(error(R"({"elongation": {"quadratic": -1.0}})").find("stops rising at 0.375 bar"), std::string::npos);
   EXPECT_EQ(error(R"({"elongation": {"quadratic": -0.9}})"), "accepted");

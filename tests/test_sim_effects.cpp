@@ -142,8 +142,7 @@ TEST(SimKinematics, SensorEquationsRecoverBendAndSteer) {
       const Eigen::Matrix3d g_r_tip = Eigen::AngleAxisd(p, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
                                       Eigen::AngleAxisd(t, Eigen::Vector3d::UnitY()).toRotationMatrix() *
                                       Eigen::AngleAxisd(-p, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      const Eigen::Matrix3d g_r_b =
-          g_r_tip * Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      const Eigen::Matrix3d g_r_b = g_r_tip * Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
       double bend, steer;
       anglesFromRotation(g_r_b.transpose(), bend, steer);
       EXPECT_NEAR(bend, theta, 1e-9);
@@ -194,7 +193,8 @@ TEST(SimEffects, EveryEffectHasAnotherFormulationThatKeepsItsSignatureButDiffers
       if (forms[f] == "weighted_pi") b.hysteresis.weight_wide = 0.5;  // its defaults are the play's
       Actuator x(a, 1), y(b, 1), off(allOff(), 1);
       double differs = 0.0, effect = 0.0;
-      for (std::array<double, 3> cmd : {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
+      for (std::array<double, 3> cmd :
+           {std::array<double, 3>{0.05, 0, 0}, {0.3, 0.2, 0}, {0.15, 0, 0.25}, {0, 0, 0.1}}) {
         const auto rx = hold(x, cmd, 4.0), ry = hold(y, cmd, 4.0), ro = hold(off, cmd, 4.0);
         // Measured bending vector and chamber pressure: every effect shows in one of them.
         auto v = [](const ActuatorSample& s) {
@@ -252,8 +252,8 @@ TEST(SimEffects, StiffeningsStaticShareHoldsTheBendBack) {
   const double low_a = settled(a, {0.04, 0, 0}, 6.0), low_b = settled(b, {0.04, 0, 0}, 6.0);
   const double high_a = settled(a, {0.35, 0, 0}, 6.0), high_b = settled(b, {0.35, 0, 0}, 6.0);
   const double high_off = settled(off, {0.35, 0, 0}, 6.0);
-  EXPECT_NEAR(high_a, high_off, 0.01 * high_off);  // share 0: the same static bend, only sooner
-  EXPECT_LT(high_b, 0.6 * high_a);                 // share 1: held back by the stiffer spring
+  EXPECT_NEAR(high_a, high_off, 0.01 * high_off);   // share 0: the same static bend, only sooner
+  EXPECT_LT(high_b, 0.6 * high_a);                  // share 1: held back by the stiffer spring
   EXPECT_GT(low_b / low_a, 2.0 * high_b / high_a);  // far less held back at low pressure
 }
 
@@ -293,7 +293,8 @@ TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
   Actuator a(c, 1), b(biased, 1);
   const auto ra = hold(a, {0.2, 0.1, 0}, 10.0), rb = hold(b, {0.2, 0.1, 0}, 10.0);
   auto vec = [](const ActuatorSample& s) {
-    return Eigen::Vector2d(s.bend_deg * std::cos(s.steer_deg * M_PI / 180), s.bend_deg * std::sin(s.steer_deg * M_PI / 180));
+    return Eigen::Vector2d(s.bend_deg * std::cos(s.steer_deg * M_PI / 180),
+                           s.bend_deg * std::sin(s.steer_deg * M_PI / 180));
   };
   for (std::size_t k : {std::size_t{79}, std::size_t{799}}) {
     const Eigen::Vector2d d = vec(rb[k]) - vec(ra[k]);

@@ -85,9 +85,9 @@ TEST(SimExperiments, StaticMapVisitsEveryPointOnceFromTheBase) {
     for (Eigen::Index k = at; k < at + 40 * rate; ++k) ASSERT_EQ(e.commands.row(k), e.commands.row(at));
     points.insert({e.commands(at, 0), e.commands(at, 1)});
   }
-  const std::set<std::pair<double, double>> expected = {
-      {0.20, 0.20}, {0.20, 0.275}, {0.20, 0.35}, {0.275, 0.20}, {0.275, 0.275},
-      {0.275, 0.35}, {0.35, 0.20}, {0.35, 0.275}, {0.35, 0.35}};
+  const std::set<std::pair<double, double>> expected = {{0.20, 0.20},  {0.20, 0.275},  {0.20, 0.35},
+                                                        {0.275, 0.20}, {0.275, 0.275}, {0.275, 0.35},
+                                                        {0.35, 0.20},  {0.35, 0.275},  {0.35, 0.35}};
   ASSERT_EQ(points.size(), 9u);
   for (const auto& [pa, pb] : expected) {
     bool found = false;

@@ -27,7 +27,8 @@ TEST(OutputDrift, RemovalIsALinearTrendAboutTheReferenceAndChecksItsInput) {
   // Output side: the level is not a function of the inputs.
   DioPwlObfModel m = knownModel();
   try {
-    estimateOutputDrift(m, {Eigen::MatrixXd::Zero(3, m.inputCount())}, {Eigen::MatrixXd::Zero(3, m.outputCount())}, {t});
+    estimateOutputDrift(m, {Eigen::MatrixXd::Zero(3, m.inputCount())}, {Eigen::MatrixXd::Zero(3, m.outputCount())},
+                        {t});
     ADD_FAILURE() << "no exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("input-side"), std::string::npos) << e.what();
@@ -171,8 +172,9 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const Eigen::VectorXd turn = registered.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1);
   EXPECT_NEAR(turn.mean(), yaw, 0.3);
   EXPECT_LT(turn.maxCoeff() - turn.minCoeff(), 1e-6);  // one rotation for the whole run
-  EXPECT_LT((registered.outputs[0].simulated.tail(T - 1) - carried.outputs[0].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
-            1e-9);
+  EXPECT_LT(
+      (registered.outputs[0].simulated.tail(T - 1) - carried.outputs[0].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
+      1e-9);
   // The k-step predictions start from measurements and are untouched.
   EXPECT_EQ(registered.outputs[1].fit_k.at(40), carried.outputs[1].fit_k.at(40));
   // A window is registered on and not scored.
@@ -182,7 +184,8 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   io::Log on_axis = turned;
   on_axis.data(0, bend) = 0.0;
   const ValidationResult kept = validateModel(tip, on_axis, {40}, first);
-  EXPECT_LT((kept.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1)).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LT((kept.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
+            1e-9);
   // As logged there is no yaw to tell from the outputs: nothing changes.
   const DioPwlObfModel logged = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
   EXPECT_EQ(validateModel(logged, turned, {40}, first).outputs[1].fit_sim,

@@ -106,21 +106,30 @@ namespace plsa::can {
 
 const char* toString(TransportStatus s) {
   switch (s) {
-    case TransportStatus::kOk: return "ok";
-    case TransportStatus::kTimeout: return "timeout";
-    case TransportStatus::kBackPressure: return "transmit queue full (back-pressure)";
-    case TransportStatus::kBusOff: return "bus-off";
-    case TransportStatus::kBadFrame: return "bad frame (DLC above 8 or id above 11 bits)";
-    case TransportStatus::kIoError: return "I/O error";
+    case TransportStatus::kOk:
+      return "ok";
+    case TransportStatus::kTimeout:
+      return "timeout";
+    case TransportStatus::kBackPressure:
+      return "transmit queue full (back-pressure)";
+    case TransportStatus::kBusOff:
+      return "bus-off";
+    case TransportStatus::kBadFrame:
+      return "bad frame (DLC above 8 or id above 11 bits)";
+    case TransportStatus::kIoError:
+      return "I/O error";
   }
   return "unknown";
 }
 
 const char* toString(BusState s) {
   switch (s) {
-    case BusState::kActive: return "error-active";
-    case BusState::kErrorPassive: return "error-passive";
-    case BusState::kBusOff: return "bus-off";
+    case BusState::kActive:
+      return "error-active";
+    case BusState::kErrorPassive:
+      return "error-passive";
+    case BusState::kBusOff:
+      return "bus-off";
   }
   return "unknown";
 }

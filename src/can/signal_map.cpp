@@ -34,11 +34,16 @@ std::uint32_t readRaw(const Signal& s, const CanFrame& f) {
 
 const char* toString(DecodeStatus s) {
   switch (s) {
-    case DecodeStatus::kOk: return "ok";
-    case DecodeStatus::kWrongId: return "wrong identifier";
-    case DecodeStatus::kWrongLength: return "wrong data length (DLC)";
-    case DecodeStatus::kBadChecksum: return "checksum mismatch";
-    case DecodeStatus::kCounterGap: return "counter gap (a frame was lost)";
+    case DecodeStatus::kOk:
+      return "ok";
+    case DecodeStatus::kWrongId:
+      return "wrong identifier";
+    case DecodeStatus::kWrongLength:
+      return "wrong data length (DLC)";
+    case DecodeStatus::kBadChecksum:
+      return "checksum mismatch";
+    case DecodeStatus::kCounterGap:
+      return "counter gap (a frame was lost)";
   }
   return "unknown";
 }
@@ -77,8 +82,10 @@ void SignalMap::validate() const {
       throw std::invalid_argument(where + "needs 1 to 8 signals");
     std::array<bool, 8> used{};
     auto claim = [&](int byte, const std::string& what) {
-      if (byte < 0 || byte >= m.dlc) throw std::invalid_argument(where + what + " lies beyond the frame's " + std::to_string(m.dlc) + " bytes");
-      if (used[static_cast<std::size_t>(byte)]) throw std::invalid_argument(where + what + " overlaps another field at byte " + std::to_string(byte));
+      if (byte < 0 || byte >= m.dlc)
+        throw std::invalid_argument(where + what + " lies beyond the frame's " + std::to_string(m.dlc) + " bytes");
+      if (used[static_cast<std::size_t>(byte)])
+        throw std::invalid_argument(where + what + " overlaps another field at byte " + std::to_string(byte));
       used[static_cast<std::size_t>(byte)] = true;
     };
     if (m.counter_byte >= 0) claim(m.counter_byte, "the counter");
@@ -101,8 +108,7 @@ long long integerField(const nlohmann::json& j, const char* key, long long lo, l
                        const nlohmann::json* fallback = nullptr) {
   const nlohmann::json* v = j.contains(key) ? &j.at(key) : fallback;
   if (!v) throw std::invalid_argument(where + "missing field '" + key + "'");
-  if (!v->is_number_integer())
-    throw std::invalid_argument(where + "'" + key + "' must be an integer");
+  if (!v->is_number_integer()) throw std::invalid_argument(where + "'" + key + "' must be an integer");
   const bool is_unsigned = v->is_number_unsigned();
   if (is_unsigned ? v->get<unsigned long long>() > static_cast<unsigned long long>(hi)
                   : (v->get<long long>() < lo || v->get<long long>() > hi))
@@ -183,10 +189,8 @@ std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
     const MessageLayout* m = map.find(name);
     if (!m) continue;
     const std::string where = "signal map '" + map.profile + "', message '" + name + "': ";
-    if (m->counter_byte < 0)
-      out.push_back(where + "no rolling counter: a lost or replayed frame cannot be detected");
-    if (m->checksum_byte < 0)
-      out.push_back(where + "no checksum: a corrupted frame would be applied as it reads");
+    if (m->counter_byte < 0) out.push_back(where + "no rolling counter: a lost or replayed frame cannot be detected");
+    if (m->checksum_byte < 0) out.push_back(where + "no checksum: a corrupted frame would be applied as it reads");
     std::string names, want;
     bool same = m->signals.size() == signals.size();
     for (std::size_t i = 0; i < m->signals.size(); ++i) {
@@ -195,8 +199,8 @@ std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
     }
     for (std::size_t i = 0; i < signals.size(); ++i) want += (i ? ", " : "") + signals[i];
     if (!same)
-      out.push_back(where + "signals are taken by position, in this order: " + names + " (documented names: " +
-                    want + "); check chamber " + (std::string(name) == "tip_angle" ? "and angle " : "") + "order");
+      out.push_back(where + "signals are taken by position, in this order: " + names + " (documented names: " + want +
+                    "); check chamber " + (std::string(name) == "tip_angle" ? "and angle " : "") + "order");
     const std::string unit = std::string(name) == "tip_angle" ? "deg" : "bar";
     for (const Signal& s : m->signals)
       if (s.unit != unit) out.push_back(where + "signal '" + s.name + "' is in '" + s.unit + "'; plsa reads " + unit);
@@ -204,9 +208,7 @@ std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
   return out;
 }
 
-SignalMap loadSignalMap(const std::string& path) {
-  return signalMapFromJson(readTextFile(path, "signal map"), path);
-}
+SignalMap loadSignalMap(const std::string& path) { return signalMapFromJson(readTextFile(path, "signal map"), path); }
 
 SignalMap defaultSignalMap() {
   auto pressures = [](const std::string& prefix) {
@@ -214,11 +216,16 @@ SignalMap defaultSignalMap() {
     for (int i = 0; i < 3; ++i) s.push_back({prefix + std::to_string(i + 1), 2 * i, 16, true, false, 1e-5, 0.0, "bar"});
     return s;
   };
-  SignalMap map{"plsa-default",
-                {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
-                 {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")},
-                 {"tip_angle", 0x210, 8, 6, 7,
-                  {{"bend_deg", 0, 16, true, true, 0.01, 0.0, "deg"}, {"steer_deg", 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
+  SignalMap map{
+      "plsa-default",
+      {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
+       {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")},
+       {"tip_angle",
+        0x210,
+        8,
+        6,
+        7,
+        {{"bend_deg", 0, 16, true, true, 0.01, 0.0, "deg"}, {"steer_deg", 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
   map.validate();
   return map;
 }

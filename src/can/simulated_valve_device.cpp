@@ -17,7 +17,8 @@ SimulatedValveDevice::SimulatedValveDevice(CanTransport& transport, const Signal
   if (valve_->signals.size() != 3 || sensor_->signals.size() != 3)
     throw std::invalid_argument("simulated device: valve_command and pressure_sensor need three signals each");
   tip_ = map.find("tip_angle");
-  if (tip_ && tip_->signals.size() != 2) throw std::invalid_argument("simulated device: tip_angle needs two signals (bend, steer)");
+  if (tip_ && tip_->signals.size() != 2)
+    throw std::invalid_argument("simulated device: tip_angle needs two signals (bend, steer)");
 }
 
 void SimulatedValveDevice::setCommandTimeout(double seconds) {
@@ -78,7 +79,8 @@ sim::ActuatorSample SimulatedValveDevice::step() {
 SimulatedDeviceStats runSimulatedDevice(SimulatedValveDevice& device, const std::atomic<bool>& stop, double duration_s,
                                         const std::function<void(const sim::ActuatorSample&)>& on_sample) {
   using Clock = std::chrono::steady_clock;
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / device.sampleRateHz()));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / device.sampleRateHz()));
   auto next = Clock::now();
   while (!stop.load()) {
     next += period;

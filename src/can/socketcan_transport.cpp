@@ -38,13 +38,13 @@ std::runtime_error systemError(const std::string& what, int err) {
 
 }  // namespace
 
-SocketCanTransport::SocketCanTransport(const SocketCanOptions& o, std::shared_ptr<SocketOps> ops) : ops_(std::move(ops)) {
+SocketCanTransport::SocketCanTransport(const SocketCanOptions& o, std::shared_ptr<SocketOps> ops)
+    : ops_(std::move(ops)) {
   fd_ = ops_->socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
   if (fd_ < 0) {
     const int err = errno;
-    throw systemError(err == EAFNOSUPPORT ? "socket(PF_CAN) failed (this kernel has no CAN support)"
-                                          : "socket(PF_CAN) failed",
-                      err);
+    throw systemError(
+        err == EAFNOSUPPORT ? "socket(PF_CAN) failed (this kernel has no CAN support)" : "socket(PF_CAN) failed", err);
   }
   try {
     const unsigned index = ops_->interfaceIndex(o.interface);
@@ -55,9 +55,8 @@ SocketCanTransport::SocketCanTransport(const SocketCanOptions& o, std::shared_pt
       // Standard frames of exactly this id: the EFF and RTR bits must be clear.
       filters.push_back({id, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
     }
-    if (!filters.empty() &&
-        ops_->setOption(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
-                        static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0)
+    if (!filters.empty() && ops_->setOption(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
+                                            static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0)
       throw systemError("setsockopt(CAN_RAW_FILTER)", errno);
     const can_err_mask_t err_mask = o.error_frames ? (CAN_ERR_BUSOFF | CAN_ERR_CRTL | CAN_ERR_RESTARTED) : 0;
     if (ops_->setOption(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) != 0)
@@ -169,7 +168,8 @@ TransportStatus SocketCanTransport::receive(CanFrame& frame, std::chrono::micros
 
 std::string socketCanUnavailableReason(const std::string& interface) {
   const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_CLOEXEC, CAN_RAW);
-  if (fd < 0) return std::string("socket(PF_CAN) failed: ") + std::strerror(errno) + " (this kernel has no CAN support)";
+  if (fd < 0)
+    return std::string("socket(PF_CAN) failed: ") + std::strerror(errno) + " (this kernel has no CAN support)";
   ::close(fd);
   if (::if_nametoindex(interface.c_str()) == 0)
     return "no interface '" + interface + "' (load vcan and add it: modprobe vcan; ip link add " + interface +

@@ -52,7 +52,8 @@ bool decodeDatagram(const std::uint8_t* data, std::size_t size, DatagramKind& ki
   return true;
 }
 
-UdpCanTransport::UdpCanTransport(const UdpCanOptions& o) : peers_(o.peer_ports), faults_(o.faults), rng_(o.faults.seed) {
+UdpCanTransport::UdpCanTransport(const UdpCanOptions& o)
+    : peers_(o.peer_ports), faults_(o.faults), rng_(o.faults.seed) {
   if (!(faults_.drop_probability >= 0 && faults_.drop_probability <= 1) ||
       !(faults_.corrupt_probability >= 0 && faults_.corrupt_probability <= 1) || faults_.delay.count() < 0)
     throw std::invalid_argument("UDP CAN: drop and corrupt are probabilities in [0, 1], delay >= 0");
@@ -223,7 +224,8 @@ std::unique_ptr<CanTransport> openTransport(const std::string& spec, const std::
       const auto amp = std::min(query.find('&', start), query.size());
       const std::string kv = query.substr(start, amp - start);
       const auto eq = kv.find('=');
-      if (eq == std::string::npos) throw std::invalid_argument("CAN transport '" + spec + "': '" + kv + "' needs key=value");
+      if (eq == std::string::npos)
+        throw std::invalid_argument("CAN transport '" + spec + "': '" + kv + "' needs key=value");
       const std::string key = kv.substr(0, eq);
       const double v = parseNumber(key, kv.substr(eq + 1), spec);
       if (key == "drop")

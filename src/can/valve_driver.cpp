@@ -11,15 +11,21 @@ namespace plsa::can {
 
 const char* toString(DriverFault f) {
   switch (f) {
-    case DriverFault::kNone: return "no fault";
-    case DriverFault::kStaleSensor: return "no valid pressure reading within the sensor timeout: vented";
-    case DriverFault::kCommandTimeout: return "commands stopped for longer than the command timeout: vented";
+    case DriverFault::kNone:
+      return "no fault";
+    case DriverFault::kStaleSensor:
+      return "no valid pressure reading within the sensor timeout: vented";
+    case DriverFault::kCommandTimeout:
+      return "commands stopped for longer than the command timeout: vented";
     case DriverFault::kBusOff:
       return "CAN controller is bus-off: no frame can be sent, a vent frame neither; the valves rely on their own "
              "command timeout";
-    case DriverFault::kErrorPassive: return "CAN controller is error-passive: vented";
-    case DriverFault::kShutdown: return "shut down: vented";
-    case DriverFault::kOverPressure: return "a chamber reads above the overpressure limit: vented";
+    case DriverFault::kErrorPassive:
+      return "CAN controller is error-passive: vented";
+    case DriverFault::kShutdown:
+      return "shut down: vented";
+    case DriverFault::kOverPressure:
+      return "a chamber reads above the overpressure limit: vented";
   }
   return "unknown";
 }
@@ -60,7 +66,8 @@ ValveDriver::ValveDriver(CanTransport& transport, const SignalMap& map, const Sa
   if (valve_->signals.size() != 3 || sensor_->signals.size() != 3)
     throw std::invalid_argument("ValveDriver: valve_command and pressure_sensor need three signals each");
   tip_ = map.find("tip_angle");
-  if (tip_ && tip_->signals.size() != 2) throw std::invalid_argument("ValveDriver: tip_angle needs two signals (bend, steer)");
+  if (tip_ && tip_->signals.size() != 2)
+    throw std::invalid_argument("ValveDriver: tip_angle needs two signals (bend, steer)");
   checkSafetyLimits(map, limits);
 }
 
@@ -119,9 +126,14 @@ void ValveDriver::tick(double time_s) noexcept {
       }
   }
   switch (transport_.busState()) {
-    case BusState::kBusOff: latch(DriverFault::kBusOff); break;
-    case BusState::kErrorPassive: latch(DriverFault::kErrorPassive); break;
-    case BusState::kActive: break;
+    case BusState::kBusOff:
+      latch(DriverFault::kBusOff);
+      break;
+    case BusState::kErrorPassive:
+      latch(DriverFault::kErrorPassive);
+      break;
+    case BusState::kActive:
+      break;
   }
   if (time_s - last_sensor_ > limits_.sensor_timeout_s) latch(DriverFault::kStaleSensor);
   if (have_command_ && time_s - last_command_ > limits_.command_timeout_s) latch(DriverFault::kCommandTimeout);

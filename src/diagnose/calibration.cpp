@@ -10,9 +10,7 @@
 
 namespace plsa::diagnose {
 
-Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const {
-  return (v * M.topRows<2>()).rowwise() + M.row(2);
-}
+Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const { return (v * M.topRows<2>()).rowwise() + M.row(2); }
 
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
                         double preroll_s) {
@@ -199,11 +197,9 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
   opt.set_ftol_rel(1e-5);
   using Fn = decltype(objective);
   // nlopt::opt wants a plain function pointer and a context.
-  opt.set_min_objective(
-      [](unsigned count, const double* xs, double*, void* data) {
-        return (*static_cast<Fn*>(data))(std::vector<double>(xs, xs + count));
-      },
-      &objective);
+  opt.set_min_objective([](unsigned count, const double* xs, double*,
+                           void* data) { return (*static_cast<Fn*>(data))(std::vector<double>(xs, xs + count)); },
+                        &objective);
   double fmin = 0.0;
   try {
     opt.optimize(x, fmin);

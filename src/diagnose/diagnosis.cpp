@@ -71,7 +71,8 @@ void setNeutral(sim::SimConfig& c, const std::string& effect) {
   if (effect == "creep") c.creep.fraction = 0.0;
   if (effect == "sensor_bias") {
     auto& b = c.sensor_bias;
-    b.tilt_deg = b.yaw_drift_deg_per_s = b.offset_x_deg = b.offset_y_deg = b.drift_x_deg_per_s = b.drift_y_deg_per_s = 0.0;
+    b.tilt_deg = b.yaw_drift_deg_per_s = b.offset_x_deg = b.offset_y_deg = b.drift_x_deg_per_s = b.drift_y_deg_per_s =
+        0.0;
   }
 }
 
@@ -120,8 +121,7 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
     try {
       const double gap = measureGap(s, train, g).total;
       if (gap < best_gap) best_gap = gap, best = s;
-    } catch (const std::invalid_argument&) {
-    }
+    } catch (const std::invalid_argument&) {}
   }
   return {neutral, best};
 }
@@ -180,8 +180,7 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
         try {
           ++spent;
           ranked.emplace_back(measureGap(c, train, g).total, c);
-        } catch (const std::invalid_argument&) {
-        }
+        } catch (const std::invalid_argument&) {}
       }
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<sim::SimConfig> starts = {simulator};
@@ -215,8 +214,8 @@ CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::v
 }
 
 // The evaluations the largest candidate's calibration may spend.
-int candidateBudget(sim::SimConfig c, const std::vector<std::string>& modules, const std::vector<std::string>& candidates,
-                    const CalibrationOptions& o) {
+int candidateBudget(sim::SimConfig c, const std::vector<std::string>& modules,
+                    const std::vector<std::string>& candidates, const CalibrationOptions& o) {
   std::size_t base = 0;
   for (const auto& m : modules) base += c.parameters(m).size();
   std::size_t most = 0;
@@ -394,8 +393,9 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
     forEachInParallel(remaining.size() + 1, o.threads, work);  // the last index: the nothing-added bar
     std::vector<std::size_t> order(results.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return results[a].heldout_after.total < results[b].heldout_after.total; });
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return results[a].heldout_after.total < results[b].heldout_after.total;
+    });
     for (std::size_t i : order) {
       char line[256];
       std::snprintf(line, sizeof line, "  round %d: %-14s held-out gap %s -> %s (shrink %.1f%%)", round,
@@ -456,12 +456,13 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   judgeConfidence(d, d.recalibrated_round1, o);
   char v[768];
   if (selected.empty()) {
-    std::snprintf(v, sizeof v,
-                  "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is %.1f%% "
-                  "against a noise floor of %.1f%%, and the best candidate (%s) shrinks it by %.1f%%, less than the "
-                  "margin.",
-                  d.gap_before.percent(), d.noise.percent(), d.ranking.empty() ? "none" : d.ranking[0].effect.c_str(),
-                  d.ranking.empty() ? 0.0 : d.ranking[0].shrink_percent);
+    std::snprintf(
+        v, sizeof v,
+        "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is %.1f%% "
+        "against a noise floor of %.1f%%, and the best candidate (%s) shrinks it by %.1f%%, less than the "
+        "margin.",
+        d.gap_before.percent(), d.noise.percent(), d.ranking.empty() ? "none" : d.ranking[0].effect.c_str(),
+        d.ranking.empty() ? 0.0 : d.ranking[0].shrink_percent);
   } else {
     std::string list;
     for (const auto& s : selected) list += (list.empty() ? "" : ", then ") + s;
@@ -474,10 +475,9 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   if (d.confidence == "uncertain")
     d.verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
                  selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";
-  const std::string reached =
-      d.reference.available && d.reference.gap.percent() < d.gap_after.percent()
-          ? " and above the " + pct(d.reference.gap.percent()) + " an identified model reaches"
-          : "";
+  const std::string reached = d.reference.available && d.reference.gap.percent() < d.gap_after.percent()
+                                  ? " and above the " + pct(d.reference.gap.percent()) + " an identified model reaches"
+                                  : "";
   if (d.confidence == "qualified")
     d.verdict += " Qualified: the gap left, " + pct(d.gap_after.percent()) + ", is over " +
                  std::to_string(static_cast<int>(o.qualified_noise_multiple)) + " times the noise floor" + reached +

@@ -38,7 +38,7 @@ json sharesJson(const std::vector<ResidualShare>& v) {
 }
 
 json placeJson(const GridPlace& g) {
-  return {{"chamber", g.chamber}, {"from_bar", g.from_bar}, {"to_bar", g.to_bar}, {"direction", g.direction},
+  return {{"chamber", g.chamber}, {"from_bar", g.from_bar}, {"to_bar", g.to_bar},   {"direction", g.direction},
           {"rms", g.rms},         {"share", g.share},       {"samples", g.samples}, {"words", g.words}};
 }
 
@@ -66,17 +66,19 @@ json breakdownJson(const Breakdown& b) {
 }
 
 json candidateJson(const CandidateResult& c) {
-  return {{"effect", c.effect},
-          {"formulation", c.formulation},
-          {"round", c.round},
-          {"heldout_gap_before", c.heldout_before.percent()},
-          {"heldout_gap_after", c.heldout_after.percent()},
-          {"shrink_percent", c.shrink_percent},
-          {"train_gap_after", c.train_after.percent()},
-          {"calibration", {{"starts", c.starts}, {"evaluations", c.evaluations},
-                           {"train_gap_percent_per_start", c.train_gap_per_start}}},
-          {"params", paramsJson(c.params)},
-          {"signature", {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
+  return {
+      {"effect", c.effect},
+      {"formulation", c.formulation},
+      {"round", c.round},
+      {"heldout_gap_before", c.heldout_before.percent()},
+      {"heldout_gap_after", c.heldout_after.percent()},
+      {"shrink_percent", c.shrink_percent},
+      {"train_gap_after", c.train_after.percent()},
+      {"calibration",
+       {{"starts", c.starts}, {"evaluations", c.evaluations}, {"train_gap_percent_per_start", c.train_gap_per_start}}},
+      {"params", paramsJson(c.params)},
+      {"signature",
+       {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
 }
 
 std::string fmt(double v, const char* f = "%.1f") {
@@ -153,8 +155,9 @@ std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis
     for (Eigen::Index c = 0; c < d.where.gap_map.cols(); ++c) {
       const auto rr = static_cast<std::size_t>(r), cc = static_cast<std::size_t>(c);
       const bool has_after = d.where_after.gap_map.rows() > r && d.where_after.gap_map.cols() > c;
-      map << csvNumber(cc < edges.size() ? edges[cc] : NAN) << ',' << csvNumber(cc + 1 < edges.size() ? edges[cc + 1] : NAN)
-          << ',' << csvNumber(rr < edges.size() ? edges[rr] : NAN) << ','
+      map << csvNumber(cc < edges.size() ? edges[cc] : NAN) << ','
+          << csvNumber(cc + 1 < edges.size() ? edges[cc + 1] : NAN) << ','
+          << csvNumber(rr < edges.size() ? edges[rr] : NAN) << ','
           << csvNumber(rr + 1 < edges.size() ? edges[rr + 1] : NAN) << ',' << csvNumber(d.where.gap_map(r, c)) << ','
           << csvNumber(has_after ? d.where_after.gap_map(r, c) : NAN) << '\n';
     }
@@ -162,7 +165,8 @@ std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis
   for (const auto& c : d.ranking) {
     const bool kept = std::find(d.selected.begin(), d.selected.end(), c.effect) != d.selected.end();
     shrink << c.effect << ',' << c.formulation << ',' << csvNumber(c.heldout_before.percent()) << ','
-           << csvNumber(c.heldout_after.percent()) << ',' << csvNumber(c.shrink_percent) << ',' << (kept ? 1 : 0) << '\n';
+           << csvNumber(c.heldout_after.percent()) << ',' << csvNumber(c.shrink_percent) << ',' << (kept ? 1 : 0)
+           << '\n';
   }
   return {{"trace.csv", trace.str()}, {"gap_map.csv", map.str()}, {"shrink.csv", shrink.str()}};
 }
@@ -173,15 +177,17 @@ std::string reportHtml(const Diagnosis& d) {
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>plsa diagnosis</title>\n"
     << "<style>body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}"
     << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}"
-    << "th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.2em;background:#f6f8ff;"
+    << "th{background:#f4f4f4}td:first-child,th:first-child{text-align:left}.verdict{font-size:1.2em;background:#"
+       "f6f8ff;"
     << "padding:1em;border-left:4px solid #4060c0}.note{color:#666;font-size:.9em}</style></head><body>\n";
   h << "<h1>Sim-to-real gap diagnosis</h1>\n<p class=\"verdict\" id=\"verdict\">" << escape(d.verdict) << "</p>\n";
-  h << "<p class=\"note\">Gap: 100 &times; sqrt(normalised mean squared residual) on held-out data (" << d.heldout_runs.size()
-    << " run(s)); 0 is a perfect match, 100 no better than the mean. Simulator as given: "
+  h << "<p class=\"note\">Gap: 100 &times; sqrt(normalised mean squared residual) on held-out data ("
+    << d.heldout_runs.size() << " run(s)); 0 is a perfect match, 100 no better than the mean. Simulator as given: "
     << fmt(d.heldout_uncalibrated.percent()) << "%; nominal physics calibrated: " << fmt(d.gap_before.percent())
     << "%; with the selected effects: " << fmt(d.gap_after.percent()) << "%; noise floor: " << fmt(d.noise.percent())
-    << "%; " << (d.reference.available ? "an identified model (outputs only): " + fmt(d.reference.gap.percent()) + "%"
-                                        : "no identified reference (" + escape(d.reference.note) + ")")
+    << "%; "
+    << (d.reference.available ? "an identified model (outputs only): " + fmt(d.reference.gap.percent()) + "%"
+                              : "no identified reference (" + escape(d.reference.note) + ")")
     << ". Confidence: " << escape(d.confidence);
   if (!d.runner_up.empty())
     h << " (margin over re-calibration " << fmt(100 * d.margin_over_recalibration) << "%, over the runner-up, "
@@ -209,7 +215,8 @@ std::string reportHtml(const Diagnosis& d) {
   h << "<p class=\"note\">Data behind the charts: <a href=\"gap_map.csv\">gap_map.csv</a>, "
        "<a href=\"shrink.csv\">shrink.csv</a>, <a href=\"trace.csv\">trace.csv</a>.</p>\n";
   auto table = [&](const char* title, const std::vector<ResidualShare>& v) {
-    h << "<table><tr><th>" << title << "</th><th>RMS</th><th>share of squared residual</th><th>share of samples</th></tr>";
+    h << "<table><tr><th>" << title
+      << "</th><th>RMS</th><th>share of squared residual</th><th>share of samples</th></tr>";
     for (const auto& s : v)
       h << "<tr><td>" << escape(s.label) << "</td><td>" << fmt(s.rms, "%.3g") << "</td><td>" << fmt(100 * s.share)
         << "%</td><td>" << (s.samples > 0 ? fmt(100 * s.samples) + "%" : "") << "</td></tr>";
@@ -237,9 +244,9 @@ std::string reportHtml(const Diagnosis& d) {
       if (k.rfind(c.effect + ".", 0) == 0) params += k.substr(c.effect.size() + 1) + " = " + fmt(v, "%.4g") + "; ";
     h << "<tr><td>" << escape(c.effect) << " (" << escape(c.formulation) << ")</td><td>"
       << fmt(c.heldout_before.percent()) << "%</td><td>" << fmt(c.heldout_after.percent()) << "%</td><td>"
-      << fmt(c.shrink_percent) << "%</td><td>"
-      << (c.signature.present ? "supports: " : "") << escape(c.signature.evidence) << "</td><td>" << escape(params)
-      << "</td><td>" << c.starts << ", " << c.evaluations << ";";
+      << fmt(c.shrink_percent) << "%</td><td>" << (c.signature.present ? "supports: " : "")
+      << escape(c.signature.evidence) << "</td><td>" << escape(params) << "</td><td>" << c.starts << ", "
+      << c.evaluations << ";";
     for (double gap : c.train_gap_per_start) h << " " << fmt(gap) << "%";
     h << "</td></tr>";
   }
@@ -257,11 +264,11 @@ std::string reportHtml(const Diagnosis& d) {
   const Eigen::Index n = d.trace_real.rows();
   Eigen::VectorXd t(n);
   for (Eigen::Index i = 0; i < n; ++i) t(i) = i * d.trace_dt;
-  const std::array<std::string, 2> names = d.map == OutputMap::kAngles
-                                               ? std::array<std::string, 2>{"bending vector x (deg)", "bending vector y (deg)"}
-                                               : std::array<std::string, 2>{"output 1", "output 2"};
-  const std::string with = d.selected.empty() ? "sim (no effect kept)" : "sim + " + d.selected[0] +
-                                                                             (d.selected.size() > 1 ? " + ..." : "");
+  const std::array<std::string, 2> names =
+      d.map == OutputMap::kAngles ? std::array<std::string, 2>{"bending vector x (deg)", "bending vector y (deg)"}
+                                  : std::array<std::string, 2>{"output 1", "output 2"};
+  const std::string with =
+      d.selected.empty() ? "sim (no effect kept)" : "sim + " + d.selected[0] + (d.selected.size() > 1 ? " + ..." : "");
   for (int c = 0; c < 2; ++c) {
     h << "<div class=\"trace\" id=\"trace-" << c + 1 << "\">"
       << report::lineChart("Held-out run: " + names[static_cast<std::size_t>(c)], t,
@@ -282,7 +289,8 @@ std::string reportHtml(const Diagnosis& d) {
     << " simulator runs: the gain regression, a 27-point grid of frequency, damping and time constant, BOBYQA from "
        "the simulator as given and the best two grid points, then a restart from the best.</p>"
        "<table><tr><th>parameter</th><th>value</th></tr>";
-  for (const auto& [k, v] : d.nominal_params) h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
+  for (const auto& [k, v] : d.nominal_params)
+    h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
   h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n</body></html>\n";
   return h.str();
 }

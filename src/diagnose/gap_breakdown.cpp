@@ -96,14 +96,15 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     return ResidualShare{label, count > 0 ? std::sqrt(sum / count) : 0.0, sum / total, count / n};
   };
   const bool angles = in.map == OutputMap::kAngles;
-  const std::array<std::string, 2> out_names = angles ? std::array<std::string, 2>{"bending", "steering"}
-                                                      : std::array<std::string, 2>{"output 1", "output 2"};
+  const std::array<std::string, 2> out_names =
+      angles ? std::array<std::string, 2>{"bending", "steering"} : std::array<std::string, 2>{"output 1", "output 2"};
   for (int p = 0; p < 2; ++p) {
     double sum = 0;
     for (const auto& s : all) sum += s.parts[static_cast<std::size_t>(p)];
-    b.by_output.push_back({out_names[static_cast<std::size_t>(p)] +
-                               (angles ? (p == 0 ? " (along the tip direction, deg)" : " (across it, deg of arc)") : ""),
-                           std::sqrt(sum / n), sum / total, 1.0});
+    b.by_output.push_back(
+        {out_names[static_cast<std::size_t>(p)] +
+             (angles ? (p == 0 ? " (along the tip direction, deg)" : " (across it, deg of arc)") : ""),
+         std::sqrt(sum / n), sum / total, 1.0});
   }
   auto dominant = [](const Sample& s) {
     int best = 0;
@@ -118,9 +119,10 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
                 share("transient", [](const Sample& s) { return s.since_change_s < 1.5; })};
 
   // Frequency bands of the residual, by Parseval over each run's spectrum.
-  const std::vector<std::pair<double, std::string>> bands = {
-      {0.05, "offset and drift (< 0.05 Hz)"}, {0.5, "slow (0.05-0.5 Hz)"}, {2.0, "bending dynamics (0.5-2 Hz)"},
-      {1e9, "fast (> 2 Hz)"}};
+  const std::vector<std::pair<double, std::string>> bands = {{0.05, "offset and drift (< 0.05 Hz)"},
+                                                             {0.5, "slow (0.05-0.5 Hz)"},
+                                                             {2.0, "bending dynamics (0.5-2 Hz)"},
+                                                             {1e9, "fast (> 2 Hz)"}};
   std::vector<double> band_energy(bands.size(), 0.0);
   Eigen::FFT<double> fft;
   for (std::size_t k = 0; k < runs.size(); ++k)
@@ -139,7 +141,8 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     }
   const double band_total = std::max(1e-300, std::accumulate(band_energy.begin(), band_energy.end(), 0.0));
   for (std::size_t i = 0; i < bands.size(); ++i)
-    b.by_band.push_back({bands[i].second, overall_rms * std::sqrt(band_energy[i] / band_total), band_energy[i] / band_total, 0.0});
+    b.by_band.push_back(
+        {bands[i].second, overall_rms * std::sqrt(band_energy[i] / band_total), band_energy[i] / band_total, 0.0});
 
   // The pressure grid: four equal bands per chamber, by direction of that chamber.
   constexpr int nb = 4;
@@ -165,7 +168,8 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
   for (int c = 0; c < 3; ++c)
     for (int k = 0; k < nb; ++k)
       for (int d = -1; d <= 1; ++d) {
-        const Cell& p = place[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)][static_cast<std::size_t>(d + 1)];
+        const Cell& p =
+            place[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)][static_cast<std::size_t>(d + 1)];
         if (p.count < 5) continue;
         GridPlace g;
         g.chamber = c + 1;
@@ -176,7 +180,8 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
         g.share = p.sum / total;
         g.samples = p.count / n;
         const std::string what = p.parts[0] >= p.parts[1] ? out_names[0] : out_names[1];
-        g.words = what + ", chamber " + std::to_string(c + 1) + fmt(" between %.2f and %.2f bar", g.from_bar, g.to_bar) +
+        g.words = what + ", chamber " + std::to_string(c + 1) +
+                  fmt(" between %.2f and %.2f bar", g.from_bar, g.to_bar) +
                   (d == 0 ? ", pressure holding" : (d > 0 ? ", pressure rising" : ", pressure falling")) +
                   fmt(": residual %.3g RMS, %.1fx the overall RMS, %.0f%% of the samples", g.rms, g.rms / overall_rms,
                       100 * g.samples);
@@ -207,7 +212,8 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     Eigen::MatrixXd Xc = Eigen::MatrixXd::Ones(X.rows(), 1);
     const Eigen::MatrixXd mean_only = Xc.colPivHouseholderQr().solve(R);
     const double r2 = 1.0 - (R - X * beta).squaredNorm() / std::max(1e-300, (R - Xc * mean_only).squaredNorm());
-    b.signatures["hysteresis"] = {r2, r2 > 0.15, fmt("direction of pressure change explains %.0f%% of the residual", 100 * r2)};
+    b.signatures["hysteresis"] = {r2, r2 > 0.15,
+                                  fmt("direction of pressure change explains %.0f%% of the residual", 100 * r2)};
   }
   {
     // A deadzone: at low pressure the real tip barely moves while the sim
@@ -222,17 +228,16 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     const double rel_low = low_v > 0 ? std::sqrt(low_r / low_v) : 0.0;
     const double rel_high = high_v > 0 ? std::sqrt(high_r / high_v) : 0.0;
     const double ratio = rel_high > 0 && low_n / n > 0.02 ? rel_low / rel_high : 0.0;
-    b.signatures["deadzone"] = {ratio, ratio > 2.0,
-                                fmt("relative residual below 0.12 bar is %.1fx that above (%.0f%% vs %.0f%% of the sim's output)",
-                                    ratio, 100 * rel_low, 100 * rel_high)};
+    b.signatures["deadzone"] = {
+        ratio, ratio > 2.0,
+        fmt("relative residual below 0.12 bar is %.1fx that above (%.0f%% vs %.0f%% of the sim's output)", ratio,
+            100 * rel_low, 100 * rel_high)};
   }
   {
-    const ResidualShare multi = share("multi", [](const Sample& s) {
-      return (s.cmd[0] > 0.1) + (s.cmd[1] > 0.1) + (s.cmd[2] > 0.1) >= 2;
-    });
-    const ResidualShare single = share("single", [](const Sample& s) {
-      return (s.cmd[0] > 0.1) + (s.cmd[1] > 0.1) + (s.cmd[2] > 0.1) == 1;
-    });
+    const ResidualShare multi =
+        share("multi", [](const Sample& s) { return (s.cmd[0] > 0.1) + (s.cmd[1] > 0.1) + (s.cmd[2] > 0.1) >= 2; });
+    const ResidualShare single =
+        share("single", [](const Sample& s) { return (s.cmd[0] > 0.1) + (s.cmd[1] > 0.1) + (s.cmd[2] > 0.1) == 1; });
     const double ratio = single.rms > 0 && multi.samples > 0.03 ? multi.rms / single.rms : 0.0;
     b.signatures["coupling"] = {ratio, ratio > 1.5,
                                 fmt("residual with two or more chambers pressurised is %.2fx that with one", ratio)};
@@ -275,8 +280,9 @@ Breakdown breakdownGap(const BreakdownInputs& in) {
     const double offset = mean.norm() / std::max(1e-300, overall_rms);
     const double drift = std::abs(correlation(t, proj));
     const double score = std::max(offset, drift);
-    b.signatures["sensor_bias"] = {score, score > 0.5,
-                                   fmt("a constant offset makes %.0f%% of the residual RMS; drift correlation %.2f", 100 * offset, drift)};
+    b.signatures["sensor_bias"] = {
+        score, score > 0.5,
+        fmt("a constant offset makes %.0f%% of the residual RMS; drift correlation %.2f", 100 * offset, drift)};
   }
   return b;
 }

@@ -21,10 +21,12 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
   const std::string where = "diagnosis: run '" + log.source + "': ";
   if (c.inputs.empty() || c.inputs.size() > 3) throw std::invalid_argument(where + "needs 1 to 3 input columns");
   if (c.outputs.size() != 2) throw std::invalid_argument(where + "needs exactly 2 output columns");
-  if (!(c.input_scale > 0) || !std::isfinite(c.input_scale)) throw std::invalid_argument(where + "input scale must be positive");
+  if (!(c.input_scale > 0) || !std::isfinite(c.input_scale))
+    throw std::invalid_argument(where + "input scale must be positive");
   if (!log.hasColumn(io::standard_columns::kTime))
     throw std::invalid_argument(where + "has no " + io::standard_columns::kTime + " column");
-  if (log.samples() < 50) throw std::invalid_argument(where + "has " + std::to_string(log.samples()) + " samples; at least 50 needed");
+  if (log.samples() < 50)
+    throw std::invalid_argument(where + "has " + std::to_string(log.samples()) + " samples; at least 50 needed");
   RunData r;
   r.name = log.source;
   const Eigen::VectorXd t = log.column(io::standard_columns::kTime);
@@ -39,7 +41,9 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
   for (Eigen::Index i = 0; i < r.commands.rows(); ++i)
     for (Eigen::Index j = 0; j < 3; ++j) {
       const double v = r.commands(i, j);
-      if (!std::isfinite(v)) throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " is not finite at row " + std::to_string(i + 1));
+      if (!std::isfinite(v))
+        throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " is not finite at row " +
+                                    std::to_string(i + 1));
       if (v < -1e-9 || v > max_pressure_bar * 1.5 + 1e-9)
         throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " = " + std::to_string(v) +
                                     " bar at row " + std::to_string(i + 1) + " is outside 0.." +
@@ -80,7 +84,8 @@ RunStart detectRunStart(const RunData& run, OutputMap map) {
 }
 
 std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction) {
-  if (!(heldout_fraction > 0 && heldout_fraction < 1)) throw std::invalid_argument("held-out fraction must be in (0, 1)");
+  if (!(heldout_fraction > 0 && heldout_fraction < 1))
+    throw std::invalid_argument("held-out fraction must be in (0, 1)");
   const Eigen::Index n = run.samples();
   const auto cut = static_cast<Eigen::Index>(std::lround(n * (1.0 - heldout_fraction)));
   if (cut < 50 || n - cut < 50) throw std::invalid_argument("diagnosis: run '" + run.name + "' is too short to split");

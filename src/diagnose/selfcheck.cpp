@@ -12,7 +12,6 @@
 #include "plsa/sim/independent_actuator.hpp"
 #include "plsa/io/standard_columns.hpp"
 
-
 namespace plsa::diagnose {
 namespace {
 
@@ -20,12 +19,18 @@ namespace {
 // inside what a real actuator shows.
 const std::map<std::string, std::pair<double, double>>& truthRanges() {
   static const std::map<std::string, std::pair<double, double>> r = {
-      {"deadzone.threshold_bar", {0.04, 0.10}},        {"deadzone.smooth_width_bar", {0.01, 0.03}},
-      {"hysteresis.width", {0.08, 0.20}},              {"stiffening.per_bar", {10.0, 30.0}},
-      {"coupling.per_bar", {0.5, 1.2}},                {"pneumatic_lag.fill_time_constant_s", {0.06, 0.15}},
-      {"pneumatic_lag.vent_time_constant_s", {0.03, 0.08}}, {"pneumatic_lag.delay_s", {0.02, 0.06}},
-      {"creep.fraction", {0.06, 0.15}},                {"creep.time_constant_s", {3.0, 12.0}},
-      {"sensor_bias.tilt_deg", {1.0, 3.0}},            {"sensor_bias.yaw_drift_deg_per_s", {0.01, 0.04}}};
+      {"deadzone.threshold_bar", {0.04, 0.10}},
+      {"deadzone.smooth_width_bar", {0.01, 0.03}},
+      {"hysteresis.width", {0.08, 0.20}},
+      {"stiffening.per_bar", {10.0, 30.0}},
+      {"coupling.per_bar", {0.5, 1.2}},
+      {"pneumatic_lag.fill_time_constant_s", {0.06, 0.15}},
+      {"pneumatic_lag.vent_time_constant_s", {0.03, 0.08}},
+      {"pneumatic_lag.delay_s", {0.02, 0.06}},
+      {"creep.fraction", {0.06, 0.15}},
+      {"creep.time_constant_s", {3.0, 12.0}},
+      {"sensor_bias.tilt_deg", {1.0, 3.0}},
+      {"sensor_bias.yaw_drift_deg_per_s", {0.01, 0.04}}};
   return r;
 }
 
@@ -129,8 +134,8 @@ std::string SelfcheckResult::summary() const {
                 ">= 60%%); null cases claiming nothing: %d/%d; cases with a spurious selection: %d/%zu (target <= "
                 "10%%) -> %s\n",
                 truth.c_str(), single_top1, single_cases, single_cases ? 100.0 * single_top1 / single_cases : 0.0,
-                pair_top2, pair_cases, min_true_shrink, median_true_shrink, null_clean, null_cases,
-                cases_with_spurious, cases.size(), targets_met ? "all targets met" : "targets NOT met");
+                pair_top2, pair_cases, min_true_shrink, median_true_shrink, null_clean, null_cases, cases_with_spurious,
+                cases.size(), targets_met ? "all targets met" : "targets NOT met");
   o << line;
   std::snprintf(line, sizeof line,
                 "single cases with a calibrated gap over twice the noise floor: %d/%d, the withheld effect named "
@@ -169,7 +174,6 @@ std::vector<Spec> caseSpecs(const SelfcheckOptions& o) {
   for (int k = 0; k < o.null_cases; ++k) specs.push_back({{}, "", seed++});
   return specs;
 }
-
 
 // One case's truth, its parameters and laws recorded in `c`; independent.
 RunData recordIndependent(const sim::IndependentPhysics& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
@@ -381,8 +385,10 @@ SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
     if (!o.save_runs_dir.empty()) saveRuns(runs, o.save_runs_dir, c.name);
     DiagnoseOptions dopt = o.diagnose;
     dopt.identified_reference = false;  // reported, never used to decide: not what is scored here
-    if (!o.verbose) dopt.log = nullptr;
-    else if (!dopt.log) dopt.log = o.log;
+    if (!o.verbose)
+      dopt.log = nullptr;
+    else if (!dopt.log)
+      dopt.log = o.log;
     const Diagnosis d = runDiagnosis(allOff(), runs, dopt);
     scoreCase(spec, d, c, res, shrinks);
     c.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -37,7 +37,7 @@ ArxModel ArxModel::fit(const std::vector<Eigen::MatrixXd>& U, const std::vector<
     Eigen::VectorXd h = Eigen::VectorXd::Zero(p);
     for (std::size_t r = 0; r < U.size(); ++r) {
       PLSA_CHECK(U[r].cols() == nu && Y[r].cols() == ny && U[r].rows() == Y[r].rows(),
-              "ArxModel::fit: record " + std::to_string(r) + " has a different shape");
+                 "ArxModel::fit: record " + std::to_string(r) + " has a different shape");
       Eigen::VectorXd phi(p);
       for (Eigen::Index t = lag(m); t < U[r].rows(); ++t) {
         for (int i = 1; i <= na; ++i) phi(i - 1) = Y[r](t - i, o);
@@ -66,9 +66,8 @@ AlignedPrediction ArxModel::kStepAhead(const Eigen::MatrixXd& u, const Eigen::Ve
     // Measured up to t0, predict t0+1..t0+k.
     for (int s = 1; s <= k; ++s) {
       const Eigen::Index t = t0 + s;
-      pred[static_cast<std::size_t>(s - 1)] = arxStep(*this, u, o, t, [&](Eigen::Index q) {
-        return q <= t0 ? y(q) : pred[static_cast<std::size_t>(q - t0 - 1)];
-      });
+      pred[static_cast<std::size_t>(s - 1)] = arxStep(
+          *this, u, o, t, [&](Eigen::Index q) { return q <= t0 ? y(q) : pred[static_cast<std::size_t>(q - t0 - 1)]; });
     }
     out.values(t0 + k - out.first) = pred[static_cast<std::size_t>(k - 1)];
   }

@@ -44,8 +44,10 @@ void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eig
     node_weight = Eigen::MatrixXd::Zero(T, regions);
     for (Eigen::Index k = 0; k < T; ++k) {
       ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
-      if (k + 1 < T) b = out.schedule[static_cast<std::size_t>(k + 1)];
-      else if (k > 0) partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
+      if (k + 1 < T)
+        b = out.schedule[static_cast<std::size_t>(k + 1)];
+      else if (k > 0)
+        partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
     }
     for (Eigen::Index k = 0; k < T; ++k) {
       const ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
@@ -173,7 +175,7 @@ void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, Mode
 
 Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
   PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
-          "modelIncrements: the regressors were made for another model");
+             "modelIncrements: the regressors were made for another model");
   const auto T = static_cast<Eigen::Index>(reg.schedule.size());
   Eigen::MatrixXd dy(T, model.outputCount());
   if (model.schedule_side == ScheduleSide::kInput) {
@@ -203,8 +205,8 @@ Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegresso
       double v = 0.0;
       for (int m = 0; m < b.count; ++m)
         v += b.weight[static_cast<std::size_t>(m)] *
-             reg.phi[static_cast<std::size_t>(o)].row(k).dot(
-                 model.coefficients[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)]);
+             reg.phi[static_cast<std::size_t>(o)].row(k).dot(model.coefficients[static_cast<std::size_t>(
+                 b.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)]);
       dy(k, o) = v;
     }
   }
@@ -213,15 +215,16 @@ Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegresso
 
 Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   PLSA_CHECK(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
-                                              " inputs, the model " + std::to_string(model.inputCount()));
+                                                 " inputs, the model " + std::to_string(model.inputCount()));
   return modelIncrements(model, modelRegressors(model, u));
 }
 
 Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {
   PLSA_CHECK(model.schedule_side == ScheduleSide::kInput,
-          "modelLevels: only an input-side model has a level that is a function of its inputs");
+             "modelLevels: only an input-side model has a level that is a function of its inputs");
   PLSA_CHECK(u.rows() >= 1, "modelLevels: empty record");
-  PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(), "modelLevels: increments do not match the record");
+  PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
+             "modelLevels: increments do not match the record");
   // Settled states depend on the first sample alone (its schedule, played and coupled level).
   const ModelRegressors first = modelRegressors(model, u.topRows(1));
   Eigen::MatrixXd level(u.rows(), model.outputCount());

@@ -17,8 +17,8 @@ namespace plsa {
 
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
   PLSA_CHECK(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
-          "SimulationStart: the yaw registration window must be finite and >= 0 s, got " +
-              std::to_string(start.yaw_registration_s));
+             "SimulationStart: the yaw registration window must be finite and >= 0 s, got " +
+                 std::to_string(start.yaw_registration_s));
   if (model.output_level.empty() || model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0)
     return 0;
   return std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
@@ -37,8 +37,8 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                              const SimulationStart& start) {
   PLSA_CHECK(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
-              dy.rows() == u.rows(),
-          "simulateModel: the record does not match the model's outputs");
+                 dy.rows() == u.rows(),
+             "simulateModel: the record does not match the model's outputs");
   const Eigen::Index n = yawRegistrationSamples(model, start);
   std::vector<AlignedPrediction> out;
   if (model.output_level.empty()) {
@@ -61,8 +61,8 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   Eigen::Index first = 1;
   if (n > 0) {
     PLSA_CHECK(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
-                              " s, " + std::to_string(n) + " samples) leaves nothing of the " +
-                              std::to_string(u.rows()) + "-sample record to simulate");
+                                 " s, " + std::to_string(n) + " samples) leaves nothing of the " +
+                                 std::to_string(u.rows()) + "-sample record to simulate");
     // The rotation that best maps the predicted tip components onto the
     // measured ones: atan2(sum of cross products, sum of dot products),
     // which weighs each sample by how far the tip is from the axis.
@@ -116,21 +116,23 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start) {
   PLSA_CHECK(y.cols() == model.outputCount() && y.rows() == u.rows(),
-          "predictOutputs: the record does not match the model's outputs");
+             "predictOutputs: the record does not match the model's outputs");
   PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
-          "predictOutputs: the increments do not match the record");
+             "predictOutputs: the increments do not match the record");
   const Eigen::MatrixXd ym = toModelFrame(model.output_frame, y);
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
   for (int k : horizons) {
     PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
-    for (int o = 0; o < model.outputCount(); ++o) out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
+    for (int o = 0; o < model.outputCount(); ++o)
+      out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
     if (model.output_frame == OutputFrame::kTipCartesian)
       std::tie(out[0][k], out[1][k]) =
           toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
   }
   if (with_simulation) {
     const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy, start);
-    for (int o = 0; o < model.outputCount(); ++o) out[static_cast<std::size_t>(o)][0] = sims[static_cast<std::size_t>(o)];
+    for (int o = 0; o < model.outputCount(); ++o)
+      out[static_cast<std::size_t>(o)][0] = sims[static_cast<std::size_t>(o)];
     if (model.output_frame == OutputFrame::kTipCartesian)
       std::tie(out[0][0], out[1][0]) = toTipAngles(out[0][0], out[1][0], [&](Eigen::Index t, double previous) {
         return t == sims[0].first ? y(t - 1, 1) : previous;
@@ -218,8 +220,8 @@ std::vector<std::string> inputCoverageWarnings(const DioPwlObfModel& model, cons
 namespace {
 
 // A fit or error that is not a number is no score: say what went wrong instead.
-void requireFiniteScore(double value, const std::string& what, const std::string& output,
-                        const AlignedPrediction& p, const std::string& source) {
+void requireFiniteScore(double value, const std::string& what, const std::string& output, const AlignedPrediction& p,
+                        const std::string& source) {
   if (std::isfinite(value)) return;
   const double largest = p.values.size() ? p.values.cwiseAbs().maxCoeff() : 0.0;
   std::ostringstream msg;
@@ -275,7 +277,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
   ValidationResult res;
   res.time = log.hasColumn(io::standard_columns::kTime) ? log.column(io::standard_columns::kTime)
-                                                       : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
+                                                        : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.outside_training = inputsOutsideTraining(model, u);
   // One window for every score: from the first sample every prediction covers.
   res.scored_from = scoringStart(pred);

@@ -25,7 +25,7 @@ void checkSampleWeights(const std::vector<Eigen::MatrixXd>& U, const SampleWeigh
   PLSA_CHECK(weights.size() == U.size(), std::string(who) + ": need one weight vector per record");
   for (std::size_t r = 0; r < U.size(); ++r)
     PLSA_CHECK(weights[r].size() == U[r].rows() && weights[r].allFinite() && (weights[r].array() >= 0).all(),
-            std::string(who) + ": record " + std::to_string(r) + " needs one finite weight >= 0 per sample");
+               std::string(who) + ": record " + std::to_string(r) + " needs one finite weight >= 0 per sample");
 }
 
 namespace {
@@ -33,7 +33,8 @@ namespace {
 CoefficientSums::Group emptyGroup(const DioPwlObfModel& model) {
   const int R = model.partition.regionCount();
   const int ny = model.outputCount();
-  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
+  const bool joint =
+      model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
   CoefficientSums::Group g;
   g.G.resize(static_cast<std::size_t>(ny));
   g.h.resize(static_cast<std::size_t>(ny));
@@ -70,7 +71,8 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
     std::vector<double>& count = sums.groups[static_cast<std::size_t>(groupOf(k))].count;
     for (int m = 0; m < b.count; ++m)
-      count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] += weightOf(k) * b.weight[static_cast<std::size_t>(m)];
+      count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] +=
+          weightOf(k) * b.weight[static_cast<std::size_t>(m)];
   }
   if (input_side) {
     // Every node's regressors side by side: one dense least-squares problem,
@@ -170,7 +172,7 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
 void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::Index rows, std::size_t r,
                  const char* who) {
   PLSA_CHECK(Y.cols() == model.outputCount() && Y.rows() == rows,
-          std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
+             std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
   PLSA_CHECK(Y.allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
 }
 
@@ -180,7 +182,7 @@ CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<M
                                 const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
                                 int groups) {
   PLSA_CHECK(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
-          "coefficientSums: need one regressor set, output record and group vector per record");
+             "coefficientSums: need one regressor set, output record and group vector per record");
   PLSA_CHECK(groups >= 1, "coefficientSums: need at least one group");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   CoefficientSums sums;
@@ -188,8 +190,8 @@ CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<M
   for (std::size_t r = 0; r < Y.size(); ++r) {
     checkRecord(model, Y[r], static_cast<Eigen::Index>(regressors[r].schedule.size()), r, "coefficientSums");
     PLSA_CHECK(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
-            "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
-                ") per sample");
+               "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
+                   ") per sample");
     accumulate(model, regressors[r], Y[r], nullptr, &group[r], sums);
   }
   return sums;
@@ -205,7 +207,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
   for (std::size_t r = 0; r < U.size(); ++r) {
     PLSA_CHECK(U[r].cols() == model.inputCount(),
-            "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
+               "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
     const ModelRegressors reg = modelRegressors(model, U[r]);  // one record at a time: they are large
     accumulate(model, reg, Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
@@ -216,14 +218,14 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
                                        const CoefficientFitOptions& o) {
   PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
-          "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
+             "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
   const int R = model.partition.regionCount();
   const int ny = model.outputCount();
   const bool input_side = model.schedule_side == ScheduleSide::kInput;
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
-  PLSA_CHECK(static_cast<int>(sums.groups.front().count.size()) == R &&
-              static_cast<int>(sums.groups.front().J.size()) == ny,
-          "solveCoefficients: the sums were made for another model structure");
+  PLSA_CHECK(
+      static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
+      "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = emptyGroup(model);
   for (std::size_t gi = 0; gi < sums.groups.size(); ++gi) {
     if (static_cast<int>(gi) == leave_out) continue;
@@ -266,7 +268,8 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
   for (int out = 0; out < ny; ++out) max_params = std::max(max_params, model.regressorSize(out));
   for (int l = 0; l < R; ++l) {
     own[static_cast<std::size_t>(l)] = count[static_cast<std::size_t>(l)] >= o.min_samples_per_parameter * max_params;
-    model.region_fits[static_cast<std::size_t>(l)].samples = static_cast<int>(std::lround(count[static_cast<std::size_t>(l)]));
+    model.region_fits[static_cast<std::size_t>(l)].samples =
+        static_cast<int>(std::lround(count[static_cast<std::size_t>(l)]));
   }
   std::vector<Eigen::VectorXd> global(static_cast<std::size_t>(ny));
   for (int out = 0; out < ny; ++out) {
@@ -335,7 +338,8 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
     RegionFit& fit = model.region_fits[ll];
     const std::string where = model.partition.describe(l, model.inputs);
     if (nearest.empty()) {
-      for (int out = 0; out < ny; ++out) model.coefficients[ll][static_cast<std::size_t>(out)] = global[static_cast<std::size_t>(out)];
+      for (int out = 0; out < ny; ++out)
+        model.coefficients[ll][static_cast<std::size_t>(out)] = global[static_cast<std::size_t>(out)];
       fit.fallback_from = -2;
       fit.note = "too little data (" + std::to_string(fit.samples) + " samples): global linear coefficients";
     } else {
@@ -359,13 +363,14 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
   PLSA_CHECK(model.schedule_side == ScheduleSide::kInput, "fitOutputLevel: needs an input-side model");
   PLSA_CHECK(!U.empty() && U.size() == Y_logged.size(), "fitOutputLevel: need matching input and output records");
   checkSampleWeights(U, weights, "fitOutputLevel");
-  PLSA_CHECK(increments.empty() || increments.size() == U.size(), "fitOutputLevel: need one increment record per record");
+  PLSA_CHECK(increments.empty() || increments.size() == U.size(),
+             "fitOutputLevel: need one increment record per record");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
   double n = 0.0;
   for (std::size_t r = 0; r < U.size(); ++r) {
     PLSA_CHECK(Y[r].cols() == model.outputCount() && Y[r].rows() == U[r].rows() && Y[r].allFinite(),
-            "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
+               "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
     if (U[r].rows() == 0) continue;
     const Eigen::MatrixXd residual =
         Y[r] - (increments.empty() ? modelLevels(model, U[r]) : modelLevels(model, U[r], increments[r]));

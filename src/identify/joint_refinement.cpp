@@ -18,9 +18,8 @@ void IdentificationRun::refineJointly() {
   // over all four from the pick, on the same held-out score.
   // Only the stages that ran are refined: a stage turned off (its candidates
   // empty) keeps its setting, as does the channel size without a channel.
-  const bool any_channel = std::any_of(best_set.begin(), best_set.end(), [](const PlayChannel& c) {
-    return !c.passesThrough();
-  });
+  const bool any_channel =
+      std::any_of(best_set.begin(), best_set.end(), [](const PlayChannel& c) { return !c.passesThrough(); });
   std::vector<std::size_t> refined_dims;  // of threshold, coupling, softening, channel size
   if (input_side_chosen) {
     if (!o.play_threshold_candidates.empty()) refined_dims.push_back(0);
@@ -89,11 +88,9 @@ void IdentificationRun::refineJointly() {
     opt.set_xtol_abs(1e-3);
     using Objective = decltype(score);
     // nlopt::opt wants a plain function pointer and a context.
-    opt.set_max_objective(
-        [](const std::vector<double>& v, std::vector<double>&, void* data) {
-          return (*static_cast<Objective*>(data))(v);
-        },
-        &score);
+    opt.set_max_objective([](const std::vector<double>& v, std::vector<double>&,
+                             void* data) { return (*static_cast<Objective*>(data))(v); },
+                          &score);
     double f = 0.0;
     try {
       opt.optimize(xs, f);

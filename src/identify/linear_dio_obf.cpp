@@ -5,11 +5,11 @@
 
 namespace plsa::identify {
 
-Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
-                                 const Eigen::MatrixXd& u, DioStart start) {
+Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input, const Eigen::MatrixXd& u,
+                                 DioStart start) {
   PLSA_CHECK(static_cast<Eigen::Index>(poles_per_input.size()) == u.cols(),
-          "dioObfRegressors: " + std::to_string(poles_per_input.size()) + " pole sets for " +
-              std::to_string(u.cols()) + " inputs");
+             "dioObfRegressors: " + std::to_string(poles_per_input.size()) + " pole sets for " +
+                 std::to_string(u.cols()) + " inputs");
   PLSA_CHECK(u.allFinite(), "dioObfRegressors: the inputs contain NaN or Inf");
   const Eigen::MatrixXd du = dioDifference(u, start);
   int width = 0;
@@ -28,19 +28,17 @@ Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
   return phi;
 }
 
-LinearDioObf LinearDioObf::fit(const std::vector<PoleSet>& poles_per_input,
-                               const std::vector<Eigen::MatrixXd>& inputs,
+LinearDioObf LinearDioObf::fit(const std::vector<PoleSet>& poles_per_input, const std::vector<Eigen::MatrixXd>& inputs,
                                const std::vector<Eigen::MatrixXd>& outputs, double ridge) {
   PLSA_CHECK(!inputs.empty() && inputs.size() == outputs.size(),
-          "LinearDioObf::fit: need as many output records as input records, at least one");
+             "LinearDioObf::fit: need as many output records as input records, at least one");
   PLSA_CHECK(ridge >= 0.0, "LinearDioObf::fit: the ridge weight must be >= 0");
   Eigen::MatrixXd gram;
   Eigen::MatrixXd rhs;
   for (std::size_t r = 0; r < inputs.size(); ++r) {
     PLSA_CHECK(inputs[r].rows() == outputs[r].rows(),
-            "LinearDioObf::fit: record " + std::to_string(r) + " has different input and output lengths");
-    PLSA_CHECK(outputs[r].allFinite(), "LinearDioObf::fit: record " + std::to_string(r) +
-                                        " has NaN or Inf outputs");
+               "LinearDioObf::fit: record " + std::to_string(r) + " has different input and output lengths");
+    PLSA_CHECK(outputs[r].allFinite(), "LinearDioObf::fit: record " + std::to_string(r) + " has NaN or Inf outputs");
     const Eigen::MatrixXd phi = dioObfRegressors(poles_per_input, inputs[r]);
     const Eigen::MatrixXd dy = dioDifference(outputs[r], DioStart::kAtRest);
     if (r == 0) {

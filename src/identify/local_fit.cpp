@@ -63,8 +63,10 @@ LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
     } else if (p.real() < 0.0) {
       // Equation-error fits of order > 1 put a spare pole on the noise; it is
       // dropped there (and noted), but a first-order fit that lands here is wrong.
-      if (order == 1) why << "negative real pole " << p.real() << " (alternating, not a physical step response); ";
-      else fit.dropped.push_back(p);
+      if (order == 1)
+        why << "negative real pole " << p.real() << " (alternating, not a physical step response); ";
+      else
+        fit.dropped.push_back(p);
     } else {
       kept.push_back(p);
     }
@@ -73,7 +75,8 @@ LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
   if (fit.poles.empty() && why.str().empty()) why << "no physical pole left; ";
   // With order > 1 the AR coefficients are correlated, so their standard
   // errors say little about the poles; the SNR test still applies.
-  if (order == 1 && fit.pole_std_error > max_std_error) why << "pole badly determined (std error " << fit.pole_std_error << "); ";
+  if (order == 1 && fit.pole_std_error > max_std_error)
+    why << "pole badly determined (std error " << fit.pole_std_error << "); ";
   if (fit.snr < min_snr) why << "response too small for the noise (SNR " << fit.snr << "); ";
   fit.reason = why.str();
   if (!fit.reason.empty()) fit.reason.resize(fit.reason.size() - 2);

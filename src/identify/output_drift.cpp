@@ -16,13 +16,13 @@ double meanSampleTime(const std::vector<Eigen::VectorXd>& t) {
   return sum / static_cast<double>(n);
 }
 
-std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
-                                               const OutputDrift& drift) {
+std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd>& Y,
+                                               const std::vector<Eigen::VectorXd>& t, const OutputDrift& drift) {
   PLSA_CHECK(Y.size() == t.size(), "output drift: need one time vector per record");
   std::vector<Eigen::MatrixXd> out = Y;
   for (std::size_t r = 0; r < Y.size(); ++r) {
     PLSA_CHECK(t[r].size() == Y[r].rows() && static_cast<std::size_t>(Y[r].cols()) == drift.rate.size(),
-            "output drift: record " + std::to_string(r) + " does not match the drift's outputs or its times");
+               "output drift: record " + std::to_string(r) + " does not match the drift's outputs or its times");
     const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
     for (Eigen::Index o = 0; o < Y[r].cols(); ++o)
       if (drift.rate[static_cast<std::size_t>(o)] != 0.0)
@@ -35,8 +35,9 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
                                 const CoefficientFitOptions& options, int iterations, const SampleWeights& weights) {
   PLSA_CHECK(model_in.schedule_side == ScheduleSide::kInput,
-          "output drift: needs an input-side model (only its level is a function of the inputs)");
-  PLSA_CHECK(U.size() == Y.size() && U.size() == t.size() && !U.empty(), "output drift: need matching records and times");
+             "output drift: needs an input-side model (only its level is a function of the inputs)");
+  PLSA_CHECK(U.size() == Y.size() && U.size() == t.size() && !U.empty(),
+             "output drift: need matching records and times");
   PLSA_CHECK(iterations >= 1, "output drift: need at least one iteration");
   checkSampleWeights(U, weights, "output drift");
   const int ny = model_in.outputCount();

@@ -41,13 +41,15 @@ OutputFrameChoice chooseOutputFrame(const std::vector<std::string>& outputs, con
   }
   const std::string pair = "'" + outputs[0] + "' and '" + outputs[1] + "'";
   if (isSteering(outputs[0]) && isBending(outputs[1])) {
-    c.reason = "outputs fitted as logged: " + pair + " look like a tip's steering and bending angles in that order; "
-               "list the bending angle first (--outputs " + outputs[1] + "," + outputs[0] +
-               ") to fit them in the tip frame";
+    c.reason = "outputs fitted as logged: " + pair +
+               " look like a tip's steering and bending angles in that order; "
+               "list the bending angle first (--outputs " +
+               outputs[1] + "," + outputs[0] + ") to fit them in the tip frame";
     return c;
   }
   if (!(isBending(outputs[0]) && isSteering(outputs[1]))) {
-    c.reason = "outputs " + pair + " fitted as logged; if they are a tip's bending and steering angles (deg), "
+    c.reason = "outputs " + pair +
+               " fitted as logged; if they are a tip's bending and steering angles (deg), "
                "--output-frame tip_cartesian fits them in the tip frame, usually better";
     return c;
   }
@@ -56,12 +58,14 @@ OutputFrameChoice chooseOutputFrame(const std::vector<std::string>& outputs, con
     char share[32];
     std::snprintf(share, sizeof share, "%.1f%%", 100.0 * negative);
     c.reason = "outputs " + pair + " fitted as logged: they are named as bending and steering angles, but " + share +
-               " of '" + outputs[0] + "' lies below -0.5 deg, and a bending angle is never negative "
+               " of '" + outputs[0] +
+               "' lies below -0.5 deg, and a bending angle is never negative "
                "(--output-frame tip_cartesian to fit them in the tip frame anyway)";
     return c;
   }
   c.frame = OutputFrame::kTipCartesian;
-  c.reason = "outputs " + pair + " read as a tip's bending and steering angles (deg): fitted in the tip frame "
+  c.reason = "outputs " + pair +
+             " read as a tip's bending and steering angles (deg): fitted in the tip frame "
              "(--output-frame as_logged to fit them as logged)";
   return c;
 }

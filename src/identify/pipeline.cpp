@@ -31,12 +31,17 @@ std::string fmtPoles(std::vector<std::complex<double>> p) {
   return s.str();
 }
 
-ClusteringResult cluster(PoleMethod method, const std::vector<std::complex<double>>& poles, const ClusteringOptions& o) {
+ClusteringResult cluster(PoleMethod method, const std::vector<std::complex<double>>& poles,
+                         const ClusteringOptions& o) {
   switch (method) {
-    case PoleMethod::kFkcm: return fkcmClustering(poles, o);
-    case PoleMethod::kFuzzyCMeans: return fuzzyCMeansClustering(poles, o);
-    case PoleMethod::kKMeans: return kMeansClustering(poles, o);
-    case PoleMethod::kGlobalRho: return globalRhoSearch(poles, o);
+    case PoleMethod::kFkcm:
+      return fkcmClustering(poles, o);
+    case PoleMethod::kFuzzyCMeans:
+      return fuzzyCMeansClustering(poles, o);
+    case PoleMethod::kKMeans:
+      return kMeansClustering(poles, o);
+    case PoleMethod::kGlobalRho:
+      return globalRhoSearch(poles, o);
   }
   throw std::invalid_argument("identify: pole method out of range");
 }
@@ -75,7 +80,8 @@ std::vector<double> quantileBreakpoints(std::vector<double> values, int levels) 
   std::sort(values.begin(), values.end());
   std::vector<double> b;
   for (int i = 1; i < levels; ++i) {
-    const double v = values[static_cast<std::size_t>(std::lround(i / static_cast<double>(levels) * (values.size() - 1)))];
+    const double v =
+        values[static_cast<std::size_t>(std::lround(i / static_cast<double>(levels) * (values.size() - 1)))];
     if (b.empty() || v > b.back()) b.push_back(v);
   }
   return b;
@@ -87,7 +93,9 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
     if (x.size() < 3) continue;
     std::vector<double> sorted(x.data(), x.data() + x.size());
     std::sort(sorted.begin(), sorted.end());
-    auto quantile = [&](double q) { return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))]; };
+    auto quantile = [&](double q) {
+      return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
+    };
     const double median = quantile(0.5), band = quantile(0.99) - quantile(0.01);
     if (!(band > 0)) continue;
     for (Eigen::Index k = 0; k < x.size(); ++k) {
@@ -102,7 +110,6 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
   }
   return {};
 }
-
 
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
   IdentifyReport local;
@@ -152,11 +159,11 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
-  PLSA_CHECK(o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
-          "identify: play refinement evaluations must be in 0..10000, got " +
-              std::to_string(o.play_refine_evaluations));
+  PLSA_CHECK(
+      o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
+      "identify: play refinement evaluations must be in 0..10000, got " + std::to_string(o.play_refine_evaluations));
   PLSA_CHECK(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
-          "identify: the progress interval must be a finite number of seconds >= 0");
+             "identify: the progress interval must be a finite number of seconds >= 0");
   checkOption(o.pole_method);
   checkOption(o.scheduling);
   checkOption(o.output_drift);
@@ -179,27 +186,31 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
       columns.insert(columns.end(), o.outputs.begin(), o.outputs.end());
       const std::string outlier = grossOutlier(log, columns);
       if (!outlier.empty())
-        throw std::invalid_argument(outlier + ": a glitch would shape the whole model; remove the sample (or "
+        throw std::invalid_argument(outlier +
+                                    ": a glitch would shape the whole model; remove the sample (or "
                                     "identify with --keep-outliers)");
     }
     const double t = io::checkedSampleTime(log, io::standard_columns::kTime, o.max_gap_factor);
     if (dt == 0.0) dt = t;
     if (!io::sameSampleTime(t, dt))
-      throw std::invalid_argument(log.source + ": sample time " + std::to_string(t) + " s differs from the first log's " +
-                                  std::to_string(dt) + " s");
+      throw std::invalid_argument(log.source + ": sample time " + std::to_string(t) +
+                                  " s differs from the first log's " + std::to_string(dt) + " s");
     U.push_back(log.columnsOf(o.inputs));
     Y.push_back(log.columnsOf(o.outputs));
     Ref.push_back(log.columnsOf(reference));
     times.push_back(log.column(io::standard_columns::kTime));
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
-  rep.output_frame = o.output_frame ? OutputFrameChoice{*o.output_frame, std::string("output frame ") +
-                                                                             toString(*o.output_frame) + " as given"}
-                                    : chooseOutputFrame(o.outputs, Y);
+  rep.output_frame =
+      o.output_frame
+          ? OutputFrameChoice{*o.output_frame, std::string("output frame ") + toString(*o.output_frame) + " as given"}
+          : chooseOutputFrame(o.outputs, Y);
   frame = rep.output_frame.frame;
   if (frame == OutputFrame::kTipCartesian)
-    PLSA_CHECK(o.outputs.size() == 2, "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
-                                   "steering in deg), got " + std::to_string(o.outputs.size()));
+    PLSA_CHECK(o.outputs.size() == 2,
+               "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
+               "steering in deg), got " +
+                   std::to_string(o.outputs.size()));
   Ym = toModelFrame(frame, Y);
   total = 0;
   for (const auto& u : U) total += u.rows();
@@ -207,8 +218,10 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
       std::to_string(1.0 / dt).substr(0, 6) + " Hz");
   if (!o.output_frame) say("[1/5] " + rep.output_frame.reason);
   if (frame == OutputFrame::kTipCartesian)
-    say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] + " as a tip's bending and steering angles; the model "
-        "runs on " + o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
+    say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] +
+        " as a tip's bending and steering angles; the model "
+        "runs on " +
+        o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
   ni = static_cast<int>(o.inputs.size());
   no = static_cast<int>(o.outputs.size());
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
@@ -225,8 +238,9 @@ void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
       ++rep.segments;
       const Eigen::Index n = seg.end - seg.begin;
       for (int out_i = 0; out_i < no; ++out_i) {
-        const LocalFit f = fitLocalModel(U[r].col(seg.input).segment(seg.begin, n), Ym[r].col(out_i).segment(seg.begin, n),
-                                         U[r](seg.begin - 1, seg.input), Ym[r](seg.begin - 1, out_i), o.local_order);
+        const LocalFit f =
+            fitLocalModel(U[r].col(seg.input).segment(seg.begin, n), Ym[r].col(out_i).segment(seg.begin, n),
+                          U[r](seg.begin - 1, seg.input), Ym[r](seg.begin - 1, out_i), o.local_order);
         PairPoles& pp = pairAt(seg.input, out_i);
         if (f.usable) {
           pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
@@ -330,14 +344,16 @@ void IdentificationRun::selectPoles() {
         for (const auto& p : rep.pairs)
           for (const auto& r : p.rejections)
             if (p.output == out_i && shown++ < 3) why += "\n  rejected: " + r;
-        throw std::runtime_error("identify: no usable local poles for output '" + o.outputs[static_cast<std::size_t>(out_i)] +
-                                 "' (" + std::to_string(rep.segments) + " step segments, all fits rejected)" + why);
+        throw std::runtime_error("identify: no usable local poles for output '" +
+                                 o.outputs[static_cast<std::size_t>(out_i)] + "' (" + std::to_string(rep.segments) +
+                                 " step segments, all fits rejected)" + why);
       }
       pp.chosen = cluster(o.pole_method, src, co);
       model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
-      say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] +
-          " (" + pp.chosen.method + " over " + std::to_string(src.size()) + (own ? " own" : " output-wide") +
-          " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
+      say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
+          o.outputs[static_cast<std::size_t>(out_i)] + " (" + pp.chosen.method + " over " + std::to_string(src.size()) +
+          (own ? " own" : " output-wide") + " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) +
+          "): " + fmtPoles(pp.chosen.centres));
     }
   }
 }
@@ -401,9 +417,9 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
                                     : PwlPartition(sched, bps, o.direction_split));
   constexpr int kMaxRegions = 4096;
   if (partitions.back().regionCount() > kMaxRegions)
-    throw std::invalid_argument("identify: the partition would have " + std::to_string(partitions.back().regionCount()) +
-                                " regions (limit " + std::to_string(kMaxRegions) +
-                                "); use fewer --levels or scheduling inputs, or no direction split");
+    throw std::invalid_argument(
+        "identify: the partition would have " + std::to_string(partitions.back().regionCount()) + " regions (limit " +
+        std::to_string(kMaxRegions) + "); use fewer --levels or scheduling inputs, or no direction split");
   model.partition = partitions.back();
   model.input_min = all_u.minCoeff();
   model.input_max = all_u.maxCoeff();
@@ -411,10 +427,11 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
   for (Eigen::Index c = 0; c < all_u.cols(); ++c)
     model.input_ranges.push_back({all_u.col(c).minCoeff(), all_u.col(c).maxCoeff()});
   {
-    std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") + "): " +
-                    std::to_string(model.partition.regionCount()) + " regions";
+    std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") +
+                    "): " + std::to_string(model.partition.regionCount()) + " regions";
     for (std::size_t i = 0; i < sched.size(); ++i) {
-      s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] + (interpolated ? " nodes" : " split at");
+      s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] +
+           (interpolated ? " nodes" : " split at");
       for (double b : bps[i]) s += " " + std::to_string(b).substr(0, 6);
     }
     if (!designed) s += " (quantile grid: the logs hold no designed reference levels)";

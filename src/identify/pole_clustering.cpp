@@ -27,10 +27,10 @@ struct Layout {
 Layout layoutOf(const ClusteringOptions& o) {
   PLSA_CHECK(o.centres >= 1, "pole clustering: need at least one centre");
   PLSA_CHECK(o.complex_pairs >= 0 && 2 * o.complex_pairs <= o.centres,
-          "pole clustering: complex pairs must fit in the number of centres");
+             "pole clustering: complex pairs must fit in the number of centres");
   // An infinite m weighs every pole alike (u^m -> 0): no clustering is left.
   PLSA_CHECK(o.fuzziness > 1.0 && std::isfinite(o.fuzziness),
-          "pole clustering: fuzziness m must be finite and > 1, got " + std::to_string(o.fuzziness));
+             "pole clustering: fuzziness m must be finite and > 1, got " + std::to_string(o.fuzziness));
   return {o.centres - 2 * o.complex_pairs, o.complex_pairs};
 }
 
@@ -38,8 +38,8 @@ void checkPoles(const std::vector<C>& poles) {
   PLSA_CHECK(!poles.empty(), "pole clustering: no identified poles to cluster");
   for (const auto& p : poles)
     PLSA_CHECK(std::isfinite(p.real()) && std::isfinite(p.imag()) && std::abs(p) < 1.0,
-            "pole clustering: identified pole " + std::to_string(p.real()) + "+" + std::to_string(p.imag()) +
-                "i is not stable; drop it before clustering");
+               "pole clustering: identified pole " + std::to_string(p.real()) + "+" + std::to_string(p.imag()) +
+                   "i is not stable; drop it before clustering");
 }
 
 C clusterCentre(const Layout& L, const std::vector<double>& x, int i) {
@@ -188,8 +188,8 @@ std::vector<double> epigraphMinimax(nlopt::mfunc constraints, EpigraphData& data
   return z;
 }
 
-ClusteringResult finish(std::string method, const Layout& L, const std::vector<double>& x,
-                        const std::vector<C>& poles, double objective, int iterations) {
+ClusteringResult finish(std::string method, const Layout& L, const std::vector<double>& x, const std::vector<C>& poles,
+                        double objective, int iterations) {
   ClusteringResult r;
   r.method = std::move(method);
   r.centres = expand(L, x);
@@ -226,10 +226,12 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
     double worst = 0.0;
     for (std::size_t k = 0; k < poles.size(); ++k) {
       double s = 0.0;
-      for (int i = 0; i < L.clusters(); ++i) s += mum[static_cast<std::size_t>(i)][k] * d[static_cast<std::size_t>(i)][k];
+      for (int i = 0; i < L.clusters(); ++i)
+        s += mum[static_cast<std::size_t>(i)][k] * d[static_cast<std::size_t>(i)][k];
       worst = std::max(worst, s);
     }
-    const std::vector<double> z = epigraphMinimax(epigraphConstraints, data, lo, hi, x, worst, 0.0, 1e-10, 1e-9, &objective);
+    const std::vector<double> z =
+        epigraphMinimax(epigraphConstraints, data, lo, hi, x, worst, 0.0, 1e-10, 1e-9, &objective);
     double moved = 0.0;
     for (std::size_t i = 0; i < x.size(); ++i) moved = std::max(moved, std::abs(z[i] - x[i]));
     x = z;
@@ -243,9 +245,9 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
     // i.e. rho: a last minimax on it (epigraph of log rho) from FKcM's centres,
     // kept only where it lowers rho.
     EpigraphData data{&L, &poles, nullptr};
-    const std::vector<double> z = epigraphMinimax(logRhoConstraints, data, lo, hi, x,
-                                                  std::log(std::max(rhoOf(L, x, poles), 1e-300)), -HUGE_VAL, 1e-9,
-                                                  1e-10, nullptr);
+    const std::vector<double> z =
+        epigraphMinimax(logRhoConstraints, data, lo, hi, x, std::log(std::max(rhoOf(L, x, poles), 1e-300)), -HUGE_VAL,
+                        1e-9, 1e-10, nullptr);
     if (rhoOf(L, z, poles) < rhoOf(L, x, poles)) x = z;
   }
   return finish(o.refine_on_rho ? "FKcM+rho" : "FKcM", L, x, poles, objective, it);
@@ -261,7 +263,8 @@ ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const Cluste
   for (; it < o.max_iterations; ++it) {
     std::vector<std::vector<double>> d(static_cast<std::size_t>(L.reals), std::vector<double>(poles.size()));
     for (int i = 0; i < L.reals; ++i)
-      for (std::size_t k = 0; k < poles.size(); ++k) d[static_cast<std::size_t>(i)][k] = std::abs(poles[k] - C(x[static_cast<std::size_t>(i)], 0));
+      for (std::size_t k = 0; k < poles.size(); ++k)
+        d[static_cast<std::size_t>(i)][k] = std::abs(poles[k] - C(x[static_cast<std::size_t>(i)], 0));
     const auto mu = memberships(d, o.fuzziness);
     double moved = 0.0;
     objective = 0.0;
@@ -380,8 +383,7 @@ ClusteringResult globalRhoSearch(const std::vector<C>& poles, const ClusteringOp
     double f = 0.0;
     try {
       g.optimize(x, f);
-    } catch (const nlopt::roundoff_limited&) {
-    }
+    } catch (const nlopt::roundoff_limited&) {}
     starts.push_back(x);
   }
   starts.push_back(initialCentres(L, poles));
@@ -405,8 +407,7 @@ ClusteringResult globalRhoSearch(const std::vector<C>& poles, const ClusteringOp
     double f = rhoOf(L, x, poles);
     try {
       loc.optimize(x, f);
-    } catch (const nlopt::roundoff_limited&) {
-    }
+    } catch (const nlopt::roundoff_limited&) {}
     f = rhoOf(L, x, poles);
     if (f < best_f) {
       best_f = f;

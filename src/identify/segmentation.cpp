@@ -31,7 +31,8 @@ std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& ref, double min_st
   return out;
 }
 
-std::vector<std::vector<double>> referenceLevels(const Eigen::MatrixXd& ref, double resolution, Eigen::Index min_length) {
+std::vector<std::vector<double>> referenceLevels(const Eigen::MatrixXd& ref, double resolution,
+                                                 Eigen::Index min_length) {
   PLSA_CHECK(resolution > 0, "referenceLevels: resolution must be positive");
   std::vector<std::vector<double>> levels(static_cast<std::size_t>(ref.cols()));
   for (Eigen::Index j = 0; j < ref.cols(); ++j) {

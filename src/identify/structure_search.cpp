@@ -25,7 +25,8 @@ constexpr SimulationStart kSameSession{0, false};
 void IdentificationRun::listStructures() {
   for (std::size_t pi = 0; pi < partitions.size(); ++pi) {
     const bool interp = partitions[pi].scheduling() == Scheduling::kInterpolated;
-    if (o.scheduling != SchedulingChoice::kInputSide) structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
+    if (o.scheduling != SchedulingChoice::kInputSide)
+      structures.push_back({pi, ScheduleSide::kOutput, interp ? "I" : "S"});
     if (interp && !o.direction_split &&
         (o.scheduling == SchedulingChoice::kInputSide || o.scheduling == SchedulingChoice::kAuto))
       structures.push_back({pi, ScheduleSide::kInput, "N"});
@@ -33,7 +34,8 @@ void IdentificationRun::listStructures() {
   PLSA_CHECK(!structures.empty(), "identify: input-side scheduling cannot split by direction");
   PLSA_CHECK(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
   range.assign(static_cast<std::size_t>(ni), 0.0);
-  for (int in_i = 0; in_i < ni; ++in_i) range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
+  for (int in_i = 0; in_i < ni; ++in_i)
+    range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
 }
 
 void IdentificationRun::applyStructure(const Structure& st) {
@@ -46,9 +48,9 @@ void IdentificationRun::applyPlay(const std::vector<PlayChannel>& set) {
   for (int in_i = 0; in_i < ni; ++in_i)
     for (const PlayChannel& c : set) {
       PLSA_CHECK(c.width >= 0 && std::isfinite(c.width) && c.slope >= 0 && std::isfinite(c.slope),
-              "identify: play widths and slopes must be finite and >= 0");
+                 "identify: play widths and slopes must be finite and >= 0");
       model.shaping.play[static_cast<std::size_t>(in_i)].emplace_back(c.width * range[static_cast<std::size_t>(in_i)],
-                                                                    c.slope);
+                                                                      c.slope);
     }
 }
 
@@ -59,7 +61,7 @@ void IdentificationRun::cutFolds() {
   PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
   interleaved = o.cv_layout == CvLayout::kInterleaved;
   PLSA_CHECK(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
-          "identify: cross-validation chunks must last a positive, finite number of seconds");
+             "identify: cross-validation chunks must last a positive, finite number of seconds");
   // Contiguous blocks hold out a stretch of the experiment, often a part of
   // the grid the other blocks never visit, so they score extrapolation and
   // favour structures that extrapolate rather than fit; interleaved chunks
@@ -83,8 +85,8 @@ void IdentificationRun::cutFolds() {
     }
   }
   rep.play_scores.clear();
-  FY = BY;  // per block
-  FYlog = Y;  // per log
+  FY = BY;                // per block
+  FYlog = Y;              // per log
   regs.resize(U.size());  // kept between scores: refilling beats reallocating
 }
 
@@ -138,8 +140,8 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
     std::vector<std::vector<double>> meas(static_cast<std::size_t>(no)), pred(static_cast<std::size_t>(no));
     for (std::size_t r = 0; r < U.size(); ++r) {
       if (U[r].rows() <= o.play_selection_horizon) continue;
-      const std::vector<std::map<int, AlignedPrediction>> p =
-          predictOutputs(model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
+      const std::vector<std::map<int, AlignedPrediction>> p = predictOutputs(
+          model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
       for (int out_i = 0; out_i < no; ++out_i) {
         const AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
         for (Eigen::Index i = 0; i < a.values.size(); ++i)
@@ -179,9 +181,9 @@ double IdentificationRun::crossValidatedContiguous(Score what) {
     for (std::size_t b = 0; b < BU.size(); ++b) {
       if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
       const bool sim = what == Score::kSimulation;
-      const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(
-          model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim,
-          kSameSession);
+      const std::vector<std::map<int, AlignedPrediction>> pred =
+          predictOutputs(model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon},
+                         sim, kSameSession);
       for (int out_i = 0; out_i < no; ++out_i, ++n)
         score += fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
     }
@@ -240,7 +242,9 @@ void IdentificationRun::reportPlayChoice() {
     const bool chosen_input = model.schedule_side == ScheduleSide::kInput;
     std::string s = std::string("[5/5] chosen by ") + std::to_string(o.play_selection_horizon) +
                     "-step fit on held-out " + std::string(interleaved ? "chunks" : "blocks") + ": " +
-                    (chosen_input ? "input-side interpolated" : chosen_interp ? "interpolated" : "switched") +
+                    (chosen_input    ? "input-side interpolated"
+                     : chosen_interp ? "interpolated"
+                                     : "switched") +
                     " scheduling, play channels " + formatPlaySet(best_set) +
                     " (widths: fractions of each input's range; u: of its level). Scores (I interpolated, "
                     "S switched, N input side):";
@@ -252,10 +256,12 @@ void IdentificationRun::reportPlayChoice() {
   }
   if (!rep.coupling_scores.empty()) {
     std::string s = "[5/5] coupled to the other inputs (kappa x top level): ";
-    s += best_coupling > 0 ? "kept " + std::to_string(best_coupling * top_level).substr(0, 4) : std::string("none kept");
+    s +=
+        best_coupling > 0 ? "kept " + std::to_string(best_coupling * top_level).substr(0, 4) : std::string("none kept");
     s += ". Scores:";
     for (const auto& c : rep.coupling_scores)
-      s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" + std::to_string(c.score).substr(0, 5);
+      s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" +
+           std::to_string(c.score).substr(0, 5);
     say(s);
   }
 }
@@ -313,7 +319,7 @@ void IdentificationRun::searchThreshold() {
     }
     for (double f : o.play_softening_candidates) {
       PLSA_CHECK(f >= 0 && f < 0.5,
-              "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
+                 "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
       if (f > 0 && input_side_chosen) softenings.push_back(f);
     }
     // A neighbour's level now counts from the threshold: the chosen coupling
@@ -393,8 +399,7 @@ void IdentificationRun::searchOutputDrift() {
       FYlog = Yfit;
       for (std::size_t b = 0, r = 0; !interleaved && r < U.size(); ++r) {
         const Eigen::Index len = U[r].rows() / o.play_selection_folds;
-        for (int f = 0; f < o.play_selection_folds; ++f, ++b)
-          FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
+        for (int f = 0; f < o.play_selection_folds; ++f, ++b) FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
       }
       s += "taken out";
     } else {
@@ -424,9 +429,9 @@ void IdentificationRun::searchSlowPole() {
       }
   };
   double best_tau = 0.0;
-  beginScoring("slow poles", 1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(),
-                                                                         o.slow_pole_candidates.end(),
-                                                                         [](double tau) { return tau != 0; })));
+  beginScoring("slow poles",
+               1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(), o.slow_pole_candidates.end(),
+                                                          [](double tau) { return tau != 0; })));
   double best_sim = crossValidated(Score::kSimulation);
   rep.slow_pole_scores.emplace_back(0.0, best_sim);
   for (double tau : o.slow_pole_candidates) {

@@ -79,7 +79,8 @@ class LineReader {
     line.clear();
     std::streambuf* buf = in_.rdbuf();
     using traits = std::char_traits<char>;
-    for (auto got = buf ? buf->sbumpc() : traits::eof(); !traits::eq_int_type(got, traits::eof()); got = buf->sbumpc()) {
+    for (auto got = buf ? buf->sbumpc() : traits::eof(); !traits::eq_int_type(got, traits::eof());
+         got = buf->sbumpc()) {
       const char c = traits::to_char_type(got);
       if (c == '\n') {
         ++number_;
@@ -87,7 +88,8 @@ class LineReader {
       }
       if (c == '\0') fail(source_, number_ + 1, "NUL byte: binary data, not a CSV log");
       if (line.size() >= kMaxCsvLineBytes)
-        fail(source_, number_ + 1, "line longer than " + std::to_string(kMaxCsvLineBytes >> 20) + " MiB: not a CSV log");
+        fail(source_, number_ + 1,
+             "line longer than " + std::to_string(kMaxCsvLineBytes >> 20) + " MiB: not a CSV log");
       line.push_back(c);
     }
     if (line.empty()) return false;
@@ -132,8 +134,7 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
     if (t[0] == '#') {
       const std::string body = trim(t.substr(1));
       const auto colon = body.find(':');
-      if (colon != std::string::npos && colon > 0 &&
-          body.find_first_of(" \t") > colon) {
+      if (colon != std::string::npos && colon > 0 && body.find_first_of(" \t") > colon) {
         log.metadata[trim(body.substr(0, colon))] = trim(body.substr(colon + 1));
       } else {
         log.comments.push_back(body);
@@ -157,8 +158,8 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
       continue;
     }
     if (fields.size() != log.columns.size())
-      fail(path, lineno, "row has " + std::to_string(fields.size()) + " fields, header has " +
-                             std::to_string(log.columns.size()));
+      fail(path, lineno,
+           "row has " + std::to_string(fields.size()) + " fields, header has " + std::to_string(log.columns.size()));
     for (std::size_t i = 0; i < fields.size(); ++i) {
       const std::string& f = fields[i];
       char* end = nullptr;
@@ -166,15 +167,15 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
       const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
       if (f.empty() || end != f.c_str() + f.size())
         fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
-      if (!std::isfinite(v))
-        fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
+      if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
       values.push_back(v);
     }
     if (time_col >= 0) {
       const double tt = values[values.size() - fields.size() + static_cast<std::size_t>(time_col)];
       if (!(tt > last_time)) {
-        fail(path, lineno, "time " + shortest(tt) + " is not after the previous sample's " +
-                               shortest(last_time) + " (time must increase strictly)");
+        fail(path, lineno,
+             "time " + shortest(tt) + " is not after the previous sample's " + shortest(last_time) +
+                 " (time must increase strictly)");
       }
       last_time = tt;
     }
@@ -187,15 +188,15 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
                            ": the file ends without a newline; its last row may have been cut short (check its "
                            "last value)");
   const auto cols = static_cast<Eigen::Index>(log.columns.size());
-  log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      values.data(), rows, cols);
+  log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(values.data(),
+                                                                                                      rows, cols);
   return log;
 }
 
 void writeCsvLog(const std::string& path, const Log& log) {
   if (static_cast<Eigen::Index>(log.columns.size()) != log.data.cols())
-    throw std::invalid_argument("writeCsvLog: " + std::to_string(log.columns.size()) +
-                                " column names for " + std::to_string(log.data.cols()) + " columns");
+    throw std::invalid_argument("writeCsvLog: " + std::to_string(log.columns.size()) + " column names for " +
+                                std::to_string(log.data.cols()) + " columns");
   std::ostringstream out;
   for (const auto& [k, v] : log.metadata) out << "# " << k << ": " << v << '\n';
   for (const auto& c : log.comments) out << "# " << c << '\n';
@@ -219,8 +220,8 @@ double checkedSampleTime(const Log& log, const std::string& time_column, double 
   for (std::size_t k = 0; k < dt.size(); ++k) {
     if (dt[k] > max_gap_factor * median) {
       std::ostringstream msg;
-      msg << log.source << ": time gap of " << dt[k] << " s before data row " << k + 2
-          << " (median sample time " << median << " s); split the log at the gap";
+      msg << log.source << ": time gap of " << dt[k] << " s before data row " << k + 2 << " (median sample time "
+          << median << " s); split the log at the gap";
       throw std::runtime_error(msg.str());
     }
   }

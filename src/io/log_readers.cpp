@@ -64,8 +64,8 @@ bool LogReaderRegistry::add(LogFormat format, OnDuplicate on_duplicate) {
   auto& formats = state_->formats;
   const auto same = std::find_if(formats.begin(), formats.end(), [&](const auto& f) { return f->name == format.name; });
   if (same != formats.end() && on_duplicate == OnDuplicate::Refuse)
-    throw std::invalid_argument("log formats: '" + format.name + "' is already registered (as " +
-                                (*same)->description + ")");
+    throw std::invalid_argument("log formats: '" + format.name + "' is already registered (as " + (*same)->description +
+                                ")");
   if (format.fallback)
     for (const auto& f : formats)
       if (f->fallback && f->name != format.name)
@@ -184,12 +184,11 @@ void LogReaderRegistry::write(const std::string& path, const Log& log, const Wri
     for (const auto& f : formats)
       if (f->fallback) format = f;
   if (!format || !format->write)
-    throw std::invalid_argument(
-        path + ": " +
-        (format ? format->description + ", which this build cannot write" +
-                      (format->missing.empty() ? "" : " (" + format->missing + ")")
-                : std::string("not a log format this build knows")) +
-        "; it writes: " + joined(writable()));
+    throw std::invalid_argument(path + ": " +
+                                (format ? format->description + ", which this build cannot write" +
+                                              (format->missing.empty() ? "" : " (" + format->missing + ")")
+                                        : std::string("not a log format this build knows")) +
+                                "; it writes: " + joined(writable()));
   format->write(path, log, options);
 }
 

@@ -68,10 +68,11 @@ class CanBridge {
     vented_on_exit_ = true;
     try {
       publishState();
-      publishStatus(plsa_lcm::status_t::STOPPED,
-                    driver_.lastFrameSent() ? why + "; vent frame sent to every chamber"
-                                            : why + "; the vent frame could NOT be sent (bus-off or transport "
-                                                    "failure): the valves rely on their own command timeout");
+      publishStatus(plsa_lcm::status_t::STOPPED, driver_.lastFrameSent()
+                                                     ? why + "; vent frame sent to every chamber"
+                                                     : why +
+                                                           "; the vent frame could NOT be sent (bus-off or transport "
+                                                           "failure): the valves rely on their own command timeout");
     } catch (...) {  // the vent frame is out; a report that cannot be sent changes nothing
     }
   }
@@ -139,8 +140,7 @@ class CanBridge {
     const auto t = Clock::now();
     if (t - last_rejection_report_ < std::chrono::milliseconds(200)) return;
     last_rejection_report_ = t;
-    publishStatus(driver_.fault() == can::DriverFault::kNone ? plsa_lcm::status_t::OK : plsa_lcm::status_t::FAULT,
-                  why);
+    publishStatus(driver_.fault() == can::DriverFault::kNone ? plsa_lcm::status_t::OK : plsa_lcm::status_t::FAULT, why);
   }
 
   // Any message on the clear channel asks; its bytes are not read.
@@ -180,16 +180,24 @@ class CanBridge {
     s.source = "plsa can-bridge";
     s.state = state;
     s.message = message;
-    s.names = {"sensor_frames", "tip_frames",      "bad_length",   "bad_checksum",    "counter_gaps",
-               "valve_frames",  "send_failures",   "commands",     "rejected_commands", "rx_overflows",
-               "back_pressure", "malformed_frames", "bus_state",   "faults", "overpressure_readings"};
-    s.values = {static_cast<double>(c.sensor_frames), static_cast<double>(c.tip_frames),
-                static_cast<double>(c.bad_length),    static_cast<double>(c.bad_checksum),
-                static_cast<double>(c.counter_gaps),  static_cast<double>(c.valve_frames),
-                static_cast<double>(c.send_failures), static_cast<double>(stats_.commands),
-                static_cast<double>(stats_.rejected_commands), static_cast<double>(t.overflows),
-                static_cast<double>(t.back_pressure), static_cast<double>(t.malformed),
-                static_cast<double>(transport_.busState()), static_cast<double>(stats_.faults),
+    s.names = {"sensor_frames",     "tip_frames",   "bad_length",           "bad_checksum",
+               "counter_gaps",      "valve_frames", "send_failures",        "commands",
+               "rejected_commands", "rx_overflows", "back_pressure",        "malformed_frames",
+               "bus_state",         "faults",       "overpressure_readings"};
+    s.values = {static_cast<double>(c.sensor_frames),
+                static_cast<double>(c.tip_frames),
+                static_cast<double>(c.bad_length),
+                static_cast<double>(c.bad_checksum),
+                static_cast<double>(c.counter_gaps),
+                static_cast<double>(c.valve_frames),
+                static_cast<double>(c.send_failures),
+                static_cast<double>(stats_.commands),
+                static_cast<double>(stats_.rejected_commands),
+                static_cast<double>(t.overflows),
+                static_cast<double>(t.back_pressure),
+                static_cast<double>(t.malformed),
+                static_cast<double>(transport_.busState()),
+                static_cast<double>(stats_.faults),
                 static_cast<double>(c.overpressure_readings)};
     s.n_values = static_cast<int32_t>(s.names.size());
     lcm_.publish(o_.status_channel, &s);
@@ -222,8 +230,7 @@ void checkCanBridgeOptions(const CanBridgeOptions& o, const can::SignalMap& map)
     std::ostringstream msg;
     msg << "plsa can-bridge: --rate " << o.rate_hz << " Hz ticks every " << 1.0 / o.rate_hz << " s, but the "
         << (o.limits.sensor_timeout_s <= o.limits.command_timeout_s ? "--sensor-timeout" : "--command-timeout")
-        << " of "
-        << timeout << " s needs a tick at least every " << timeout / 2 << " s (--rate " << 2.0 / timeout
+        << " of " << timeout << " s needs a tick at least every " << timeout / 2 << " s (--rate " << 2.0 / timeout
         << " or more) to vent in time";
     throw std::invalid_argument(msg.str());
   }

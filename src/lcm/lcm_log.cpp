@@ -49,8 +49,8 @@ class EventReader {
     log.source = source_;
     log.columns = kColumns;
     const auto rows = static_cast<Eigen::Index>(values.size() / 9);
-    log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-        values.data(), rows, 9);
+    log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(values.data(),
+                                                                                                        rows, 9);
     log.metadata["source"] = "LCM event log, channel " + channel_;
     log.metadata["events_on_other_channels"] = std::to_string(other_);
     if (!cut_.empty()) log.warnings.push_back(cut_);

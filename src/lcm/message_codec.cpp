@@ -28,7 +28,8 @@ class Walk {
     if (!big(4, field, v)) return false;
     value = static_cast<std::int32_t>(static_cast<std::uint32_t>(v));
     if (value < lo || value > hi)
-      return fail(field, "= " + std::to_string(value) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi));
+      return fail(field,
+                  "= " + std::to_string(value) + " is outside " + std::to_string(lo) + ".." + std::to_string(hi));
     return true;
   }
   bool doubles(std::size_t count, const char* field) {

@@ -34,8 +34,8 @@ Field fieldFor(const std::string& name) {
   namespace columns = io::standard_columns;
   if (name == columns::kBend) return {Field::kBend, 0};
   if (name == columns::kSteer) return {Field::kSteer, 0};
-  for (const auto& [prefix, kind] : {std::pair{columns::kPressurePrefix, Field::kPressure},
-                                     std::pair{columns::kCommandPrefix, Field::kCommand}}) {
+  for (const auto& [prefix, kind] :
+       {std::pair{columns::kPressurePrefix, Field::kPressure}, std::pair{columns::kCommandPrefix, Field::kCommand}}) {
     const std::string p = prefix;
     if (name.rfind(p, 0) == 0) {
       const int i = std::atoi(name.c_str() + p.size());
@@ -48,10 +48,14 @@ Field fieldFor(const std::string& name) {
 
 double read(const plsa_lcm::actuator_state_t& m, const Field& f) {
   switch (f.kind) {
-    case Field::kPressure: return f.index < m.n_chambers ? m.pressure_bar[static_cast<std::size_t>(f.index)] : NAN;
-    case Field::kCommand: return f.index < m.n_chambers ? m.command_bar[static_cast<std::size_t>(f.index)] : NAN;
-    case Field::kBend: return m.bend_deg;
-    case Field::kSteer: return m.steer_deg;
+    case Field::kPressure:
+      return f.index < m.n_chambers ? m.pressure_bar[static_cast<std::size_t>(f.index)] : NAN;
+    case Field::kCommand:
+      return f.index < m.n_chambers ? m.command_bar[static_cast<std::size_t>(f.index)] : NAN;
+    case Field::kBend:
+      return m.bend_deg;
+    case Field::kSteer:
+      return m.steer_deg;
   }
   return NAN;
 }
@@ -59,8 +63,7 @@ double read(const plsa_lcm::actuator_state_t& m, const Field& f) {
 class PredictorNode {
  public:
   // `longest`: the longest of o.horizons, which runPredictorNode has checked.
-  PredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& o, int longest,
-                const std::atomic<bool>& stop)
+  PredictorNode(const DioPwlObfModel& model, const PredictorNodeOptions& o, int longest, const std::atomic<bool>& stop)
       : o_(o), stop_(stop), lcm_(o.url), predictor_(model, options(longest)) {
     if (!lcm_.good()) throw std::runtime_error("plsa predict: cannot open LCM");
     for (const auto& n : model.inputs) in_.push_back(fieldFor(n));
@@ -81,7 +84,8 @@ class PredictorNode {
       p.horizon = o.horizons[i];
       p.n_outputs = model.outputCount();
       p.output_names = names_;
-      p.trajectory.assign(static_cast<std::size_t>(p.horizon), std::vector<double>(static_cast<std::size_t>(p.n_outputs)));
+      p.trajectory.assign(static_cast<std::size_t>(p.horizon),
+                          std::vector<double>(static_cast<std::size_t>(p.n_outputs)));
     }
     lcm_.subscribe(o.state_channel, &PredictorNode::onState, this);
   }
@@ -148,7 +152,8 @@ class PredictorNode {
       p.utime = m->utime;
       p.state_seq = m->seq;
       for (int h = 0; h < p.horizon; ++h)
-        for (int o = 0; o < p.n_outputs; ++o) p.trajectory[static_cast<std::size_t>(h)][static_cast<std::size_t>(o)] = traj_(h, o);
+        for (int o = 0; o < p.n_outputs; ++o)
+          p.trajectory[static_cast<std::size_t>(h)][static_cast<std::size_t>(o)] = traj_(h, o);
       lcm_.publish(o_.prediction_channel, &p);
       ++stats_.predictions;
     }
@@ -159,9 +164,12 @@ class PredictorNode {
     const std::size_t n = std::min<std::size_t>(static_cast<std::size_t>(lat_n_), latency_.size());
     std::copy(latency_.begin(), latency_.begin() + static_cast<long>(n), sorted_.begin());
     std::sort(sorted_.begin(), sorted_.begin() + static_cast<long>(n));
-    auto q = [&](double f) { return n ? sorted_[std::min(n - 1, static_cast<std::size_t>(f * static_cast<double>(n)))] : 0.0; };
+    auto q = [&](double f) {
+      return n ? sorted_[std::min(n - 1, static_cast<std::size_t>(f * static_cast<double>(n)))] : 0.0;
+    };
     plsa_lcm::status_t s;
-    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+                  .count();
     s.source = "plsa predict";
     // Rates over the time since the last status: what a monitor alarms on.
     const auto now = Clock::now();
@@ -172,24 +180,45 @@ class PredictorNode {
     states_at_status_ = stats_.states;
     rejected_at_status_ = stats_.rejected;
     s.state = rejected_per_s > 0 ? plsa_lcm::status_t::FAULT : plsa_lcm::status_t::OK;
-    s.message = last_problem_.empty()            ? "running"
-                : rejected_per_s > 0             ? "rejecting samples; last: " + last_problem_
-                                                 : "running; last rejected or restarted: " + last_problem_;
+    s.message = last_problem_.empty() ? "running"
+                : rejected_per_s > 0  ? "rejecting samples; last: " + last_problem_
+                                      : "running; last rejected or restarted: " + last_problem_;
     const std::size_t jn = std::min<std::size_t>(static_cast<std::size_t>(jitter_n_), jitter_.size());
     std::copy(jitter_.begin(), jitter_.begin() + static_cast<long>(jn), sorted_.begin());
     std::sort(sorted_.begin(), sorted_.begin() + static_cast<long>(jn));
-    const double jitter_p99 = jn ? sorted_[std::min(jn - 1, static_cast<std::size_t>(0.99 * static_cast<double>(jn)))] : 0.0;
-    s.names = {"states", "predictions", "rejected", "latency_p50_us", "latency_p99_us", "latency_max_us",
-               "states_per_s", "rejected_per_s", "rejected_malformed", "rejected_not_finite",
-               "rejected_out_of_range", "rejected_time", "restarts", "deadline_misses", "arrival_jitter_p99_us",
+    const double jitter_p99 =
+        jn ? sorted_[std::min(jn - 1, static_cast<std::size_t>(0.99 * static_cast<double>(jn)))] : 0.0;
+    s.names = {"states",
+               "predictions",
+               "rejected",
+               "latency_p50_us",
+               "latency_p99_us",
+               "latency_max_us",
+               "states_per_s",
+               "rejected_per_s",
+               "rejected_malformed",
+               "rejected_not_finite",
+               "rejected_out_of_range",
+               "rejected_time",
+               "restarts",
+               "deadline_misses",
+               "arrival_jitter_p99_us",
                "realtime_fifo"};
-    s.values = {static_cast<double>(stats_.states), static_cast<double>(stats_.predictions),
-                static_cast<double>(stats_.rejected), q(0.5), q(0.99), n ? sorted_[n - 1] : 0.0, states_per_s,
-                rejected_per_s, static_cast<double>(malformed_),
+    s.values = {static_cast<double>(stats_.states),
+                static_cast<double>(stats_.predictions),
+                static_cast<double>(stats_.rejected),
+                q(0.5),
+                q(0.99),
+                n ? sorted_[n - 1] : 0.0,
+                states_per_s,
+                rejected_per_s,
+                static_cast<double>(malformed_),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kNotFinite)]),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kInputOutOfRange)]),
                 static_cast<double>(rejected_by_[-static_cast<int>(PredictorStatus::kTimeNotIncreasing)]),
-                static_cast<double>(restarts_), static_cast<double>(stats_.deadline_misses), jitter_p99,
+                static_cast<double>(restarts_),
+                static_cast<double>(stats_.deadline_misses),
+                jitter_p99,
                 stats_.realtime.rfind("SCHED_FIFO priority", 0) == 0 ? 1.0 : 0.0};
     s.n_values = static_cast<int32_t>(s.names.size());
     lcm_.publish(o_.status_channel, &s);
@@ -237,8 +266,8 @@ PredictorNodeStats runPredictorNode(const DioPwlObfModel& model, const Predictor
     const int cap = static_cast<int>(std::floor(steps));
     char msg[200];
     std::snprintf(msg, sizeof msg,
-                  "plsa predict: horizon %d (%.4g s) is beyond the %g s published at most: %d samples at %g s",
-                  longest, longest * model.sample_time_s, kMaxPublishedHorizonS, cap, model.sample_time_s);
+                  "plsa predict: horizon %d (%.4g s) is beyond the %g s published at most: %d samples at %g s", longest,
+                  longest * model.sample_time_s, kMaxPublishedHorizonS, cap, model.sample_time_s);
     throw std::invalid_argument(msg);
   }
   PredictorNode node(model, options, longest, stop);

@@ -158,8 +158,8 @@ class SimNode {
 
   void publishStatus(int8_t state, const std::string& message) {
     plsa_lcm::status_t s;
-    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                  std::chrono::system_clock::now().time_since_epoch()).count();
+    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+                  .count();
     s.source = "plsa sim";
     s.state = state;
     s.message = message;
@@ -199,15 +199,17 @@ SimNodeStats runSimNode(const SimNodeOptions& options, const std::atomic<bool>& 
 SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport, const can::SignalMap& map,
                            const std::atomic<bool>& stop) {
   ::lcm::LCM lcm(o.url);
-  if (!lcm.good()) throw std::runtime_error("plsa sim: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
+  if (!lcm.good())
+    throw std::runtime_error("plsa sim: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
   can::SimulatedValveDevice device(transport, map, o.config, o.seed);
   device.setCommandTimeout(o.command_timeout_s);
   SimNodeStats stats;
-  const can::SimulatedDeviceStats d = can::runSimulatedDevice(device, stop, o.duration_s, [&](const sim::ActuatorSample& s) {
-    const bool vented = device.setpoint() == std::array<double, 3>{0, 0, 0};
-    const plsa_lcm::actuator_state_t m = toMessage(s, stats.states_published++, vented);
-    lcm.publish(o.state_channel, &m);
-  });
+  const can::SimulatedDeviceStats d =
+      can::runSimulatedDevice(device, stop, o.duration_s, [&](const sim::ActuatorSample& s) {
+        const bool vented = device.setpoint() == std::array<double, 3>{0, 0, 0};
+        const plsa_lcm::actuator_state_t m = toMessage(s, stats.states_published++, vented);
+        lcm.publish(o.state_channel, &m);
+      });
   stats.commands_accepted = d.valve_frames;
   stats.commands_rejected = d.bad_valve_frames;
   stats.sensor_frames_lost = d.send_failures;

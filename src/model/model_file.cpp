@@ -105,11 +105,10 @@ namespace {
 // The keys each object of a model file may hold, by schema version 2; version
 // 1 files hold a subset of them.
 constexpr std::array<std::string_view, 21> kTopKeys = {
-    "schema",        "version",        "sample_time_s",  "inputs",         "outputs",
-    "units",         "input_range",    "input_ranges",   "poles",          "input_play",
-    "play_start",    "play_coupling",  "play_threshold", "play_softening", "schedule_lag_s",
-    "schedule_side", "output_level",   "training_output_drift", "output_frame", "partition",
-    "regions"};
+    "schema",         "version",        "sample_time_s",  "inputs",        "outputs",      "units",
+    "input_range",    "input_ranges",   "poles",          "input_play",    "play_start",   "play_coupling",
+    "play_threshold", "play_softening", "schedule_lag_s", "schedule_side", "output_level", "training_output_drift",
+    "output_frame",   "partition",      "regions"};
 
 // Reads one model file. Version 2 requires every field it writes; version 1
 // gives the fields that did not exist yet the meaning they had then.
@@ -270,8 +269,8 @@ class ModelReader {
       m.shaping.play.push_back(std::move(channels));
     }
     // Files from before the field existed started their bands centred.
-    m.shaping.start = choice("play_start", {"rising", "centred"}, "centred") == "rising" ? PlayStart::kRising
-                                                                                      : PlayStart::kCentred;
+    m.shaping.start =
+        choice("play_start", {"rising", "centred"}, "centred") == "rising" ? PlayStart::kRising : PlayStart::kCentred;
     m.shaping.coupling = scalar("play_coupling", 0.0);
     m.shaping.threshold = scalar("play_threshold", 0.0);
     m.shaping.softening = scalar("play_softening", 0.0);
@@ -280,7 +279,7 @@ class ModelReader {
   void readSchedule(DioPwlObfModel& m) const {
     m.schedule_lag_s = scalar("schedule_lag_s", 0.0);
     m.schedule_side = choice("schedule_side", {"output", "input"}, "output") == "input" ? ScheduleSide::kInput
-                                                                                         : ScheduleSide::kOutput;
+                                                                                        : ScheduleSide::kOutput;
     m.output_frame = outputFrameFromString(choice("output_frame", {"as_logged", "tip_cartesian"}, "as_logged"));
   }
 
@@ -324,14 +323,14 @@ class ModelReader {
   void readRegions(DioPwlObfModel& m) const {
     const json& regions = array(at(j_, "regions", ""), "regions");
     if (regions.size() != static_cast<std::size_t>(m.partition.regionCount()))
-      bad(std::to_string(regions.size()) + " regions for a partition of " +
-          std::to_string(m.partition.regionCount()));
+      bad(std::to_string(regions.size()) + " regions for a partition of " + std::to_string(m.partition.regionCount()));
     for (std::size_t r = 0; r < regions.size(); ++r) {
       const std::string path = "regions[" + std::to_string(r) + "].";
       object(regions[r], "regions[" + std::to_string(r) + "]");
       io::requireKnownKeys(regions[r], {"samples", "fallback_from", "note", "coefficients"}, path, source_);
       RegionFit fit;
-      fit.samples = static_cast<int>(io::integerIn(at(regions[r], "samples", path), 0, INT32_MAX, path + "samples", source_));
+      fit.samples =
+          static_cast<int>(io::integerIn(at(regions[r], "samples", path), 0, INT32_MAX, path + "samples", source_));
       fit.fallback_from = static_cast<int>(
           io::integerIn(at(regions[r], "fallback_from", path), -2, INT32_MAX, path + "fallback_from", source_));
       fit.note = string(at(regions[r], "note", path), path + "note");
@@ -361,8 +360,6 @@ void saveModel(const std::string& path, const DioPwlObfModel& model) {
   writeTextFile(path, modelToJson(model) + "\n", "model file");
 }
 
-DioPwlObfModel loadModel(const std::string& path) {
-  return modelFromJson(readTextFile(path, "model file"), path);
-}
+DioPwlObfModel loadModel(const std::string& path) { return modelFromJson(readTextFile(path, "model file"), path); }
 
 }  // namespace plsa

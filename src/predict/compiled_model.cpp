@@ -15,12 +15,12 @@ constexpr double kMaxModalCondition = 1e5;
 
 void checkOptions(const PredictorOptions& o) {
   PLSA_CHECK(o.max_horizon >= 1 && o.max_horizon <= kMaxPredictorHorizon,
-          "Predictor: max_horizon " + std::to_string(o.max_horizon) + " is outside 1.." +
-              std::to_string(kMaxPredictorHorizon) + " samples");
+             "Predictor: max_horizon " + std::to_string(o.max_horizon) + " is outside 1.." +
+                 std::to_string(kMaxPredictorHorizon) + " samples");
   // Infinite values would switch the input-range or gap check off unannounced.
   PLSA_CHECK(std::isfinite(o.input_margin) && o.input_margin >= 0, "Predictor: input_margin must be finite and >= 0");
   PLSA_CHECK(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
-          "Predictor: max_gap_factor must be finite and > 1");
+             "Predictor: max_gap_factor must be finite and > 1");
 }
 
 // Stage 1: what every form shares.
@@ -91,8 +91,8 @@ void compileStateSpace(const DioPwlObfModel& m, CompiledModel& c) {
     const int per_region = m.regressorSize(o);
     for (int r = 0; r < c.nodes; ++r)
       for (int j = 0; j < c.n_u; ++j)
-        for (int ch = c.first_channel[static_cast<std::size_t>(j)]; ch < c.first_channel[static_cast<std::size_t>(j) + 1];
-             ++ch) {
+        for (int ch = c.first_channel[static_cast<std::size_t>(j)];
+             ch < c.first_channel[static_cast<std::size_t>(j) + 1]; ++ch) {
           s.bank_output.push_back(o);
           s.bank_node.push_back(r);
           s.bank_input.push_back(j);
@@ -166,9 +166,10 @@ void compileModal(CompiledModel& c) {
     const Eigen::MatrixXd& v = f.basis[static_cast<std::size_t>(o * c.n_u + j)];
     for (Eigen::Index m = 0; m < regions; ++m) {
       const Eigen::VectorXd modal =
-          v.transpose() * s.coefficient[static_cast<std::size_t>(m)][static_cast<std::size_t>(o)].segment(
-                              s.coefficient_offset[b], n);
-      for (int i = 0; i < n; ++i) f.coefficient(m, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k) = modal(i);
+          v.transpose() *
+          s.coefficient[static_cast<std::size_t>(m)][static_cast<std::size_t>(o)].segment(s.coefficient_offset[b], n);
+      for (int i = 0; i < n; ++i)
+        f.coefficient(m, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k) = modal(i);
     }
   }
   if (c.input_side) {
@@ -182,7 +183,8 @@ void compileModal(CompiledModel& c) {
           const int q = (j * c.n_y + o) * n + i, slot = j * f.block + o * n + i;
           f.merged_lambda(slot) = f.lambda(q);
           f.merged_beta(slot) = f.beta(q);
-          for (Eigen::Index k = 0; k < t.rows(); ++k) t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
+          for (Eigen::Index k = 0; k < t.rows(); ++k)
+            t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
         }
       f.by_copy.push_back(std::move(t));
     }

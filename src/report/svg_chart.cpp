@@ -35,11 +35,16 @@ double niceStep(double span, int n) {
 std::string escape(const std::string& s) {
   std::string o;
   for (char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else if (c == '"') o += "&quot;";
-    else o += c;
+    if (c == '<')
+      o += "&lt;";
+    else if (c == '>')
+      o += "&gt;";
+    else if (c == '&')
+      o += "&amp;";
+    else if (c == '"')
+      o += "&quot;";
+    else
+      o += c;
   }
   return o;
 }
@@ -136,7 +141,8 @@ std::string poleMap(const std::string& title, const std::vector<PoleGroup>& grou
     pen = true;
   }
   o << "\"/>\n";
-  o << "<line x1=\"" << m << "\" x2=\"" << size - m << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0) << "\" stroke=\"#ccc\"/>\n";
+  o << "<line x1=\"" << m << "\" x2=\"" << size - m << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0)
+    << "\" stroke=\"#ccc\"/>\n";
   for (double v = std::ceil(lo * 20) / 20; v <= 1.0 + 1e-9; v += 0.05)
     o << "<text x=\"" << num(X(v)) << "\" y=\"" << size - m + 14 << "\" font-size=\"10\" text-anchor=\"middle\">"
       << tick(v) << "</text>\n";
@@ -154,9 +160,8 @@ std::string poleMap(const std::string& title, const std::vector<PoleGroup>& grou
           << "\" fill-opacity=\"0.6\"/>\n";
     }
     const double ly = m + 10 + 18 * li++;
-    o << "<circle cx=\"" << size - m + 20 << "\" cy=\"" << ly << "\" r=\"4\" fill=\"" << g.color
-      << "\"/><text x=\"" << size - m + 30 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(g.label)
-      << "</text>\n";
+    o << "<circle cx=\"" << size - m + 20 << "\" cy=\"" << ly << "\" r=\"4\" fill=\"" << g.color << "\"/><text x=\""
+      << size - m + 30 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(g.label) << "</text>\n";
   }
   o << "</svg>\n";
   return o.str();
@@ -192,7 +197,8 @@ std::string barChart(const std::string& title, const std::vector<Bar>& bars, con
       << "transform=\"rotate(-30 " << num(x + bw * 0.35) << " " << mt + ph + 14 << ")\">" << escape(bars[i].label)
       << "</text>\n";
   }
-  o << "<line x1=\"" << ml << "\" x2=\"" << ml + pw << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0) << "\" stroke=\"#333\"/>\n";
+  o << "<line x1=\"" << ml << "\" x2=\"" << ml + pw << "\" y1=\"" << Y(0) << "\" y2=\"" << Y(0)
+    << "\" stroke=\"#333\"/>\n";
   o << "</svg>\n";
   return o.str();
 }
@@ -213,7 +219,8 @@ std::string colourBar(double x, double y, double w, double h, double vmax, const
   const std::string id = "heat-" + std::to_string(std::hash<std::string>{}(title) % 1000000007u);
   std::ostringstream o;
   o << "<g class=\"colour-bar\"><defs><linearGradient id=\"" << id << "\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">"
-    << "<stop offset=\"0\" stop-color=\"#ffffff\"/><stop offset=\"1\" stop-color=\"#ff3723\"/></linearGradient></defs>\n";
+    << "<stop offset=\"0\" stop-color=\"#ffffff\"/><stop offset=\"1\" "
+       "stop-color=\"#ff3723\"/></linearGradient></defs>\n";
   o << "<rect x=\"" << num(x) << "\" y=\"" << num(y) << "\" width=\"" << num(w) << "\" height=\"" << num(h)
     << "\" fill=\"url(#" << id << ")\" stroke=\"#999\"/>\n";
   for (int k = 0; k <= 4; ++k) {
@@ -231,8 +238,8 @@ std::string colourBar(double x, double y, double w, double h, double vmax, const
 }  // namespace
 
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
-                    const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
-                    int cell, double scale_max, const std::string& unit) {
+                    const std::vector<std::string>& col_labels, const std::string& row_axis,
+                    const std::string& col_axis, int cell, double scale_max, const std::string& unit) {
   const double ml = 110, mt = 30, mb = 50, bar_w = 16, bar_gap = 24;
   const auto rows = values.rows(), cols = values.cols();
   const int width = static_cast<int>(ml + cols * cell + bar_gap + bar_w + 90),
@@ -251,11 +258,12 @@ std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, con
       if (std::isfinite(v)) {
         const double t = vmax > 0 ? std::clamp(v / vmax, 0.0, 1.0) : 0.0;
         char b[16];
-        std::snprintf(b, sizeof b, "#%02x%02x%02x", 255, static_cast<int>(255 - 200 * t), static_cast<int>(255 - 220 * t));
+        std::snprintf(b, sizeof b, "#%02x%02x%02x", 255, static_cast<int>(255 - 200 * t),
+                      static_cast<int>(255 - 220 * t));
         fill = b;
       }
-      o << "<rect class=\"cell\" x=\"" << num(x) << "\" y=\"" << num(y) << "\" width=\"" << cell << "\" height=\"" << cell
-        << "\" fill=\"" << fill << "\" stroke=\"#fff\"/>\n";
+      o << "<rect class=\"cell\" x=\"" << num(x) << "\" y=\"" << num(y) << "\" width=\"" << cell << "\" height=\""
+        << cell << "\" fill=\"" << fill << "\" stroke=\"#fff\"/>\n";
       o << "<text x=\"" << num(x + cell / 2.0) << "\" y=\"" << num(y + cell / 2.0 + 4)
         << "\" font-size=\"11\" text-anchor=\"middle\">" << (std::isfinite(v) ? tick(v) : std::string("no data"))
         << "</text>\n";
@@ -265,11 +273,13 @@ std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, con
       << "\" font-size=\"11\" text-anchor=\"end\">" << escape(row_labels[static_cast<std::size_t>(r)]) << "</text>\n";
   for (Eigen::Index c = 0; c < cols && c < static_cast<Eigen::Index>(col_labels.size()); ++c)
     o << "<text x=\"" << num(ml + c * cell + cell / 2.0) << "\" y=\"" << num(mt + rows * cell + 14)
-      << "\" font-size=\"11\" text-anchor=\"middle\">" << escape(col_labels[static_cast<std::size_t>(c)]) << "</text>\n";
+      << "\" font-size=\"11\" text-anchor=\"middle\">" << escape(col_labels[static_cast<std::size_t>(c)])
+      << "</text>\n";
   o << "<text x=\"" << num(ml + cols * cell / 2.0) << "\" y=\"" << num(mt + rows * cell + 36)
     << "\" font-size=\"12\" text-anchor=\"middle\">" << escape(col_axis) << "</text>\n";
-  o << "<text x=\"14\" y=\"" << num(mt + rows * cell / 2.0) << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
-    << num(mt + rows * cell / 2.0) << ")\">" << escape(row_axis) << "</text>\n";
+  o << "<text x=\"14\" y=\"" << num(mt + rows * cell / 2.0)
+    << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 " << num(mt + rows * cell / 2.0) << ")\">"
+    << escape(row_axis) << "</text>\n";
   o << colourBar(ml + cols * cell + bar_gap, mt, bar_w, rows * cell, vmax, unit, title);
   o << "</svg>\n";
   return o.str();

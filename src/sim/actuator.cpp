@@ -68,7 +68,7 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   delay_frac_ = delay_steps - static_cast<double>(delay_whole_);
   delay_line_.assign(delay_whole_ + 2, {0.0, 0.0, 0.0});
   const std::string& flow = config_.pneumatic_lag.formulation;
-  flow_law_ = flow == "orifice" ? FlowLaw::kOrifice
+  flow_law_ = flow == "orifice"  ? FlowLaw::kOrifice
               : flow == "choked" ? FlowLaw::kChoked
               : flow == "power"  ? FlowLaw::kPower
                                  : FlowLaw::kLinear;
@@ -184,7 +184,6 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
   bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
   bend_ += bend_rate_ * dt_;
-
 }
 
 ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
@@ -202,7 +201,8 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   if (c.sensor_bias.enabled) {
     double yaw_deg = c.sensor_bias.yaw_drift_deg_per_s * time_s_;
     if (random_walk_bias_) {
-      yaw_walk_deg_ += std::abs(c.sensor_bias.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / c.sample_rate_hz) * normal_(rng_);
+      yaw_walk_deg_ +=
+          std::abs(c.sensor_bias.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / c.sample_rate_hz) * normal_(rng_);
       yaw_deg = yaw_walk_deg_;
     }
     g_r_b = rotZ(yaw_deg * kDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);

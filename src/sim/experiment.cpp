@@ -58,10 +58,10 @@ class CommandWriter {
 
 void checkCommon(const ExperimentOptions& o) {
   PLSA_CHECK(o.sample_rate_hz > 0 && std::isfinite(o.sample_rate_hz),
-          "experiment: sample_rate_hz must be a finite number above 0");
+             "experiment: sample_rate_hz must be a finite number above 0");
   PLSA_CHECK(o.hold_s > 0 && std::isfinite(o.hold_s), "experiment: hold_s must be a finite number above 0");
   PLSA_CHECK(o.initial_rest_s >= 0 && std::isfinite(o.initial_rest_s),
-          "experiment: initial_rest_s must be a finite number >= 0");
+             "experiment: initial_rest_s must be a finite number >= 0");
   PLSA_CHECK(o.preroll_s >= 0 && std::isfinite(o.preroll_s), "experiment: preroll_s must be a finite number >= 0");
 }
 
@@ -171,13 +171,13 @@ Experiment gridJointExperiment(const ExperimentOptions& o) { return gridWithOpti
 Experiment joystickExperiment(const ExperimentOptions& o) {
   checkCommon(o);
   PLSA_CHECK(o.joystick_duration_s > 0 && std::isfinite(o.joystick_duration_s),
-          "joystick: duration must be a finite number above 0");
+             "joystick: duration must be a finite number above 0");
   PLSA_CHECK(o.joystick_max_bar > o.joystick_min_bar && o.joystick_min_bar >= 0,
-          "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
+             "joystick: need 0 <= joystick_min_bar < joystick_max_bar");
   PLSA_CHECK(o.joystick_preroll_s > 0 && std::isfinite(o.joystick_preroll_s),
-          "joystick: joystick_preroll_s must be a finite number above 0");
+             "joystick: joystick_preroll_s must be a finite number above 0");
   PLSA_CHECK(o.joystick_bandwidth_hz > 0 && o.joystick_bandwidth_hz <= o.sample_rate_hz / 2,
-          "joystick: joystick_bandwidth_hz must be above 0 and at most half the sample rate");
+             "joystick: joystick_bandwidth_hz must be above 0 and at most half the sample rate");
   constexpr double kSettledS = 1.0;  // recorded, held at the starting point before the path moves
   // The trajectory is allocated before the writer sees it, so its length is checked here.
   requireSamples("joystick", (o.joystick_preroll_s + kSettledS + o.joystick_duration_s) * o.sample_rate_hz,
@@ -223,21 +223,20 @@ Experiment staticMapExperiment(const ExperimentOptions& o) {
   checkCommon(o);
   PLSA_CHECK(o.static_map_points >= 2 && o.static_map_points <= 100, "static_map: static_map_points must be 2 to 100");
   PLSA_CHECK(std::isfinite(o.static_map_base_bar) && o.static_map_base_bar >= 0,
-          "static_map: static_map_base_bar must be a finite number >= 0");
+             "static_map: static_map_base_bar must be a finite number >= 0");
   PLSA_CHECK(o.static_map_base_s > 0 && std::isfinite(o.static_map_base_s),
-          "static_map: static_map_base_s must be a finite number above 0");
+             "static_map: static_map_base_s must be a finite number above 0");
   PLSA_CHECK(o.static_map_hold_s > 0 && std::isfinite(o.static_map_hold_s),
-          "static_map: static_map_hold_s must be a finite number above 0");
+             "static_map: static_map_hold_s must be a finite number above 0");
   PLSA_CHECK(o.grid_levels_bar.size() >= 2 && o.grid_levels_bar.back() > o.grid_levels_bar.front(),
-          "static_map: the grid's levels must span a range");
+             "static_map: the grid's levels must span a range");
   const int a = chamberIndex(o.grid_chambers[0]);
   const int b = chamberIndex(o.grid_chambers[1]);
   PLSA_CHECK(a != b, "static_map: the two chambers must differ");
   const double lo = o.grid_levels_bar.front(), hi = o.grid_levels_bar.back();
   PLSA_CHECK(o.static_map_base_bar <= lo, "static_map: the base must not be above the grid's lowest level");
   const int n = o.static_map_points;
-  requireSamples("static_map",
-                 (o.preroll_s + n * n * (o.static_map_base_s + o.static_map_hold_s)) * o.sample_rate_hz,
+  requireSamples("static_map", (o.preroll_s + n * n * (o.static_map_base_s + o.static_map_hold_s)) * o.sample_rate_hz,
                  o.sample_rate_hz);
   CommandWriter w("static_map", o.sample_rate_hz);
   Eigen::RowVector3d base = Eigen::RowVector3d::Zero();

@@ -64,15 +64,21 @@ const std::vector<std::string>& independentLawsOf(const std::string& effect) {
 }
 
 std::pair<double, double> independentStrengthRange(const std::string& effect, const std::string& law) {
-  static const std::map<std::string, std::pair<double, double>> r = {
-      {"deadzone", {0.04, 0.10}},           {"hysteresis.bouc_wen", {0.25, 0.5}},
-      {"hysteresis.preisach", {0.25, 0.5}}, {"hysteresis.backlash", {0.05, 0.15}},
-      {"stiffening.duffing", {0.4, 1.2}},   {"stiffening.tanh_strain", {0.7, 1.3}},
-      {"stiffening.saturating_exp", {2.0, 5.0}}, {"coupling.exponential", {1.0, 2.5}},
-      {"coupling.quadratic", {0.1, 0.3}},   {"coupling.crosstalk", {0.15, 0.35}},
-      {"pneumatic_lag.two_volume", {0.06, 0.15}}, {"pneumatic_lag.pressure_dependent", {1.0, 3.0}},
-      {"pneumatic_lag.quantised_valve", {0.0, 0.0}}, {"creep", {0.06, 0.15}},
-      {"sensor_bias", {1.0, 3.0}}};
+  static const std::map<std::string, std::pair<double, double>> r = {{"deadzone", {0.04, 0.10}},
+                                                                     {"hysteresis.bouc_wen", {0.25, 0.5}},
+                                                                     {"hysteresis.preisach", {0.25, 0.5}},
+                                                                     {"hysteresis.backlash", {0.05, 0.15}},
+                                                                     {"stiffening.duffing", {0.4, 1.2}},
+                                                                     {"stiffening.tanh_strain", {0.7, 1.3}},
+                                                                     {"stiffening.saturating_exp", {2.0, 5.0}},
+                                                                     {"coupling.exponential", {1.0, 2.5}},
+                                                                     {"coupling.quadratic", {0.1, 0.3}},
+                                                                     {"coupling.crosstalk", {0.15, 0.35}},
+                                                                     {"pneumatic_lag.two_volume", {0.06, 0.15}},
+                                                                     {"pneumatic_lag.pressure_dependent", {1.0, 3.0}},
+                                                                     {"pneumatic_lag.quantised_valve", {0.0, 0.0}},
+                                                                     {"creep", {0.06, 0.15}},
+                                                                     {"sensor_bias", {1.0, 3.0}}};
   const auto it = r.find(effect + "." + law);
   return it != r.end() ? it->second : r.at(effect);
 }
@@ -86,8 +92,10 @@ std::vector<std::pair<std::string, double>> drawNominal(IndependentPhysics& t, s
   t.strain_per_bar *= gain;
   t.strain_quadratic *= gain;
   t.time_constant_s *= between(0.5, 3.0);
-  return {{"nominal.natural_freq_hz", t.natural_freq_hz}, {"nominal.damping_ratio", t.damping_ratio},
-          {"nominal.gain", gain}, {"nominal.time_constant_s", t.time_constant_s}};
+  return {{"nominal.natural_freq_hz", t.natural_freq_hz},
+          {"nominal.damping_ratio", t.damping_ratio},
+          {"nominal.gain", gain},
+          {"nominal.time_constant_s", t.time_constant_s}};
 }
 
 void setIndependentEffect(IndependentPhysics& physics, const std::string& effect, const std::string& law,
@@ -152,7 +160,8 @@ double IndependentActuator::effectivePressure(std::size_t i, double p) {
 double IndependentActuator::hysteretic(std::size_t i, double s, double dt) {
   (void)dt;
   const double h = ph_.hysteresis_strength;
-  const double top = ph_.strain_per_bar * ph_.max_pressure_bar + ph_.strain_quadratic * ph_.max_pressure_bar * ph_.max_pressure_bar;
+  const double top =
+      ph_.strain_per_bar * ph_.max_pressure_bar + ph_.strain_quadratic * ph_.max_pressure_bar * ph_.max_pressure_bar;
   if (ph_.hysteresis == "bouc_wen") {
     // z' = s' - (beta |s'| z + gamma s' |z|), bounded by `top`: steeper on unloading.
     const double ds = s - last_strain_[i];

@@ -114,9 +114,7 @@ std::string& SimConfig::formulationOf(const std::string& effect) {
   return *f;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 bool SimConfig::effectEnabled(const std::string& effect) const {
   return *enabledFlag(const_cast<SimConfig&>(*this), effect);
@@ -128,8 +126,7 @@ std::vector<ParamRef> SimConfig::parameters(const std::string& module) {
   static const std::vector<std::string> nominal = {"pneumatics", "elongation", "bending"};
   std::vector<ParamRef> out;
   for (auto& f : fields(*this)) {
-    const bool is_nominal = module == "nominal" &&
-                            std::find(nominal.begin(), nominal.end(), f.module) != nominal.end();
+    const bool is_nominal = module == "nominal" && std::find(nominal.begin(), nominal.end(), f.module) != nominal.end();
     const bool used = f.only_for.empty() || *formulation(*this, f.module) == f.only_for;
     if ((is_nominal || f.module == module) && used) out.push_back(f.ref);
   }
@@ -144,8 +141,8 @@ void SimConfig::validate() const {
     const std::string name = (f.module.empty() ? "" : f.module + ".") + f.ref.name;
     if (!std::isfinite(v) || v < f.ref.lower || v > f.ref.upper) {
       std::ostringstream msg;
-      msg << "sim config: " << name << " = " << v << " is outside [" << f.ref.lower << ", " << f.ref.upper
-          << "] " << f.ref.unit;
+      msg << "sim config: " << name << " = " << v << " is outside [" << f.ref.lower << ", " << f.ref.upper << "] "
+          << f.ref.unit;
       throw std::invalid_argument(msg.str());
     }
   }

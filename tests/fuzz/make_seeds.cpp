@@ -72,19 +72,25 @@ plsa::DioPwlObfModel smallModel() {
 void modelSeeds() {
   const std::string good = plsa::modelToJson(smallModel());
   put("model_file", "seed-small.json", good);
-  put("model_file", "regression-number-beyond-double.json", replaceFirst(good, "\"sample_time_s\": 0.0125", "\"sample_time_s\": 1e400"));
-  put("model_file", "regression-null-range.json", replaceFirst(good, "\"input_range\": [\n  0.0", "\"input_range\": [\n  null"));
+  put("model_file", "regression-number-beyond-double.json",
+      replaceFirst(good, "\"sample_time_s\": 0.0125", "\"sample_time_s\": 1e400"));
+  put("model_file", "regression-null-range.json",
+      replaceFirst(good, "\"input_range\": [\n  0.0", "\"input_range\": [\n  null"));
   put("model_file", "regression-huge-version.json", replaceFirst(good, "\"version\": 2", "\"version\": 1e300"));
   put("model_file", "regression-huge-samples.json", replaceFirst(good, "\"samples\": 100", "\"samples\": 1e300"));
   put("model_file", "regression-inf-string-bound.json", replaceFirst(good, "0.0,\n  0.4\n ]", "0.0,\n  \"-inf\"\n ]"));
-  put("model_file", "regression-duplicate-key.json", replaceFirst(good, "\"sample_time_s\"", "\"sample_time_s\": 1, \"sample_time_s\""));
-  put("model_file", "regression-unknown-key.json", replaceFirst(good, "\"sample_time_s\"", "\"from_the_future\": 1, \"sample_time_s\""));
-  put("model_file", "regression-duplicate-output.json", replaceFirst(good, "\"inputs\": [\n  \"p_1\",\n  \"p_2\"", "\"inputs\": [\n  \"p_1\",\n  \"p_1\""));
+  put("model_file", "regression-duplicate-key.json",
+      replaceFirst(good, "\"sample_time_s\"", "\"sample_time_s\": 1, \"sample_time_s\""));
+  put("model_file", "regression-unknown-key.json",
+      replaceFirst(good, "\"sample_time_s\"", "\"from_the_future\": 1, \"sample_time_s\""));
+  put("model_file", "regression-duplicate-output.json",
+      replaceFirst(good, "\"inputs\": [\n  \"p_1\",\n  \"p_2\"", "\"inputs\": [\n  \"p_1\",\n  \"p_1\""));
   put("model_file", "regression-deep-nesting.json", std::string(5000, '[') + std::string(5000, ']'));
   // Two inputs of 1100 breakpoints each: 1.2 million cells, past the partition's limit (an int product before).
   std::string many = "[";
   for (int i = 1; i <= 1100; ++i) many += std::to_string(i) + (i < 1100 ? "," : "]");
-  std::string huge = replaceFirst(good, "\"breakpoints\": [\n   [\n    0.2\n   ]\n  ]", "\"breakpoints\": [" + many + "," + many + "]");
+  std::string huge = replaceFirst(good, "\"breakpoints\": [\n   [\n    0.2\n   ]\n  ]",
+                                  "\"breakpoints\": [" + many + "," + many + "]");
   put("model_file", "regression-huge-partition.json",
       replaceFirst(huge, "\"inputs\": [\n   0\n  ]", "\"inputs\": [0, 1]"));
 }
@@ -92,8 +98,10 @@ void modelSeeds() {
 void simConfigSeeds() {
   const std::string good = plsa::sim::simConfigToJson(plsa::sim::SimConfig{});
   put("sim_config", "seed-default.json", good);
-  put("sim_config", "regression-number-beyond-double.json", replaceFirst(good, "\"sample_rate_hz\": 80.0", "\"sample_rate_hz\": 1e400"));
-  put("sim_config", "regression-duplicate-key.json", replaceFirst(good, "\"sample_rate_hz\"", "\"sample_rate_hz\": 10, \"sample_rate_hz\""));
+  put("sim_config", "regression-number-beyond-double.json",
+      replaceFirst(good, "\"sample_rate_hz\": 80.0", "\"sample_rate_hz\": 1e400"));
+  put("sim_config", "regression-duplicate-key.json",
+      replaceFirst(good, "\"sample_rate_hz\"", "\"sample_rate_hz\": 10, \"sample_rate_hz\""));
 }
 
 void signalMapSeeds() {
@@ -172,7 +180,8 @@ void lcmLogSeeds() {
   const std::string log = event(0, "PLSA_STATE", encoded(state(12500, 3))) + event(1, "OTHER", "xyz") +
                           event(2, "PLSA_STATE", encoded(state(25000, 3)));
   put("lcm_log", "seed-two-states", log);
-  put("lcm_log", "regression-huge-data-length", withInt32(event(0, "PLSA_STATE", encoded(state(12500, 3))), 24, 0x7FFFFFFFu));
+  put("lcm_log", "regression-huge-data-length",
+      withInt32(event(0, "PLSA_STATE", encoded(state(12500, 3))), 24, 0x7FFFFFFFu));
   put("lcm_log", "regression-huge-chambers-logged",
       event(0, "PLSA_STATE", withInt32(encoded(state(12500, 3)), 24, 0x10000000u)));
   put("lcm_log", "regression-cut-mid-event", log.substr(0, log.size() - 10));

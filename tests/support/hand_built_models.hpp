@@ -92,8 +92,7 @@ inline DioPwlObfModel build(const Spec& spec) {
   for (std::size_t r = 0; r < regions; ++r)
     for (int o = 0; o < spec.outputs; ++o) {
       Eigen::VectorXd c(m.regressorSize(o));
-      for (Eigen::Index i = 0; i < c.size(); ++i)
-        c(i) = chosenCoefficient(static_cast<int>(r), o, static_cast<int>(i));
+      for (Eigen::Index i = 0; i < c.size(); ++i) c(i) = chosenCoefficient(static_cast<int>(r), o, static_cast<int>(i));
       m.coefficients[r].push_back(c);
     }
   m.region_fits.assign(regions, RegionFit{});
@@ -148,10 +147,14 @@ enum class Variant {
 
 inline const char* name(Variant v) {
   switch (v) {
-    case Variant::kOneRegion: return "one region";
-    case Variant::kGridOutputSide: return "2x2 grid, output side";
-    case Variant::kGridInputSide: return "2x2 grid, input side, lagged and shaped";
-    case Variant::kGridComplexPoles: return "2x2 grid, a conjugate pair";
+    case Variant::kOneRegion:
+      return "one region";
+    case Variant::kGridOutputSide:
+      return "2x2 grid, output side";
+    case Variant::kGridInputSide:
+      return "2x2 grid, input side, lagged and shaped";
+    case Variant::kGridComplexPoles:
+      return "2x2 grid, a conjugate pair";
   }
   return "?";
 }

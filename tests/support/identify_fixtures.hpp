@@ -99,7 +99,8 @@ inline const AllEffectsRuns& allEffectsRuns() {
     sim::ExperimentOptions eo;
     eo.seed = 2;
     sim::Actuator a(sim::SimConfig{}, 1), b(sim::SimConfig{}, 101);
-    return AllEffectsRuns{sim::runExperiment(a, sim::gridExperiment(eo)), sim::runExperiment(b, sim::joystickExperiment(eo))};
+    return AllEffectsRuns{sim::runExperiment(a, sim::gridExperiment(eo)),
+                          sim::runExperiment(b, sim::joystickExperiment(eo))};
   }();
   return runs;
 }

@@ -18,8 +18,7 @@ inline int seedCount() {
 }
 
 /// Random real poles and conjugate pairs with modulus below max_modulus.
-inline PoleSet randomPoleSet(std::mt19937& rng, int sections, double max_modulus = 0.9,
-                             double pair_probability = 0.4) {
+inline PoleSet randomPoleSet(std::mt19937& rng, int sections, double max_modulus = 0.9, double pair_probability = 0.4) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   std::vector<std::complex<double>> poles;
   for (int s = 0; s < sections; ++s) {

@@ -71,5 +71,4 @@ inline std::pair<double, double> upDownAt(const SimConfig& c, double probe) {
   return {up, down};
 }
 
-
 }  // namespace plsa::sim::probes

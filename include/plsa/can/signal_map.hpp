@@ -15,8 +15,8 @@ namespace plsa::can {
 
 struct Signal {
   std::string name;
-  int byte = 0;        ///< first byte
-  int bits = 16;       ///< 8, 16 or 32
+  int byte = 0;   ///< first byte
+  int bits = 16;  ///< 8, 16 or 32
   bool little_endian = true;
   bool is_signed = false;
   double scale = 1.0;  ///< physical = raw * scale + offset
@@ -48,7 +48,7 @@ struct SignalMap {
   std::string profile;
   std::vector<MessageLayout> messages;
 
-  const MessageLayout& message(const std::string& name) const;  ///< throws naming the known ones
+  const MessageLayout& message(const std::string& name) const;        ///< throws naming the known ones
   const MessageLayout* find(const std::string& name) const noexcept;  ///< nullptr when absent
   /// Throws std::invalid_argument naming the message and field at fault
   /// (overlaps, bytes beyond the DLC, bad widths, ids above 11 bits).

@@ -30,7 +30,8 @@ enum class DatagramKind : std::uint8_t { kFrame = 0, kBusState = 1 };
 
 /// Encodes / decodes one datagram (no allocation); decode returns false on
 /// anything malformed (size, magic, version, kind, dlc, id, state value).
-void encodeDatagram(DatagramKind kind, const CanFrame& frame, std::array<std::uint8_t, kUdpCanDatagramSize>& out) noexcept;
+void encodeDatagram(DatagramKind kind, const CanFrame& frame,
+                    std::array<std::uint8_t, kUdpCanDatagramSize>& out) noexcept;
 bool decodeDatagram(const std::uint8_t* data, std::size_t size, DatagramKind& kind, CanFrame& frame) noexcept;
 
 class UdpCanTransport : public CanTransport {

@@ -15,7 +15,7 @@ namespace plsa::can {
 struct SafetyLimits {
   double max_pressure_bar = 0.4;
   double max_rate_bar_per_s = 2.0;
-  double sensor_timeout_s = 0.1;   ///< no valid reading for this long: fault
+  double sensor_timeout_s = 0.1;    ///< no valid reading for this long: fault
   double command_timeout_s = 0.25;  ///< commands stop for this long: fault
   /// A valid reading above max_pressure_bar + this is a fault (a failed valve
   /// or regulator, or a frame that is not what it claims): the clamp keeps

@@ -24,9 +24,9 @@ namespace detail {
 }  // namespace detail
 }  // namespace plsa
 
-#define PLSA_CHECK(condition, ...)                                     \
-  do {                                                                 \
-    if (!(condition)) ::plsa::detail::checkFailed(__VA_ARGS__);        \
+#define PLSA_CHECK(condition, ...)                              \
+  do {                                                          \
+    if (!(condition)) ::plsa::detail::checkFailed(__VA_ARGS__); \
   } while (false)
 
 #ifdef NDEBUG
@@ -51,7 +51,8 @@ inline void requireHorizons(const std::vector<int>& horizons, const std::string&
   PLSA_CHECK(!horizons.empty(), tool + ": no horizons given");
   for (auto at = horizons.begin(); at != horizons.end(); ++at) {
     PLSA_CHECK(*at >= 1, tool + ": horizons must be >= 1, got " + std::to_string(*at));
-    PLSA_CHECK(std::find(horizons.begin(), at, *at) == at, tool + ": horizon " + std::to_string(*at) + " is given twice");
+    PLSA_CHECK(std::find(horizons.begin(), at, *at) == at,
+               tool + ": horizon " + std::to_string(*at) + " is given twice");
   }
 }
 

@@ -52,8 +52,8 @@ class PoleSet {
       }
       if (partner == poles.size()) {
         std::ostringstream msg;
-        msg << "PoleSet: complex pole " << i << " (" << p.real() << (p.imag() < 0 ? "" : "+")
-            << p.imag() << "i) has no conjugate partner; complex poles must come in "
+        msg << "PoleSet: complex pole " << i << " (" << p.real() << (p.imag() < 0 ? "" : "+") << p.imag()
+            << "i) has no conjugate partner; complex poles must come in "
             << "conjugate pairs so that the basis stays real";
         throw std::invalid_argument(msg.str());
       }
@@ -112,15 +112,13 @@ class PoleSet {
   static void checkStable(std::complex<double> p, std::size_t index) {
     if (!std::isfinite(p.real()) || !std::isfinite(p.imag())) {
       std::ostringstream msg;
-      msg << "PoleSet: pole " << index << " is not a finite number (" << p.real() << ", "
-          << p.imag() << ")";
+      msg << "PoleSet: pole " << index << " is not a finite number (" << p.real() << ", " << p.imag() << ")";
       throw std::invalid_argument(msg.str());
     }
     if (std::abs(p) >= 1.0) {
       std::ostringstream msg;
-      msg << "PoleSet: pole " << index << " (" << p.real() << (p.imag() < 0 ? "" : "+")
-          << p.imag() << "i) has modulus " << std::abs(p)
-          << " >= 1; basis poles must lie strictly inside the unit disk";
+      msg << "PoleSet: pole " << index << " (" << p.real() << (p.imag() < 0 ? "" : "+") << p.imag() << "i) has modulus "
+          << std::abs(p) << " >= 1; basis poles must lie strictly inside the unit disk";
       throw std::invalid_argument(msg.str());
     }
   }

@@ -19,9 +19,9 @@ namespace plsa::diagnose {
 
 struct DiagnoseOptions {
   CalibrationOptions calibration;
-  int nominal_evaluations = 300;   ///< the nominal fit gets more: it is the baseline everything is judged against
-  double heldout_fraction = 0.3;   ///< with a single run: its last part is held out
-  double margin = 1.0;             ///< keep an effect only if it shrinks the held-out gap by more than margin x noise floor
+  int nominal_evaluations = 300;  ///< the nominal fit gets more: it is the baseline everything is judged against
+  double heldout_fraction = 0.3;  ///< with a single run: its last part is held out
+  double margin = 1.0;  ///< keep an effect only if it shrinks the held-out gap by more than margin x noise floor
   /// ...and by at least this share of the gap (after re-calibrating without
   /// it): form mismatch leaves a structured residual that any added freedom
   /// trims by a few percent, on held-out data too.
@@ -47,10 +47,10 @@ struct DiagnoseOptions {
 
 struct CandidateResult {
   std::string effect;
-  std::string formulation;       ///< the law it was calibrated with
-  int round = 1;                 ///< forward-selection round it was tried in
+  std::string formulation;  ///< the law it was calibrated with
+  int round = 1;            ///< forward-selection round it was tried in
   Gap heldout_before, heldout_after, train_after;
-  double shrink_percent = 0.0;   ///< 100 (1 - gap_after% / gap_before%), held out
+  double shrink_percent = 0.0;                         ///< 100 (1 - gap_after% / gap_before%), held out
   std::vector<std::pair<std::string, double>> params;  ///< its fitted parameters (nominal ones too)
   /// How its calibration went: the starts tried (neutral, then the best of
   /// the configured values, spread points and, for sensor bias, the
@@ -58,7 +58,7 @@ struct CandidateResult {
   /// them, and the training gap each start ended at (%).
   int starts = 0, evaluations = 0;
   std::vector<double> train_gap_per_start;
-  Signature signature;           ///< of the residual before it was added
+  Signature signature;  ///< of the residual before it was added
 };
 
 struct Diagnosis {
@@ -67,19 +67,19 @@ struct Diagnosis {
   Gap heldout_uncalibrated;  ///< the simulator as given
   Gap gap_before;            ///< held out, after calibrating the nominal physics
   Gap train_before;
-  Gap noise;                 ///< noise floor of the held-out data, same measure
+  Gap noise;                      ///< noise floor of the held-out data, same measure
   IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
-  int nominal_evaluations = 0;  ///< simulator runs the nominal calibration spent (grid and every start)
+  int nominal_evaluations = 0;           ///< simulator runs the nominal calibration spent (grid and every start)
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
   std::vector<std::string> selected;
   /// Held-out gap after each kept effect, its calibration polished.
   std::vector<std::pair<std::string, Gap>> steps;
-  Gap gap_after;                 ///< held out, with the selected effects
+  Gap gap_after;  ///< held out, with the selected effects
   std::vector<std::pair<std::string, double>> final_params;
   Breakdown where, where_after;
-  std::string verdict;           ///< in words
+  std::string verdict;  ///< in words
   /// How firmly the evidence backs the first kept effect (round 1):
   /// "confident", "uncertain" (the runner-up comes within uncertain_margin of
   /// the best's drop over re-calibration, so the data do not separate the
@@ -87,12 +87,12 @@ struct Diagnosis {
   /// the noise floor: the named effect explains part of the gap, the rest is
   /// something no candidate models). "none" when nothing was kept.
   std::string confidence = "none";
-  std::string runner_up;           ///< round 1's second-best candidate
+  std::string runner_up;  ///< round 1's second-best candidate
   /// Round 1: the best's drop in squared held-out gap over re-calibration
   /// with nothing added, as a share of that bar (0..1), and the share of
   /// that drop the runner-up does not reach (0: a tie, 1: it gains nothing).
   double margin_over_recalibration = 0.0, margin_over_runner_up = 0.0;
-  Gap recalibrated_round1;         ///< round 1's bar: re-calibration with nothing added, the candidates' budget
+  Gap recalibrated_round1;  ///< round 1's bar: re-calibration with nothing added, the candidates' budget
   sim::SimConfig calibrated, final_config;
   // Traces for the report: the first held-out run.
   Eigen::MatrixXd trace_real, trace_before, trace_after;
@@ -103,7 +103,8 @@ struct Diagnosis {
 /// `runs` with two or more entries: split by run (the last third, at least
 /// one, held out); one run: split by time. Throws std::invalid_argument on
 /// unusable input (no runs, no candidates, an unknown candidate).
-Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& options);
+Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs,
+                       const DiagnoseOptions& options);
 
 std::string toJson(const Diagnosis& d);
 /// One self-contained page: verdict, gap map, traces, shrinkage per effect, tables.

@@ -14,8 +14,8 @@ namespace plsa::diagnose {
 
 struct ResidualShare {
   std::string label;
-  double rms = 0.0;    ///< RMS residual (output units) of the samples in this part
-  double share = 0.0;  ///< this part's share of the total squared residual
+  double rms = 0.0;      ///< RMS residual (output units) of the samples in this part
+  double share = 0.0;    ///< this part's share of the total squared residual
   double samples = 0.0;  ///< share of the samples in this part
 };
 
@@ -44,13 +44,13 @@ struct Breakdown {
   std::vector<GridPlace> by_region;         ///< every (chamber, band, direction) with data
   std::vector<GridPlace> top_places;        ///< where it concentrates, worst first (at most 3)
   std::vector<double> grid_edges_bar;       ///< band edges of the pressure grid
-  Eigen::MatrixXd gap_map;                  ///< RMS residual over chamber 1 (cols) x chamber 2 (rows) bands; NaN: no data
+  Eigen::MatrixXd gap_map;  ///< RMS residual over chamber 1 (cols) x chamber 2 (rows) bands; NaN: no data
   std::map<std::string, Signature> signatures;  ///< by candidate effect name
 };
 
 struct BreakdownInputs {
   const std::vector<RunData>* runs = nullptr;
-  const std::vector<Eigen::MatrixXd>* residuals = nullptr;  ///< per run, samples x 2 (real - sim)
+  const std::vector<Eigen::MatrixXd>* residuals = nullptr;    ///< per run, samples x 2 (real - sim)
   const std::vector<Eigen::MatrixXd>* sim_outputs = nullptr;  ///< per run, for bend/steer breakdowns (angles)
   OutputMap map = OutputMap::kAngles;
   std::array<double, 3> bend_direction_deg = {0.0, 120.0, 240.0};

@@ -32,7 +32,7 @@ struct RunColumns {
   std::vector<std::string> inputs = io::standard_columns::commands();  ///< 1 to 3 chambers; the rest get 0
   std::vector<std::string> outputs = io::standard_columns::tipAngles();
   std::vector<std::string> pressures = io::standard_columns::pressures();  ///< used when every one is present
-  double input_scale = 1.0;  ///< bar per input unit
+  double input_scale = 1.0;                                                ///< bar per input unit
   OutputMap map = OutputMap::kAngles;
   RunStart start = RunStart::kAuto;
 };
@@ -40,9 +40,9 @@ struct RunColumns {
 struct RunData {
   std::string name;
   double sample_time_s = 0.0;
-  Eigen::MatrixXd commands;   ///< samples x 3, bar
-  Eigen::MatrixXd outputs;    ///< samples x 2: bending vector (deg) for kAngles, raw outputs for kAffine
-  Eigen::MatrixXd pressures;  ///< samples x 3 (bar) or no columns
+  Eigen::MatrixXd commands;            ///< samples x 3, bar
+  Eigen::MatrixXd outputs;             ///< samples x 2: bending vector (deg) for kAngles, raw outputs for kAffine
+  Eigen::MatrixXd pressures;           ///< samples x 3 (bar) or no columns
   RunStart start = RunStart::kAtRest;  ///< kAtRest or kSettled
 
   Eigen::Index samples() const { return commands.rows(); }

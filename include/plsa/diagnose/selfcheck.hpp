@@ -31,8 +31,8 @@ struct SelfcheckOptions {
   std::vector<std::string> effects;  ///< single-effect cases; empty: all seven
   int seeds_per_effect = 4;          ///< independent: laws in turn; own laws: odd seeds another formulation
   std::vector<std::pair<std::string, std::string>> pairs = {
-      {"hysteresis", "creep"},      {"deadzone", "coupling"},     {"pneumatic_lag", "stiffening"},
-      {"sensor_bias", "hysteresis"}, {"creep", "stiffening"},      {"coupling", "pneumatic_lag"},
+      {"hysteresis", "creep"},       {"deadzone", "coupling"},       {"pneumatic_lag", "stiffening"},
+      {"sensor_bias", "hysteresis"}, {"creep", "stiffening"},        {"coupling", "pneumatic_lag"},
       {"deadzone", "sensor_bias"},   {"hysteresis", "pneumatic_lag"}};
   int null_cases = 4;
   double nominal_perturbation = 0.15;  ///< own laws: each nominal parameter scaled by 1 +- this (uniform)
@@ -52,16 +52,16 @@ struct SelfcheckOptions {
 
 struct SelfcheckCase {
   std::string name;
-  std::vector<std::string> withheld;  ///< empty: the null case
-  std::string formulation;            ///< of the withheld effect(s) in the "real" data
+  std::vector<std::string> withheld;                  ///< empty: the null case
+  std::string formulation;                            ///< of the withheld effect(s) in the "real" data
   std::vector<std::pair<std::string, double>> truth;  ///< its parameters
   std::vector<std::string> selected;
-  std::vector<std::string> top2;     ///< round-1 ranking, best two
+  std::vector<std::string> top2;  ///< round-1 ranking, best two
   double gap_before = 0, gap_after = 0, noise = 0;
-  double true_effect_shrink = 0;     ///< single: the withheld effect's own round-1 shrink; pair: overall
-  int spurious = 0;                  ///< selected effects that were not withheld
-  std::string verdict;               ///< the diagnosis's own words
-  std::string confidence;            ///< Diagnosis::confidence
+  double true_effect_shrink = 0;  ///< single: the withheld effect's own round-1 shrink; pair: overall
+  int spurious = 0;               ///< selected effects that were not withheld
+  std::string verdict;            ///< the diagnosis's own words
+  std::string confidence;         ///< Diagnosis::confidence
   /// How much the withheld effect(s) change the held-out outputs: RMS of the
   /// noise-free difference with and without them (same nominal physics) over
   /// the outputs' spread, %. Below the noise floor no diagnosis can see it.
@@ -72,8 +72,8 @@ struct SelfcheckCase {
 
 struct SelfcheckResult {
   std::vector<SelfcheckCase> cases;
-  std::vector<std::string> labels;               ///< rows/cols of the confusion matrix: effects, then "none"
-  std::vector<std::vector<int>> confusion;       ///< [truth][top-1 selected]
+  std::vector<std::string> labels;          ///< rows/cols of the confusion matrix: effects, then "none"
+  std::vector<std::vector<int>> confusion;  ///< [truth][top-1 selected]
   int single_cases = 0, single_top1 = 0, pair_cases = 0, pair_top2 = 0, null_cases = 0, null_clean = 0;
   int cases_with_spurious = 0;  ///< cases that selected an effect not withheld
   /// Single-effect cases whose calibrated nominal gap is over twice the noise
@@ -87,7 +87,7 @@ struct SelfcheckResult {
   /// >= 90% of pairs, no claim on a null case, median true-effect shrink
   /// >= 60%, spurious selections in <= 10% of cases.
   bool targets_met = false;
-  std::string truth;  ///< "independent" or "own laws"
+  std::string truth;            ///< "independent" or "own laws"
   std::string summary() const;  ///< the printed table: cases, confusion matrix, targets
 };
 

@@ -16,8 +16,7 @@ enum class DioStart {
 inline Eigen::MatrixXd dioDifference(const Eigen::MatrixXd& x, DioStart start = DioStart::kFromZero) {
   Eigen::MatrixXd d(x.rows(), x.cols());
   if (x.rows() == 0) return d;
-  d.row(0) = start == DioStart::kFromZero ? Eigen::RowVectorXd(x.row(0))
-                                           : Eigen::RowVectorXd::Zero(x.cols());
+  d.row(0) = start == DioStart::kFromZero ? Eigen::RowVectorXd(x.row(0)) : Eigen::RowVectorXd::Zero(x.cols());
   for (Eigen::Index k = 1; k < x.rows(); ++k) d.row(k) = x.row(k) - x.row(k - 1);
   return d;
 }

@@ -25,7 +25,7 @@ inline AlignedPrediction kStepAhead(const Eigen::Ref<const Eigen::VectorXd>& y,
   PLSA_CHECK(k >= 1, "kStepAhead: the horizon must be at least 1 step");
   PLSA_CHECK(y.size() == dyhat.size(), "kStepAhead: y and dyhat lengths differ");
   PLSA_CHECK(y.size() > k, "kStepAhead: the log (" + std::to_string(y.size()) +
-                            " samples) is not longer than the horizon (" + std::to_string(k) + ")");
+                               " samples) is not longer than the horizon (" + std::to_string(k) + ")");
   const Eigen::Index T = y.size();
   AlignedPrediction out;
   out.first = k;

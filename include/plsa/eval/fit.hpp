@@ -18,7 +18,7 @@ inline void requireComparable(const Eigen::Ref<const Eigen::VectorXd>& y, const 
                               const char* who, Eigen::Index min_samples) {
   const std::string w = who;
   PLSA_CHECK(y.size() == yhat.size(), w + ": measured and predicted lengths differ (" + std::to_string(y.size()) +
-                                       " vs " + std::to_string(yhat.size()) + ")");
+                                          " vs " + std::to_string(yhat.size()) + ")");
   PLSA_CHECK(y.size() >= min_samples, w + ": need at least " + std::to_string(min_samples) + " sample(s)");
   PLSA_CHECK(y.allFinite(), w + ": the measured signal contains NaN or Inf");
   PLSA_CHECK(yhat.allFinite(), w + ": the predicted signal contains NaN or Inf");
@@ -26,8 +26,7 @@ inline void requireComparable(const Eigen::Ref<const Eigen::VectorXd>& y, const 
 }  // namespace detail
 
 /// Throws if the sizes differ, the signal is constant, or a value is not finite.
-inline double nrmseFit(const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::VectorXd>& yhat) {
+inline double nrmseFit(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& yhat) {
   detail::requireComparable(y, yhat, "nrmseFit", 2);
   const double spread = (y.array() - y.mean()).matrix().norm();
   PLSA_CHECK(spread > 0.0, "nrmseFit: the measured signal is constant, the fit is undefined");
@@ -37,8 +36,7 @@ inline double nrmseFit(const Eigen::Ref<const Eigen::VectorXd>& y,
 /// sqrt(mean (y - yhat)^2), in the output's units: a fit says how much of a
 /// run's spread a model misses, this how far off it is, and a run that
 /// hardly moves can make the two read very differently.
-inline double rmsError(const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::VectorXd>& yhat) {
+inline double rmsError(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& yhat) {
   detail::requireComparable(y, yhat, "rmsError", 1);
   return (y - yhat).norm() / std::sqrt(static_cast<double>(y.size()));
 }

@@ -19,8 +19,8 @@ namespace plsa {
 /// regions * regressorSize(o)), and the schedule of sample k is the weights
 /// its own input gives the nodes.
 struct ModelRegressors {
-  std::vector<Eigen::MatrixXd> phi;    ///< [output] T x regressorSize(o), or x regions times that
-  std::vector<ScheduleBlend> schedule; ///< [T] regions and weights
+  std::vector<Eigen::MatrixXd> phi;     ///< [output] T x regressorSize(o), or x regions times that
+  std::vector<ScheduleBlend> schedule;  ///< [T] regions and weights
   /// Input side: [output] the filters' settled states at the first sample
   /// (DC gain times the first weighted input), laid out as phi's columns.
   std::vector<Eigen::RowVectorXd> level0;

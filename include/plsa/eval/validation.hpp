@@ -36,12 +36,12 @@ struct OutputValidation {
 struct InputsOutsideTraining {
   double any = 0.0;
   std::vector<double> each;
-  std::vector<bool> on_grid;        ///< per input: scheduled on a grid of nodes
-  std::vector<double> grid_low;     ///< per input: lowest node (NaN when not on a grid)
-  std::vector<double> grid_high;    ///< per input: highest node (NaN when not on a grid)
-  std::vector<double> below_grid;   ///< per input: share of rows below the lowest node
-  std::vector<double> above_grid;   ///< per input: share of rows above the highest node
-  double any_beyond_grid = 0.0;     ///< share of rows with some input beyond its grid
+  std::vector<bool> on_grid;       ///< per input: scheduled on a grid of nodes
+  std::vector<double> grid_low;    ///< per input: lowest node (NaN when not on a grid)
+  std::vector<double> grid_high;   ///< per input: highest node (NaN when not on a grid)
+  std::vector<double> below_grid;  ///< per input: share of rows below the lowest node
+  std::vector<double> above_grid;  ///< per input: share of rows above the highest node
+  double any_beyond_grid = 0.0;    ///< share of rows with some input beyond its grid
 };
 
 /// Every fit and rms error, at every horizon and in simulation, is computed

@@ -15,8 +15,8 @@
 namespace plsa::identify {
 
 struct CoefficientFitOptions {
-  double ridge = 1e-6;              ///< on the global solution, relative to the regressors' scale
-  double pull_to_global = 1e-2;     ///< ridge of each region toward the global solution (relative)
+  double ridge = 1e-6;           ///< on the global solution, relative to the regressors' scale
+  double pull_to_global = 1e-2;  ///< ridge of each region toward the global solution (relative)
   int min_samples_per_parameter = 4;
 };
 

@@ -15,16 +15,15 @@ namespace plsa::identify {
 
 /// OBF states of every input's bank, side by side: row t holds the states at
 /// time t (driven by du up to t-1). Inputs are the T x n_u matrix u.
-Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input,
-                                 const Eigen::MatrixXd& u, DioStart start = DioStart::kAtRest);
+Eigen::MatrixXd dioObfRegressors(const std::vector<PoleSet>& poles_per_input, const Eigen::MatrixXd& u,
+                                 DioStart start = DioStart::kAtRest);
 
 struct LinearDioObf {
   std::vector<PoleSet> poles_per_input;
   Eigen::MatrixXd coefficients;  ///< regressors x outputs
 
   /// Ridge least squares on dy; throws on mismatched sizes or non-finite data.
-  static LinearDioObf fit(const std::vector<PoleSet>& poles_per_input,
-                          const std::vector<Eigen::MatrixXd>& inputs,
+  static LinearDioObf fit(const std::vector<PoleSet>& poles_per_input, const std::vector<Eigen::MatrixXd>& inputs,
                           const std::vector<Eigen::MatrixXd>& outputs, double ridge = 1e-6);
   /// Predicted increments dyhat (T x n_y) for an input record.
   Eigen::MatrixXd increments(const Eigen::MatrixXd& u) const;

@@ -14,9 +14,9 @@ namespace plsa::identify {
 struct LocalFit {
   std::vector<std::complex<double>> poles;    ///< physical poles passed on
   std::vector<std::complex<double>> dropped;  ///< spare poles of a higher-order fit that sat on the noise
-  double gain = 0.0;            ///< steady-state gain of the fitted model
-  double pole_std_error = 0.0;  ///< largest standard error of the AR coefficients
-  double snr = 0.0;             ///< response amplitude / residual std
+  double gain = 0.0;                          ///< steady-state gain of the fitted model
+  double pole_std_error = 0.0;                ///< largest standard error of the AR coefficients
+  double snr = 0.0;                           ///< response amplitude / residual std
   bool usable = false;
   std::string reason;  ///< why not usable, in words
 };

@@ -34,8 +34,8 @@ double meanSampleTime(const std::vector<Eigen::VectorXd>& t);
 
 /// Y (logged frame) less the drift: y_o(t) - rate_o (t - reference_time_s).
 /// A tip_cartesian yaw is a shift of the steering angle, so this is exact there too.
-std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXd>& t,
-                                               const OutputDrift& drift);
+std::vector<Eigen::MatrixXd> removeOutputDrift(const std::vector<Eigen::MatrixXd>& Y,
+                                               const std::vector<Eigen::VectorXd>& t, const OutputDrift& drift);
 
 /// Estimates the drift on an input-side model's structure: fits it, regresses
 /// the level residual (y - output_level - modelLevels) on the drift's

@@ -50,9 +50,9 @@ template <>
 struct OptionSpelling<PoleMethod> {
   static constexpr const char* what = "pole method";
   static constexpr std::array<std::pair<PoleMethod, const char*>, 4> values{{{PoleMethod::kFkcm, "fkcm"},
-                                                                              {PoleMethod::kFuzzyCMeans, "fcm"},
-                                                                              {PoleMethod::kKMeans, "kmeans"},
-                                                                              {PoleMethod::kGlobalRho, "global"}}};
+                                                                             {PoleMethod::kFuzzyCMeans, "fcm"},
+                                                                             {PoleMethod::kKMeans, "kmeans"},
+                                                                             {PoleMethod::kGlobalRho, "global"}}};
 };
 template <>
 struct OptionSpelling<SchedulingChoice> {
@@ -99,8 +99,7 @@ template <class E>
 E parseOption(const std::string& name) {
   for (const auto& [e, spelling] : OptionSpelling<E>::values)
     if (name == spelling) return e;
-  throw std::invalid_argument(std::string(OptionSpelling<E>::what) + " '" + name + "': expected " +
-                              optionChoices<E>());
+  throw std::invalid_argument(std::string(OptionSpelling<E>::what) + " '" + name + "': expected " + optionChoices<E>());
 }
 
 struct IdentifyOptions {
@@ -126,11 +125,11 @@ struct IdentifyOptions {
   /// DioPwlObfModel::schedule_side) or "auto" (all three tried, chosen by
   /// blocked cross-validation; input side only without a direction split).
   SchedulingChoice scheduling = SchedulingChoice::kAuto;
-  double step_threshold = 0.005;  ///< a reference change above this is a step
+  double step_threshold = 0.005;                    ///< a reference change above this is a step
   double max_gap_factor = io::kToleratedGapFactor;  ///< tolerated sample-time gap (dropped samples)
   /// Refuse training data with a gross outlier (grossOutlier()); false fits them as they are.
   bool refuse_outliers = true;
-  double window_s = 8.0;          ///< local windows when the log has no steps
+  double window_s = 8.0;  ///< local windows when the log has no steps
   CoefficientFitOptions coefficients;
   /// Hysteresis memory: candidate sets of play channels. A channel's width is
   /// a fraction of the input's range in the training data, its slope a
@@ -247,11 +246,12 @@ struct IdentifyReport {
   /// only if the second is not lower. Both 0: not scored.
   std::pair<double, double> refine_simulation{0.0, 0.0};
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
-  std::vector<std::pair<double, double>> slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
+  std::vector<std::pair<double, double>>
+      slow_pole_scores;                              ///< (time constant s, held-out simulation fit), 0 (none) first
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
-  OutputDrift output_drift;     ///< the drift estimated on all training logs (empty rates: stage not run)
-  bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
-  bool used_windows = false;  ///< some output's poles came from local windows (see window_outputs)
+  OutputDrift output_drift;                 ///< the drift estimated on all training logs (empty rates: stage not run)
+  bool drift_taken_out = false;             ///< whether the model was fitted to the outputs less output_drift
+  bool used_windows = false;                ///< some output's poles came from local windows (see window_outputs)
   std::vector<std::string> window_outputs;  ///< outputs without a usable step response, fitted on windows
   /// The logs hold a staircase: some output's poles came from its steps, so the
   /// partition follows the reference levels (if few) rather than quantiles.

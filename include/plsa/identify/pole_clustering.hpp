@@ -13,9 +13,9 @@
 namespace plsa::identify {
 
 struct ClusteringOptions {
-  int centres = 5;          ///< OBF poles to choose (a complex pair counts as two)
-  int complex_pairs = 0;    ///< how many of them are conjugate pairs
-  double fuzziness = 2.0;   ///< m > 1
+  int centres = 5;         ///< OBF poles to choose (a complex pair counts as two)
+  int complex_pairs = 0;   ///< how many of them are conjugate pairs
+  double fuzziness = 2.0;  ///< m > 1
   int max_iterations = 100;
   double tolerance = 1e-7;  ///< stop when no centre moves more than this
   std::uint64_t seed = 1;

@@ -17,11 +17,11 @@ namespace plsa::io {
 
 /// A log in memory: one row per sample, one column per named signal.
 struct Log {
-  std::string source;                          ///< file it came from (for messages)
-  std::vector<std::string> columns;            ///< column names, in file order
-  Eigen::MatrixXd data;                        ///< samples x columns
-  std::map<std::string, std::string> metadata; ///< from `# key: value` lines
-  std::vector<std::string> comments;           ///< other `#` lines, without the '#'
+  std::string source;                           ///< file it came from (for messages)
+  std::vector<std::string> columns;             ///< column names, in file order
+  Eigen::MatrixXd data;                         ///< samples x columns
+  std::map<std::string, std::string> metadata;  ///< from `# key: value` lines
+  std::vector<std::string> comments;            ///< other `#` lines, without the '#'
   /// What the reader accepted but a user should hear of (a last line without
   /// its newline, a recording cut short); tools print these.
   std::vector<std::string> warnings;

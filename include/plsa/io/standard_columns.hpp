@@ -11,11 +11,11 @@
 
 namespace plsa::io::standard_columns {
 
-inline constexpr char kTime[] = "time_s";           ///< seconds
-inline constexpr char kBend[] = "bend_deg";         ///< tip bending angle, deg
-inline constexpr char kSteer[] = "steer_deg";       ///< tip steering (bending direction) angle, deg
-inline constexpr char kCommandPrefix[] = "cmd_";    ///< cmd_1.. commanded pressure, bar
-inline constexpr char kPressurePrefix[] = "p_";     ///< p_1.. measured pressure, bar
+inline constexpr char kTime[] = "time_s";         ///< seconds
+inline constexpr char kBend[] = "bend_deg";       ///< tip bending angle, deg
+inline constexpr char kSteer[] = "steer_deg";     ///< tip steering (bending direction) angle, deg
+inline constexpr char kCommandPrefix[] = "cmd_";  ///< cmd_1.. commanded pressure, bar
+inline constexpr char kPressurePrefix[] = "p_";   ///< p_1.. measured pressure, bar
 inline constexpr int kChambers = 3;
 
 /// "cmd_<chamber>" and "p_<chamber>", chambers counted from 1.
@@ -38,7 +38,8 @@ inline std::vector<std::string> tipAngles() { return {kBend, kSteer}; }
 /// commands, pressures, bending, steering.
 inline std::vector<std::string> recorded() {
   std::vector<std::string> names{kTime};
-  for (const auto& group : {commands(), pressures(), tipAngles()}) names.insert(names.end(), group.begin(), group.end());
+  for (const auto& group : {commands(), pressures(), tipAngles()})
+    names.insert(names.end(), group.begin(), group.end());
   return names;
 }
 

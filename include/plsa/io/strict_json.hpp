@@ -26,8 +26,8 @@ inline constexpr int kMaxJsonDepth = 32;
 /// its path) or nesting deeper than kMaxJsonDepth.
 inline nlohmann::json parseStrictJson(const std::string& text, const std::string& source) {
   using nlohmann::json;
-  std::vector<std::set<std::string>> seen;   // keys of each open object
-  std::vector<std::string> path;             // the key being read at each open object
+  std::vector<std::set<std::string>> seen;  // keys of each open object
+  std::vector<std::string> path;            // the key being read at each open object
   auto where = [&path] {
     std::string p;
     for (const auto& k : path) p += (p.empty() ? "" : ".") + k;
@@ -106,7 +106,8 @@ inline long long integerIn(const nlohmann::json& v, long long lo, long long hi, 
   if (!v.is_number_integer()) throw std::invalid_argument(source + ": '" + path + "'" + range);
   if (v.is_number_unsigned()) {
     const auto u = v.get<unsigned long long>();
-    if (hi < 0 || u > static_cast<unsigned long long>(hi)) throw std::invalid_argument(source + ": '" + path + "'" + range);
+    if (hi < 0 || u > static_cast<unsigned long long>(hi))
+      throw std::invalid_argument(source + ": '" + path + "'" + range);
     return static_cast<long long>(u);
   }
   const auto s = v.get<long long>();

@@ -85,7 +85,7 @@ struct DioPwlObfModel {
   int channelCount(int input) const { return shaping.channelCount(input); }
   PwlPartition partition = PwlPartition::single();
   std::vector<std::vector<Eigen::VectorXd>> coefficients;  ///< [region][output]
-  std::vector<RegionFit> region_fits;                       ///< [region]
+  std::vector<RegionFit> region_fits;                      ///< [region]
 
   int inputCount() const { return static_cast<int>(inputs.size()); }
   /// Every region's coefficients for `output`, end to end in region order:
@@ -122,51 +122,52 @@ struct DioPwlObfModel {
         PLSA_CHECK(std::find(names->begin(), at, *at) == at, "model: column '" + *at + "' is named twice");
     for (const auto& in : inputs)
       PLSA_CHECK(std::find(outputs.begin(), outputs.end(), in) == outputs.end(),
-              "model: column '" + in + "' is both an input and an output");
+                 "model: column '" + in + "' is both an input and an output");
     PLSA_CHECK(input_min < input_max, "model: input_min must be below input_max");
     PLSA_CHECK(input_ranges.empty() || input_ranges.size() == inputs.size(),
-            "model: input_ranges needs one [min, max] per input");
+               "model: input_ranges needs one [min, max] per input");
     for (const auto& r : input_ranges)
       PLSA_CHECK(std::isfinite(r[0]) && std::isfinite(r[1]) && r[0] <= r[1],
-              "model: every input_ranges entry must be finite with min <= max");
+                 "model: every input_ranges entry must be finite with min <= max");
     PLSA_CHECK(poles.size() == outputs.size(), "model: need one row of pole sets per output");
     shaping.validate(inputs.size());
     PLSA_CHECK(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     PLSA_CHECK(output_level.empty() || schedule_side == ScheduleSide::kInput,
-            "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
+               "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");
     PLSA_CHECK(output_level.empty() || output_level.size() == outputs.size(),
-            "model: output_level needs one value per output");
+               "model: output_level needs one value per output");
     for (double b : output_level) PLSA_CHECK(std::isfinite(b), "model: output_level values must be finite");
     PLSA_CHECK(training_drift_per_s.empty() || training_drift_per_s.size() == outputs.size(),
-            "model: training_output_drift needs one rate per output");
-    for (double r : training_drift_per_s) PLSA_CHECK(std::isfinite(r), "model: training_output_drift rates must be finite");
+               "model: training_output_drift needs one rate per output");
+    for (double r : training_drift_per_s)
+      PLSA_CHECK(std::isfinite(r), "model: training_output_drift rates must be finite");
     PLSA_CHECK(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
     PLSA_CHECK(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
-            "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
+               "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
     PLSA_CHECK(schedule_side == ScheduleSide::kOutput ||
-                (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
-            "model: input-side scheduling needs an interpolated partition without a direction split");
+                   (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
+               "model: input-side scheduling needs an interpolated partition without a direction split");
     for (std::size_t o = 0; o < poles.size(); ++o) {
-      PLSA_CHECK(poles[o].size() == inputs.size(),
-              "model: output '" + outputs[o] + "' needs one pole set per input");
+      PLSA_CHECK(poles[o].size() == inputs.size(), "model: output '" + outputs[o] + "' needs one pole set per input");
       for (std::size_t j = 0; j < poles[o].size(); ++j)
         PLSA_CHECK(!poles[o][j].empty(), "model: empty pole set for " + inputs[j] + " -> " + outputs[o]);
     }
-    PLSA_CHECK(partition.maxInputIndex() < inputCount(), "model: the partition schedules on an input that does not exist");
+    PLSA_CHECK(partition.maxInputIndex() < inputCount(),
+               "model: the partition schedules on an input that does not exist");
     const auto regions = static_cast<std::size_t>(partition.regionCount());
     PLSA_CHECK(coefficients.size() == regions, "model: " + std::to_string(coefficients.size()) +
-                                                " coefficient blocks for " + std::to_string(regions) + " regions");
+                                                   " coefficient blocks for " + std::to_string(regions) + " regions");
     PLSA_CHECK(region_fits.size() == regions, "model: region_fits has the wrong length");
     for (std::size_t r = 0; r < regions; ++r) {
       PLSA_CHECK(coefficients[r].size() == outputs.size(),
-              "model: region " + std::to_string(r) + " needs coefficients for every output");
+                 "model: region " + std::to_string(r) + " needs coefficients for every output");
       for (std::size_t o = 0; o < outputs.size(); ++o) {
         PLSA_CHECK(coefficients[r][o].size() == regressorSize(static_cast<int>(o)),
-                "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has " +
-                    std::to_string(coefficients[r][o].size()) + " coefficients, expected " +
-                    std::to_string(regressorSize(static_cast<int>(o))));
+                   "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has " +
+                       std::to_string(coefficients[r][o].size()) + " coefficients, expected " +
+                       std::to_string(regressorSize(static_cast<int>(o))));
         PLSA_CHECK(coefficients[r][o].allFinite(),
-                "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has a NaN or Inf coefficient");
+                   "model: region " + std::to_string(r) + ", output '" + outputs[o] + "' has a NaN or Inf coefficient");
       }
     }
   }

@@ -31,8 +31,8 @@ inline double playOperator(double input, double previous_output, double half_wid
 /// band grow with the level, as when the friction behind hysteresis scales
 /// with the strain; slope 0 is a fixed band (implicit from a plain width).
 struct PlayChannel {
-  double width = 0.0;  ///< input units
-  double slope = 0.0;  ///< fraction of the (non-negative) input level
+  double width = 0.0;                                                  ///< input units
+  double slope = 0.0;                                                  ///< fraction of the (non-negative) input level
   PlayChannel(double w = 0.0, double s = 0.0) : width(w), slope(s) {}  // NOLINT: a plain width is a channel
   double halfWidth(double u) const noexcept { return width + slope * std::max(0.0, u); }
   /// The played output after `previous` once the input reaches u (the band taken at u).

@@ -50,7 +50,7 @@ inline void tipAngles(double x, double y, double steer_reference_deg, double& be
 inline Eigen::MatrixXd toModelFrame(OutputFrame frame, const Eigen::MatrixXd& y) {
   if (frame == OutputFrame::kAsLogged) return y;
   PLSA_CHECK(y.cols() == 2, "tip_cartesian output frame: needs exactly two outputs (bending, steering), got " +
-                             std::to_string(y.cols()));
+                                std::to_string(y.cols()));
   Eigen::MatrixXd m(y.rows(), 2);
   for (Eigen::Index k = 0; k < y.rows(); ++k) tipComponents(y(k, 0), y(k, 1), m(k, 0), m(k, 1));
   return m;

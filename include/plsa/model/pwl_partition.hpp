@@ -65,25 +65,25 @@ class PwlPartition {
   /// `breakpoints[s]` splits scheduling input `inputs[s]` into cells
   /// (-inf, b0), [b0, b1), ..., [b_last, inf). A direction split doubles the
   /// regions per scheduling input; a change counts once |du| > threshold.
-  PwlPartition(std::vector<int> inputs, std::vector<std::vector<double>> breakpoints,
-               bool direction_split = false, double direction_threshold = 1e-3)
+  PwlPartition(std::vector<int> inputs, std::vector<std::vector<double>> breakpoints, bool direction_split = false,
+               double direction_threshold = 1e-3)
       : inputs_(std::move(inputs)),
         breakpoints_(std::move(breakpoints)),
         direction_split_(direction_split),
         direction_threshold_(direction_threshold) {
     PLSA_CHECK(inputs_.size() == breakpoints_.size(), "PwlPartition: one breakpoint list per scheduling input");
     PLSA_CHECK(inputs_.size() <= static_cast<std::size_t>(DirectionState::kMaxInputs),
-            "PwlPartition: at most 8 scheduling inputs");
+               "PwlPartition: at most 8 scheduling inputs");
     PLSA_CHECK(direction_threshold_ >= 0 && std::isfinite(direction_threshold_),
-            "PwlPartition: the direction threshold must be finite and >= 0");
+               "PwlPartition: the direction threshold must be finite and >= 0");
     cells_ = 1;
     for (std::size_t s = 0; s < inputs_.size(); ++s) {
       PLSA_CHECK(inputs_[s] >= 0, "PwlPartition: scheduling input indices must be >= 0");
       const auto& b = breakpoints_[s];
       for (std::size_t i = 0; i < b.size(); ++i) {
         PLSA_CHECK(std::isfinite(b[i]), "PwlPartition: breakpoints must be finite");
-        PLSA_CHECK(i == 0 || b[i] > b[i - 1], "PwlPartition: breakpoints of input " + std::to_string(inputs_[s]) +
-                                               " must increase strictly");
+        PLSA_CHECK(i == 0 || b[i] > b[i - 1],
+                   "PwlPartition: breakpoints of input " + std::to_string(inputs_[s]) + " must increase strictly");
       }
       PLSA_CHECK(b.size() < static_cast<std::size_t>(kMaxRegions / cells_), regionLimitMessage());
       strides_.push_back(cells_);
@@ -113,11 +113,14 @@ class PwlPartition {
   /// Latches each scheduling input's direction from its latest difference.
   template <class Vec>
   void updateDirections(const Vec& du, DirectionState& state) const noexcept {
-    const std::size_t n = std::min(inputs_.size(), state.dir.size());  // the constructor caps it; say so to the compiler
+    const std::size_t n =
+        std::min(inputs_.size(), state.dir.size());  // the constructor caps it; say so to the compiler
     for (std::size_t s = 0; s < n; ++s) {
       const double d = du[inputs_[s]];
-      if (d > direction_threshold_) state.dir[s] = 1;
-      else if (d < -direction_threshold_) state.dir[s] = -1;
+      if (d > direction_threshold_)
+        state.dir[s] = 1;
+      else if (d < -direction_threshold_)
+        state.dir[s] = -1;
     }
   }
 
@@ -144,7 +147,8 @@ class PwlPartition {
         i = static_cast<int>(n.size()) - 1;
       } else if (x > n.front()) {
         i = static_cast<int>(std::upper_bound(n.begin(), n.end(), x) - n.begin()) - 1;
-        t = (x - n[static_cast<std::size_t>(i)]) / (n[static_cast<std::size_t>(i) + 1] - n[static_cast<std::size_t>(i)]);
+        t = (x - n[static_cast<std::size_t>(i)]) /
+            (n[static_cast<std::size_t>(i) + 1] - n[static_cast<std::size_t>(i)]);
       }
       const int c = out.count;
       for (int m = 0; m < c; ++m) {
@@ -197,9 +201,7 @@ class PwlPartition {
     const int per = static_cast<int>(breakpoints_[s].size()) + (mode_ == Scheduling::kSwitched ? 1 : 0);
     return (region % cells_) / strides_[s] % per;
   }
-  bool fallingOf(int region, std::size_t s) const noexcept {
-    return direction_split_ && ((region / cells_) >> s) & 1;
-  }
+  bool fallingOf(int region, std::size_t s) const noexcept { return direction_split_ && ((region / cells_) >> s) & 1; }
 
   /// Words for a region, e.g. "p_1 in [0.225, 0.275) rising, p_2 in [0.275, inf) rising".
   std::string describe(int region, const std::vector<std::string>& input_names) const {

@@ -18,7 +18,8 @@ inline double poleDistance(std::complex<double> p, std::complex<double> xi) {
 }
 
 /// rho over basis poles given as a plain list (pairs expanded), e.g. cluster centres.
-inline double decayRate(const std::vector<std::complex<double>>& xi, const std::vector<std::complex<double>>& true_poles) {
+inline double decayRate(const std::vector<std::complex<double>>& xi,
+                        const std::vector<std::complex<double>>& true_poles) {
   PLSA_CHECK(!xi.empty(), "decayRate: the basis pole set is empty");
   PLSA_CHECK(!true_poles.empty(), "decayRate: no true poles given");
   double rho = 0.0;

@@ -31,8 +31,8 @@ class ObfBank {
     PLSA_CHECK(!poles.empty(), "ObfBank: the pole set is empty");
     const int n = poles.size();
     if constexpr (N != Eigen::Dynamic) {
-      PLSA_CHECK(n == N, "ObfBank<" + std::to_string(N) + ">: the pole set has " +
-                          std::to_string(n) + " basis functions");
+      PLSA_CHECK(n == N,
+                 "ObfBank<" + std::to_string(N) + ">: the pole set has " + std::to_string(n) + " basis functions");
     }
     A_.setZero(n, n);
     B_.setZero(n);
@@ -43,8 +43,7 @@ class ObfBank {
     D_ = 1.0;
     int offset = 0;
     for (const auto& sec : poles.sections()) {
-      const AllpassSection s =
-          sec.is_pair() ? AllpassSection::pair(sec.pole) : AllpassSection::real(sec.pole.real());
+      const AllpassSection s = sec.is_pair() ? AllpassSection::pair(sec.pole) : AllpassSection::real(sec.pole.real());
       const int m = s.order;
       A_.block(offset, 0, m, n) += s.B.head(m) * C_;
       A_.block(offset, offset, m, m) += s.A.topLeftCorner(m, m);

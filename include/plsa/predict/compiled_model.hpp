@@ -37,9 +37,9 @@ using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eig
 inline constexpr std::size_t kMaxHeldTableDoubles = std::size_t{4} << 20;
 
 struct ModalForm {
-  Eigen::VectorXd lambda;        ///< [modes] the pole
-  Eigen::VectorXd beta;          ///< [modes] (V^-1 B) of the mode's bank
-  std::vector<int> offset;       ///< [modes + 1] first state of each mode
+  Eigen::VectorXd lambda;   ///< [modes] the pole
+  Eigen::VectorXd beta;     ///< [modes] (V^-1 B) of the mode's bank
+  std::vector<int> offset;  ///< [modes + 1] first state of each mode
   /// [regions] x [states]: the coefficient of each state in modal
   /// coordinates, per region (one row on the input side).
   RowMajorMatrix coefficient;
@@ -102,14 +102,14 @@ struct CompiledModel {
   double sample_time = 0.0;
   double accept_min = 0.0, accept_max = 0.0;
   bool input_side = false;
-  PwlPartition partition;       ///< the coefficients' schedule (one region on the input side)
-  PwlPartition node_partition;  ///< input side: the grid whose nodes weigh the inputs
-  NodeGrid node_grid;           ///< the same, for the hot path
-  std::vector<PlayChannel> play;           ///< per channel
-  std::vector<int> channel_input;          ///< per channel: its input
-  std::vector<int> first_channel;          ///< [inputs + 1]: input j's channels are [first, first + 1)
-  InputShaping shaping;                    ///< the model's: levels and start (channels flattened in `play`)
-  double schedule_pole = 0.0;  ///< the scheduling inputs' lag, per sample
+  PwlPartition partition;           ///< the coefficients' schedule (one region on the input side)
+  PwlPartition node_partition;      ///< input side: the grid whose nodes weigh the inputs
+  NodeGrid node_grid;               ///< the same, for the hot path
+  std::vector<PlayChannel> play;    ///< per channel
+  std::vector<int> channel_input;   ///< per channel: its input
+  std::vector<int> first_channel;   ///< [inputs + 1]: input j's channels are [first, first + 1)
+  InputShaping shaping;             ///< the model's: levels and start (channels flattened in `play`)
+  double schedule_pole = 0.0;       ///< the scheduling inputs' lag, per sample
   std::vector<double> pole_values;  ///< [o][j][i], to tell whether two models share their bases
   int max_horizon = 0;
 

@@ -21,8 +21,8 @@ namespace plsa {
 inline constexpr int kMaxRestingInputs = 16;
 
 template <int W>
-PLSA_ALWAYS_INLINE void stepModesBody(const ModalForm& f, int begin, int end, int width,
-                                      const double* __restrict d, double* __restrict state) noexcept {
+PLSA_ALWAYS_INLINE void stepModesBody(const ModalForm& f, int begin, int end, int width, const double* __restrict d,
+                                      double* __restrict state) noexcept {
   const int size = W > 0 ? W : width;
   for (int q = begin; q < end; ++q) {
     double* __restrict z = state + f.offset[static_cast<std::size_t>(q)];
@@ -131,7 +131,7 @@ inline void carryFilterStates(const CompiledModel& from, const CompiledModel& to
     // In bank order, x of this bank...
     for (int i = 0; i < n; ++i)
       bank_x(i) = from.modal ? state(from.modal_form.offset[static_cast<std::size_t>((j * from.n_y + o) * n + i)] + k)
-                              : state(static_cast<Eigen::Index>(b) * n + i);
+                             : state(static_cast<Eigen::Index>(b) * n + i);
     if (from.modal) bank_x = from.modal_form.basis[g] * bank_x.eval();
     if (to.modal) bank_x = to.modal_form.basis_inverse[g] * bank_x.eval();
     // ...written where the new form keeps it (one scratch row per bank).

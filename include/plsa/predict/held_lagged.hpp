@@ -54,7 +54,6 @@ class HeldLaggedForm {
   }
 
  private:
-
   // A held input's lagged scheduling input s, h steps ahead.
   double laggedAt(int s, int h, double pole) const noexcept {
     const auto ss = static_cast<std::size_t>(s);
@@ -81,11 +80,13 @@ class HeldLaggedForm {
       // The first later step in another cell: its estimate from the logarithm, then checked.
       const double x = laggedAt(static_cast<int>(s), first, pole), target = lag_target_[s];
       if (cellOf(lv, target) == cell || x == target) continue;
-      const double bound = target < x ? lv[static_cast<std::size_t>(std::max(cell, 0))]
-                                      : lv[static_cast<std::size_t>(std::min(cell + 1, static_cast<int>(lv.size()) - 1))];
+      const double bound = target < x
+                               ? lv[static_cast<std::size_t>(std::max(cell, 0))]
+                               : lv[static_cast<std::size_t>(std::min(cell + 1, static_cast<int>(lv.size()) - 1))];
       const double ratio = (bound - target) / (x - target);
       int h = first + 1;
-      if (ratio > 0.0 && ratio < 1.0) h = std::max(first + 1, first + static_cast<int>(std::log(ratio) / std::log(pole)) - 1);
+      if (ratio > 0.0 && ratio < 1.0)
+        h = std::max(first + 1, first + static_cast<int>(std::log(ratio) / std::log(pole)) - 1);
       while (h <= last && cellOf(lv, laggedAt(static_cast<int>(s), h, pole)) == cell) ++h;
       last = std::min(last, h - 1);
     }
@@ -109,7 +110,8 @@ class HeldLaggedForm {
       const double x = laggedAt(s, first, m.schedule_pole), target = lag_target_[ss];
       const int cell = cellOf(lv, x);
       if (cell < 0 || cell == static_cast<int>(lv.size()) - 1) {  // outside: the edge node, weight 1
-        for (int c = 0; c < corners; ++c) corner_node_[static_cast<std::size_t>(c)] += std::max(cell, 0) * grid.strides[ss];
+        for (int c = 0; c < corners; ++c)
+          corner_node_[static_cast<std::size_t>(c)] += std::max(cell, 0) * grid.strides[ss];
         continue;
       }
       const double width = lv[static_cast<std::size_t>(cell) + 1] - lv[static_cast<std::size_t>(cell)];
@@ -122,7 +124,8 @@ class HeldLaggedForm {
           high[static_cast<std::size_t>(d)] = a * low[static_cast<std::size_t>(d)] + b * below;
           low[static_cast<std::size_t>(d)] = (1.0 - a) * low[static_cast<std::size_t>(d)] - b * below;
         }
-        corner_node_[static_cast<std::size_t>(c + corners)] = corner_node_[static_cast<std::size_t>(c)] + (cell + 1) * grid.strides[ss];
+        corner_node_[static_cast<std::size_t>(c + corners)] =
+            corner_node_[static_cast<std::size_t>(c)] + (cell + 1) * grid.strides[ss];
         corner_node_[static_cast<std::size_t>(c)] += cell * grid.strides[ss];
       }
       corners *= 2;
@@ -135,7 +138,8 @@ class HeldLaggedForm {
         for (int ch = 0; ch < channels; ++ch) {
           const double v = (*vc_)(first_channel + ch);
           if (v == 0.0) continue;
-          const double* row = table + static_cast<std::ptrdiff_t>(corner_node_[static_cast<std::size_t>(c)] * channels + ch) * block;
+          const double* row =
+              table + static_cast<std::ptrdiff_t>(corner_node_[static_cast<std::size_t>(c)] * channels + ch) * block;
           for (int d = 0; d <= inputs; ++d) {
             const double w = v * corner_poly_[static_cast<std::size_t>(c)][static_cast<std::size_t>(d)];
             if (w == 0.0) continue;
@@ -170,7 +174,9 @@ class HeldLaggedForm {
             x(d * n + i) = f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)];
         }
         for (int k = 0; k < width; ++k) moves = moves || x(k) != 0.0;
-        if (moves) accumulateColumns(table.data() + j * width * table.rows(), table.rows(), rows, width, x.data(), &out(first, o));
+        if (moves)
+          accumulateColumns(table.data() + j * width * table.rows(), table.rows(), rows, width, x.data(),
+                            &out(first, o));
       }
     }
   }
@@ -216,7 +222,6 @@ class HeldLaggedForm {
     for (Eigen::Index k = 0; k < slots; ++k)
       merged_(k) = f.merged_lambda(k) * merged_(k) + f.merged_beta(k) * (g_next_(k) - g_(k));
   }
-
 
   const Eigen::VectorXd* vc_ = nullptr;  // the channels of the run under way
   Eigen::VectorXd merged_, g_, g_next_, work_us_;

@@ -59,7 +59,8 @@ PLSA_TARGET_AVX2 inline void accumulateColumnsAvx2(const double* a, Eigen::Index
                                                    const double* x, double* y) noexcept {
   accumulateColumnsBody(a, ld, rows, cols, x, y);
 }
-inline void accumulateColumns(const double* a, Eigen::Index ld, int rows, int cols, const double* x, double* y) noexcept {
+inline void accumulateColumns(const double* a, Eigen::Index ld, int rows, int cols, const double* x,
+                              double* y) noexcept {
   if (predictorUsesAvx2())
     accumulateColumnsAvx2(a, ld, rows, cols, x, y);
   else
@@ -100,7 +101,10 @@ PLSA_ALWAYS_INLINE bool tipTurnsBody(const double* __restrict x, const double* _
     const double cross = px * y[h] - py * x[h], dot = px * x[h] + py * y[h];
     rough |= static_cast<int>(!((dot > 0.0) & (std::abs(cross) <= 0.1 * dot)));
     const double t = cross / dot, t2 = t * t;
-    turn[h] = t * (1.0 + t2 * (-1.0 / 3 + t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
+    turn[h] =
+        t *
+        (1.0 + t2 * (-1.0 / 3 +
+                     t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
     bend[h] = std::sqrt(x[h] * x[h] + y[h] * y[h]);
   }
   return rough == 0;

@@ -48,8 +48,12 @@ struct PlannedSchedule {
 
   PlannedSchedule(const CompiledModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& us0,
                   const Eigen::VectorXd& vc0) noexcept
-      : nu(m.n_u), nc(static_cast<int>(m.play.size())), grid_inputs(static_cast<int>(m.node_grid.inputs.size())),
-        pole(m.schedule_pole), shaping(&m.shaping), shaped(m.shaping.shapesLevels()) {
+      : nu(m.n_u),
+        nc(static_cast<int>(m.play.size())),
+        grid_inputs(static_cast<int>(m.node_grid.inputs.size())),
+        pole(m.schedule_pole),
+        shaping(&m.shaping),
+        shaped(m.shaping.shapesLevels()) {
     for (int j = 0; j < nu; ++j) u[j] = u0(j), us[j] = us0(j);
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
@@ -179,8 +183,8 @@ PLSA_ALWAYS_INLINE double outputSum(const double* total, int o, int n) noexcept 
 /// With the block size fixed at compile time the run copies the modes into
 /// its own arrays; otherwise it works in `zeta` and `level` in place.
 struct MergedStart {
-  double* zeta = nullptr;   ///< [inputs * block]
-  double* level = nullptr;  ///< [inputs * block]
+  double* zeta = nullptr;     ///< [inputs * block]
+  double* level = nullptr;    ///< [inputs * block]
   const double* y = nullptr;  ///< [outputs]
 };
 
@@ -234,7 +238,8 @@ PLSA_ALWAYS_INLINE void runPlanned(const CompiledModel& m, PlannedSchedule& sche
       const auto jj = static_cast<std::size_t>(j);
       if (resting[jj]) {
         bool still = true;
-        for (int c = m.first_channel[jj]; c < m.first_channel[jj + 1]; ++c) still = still && sched.vc[static_cast<std::size_t>(c)] == 0.0;
+        for (int c = m.first_channel[jj]; c < m.first_channel[jj + 1]; ++c)
+          still = still && sched.vc[static_cast<std::size_t>(c)] == 0.0;
         if (still) continue;
         resting[jj] = false;
       }

@@ -90,7 +90,8 @@ class PlanSensitivity {
   // input pushed its band (then the channel takes d level / d u, through the
   // band's slope, the threshold, softening and coupling; otherwise it holds
   // and takes nothing), and the next step that pushes it again.
-  void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan, const Eigen::VectorXd& vc_now) noexcept {
+  void channelPath(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                   const Eigen::VectorXd& vc_now) noexcept {
     const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
     const int nu = m.n_u;  // at most kMaxSensitivityInputs (sensitivity() checks)
     const InputShaping& shaping = m.shaping;
@@ -145,7 +146,7 @@ class PlanSensitivity {
   // t); a tip_cartesian model's row pairs turned from components into angles
   // at the nominal prediction on the way (d(bend, steer) / d(x, y)).
   void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
-                       Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+            Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
     const int ny = m.n_y, nu = m.n_u;
     const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
     const bool tip = m.frame == OutputFrame::kTipCartesian;

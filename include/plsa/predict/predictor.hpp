@@ -47,7 +47,7 @@ class NStepPredictor {
       : options_(options), handoff_(model) {
     PLSA_CHECK(model != nullptr, "Predictor: no compiled model");
     PLSA_CHECK(model->max_horizon == options.max_horizon,
-            "Predictor: the compiled model holds tables for another max_horizon");
+               "Predictor: the compiled model holds tables for another max_horizon");
     allocate(*model);
   }
 
@@ -188,7 +188,7 @@ class NStepPredictor {
   /// The same with an already compiled model (shared, e.g. by many segments).
   void install(std::shared_ptr<const CompiledModel> model) {
     PLSA_CHECK(model != nullptr && sameStructure(*shape_, *model),
-            "Predictor::install: the new model's structure differs from the running one");
+               "Predictor::install: the new model's structure differs from the running one");
     handoff_.offer(std::move(model), ++installs_);
   }
   /// Frees a model the real-time thread has let go of (install() does this too).
@@ -250,7 +250,8 @@ class NStepPredictor {
     ScheduleBlend blend;
     m.node_partition.blend(us, DirectionState{}, blend);
     w.setZero();
-    for (int k = 0; k < blend.count; ++k) w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
+    for (int k = 0; k < blend.count; ++k)
+      w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
   }
 
   // Moves the played channels to the input u (delta_: how far each moved).
@@ -295,7 +296,8 @@ class NStepPredictor {
   // input side the node weights move to the lagged input us (node_w holds
   // the previous ones).
   void advance(const CompiledModel& m, Eigen::VectorXd& state, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
-               Eigen::VectorXd& node_w, const Eigen::VectorXd& u, std::array<bool, kMaxRestingInputs>& resting) noexcept {
+               Eigen::VectorXd& node_w, const Eigen::VectorXd& u,
+               std::array<bool, kMaxRestingInputs>& resting) noexcept {
     moveChannels(m, u, vc);
     if (m.input_side) nodeWeights(m, us, next_node_w_);
     driveInputs(m, vc, node_w);
@@ -313,16 +315,19 @@ class NStepPredictor {
     if (blend.count == 1) {  // one region (always on the input side): its row as it is
       const auto row = f.coefficient.row(blend.region[0]);
       for (Eigen::Index q = 0; q < zeta.size(); ++q) {
-        const int begin = f.offset[static_cast<std::size_t>(q)], width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
+        const int begin = f.offset[static_cast<std::size_t>(q)],
+                  width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
         zeta(q) = row.segment(begin, width).dot(state.segment(begin, width));
       }
       return;
     }
     blended_.setZero();
     for (int k = 0; k < blend.count; ++k)
-      blended_ += blend.weight[static_cast<std::size_t>(k)] * f.coefficient.row(blend.region[static_cast<std::size_t>(k)]).transpose();
+      blended_ += blend.weight[static_cast<std::size_t>(k)] *
+                  f.coefficient.row(blend.region[static_cast<std::size_t>(k)]).transpose();
     for (Eigen::Index q = 0; q < zeta.size(); ++q) {
-      const int begin = f.offset[static_cast<std::size_t>(q)], width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
+      const int begin = f.offset[static_cast<std::size_t>(q)],
+                width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
       zeta(q) = blended_.segment(begin, width).dot(state.segment(begin, width));
     }
   }
@@ -358,9 +363,10 @@ class NStepPredictor {
       double dot = 0.0;
       for (int k = 0; k < blend.count; ++k)
         dot += blend.weight[static_cast<std::size_t>(k)] *
-               s.coefficient[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(k)])][static_cast<std::size_t>(o)]
-                   .segment(s.coefficient_offset[b], n)
-                   .dot(state.segment(static_cast<Eigen::Index>(b) * n, n));
+               s.coefficient[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(k)])]
+                            [static_cast<std::size_t>(o)]
+                                .segment(s.coefficient_offset[b], n)
+                                .dot(state.segment(static_cast<Eigen::Index>(b) * n, n));
       dy(o) += dot;
     }
   }
@@ -429,13 +435,20 @@ class NStepPredictor {
                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const bool avx2 = predictorUsesAvx2();
     switch (m.modal_form.block) {
-      case 4: return avx2 ? runMergedAvx2<4>(m, horizon, plan, out) : runMerged<4>(m, horizon, plan, out);
-      case 8: return avx2 ? runMergedAvx2<8>(m, horizon, plan, out) : runMerged<8>(m, horizon, plan, out);
-      case 12: return avx2 ? runMergedAvx2<12>(m, horizon, plan, out) : runMerged<12>(m, horizon, plan, out);
-      case 16: return avx2 ? runMergedAvx2<16>(m, horizon, plan, out) : runMerged<16>(m, horizon, plan, out);
-      case 20: return avx2 ? runMergedAvx2<20>(m, horizon, plan, out) : runMerged<20>(m, horizon, plan, out);
-      case 24: return avx2 ? runMergedAvx2<24>(m, horizon, plan, out) : runMerged<24>(m, horizon, plan, out);
-      default: return runMerged<0>(m, horizon, plan, out);
+      case 4:
+        return avx2 ? runMergedAvx2<4>(m, horizon, plan, out) : runMerged<4>(m, horizon, plan, out);
+      case 8:
+        return avx2 ? runMergedAvx2<8>(m, horizon, plan, out) : runMerged<8>(m, horizon, plan, out);
+      case 12:
+        return avx2 ? runMergedAvx2<12>(m, horizon, plan, out) : runMerged<12>(m, horizon, plan, out);
+      case 16:
+        return avx2 ? runMergedAvx2<16>(m, horizon, plan, out) : runMerged<16>(m, horizon, plan, out);
+      case 20:
+        return avx2 ? runMergedAvx2<20>(m, horizon, plan, out) : runMerged<20>(m, horizon, plan, out);
+      case 24:
+        return avx2 ? runMergedAvx2<24>(m, horizon, plan, out) : runMerged<24>(m, horizon, plan, out);
+      default:
+        return runMerged<0>(m, horizon, plan, out);
     }
   }
 
@@ -505,9 +518,9 @@ class NStepPredictor {
   Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
   Eigen::VectorXd zeta_, merged_, g_, zeta_of_output_, blended_;
   std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
-  HeldLaggedForm held_lagged_;  // held input with a moving lag
-  Eigen::VectorXd turn_;  // tip frame: each predicted row's turn
-  Eigen::MatrixXd sens_nominal_;  // sensitivity(): the nominal prediction
+  HeldLaggedForm held_lagged_;                     // held input with a moving lag
+  Eigen::VectorXd turn_;                           // tip frame: each predicted row's turn
+  Eigen::MatrixXd sens_nominal_;                   // sensitivity(): the nominal prediction
   PlanSensitivity sensitivity_;
   Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
   Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
@@ -529,8 +542,8 @@ class Predictor : public NStepPredictor {
   Predictor(std::shared_ptr<const CompiledModel> model, const PredictorOptions& options)
       : NStepPredictor(std::move(model), options) {
     PLSA_CHECK(NP == Eigen::Dynamic || compiledModel()->poles == NP,
-            "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
-                std::to_string(compiledModel()->poles) + " poles");
+               "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
+                   std::to_string(compiledModel()->poles) + " poles");
   }
 
  private:
@@ -540,7 +553,7 @@ class Predictor : public NStepPredictor {
       for (const auto& row : m.poles)
         for (const auto& ps : row)
           PLSA_CHECK(ps.size() == NP, "Predictor<" + std::to_string(NP) + ">: the model's pole sets have " +
-                                       std::to_string(ps.size()) + " poles");
+                                          std::to_string(ps.size()) + " poles");
     }
     return m;
   }

@@ -21,16 +21,26 @@ enum class PredictorStatus : int {
 
 inline const char* toString(PredictorStatus s) {
   switch (s) {
-    case PredictorStatus::kOk: return "ok";
-    case PredictorStatus::kTimeGap: return "time gap: filters restarted";
-    case PredictorStatus::kClockStepBack: return "clock stepped back: filters restarted";
-    case PredictorStatus::kNotFinite: return "sample has NaN or Inf";
-    case PredictorStatus::kInputOutOfRange: return "input outside the accepted range";
-    case PredictorStatus::kTimeNotIncreasing: return "time did not increase";
-    case PredictorStatus::kHorizonTooLong: return "horizon above capacity";
-    case PredictorStatus::kBadShape: return "buffer of the wrong size";
-    case PredictorStatus::kNotReady: return "no sample yet";
-    case PredictorStatus::kUnsupported: return "not available for this model";
+    case PredictorStatus::kOk:
+      return "ok";
+    case PredictorStatus::kTimeGap:
+      return "time gap: filters restarted";
+    case PredictorStatus::kClockStepBack:
+      return "clock stepped back: filters restarted";
+    case PredictorStatus::kNotFinite:
+      return "sample has NaN or Inf";
+    case PredictorStatus::kInputOutOfRange:
+      return "input outside the accepted range";
+    case PredictorStatus::kTimeNotIncreasing:
+      return "time did not increase";
+    case PredictorStatus::kHorizonTooLong:
+      return "horizon above capacity";
+    case PredictorStatus::kBadShape:
+      return "buffer of the wrong size";
+    case PredictorStatus::kNotReady:
+      return "no sample yet";
+    case PredictorStatus::kUnsupported:
+      return "not available for this model";
   }
   return "unknown";
 }
@@ -50,10 +60,10 @@ inline constexpr int kClockStepSamples = 3;
 inline constexpr int kMaxPredictorHorizon = 100000;
 
 struct PredictorOptions {
-  int max_horizon = 400;         ///< capacity of predict(), preallocated
-  double input_margin = 0.25;    ///< accepted inputs: model range widened by this share of it
-  double max_gap_factor = 2.5;   ///< a time step above this many sample times is a gap
-  bool simulate = false;         ///< free simulation: the output is never reset to a measurement
+  int max_horizon = 400;        ///< capacity of predict(), preallocated
+  double input_margin = 0.25;   ///< accepted inputs: model range widened by this share of it
+  double max_gap_factor = 2.5;  ///< a time step above this many sample times is a gap
+  bool simulate = false;        ///< free simulation: the output is never reset to a measurement
   /// Run in modal form when the model allows it (false: always step the banks
   /// as state-space filters, the slower reference the modal form is checked
   /// and measured against).

@@ -48,8 +48,8 @@ double heatScale(const Eigen::MatrixXd& values);
 /// NaN cells grey ("no data"), and a colour bar from 0 to the scale, labelled
 /// with `unit`. Give maps to be compared the same scale_max.
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
-                    const std::vector<std::string>& col_labels, const std::string& row_axis, const std::string& col_axis,
-                    int cell = 64, double scale_max = 0.0, const std::string& unit = "");
+                    const std::vector<std::string>& col_labels, const std::string& row_axis,
+                    const std::string& col_axis, int cell = 64, double scale_max = 0.0, const std::string& unit = "");
 
 /// HTML escaping for text nodes.
 std::string escape(const std::string& s);

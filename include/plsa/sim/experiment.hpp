@@ -16,7 +16,7 @@ namespace plsa::sim {
 
 struct ExperimentOptions {
   double sample_rate_hz = 80.0;
-  double hold_s = 4.0;  ///< time at each level, long enough to settle
+  double hold_s = 4.0;          ///< time at each level, long enough to settle
   double initial_rest_s = 2.0;  ///< staircase: recorded rest before the first step
   double preroll_s = 5.0;       ///< grid2: ramp to the first point and settle, unrecorded
   // staircase1

@@ -27,16 +27,16 @@ struct IndependentPhysics {
   double sample_rate_hz = 80.0;
   double max_pressure_bar = 0.4;
   // --- nominal -----------------------------------------------------------
-  double time_constant_s = 0.05;          ///< chamber filling and venting (first order)
-  double max_rate_bar_per_s = 8.0;        ///< flow limit
+  double time_constant_s = 0.05;    ///< chamber filling and venting (first order)
+  double max_rate_bar_per_s = 8.0;  ///< flow limit
   double strain_per_bar = 0.75;
-  double strain_quadratic = -0.6;         ///< per bar^2
+  double strain_quadratic = -0.6;  ///< per bar^2
   double natural_freq_hz = 0.8;
   double damping_ratio = 0.85;
   double length_m = 0.09, chamber_radius_m = 0.008;
   std::array<double, 3> bend_direction_deg = {0.0, 120.0, 240.0};
-  double noise_deg = 0.05;                ///< white noise on each bending-vector component
-  double pressure_noise_bar = 0.002;      ///< white noise on each measured pressure
+  double noise_deg = 0.05;            ///< white noise on each bending-vector component
+  double pressure_noise_bar = 0.002;  ///< white noise on each measured pressure
   // --- effects: a law name ("" = off) and one strength each ------------------
   /// deadzone: "logistic" (p * sigmoid), "cubic_onset" (p^3 / (p^2 + t^2)),
   /// "sticking" (opens above t, closes below t/2); strength: t (bar).

@@ -11,8 +11,8 @@ namespace plsa::sim {
 
 /// The candidate effects, in the order the diagnosis lists them.
 inline const std::vector<std::string>& effectNames() {
-  static const std::vector<std::string> names = {"deadzone", "hysteresis", "stiffening", "coupling",
-                                                 "pneumatic_lag", "creep", "sensor_bias"};
+  static const std::vector<std::string> names = {"deadzone",      "hysteresis", "stiffening", "coupling",
+                                                 "pneumatic_lag", "creep",      "sensor_bias"};
   return names;
 }
 
@@ -71,7 +71,7 @@ struct SimConfig {
     /// 2 width (weights scaled to sum to at most 1; the rest is the linear
     /// part). It contains "play" (weights 0, 1, 0) and no hysteresis (0, 0, 0).
     std::string formulation = "play";
-    double width = 0.12;  ///< play half-width as a fraction of the strain
+    double width = 0.12;                                              ///< play half-width as a fraction of the strain
     double weight_narrow = 0.0, weight_mid = 1.0, weight_wide = 0.0;  ///< only for "weighted_pi"
   } hysteresis;
   struct Stiffening {
@@ -121,7 +121,7 @@ struct SimConfig {
     bool enabled = true;
     /// "linear_drift" | "random_walk": yaw wanders (steps of |yaw drift| sqrt(dt) x 3) instead of drifting steadily.
     std::string formulation = "linear_drift";
-    double tilt_deg = 1.5;          ///< mount misalignment
+    double tilt_deg = 1.5;  ///< mount misalignment
     double yaw_drift_deg_per_s = 0.02;
     /// A zero error and a linear drift of each bending-vector component
     /// (bend cos steer, bend sin steer), as an uncalibrated or warming

@@ -1,5 +1,6 @@
-// Model files: JSON with a versioned schema ("plsa.dio_pwl_obf", version 1)
-// holding units, sample time, column names, poles, partition and
+// Model files: JSON with a versioned schema ("plsa.dio_pwl_obf"; this build
+// writes version 2 and reads 1 and 2; schemas/model.schema.json) holding
+// units, sample time, column names, poles, input shaping, partition and
 // coefficients. Loading validates all of it and names what is wrong.
 #pragma once
 

@@ -257,6 +257,25 @@ TEST(SimEffects, StiffeningsStaticShareHoldsTheBendBack) {
   EXPECT_GT(low_b / low_a, 2.0 * high_b / high_a);  // far less held back at low pressure
 }
 
+// per_rad2 hardens the bending spring with the angle: at rest theta (1 + h
+// theta^2) equals the plain spring's bend (radians), a Duffing spring; the
+// pressure-grown stiffness is off here (per_bar 0), and h = 0 is the plain law.
+TEST(SimEffects, StiffeningsBendHardeningIsADuffingSpring) {
+  const double kDeg = 3.14159265358979323846 / 180.0;
+  SimConfig plain = only("stiffening");
+  plain.stiffening.formulation = "power";
+  plain.stiffening.per_bar = 0.0;
+  SimConfig duffing = plain;
+  duffing.stiffening.per_rad2 = 8.0;
+  Actuator a(plain, 1), b(duffing, 1), off(allOff(), 1);
+  for (double p : {0.15, 0.35}) {
+    const double free = settled(a, {p, 0, 0}, 6.0) * kDeg, held = settled(b, {p, 0, 0}, 6.0) * kDeg;
+    EXPECT_NEAR(free, settled(off, {p, 0, 0}, 6.0) * kDeg, 1e-3 * free);
+    EXPECT_LT(held, 0.97 * free) << p;
+    EXPECT_NEAR(held * (1.0 + 8.0 * held * held), free, 0.01 * free) << p;
+  }
+}
+
 TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
   SimConfig play = only("hysteresis"), pi = only("hysteresis"), none = allOff();
   pi.hysteresis.formulation = "weighted_pi";

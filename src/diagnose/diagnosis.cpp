@@ -61,7 +61,7 @@ void lagTimesAtNominal(sim::SimConfig& c) {
 void setNeutral(sim::SimConfig& c, const std::string& effect) {
   if (effect == "deadzone") c.deadzone.threshold_bar = 0.0;
   if (effect == "hysteresis") c.hysteresis.width = 0.0;
-  if (effect == "stiffening") c.stiffening.per_bar = 0.0;
+  if (effect == "stiffening") c.stiffening.per_bar = c.stiffening.per_rad2 = 0.0;
   if (effect == "coupling") c.coupling.per_bar = 0.0;
   if (effect == "pneumatic_lag") {
     lagTimesAtNominal(c);

@@ -52,6 +52,17 @@ std::vector<std::string> lawsOutsideTheCandidate(const std::string& effect, bool
   return out;
 }
 
+// The independent actuator's laws of an effect that lie outside the
+// candidate's family: Duffing stiffening (a cubic spring in the bending
+// angle) is the flexible stiffening's bend hardening, so it is left out
+// when the diagnosis calibrates flexible laws.
+std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible) {
+  std::vector<std::string> out;
+  for (const std::string& law : sim::independentLawsOf(effect))
+    if (!(flexible && effect == "stiffening" && law == "duffing")) out.push_back(law);
+  return out;
+}
+
 RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
                   const std::string& name, bool from_rest) {
   // From rest, or settled for the 3 s the diagnosis then replays; sensor noise on.
@@ -160,7 +171,7 @@ std::vector<Spec> caseSpecs(const SelfcheckOptions& o) {
   for (const auto& e : effects) {
     const std::vector<std::string> others = o.truth == SelfcheckTruth::kOwnLaws
                                                 ? lawsOutsideTheCandidate(e, o.diagnose.flexible_laws)
-                                                : sim::independentLawsOf(e);
+                                                : independentLawsOutside(e, o.diagnose.flexible_laws);
     for (int s = 0; s < o.seeds_per_effect; ++s) {
       std::string law;
       if (o.truth == SelfcheckTruth::kOwnLaws)
@@ -194,7 +205,7 @@ RunData recordIndependent(const sim::IndependentPhysics& truth, const Eigen::Mat
   return r;
 }
 
-sim::IndependentPhysics independentTruth(const Spec& spec, std::mt19937_64& rng, SelfcheckCase& c) {
+sim::IndependentPhysics independentTruth(const Spec& spec, bool flexible, std::mt19937_64& rng, SelfcheckCase& c) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   auto between = [&](double lo, double hi) { return lo + (hi - lo) * uni(rng); };
   sim::IndependentPhysics t;
@@ -202,7 +213,7 @@ sim::IndependentPhysics independentTruth(const Spec& spec, std::mt19937_64& rng,
   std::string forms;
   for (std::size_t k = 0; k < spec.withheld.size(); ++k) {
     const std::string& e = spec.withheld[k];
-    const auto& laws = sim::independentLawsOf(e);
+    const std::vector<std::string> laws = independentLawsOutside(e, flexible);
     const std::string law = spec.withheld.size() == 1 ? spec.law : laws[(spec.seed + k) % laws.size()];
     const auto [lo, hi] = sim::independentStrengthRange(e, law);
     const double strength = between(lo, hi);
@@ -281,7 +292,7 @@ std::vector<RunData> caseRuns(const Spec& spec, const SelfcheckOptions& o, Selfc
   const Eigen::MatrixXd train_u = excitationCommands(o.train_s, rate, spec.seed * 2 + 1);
   const Eigen::MatrixXd held_u = excitationCommands(o.heldout_s, rate, spec.seed * 2 + 2);
   if (o.truth == SelfcheckTruth::kIndependent) {
-    const sim::IndependentPhysics truth = independentTruth(spec, rng, c);
+    const sim::IndependentPhysics truth = independentTruth(spec, o.diagnose.flexible_laws, rng, c);
     c.effect_size = effectSize(truth, held_u);
     return {recordIndependent(truth, train_u, spec.seed, "train"),
             recordIndependent(truth, held_u, spec.seed + 1000, "held-out")};

@@ -181,8 +181,12 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     if (stiffening_law_ == StiffeningLaw::kPower && c.stiffening.static_share > 0.0)
       target /= std::pow(stiffer, c.stiffening.static_share);
   }
-  // Semi-implicit Euler on theta'' = w^2 (target - theta) - 2 zeta w theta'.
-  bend_rate_ += (omega * omega * (target - bend_) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
+  // Semi-implicit Euler on theta'' = w^2 (target - spring(theta)) - 2 zeta w theta',
+  // spring(theta) = theta, or theta (1 + per_rad2 |theta|^2) for a hardening "power" stiffening.
+  Eigen::Vector2d spring = bend_;
+  if (c.stiffening.enabled && stiffening_law_ == StiffeningLaw::kPower && c.stiffening.per_rad2 > 0.0)
+    spring *= 1.0 + c.stiffening.per_rad2 * bend_.squaredNorm();
+  bend_rate_ += (omega * omega * (target - spring) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
   bend_ += bend_rate_ * dt_;
 }
 

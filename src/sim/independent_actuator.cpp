@@ -17,7 +17,7 @@ const std::map<std::string, std::vector<std::string>>& laws() {
   static const std::map<std::string, std::vector<std::string>> l = {
       {"deadzone", {"logistic", "cubic_onset", "sticking"}},
       {"hysteresis", {"bouc_wen", "preisach", "backlash"}},
-      {"stiffening", {"duffing", "tanh_strain", "saturating_exp"}},
+      {"stiffening", {"duffing", "tanh_strain", "saturating_exp", "limiting_stretch"}},
       {"coupling", {"exponential", "quadratic", "crosstalk"}},
       {"pneumatic_lag", {"two_volume", "pressure_dependent", "quantised_valve"}},
       {"creep", {"prony", "power_law", "asymmetric"}},
@@ -71,6 +71,7 @@ std::pair<double, double> independentStrengthRange(const std::string& effect, co
                                                                      {"stiffening.duffing", {0.4, 1.2}},
                                                                      {"stiffening.tanh_strain", {0.7, 1.3}},
                                                                      {"stiffening.saturating_exp", {2.0, 5.0}},
+                                                                     {"stiffening.limiting_stretch", {0.4, 0.8}},
                                                                      {"coupling.exponential", {1.0, 2.5}},
                                                                      {"coupling.quadratic", {0.1, 0.3}},
                                                                      {"coupling.crosstalk", {0.15, 0.35}},
@@ -271,12 +272,18 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
   double omega = 2.0 * kPi * ph.natural_freq_hz;
   if (ph.stiffening == "saturating_exp")
     omega *= std::sqrt(1.0 + ph.stiffening_strength * (1.0 - std::exp(-sum_p / 0.15)));
-  // Velocity Verlet on theta'' = w^2 (target - theta - duffing) - 2 zeta w theta'.
+  // Velocity Verlet on theta'' = w^2 (target - spring(theta)) - 2 zeta w theta'.
   auto accel = [&](const Eigen::Vector2d& x, const Eigen::Vector2d& v) {
     Eigen::Vector2d spring = x;
     if (ph.stiffening == "duffing") {
       const double theta0 = 20.0 * kDeg;
       spring *= 1.0 + ph.stiffening_strength * x.squaredNorm() / (theta0 * theta0);
+    }
+    if (ph.stiffening == "limiting_stretch") {
+      // Gent-like: the stiffness diverges as the bend nears a limiting angle
+      // of 40 deg / sqrt(strength) (capped at 10x just short of it).
+      const double theta0 = 40.0 * kDeg;
+      spring /= 1.0 - std::min(0.9, ph.stiffening_strength * x.squaredNorm() / (theta0 * theta0));
     }
     return Eigen::Vector2d(omega * omega * (target - spring) - 2.0 * ph.damping_ratio * omega * v);
   };

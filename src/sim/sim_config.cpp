@@ -46,6 +46,7 @@ std::vector<Field> fields(SimConfig& c) {
       {"stiffening", {"per_bar", &c.stiffening.per_bar, 0.0, 60.0, "1/bar"}},
       {"stiffening", {"exponent", &c.stiffening.exponent, 0.5, 3.0, ""}, "power"},
       {"stiffening", {"static_share", &c.stiffening.static_share, 0.0, 1.0, ""}, "power"},
+      {"stiffening", {"per_rad2", &c.stiffening.per_rad2, 0.0, 40.0, "1/rad^2"}, "power"},
       {"coupling", {"per_bar", &c.coupling.per_bar, 0.0, 2.5, "1/bar"}},
       {"pneumatic_lag", {"fill_time_constant_s", &c.pneumatic_lag.fill_time_constant_s, 0.005, 2.0, "s"}},
       {"pneumatic_lag", {"vent_time_constant_s", &c.pneumatic_lag.vent_time_constant_s, 0.005, 2.0, "s"}},

@@ -2,14 +2,16 @@
 // sharing none of its effect laws: the source of "real" data for checks that
 // must not test plsa on its own formulations (the diagnosis self-check, the
 // identification generalisation benchmark). Every effect has three or more
-// laws, each outside the family the diagnosis calibrates for that effect
+// laws outside the family the diagnosis calibrates for that effect
 // (Bouc-Wen, Preisach and backlash hysteresis; logistic, cubic-onset and
-// sticking deadzones; Duffing, tanh and saturating-exponential stiffening;
-// two-volume, pressure-dependent and quantised-valve pneumatics; Prony-series
-// and asymmetric creep; sensor scale, warm-up and wandering offsets...). Its
-// nominal physics has the same parts as Actuator's (first-order chambers,
-// a static elongation map, a second-order bending mode, constant curvature),
-// each integrated its own way.
+// sticking deadzones; limiting-stretch, tanh and saturating-exponential
+// stiffening; two-volume, pressure-dependent and quantised-valve pneumatics;
+// Prony-series and asymmetric creep; sensor scale, warm-up and wandering
+// offsets...), plus Duffing stiffening, which the diagnosis's flexible
+// stiffening contains (the self-check leaves it out; identification keeps
+// it). Its nominal physics has the same parts as Actuator's (first-order
+// chambers, a static elongation map, a second-order bending mode, constant
+// curvature), each integrated its own way.
 #pragma once
 
 #include <array>
@@ -50,7 +52,9 @@ struct IndependentPhysics {
   double hysteresis_strength = 0.12;
   /// stiffening: "duffing" (a cubic spring in the bending angle),
   /// "tanh_strain" (strain saturating), "saturating_exp" (stiffness grows
-  /// as 1 - exp(-sum p / 0.15 bar)); strength: dimensionless.
+  /// as 1 - exp(-sum p / 0.15 bar)), "limiting_stretch" (Gent-like: the
+  /// stiffness 1 / (1 - strength (theta / 40 deg)^2), capped at 10x, grows
+  /// without bound toward a limiting bend); strength: dimensionless.
   std::string stiffening;
   double stiffening_strength = 1.0;
   /// coupling: "exponential" (strain x exp(-k others)), "quadratic" (x (1 -

@@ -89,6 +89,10 @@ struct SimConfig {
     /// stiffer spring under the same drive bends less, as a hardening
     /// material does.
     double static_share = 0.0;
+    /// Only for "power": the bending spring also hardens with the bending
+    /// angle theta (rad), restoring force theta (1 + per_rad2 theta^2), as a
+    /// Duffing spring; 0 is the spring of the other laws.
+    double per_rad2 = 0.0;
   } stiffening;
   struct Coupling {
     bool enabled = true;

@@ -1,12 +1,13 @@
 // plsa-bench: latency of the real-time predictor on the models users run.
-//   plsa-bench --latency [--calls N] [--json FILE]
+//   plsa-bench --latency [--calls N] [--only NAME] [--json FILE]
 //       per call p50/p99.9 of update and predict on models identified by plsa
 //       itself (the demo's and its structural variants, 1-3 chambers, input and
 //       output side, with and without lag, slow pole, tip frame), against a
 //       straightforward dynamic implementation of the same model; the
 //       sensitivity of an 80-step prediction to its plan; after a
 //       125 s hold; 100 segments of the demo's model per tick; and the
-//       synthetic output-side models of earlier benchmarks.
+//       synthetic output-side models of earlier benchmarks. --only NAME
+//       measures just the model of that name (e.g. "demo"), for profiling.
 //   plsa-bench --loop SECONDS [--segments N] [--json FILE]
 //       an 80 Hz loop on absolute deadlines (clock_nanosleep) with SCHED_FIFO
 //       and locked, pre-faulted memory where permitted: wake-up jitter, work
@@ -280,17 +281,19 @@ Drive syntheticDrive(int chambers) {
   return d;
 }
 
-void runLatency(long calls) {
+void runLatency(long calls, const std::string& only) {
   std::printf("plsa-bench latency: %ld calls per line (predict: %ld), p50 and p99.9 of each call\n", calls,
               std::max(1000L, calls / 2));
   const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, say);
   const plsa::io::Log run = plsa::bench::drivingRun(1);
   for (const BenchModel& bm : models) {
+    if (!only.empty() && bm.name != only) continue;
     Drive d;
     d.u = run.columnsOf(bm.model.inputs);
     d.y = run.columnsOf(bm.model.outputs);
     measureModel(bm, d, calls);
   }
+  if (!only.empty()) return;
   Drive d;
   d.u = run.columnsOf(models.front().model.inputs);
   d.y = run.columnsOf(models.front().model.outputs);
@@ -365,7 +368,7 @@ BENCHMARK(BM_DemoUpdate)->Name("Predictor<>::update (the demo's model)");
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string json;
+  std::string json, only;
   long calls = 200'000;
   double loop_s = 0;
   int segments = 100;
@@ -390,6 +393,8 @@ int main(int argc, char** argv) {
       segments = std::stoi(value("--segments"));
     else if (a == "--json")
       json = value("--json");
+    else if (a == "--only")
+      only = value("--only");
     else
       rest.push_back(argv[i]);
   }
@@ -398,7 +403,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (latency || loop_s > 0) {
-    if (latency) runLatency(calls);
+    if (latency) runLatency(calls, only);
     if (loop_s > 0) runLoop(loop_s, segments);
     writeJson(json);
     return 0;

@@ -394,10 +394,32 @@ TEST(Predictor, SwapToOtherPolesCarriesTheFilterStates) {
 // A step of the held input: the lagged schedule then crosses grid cells
 // during the horizon, which the closed-form held path takes stretch by
 // stretch. It must equal a plan repeating the input, step by step.
+// The closed form splits each mode's lag sums into partial fractions by
+// 1 / (lambda - rho^d); a lag whose pole rho or rho^2 equals a mode's pole, or
+// comes just past the floor where the split would lose digits, must agree too.
+std::vector<DioPwlObfModel> lagsNearThePoles(const DioPwlObfModel& base) {
+  const double pole = base.poles[0][0].sections()[0].pole.real(), dt = base.sample_time_s;
+  std::vector<DioPwlObfModel> out;
+  for (const double rho : {pole, std::sqrt(pole), pole + 1.5 * kLagGapFloor, std::sqrt(pole + 1.5 * kLagGapFloor)}) {
+    DioPwlObfModel m = base;
+    m.schedule_lag_s = -dt / std::log(rho);
+    out.push_back(m);
+  }
+  return out;
+}
+
 TEST(Predictor, HeldInputWhoseLagCrossesCellsMatchesTheSteppedPlan) {
   const Data& d = data();
-  for (const DioPwlObfModel* model : {&d.input_side, &d.tip}) {
-    Predictor<5> p(*model);
+  std::vector<DioPwlObfModel> models = {d.input_side, d.tip};
+  for (const DioPwlObfModel& m : lagsNearThePoles(d.input_side)) models.push_back(m);
+  for (std::size_t v = 0; v < 4; ++v) {  // mode 0 and rho^d: on the floor's two sides
+    const auto compiled = compileModel(models[v + 2], PredictorOptions{});
+    const ModalForm& f = compiled->modal_form;
+    ASSERT_EQ(f.lambda(0), d.input_side.poles[0][0].sections()[0].pole.real());
+    EXPECT_EQ(f.lag_gap_inverse(0, static_cast<Eigen::Index>(v % 2)) == 0.0, v < 2) << "lag variant " << v;
+  }
+  for (const DioPwlObfModel& model : models) {
+    Predictor<5> p(model);
     ASSERT_TRUE(p.heldPathIsModal());
     Eigen::MatrixXd held(400, 2), stepped(400, 2);
     double worst = 0.0;

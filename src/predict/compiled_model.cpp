@@ -132,6 +132,43 @@ Eigen::MatrixXd eigenbasis(const StateSpaceForm& s, std::size_t group, int n) {
   return v;
 }
 
+// A held input's lagged schedule in closed form (ModalForm::lag_sum): the
+// stretch's KS_d columns are (S_lambda - S_rate) / (lambda - rate), rate =
+// rho^d, so the rows need only the power sums of the modes and of each rate:
+// each output's power_sum gains the columns S_rate, and lag_gap_inverse holds
+// 1 / (lambda - rate), except where the two nearly coincide (the quotient
+// would lose digits) and the pair keeps its own KS column (lag_coincident).
+void addLagRates(const CompiledModel& c, ModalForm& f, int orders) {
+  const auto modes = static_cast<Eigen::Index>(f.lambda.size());
+  f.lag_power.resize(std::max(c.max_horizon, 4) + 1);
+  f.lag_power(0) = 1.0;
+  for (Eigen::Index h = 1; h < f.lag_power.size(); ++h)
+    f.lag_power(h) = f.lag_power(h - 1) * c.schedule_pole < 1e-200 ? 0.0 : f.lag_power(h - 1) * c.schedule_pole;
+  f.lag_gap_inverse = Eigen::MatrixXd::Zero(modes, orders);
+  f.lag_coincident.assign(static_cast<std::size_t>(c.n_y), {});
+  for (Eigen::Index q = 0; q < modes; ++q)
+    for (int d = 1; d <= orders; ++d) {
+      const double gap = f.lambda(q) - std::pow(c.schedule_pole, d);
+      if (std::abs(gap) >= kLagGapFloor)
+        f.lag_gap_inverse(q, d - 1) = 1.0 / gap;
+      else
+        f.lag_coincident[static_cast<std::size_t>(q / c.poles % c.n_y)].push_back({static_cast<int>(q), d});
+    }
+  for (Eigen::MatrixXd& sum : f.power_sum) {
+    const Eigen::Index first = sum.cols();
+    sum.conservativeResize(Eigen::NoChange, first + orders);
+    for (int d = 1; d <= orders; ++d) {
+      const double rate = std::pow(c.schedule_pole, d);
+      double power = 1.0, acc = 0.0;
+      for (int h = 0; h < c.max_horizon; ++h) {
+        acc += power;
+        sum(h, first + d - 1) = acc;
+        power = power * rate < 1e-200 ? 0.0 : power * rate;  // no subnormal powers
+      }
+    }
+  }
+}
+
 // Stage 3 (when every bank allows): the modal form.
 void compileModal(CompiledModel& c) {
   const StateSpaceForm& s = c.state_space;
@@ -209,7 +246,8 @@ void compileModal(CompiledModel& c) {
   }
   const auto orders = static_cast<int>(c.node_grid.inputs.size());
   const std::size_t doubles = static_cast<std::size_t>(c.max_horizon) * static_cast<std::size_t>(Q) * (orders + 1);
-  if (c.input_side && c.schedule_pole > 0.0 && orders > 0 && doubles <= kMaxHeldTableDoubles)
+  if (c.input_side && c.schedule_pole > 0.0 && orders > 0 && doubles <= kMaxHeldTableDoubles) {
+    addLagRates(c, f, orders);
     for (int o = 0; o < c.n_y; ++o) {
       const int width = (orders + 1) * n;
       Eigen::MatrixXd sum(c.max_horizon, c.n_u * width);
@@ -229,6 +267,7 @@ void compileModal(CompiledModel& c) {
         }
       f.lag_sum.push_back(std::move(sum));
     }
+  }
   c.modal_form = std::move(f);
   c.modal = true;
 }

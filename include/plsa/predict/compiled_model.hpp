@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -36,6 +37,10 @@ using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eig
 /// in doubles (32 MB); beyond it a held input with an unsettled lag steps.
 inline constexpr std::size_t kMaxHeldTableDoubles = std::size_t{4} << 20;
 
+/// Below this |lambda - rho^d| a mode and a rate of the lag count as one
+/// (their partial fraction would lose about log10(1 / gap) digits).
+inline constexpr double kLagGapFloor = 1e-3;
+
 struct ModalForm {
   Eigen::VectorXd lambda;   ///< [modes] the pole
   Eigen::VectorXd beta;     ///< [modes] (V^-1 B) of the mode's bank
@@ -51,7 +56,8 @@ struct ModalForm {
   /// Per input j: [nodes * channels(j)] x [block], the coefficients
   /// transposed so a node's contribution to all of j's modes is one row.
   std::vector<RowMajorMatrix> by_copy;
-  /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s.
+  /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s;
+  /// with lag_sum, D more columns: the same sums of rho^d, d = 1..D.
   std::vector<Eigen::MatrixXd> power_sum;
   /// Input side with a schedule lag: a held input's lagged schedule moves as
   /// rho^h, and within a grid cell each mode's level is a polynomial of
@@ -62,6 +68,14 @@ struct ModalForm {
   /// the input's poles: one table product per input that moves.
   /// Empty when there is no lag or the tables would pass kMaxHeldTableDoubles.
   std::vector<Eigen::MatrixXd> lag_sum;
+  /// With lag_sum: KS_d = (S_lambda - S_{rho^d}) / (lambda - rho^d), so a
+  /// stretch's rows are one product with power_sum. [modes] x [D]: 1 / (lambda -
+  /// rho^d), 0 for the pairs closer than kLagGapFloor, which instead take their
+  /// KS_d column from lag_sum: lag_coincident [output]: (mode, d).
+  Eigen::MatrixXd lag_gap_inverse;
+  /// With lag_sum: rho^h for h = 0..max(max_horizon, 4) (0 once below 1e-200).
+  Eigen::VectorXd lag_power;
+  std::vector<std::vector<std::pair<int, int>>> lag_coincident;
   std::vector<std::vector<int>> modes_of_output;
   /// [o * inputs + j]: the eigenbasis V and its inverse of bank (o, j), to
   /// carry states across a model swap.

@@ -25,7 +25,8 @@ class HeldLaggedForm {
     const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
     for (Eigen::VectorXd* v : {&merged_, &g_, &g_next_}) v->setZero(slots);
     held_levels_.setZero(slots * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
-    lag_drive_.setZero(static_cast<Eigen::Index>(m.poles) * static_cast<Eigen::Index>(m.node_grid.inputs.size() + 1));
+    lag_drive_.setZero(static_cast<Eigen::Index>(m.n_u) * m.poles +
+                       static_cast<Eigen::Index>(m.node_grid.inputs.size()));
     work_us_.setZero(m.n_u);
   }
 
@@ -35,6 +36,7 @@ class HeldLaggedForm {
     const int block = f.block, per_input = m.n_y * m.poles;
     PLSA_DEBUG_ASSERT(m.node_grid.inputs.size() <= 4 && static_cast<int>(f.lag_sum.size()) == m.n_y);
     vc_ = &vc;
+    lag_power_ = &f.lag_power;
     merged_.setZero();
     for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta.segment(j * per_input, per_input);
     const int inputs = static_cast<int>(m.node_grid.inputs.size());
@@ -55,9 +57,9 @@ class HeldLaggedForm {
 
  private:
   // A held input's lagged scheduling input s, h steps ahead.
-  double laggedAt(int s, int h, double pole) const noexcept {
+  double laggedAt(int s, int h) const noexcept {
     const auto ss = static_cast<std::size_t>(s);
-    return lag_target_[ss] + (lag_start_[ss] - lag_target_[ss]) * std::pow(pole, h);
+    return lag_target_[ss] + (lag_start_[ss] - lag_target_[ss]) * (*lag_power_)(h);
   }
 
   // The cell of a scheduling input at x (as PwlPartition::blend takes it):
@@ -76,9 +78,9 @@ class HeldLaggedForm {
     int last = horizon - 1;
     for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s) {
       const std::vector<double>& lv = m.node_grid.levels[s];
-      const int cell = cellOf(lv, laggedAt(static_cast<int>(s), first, pole));
+      const int cell = cellOf(lv, laggedAt(static_cast<int>(s), first));
       // The first later step in another cell: its estimate from the logarithm, then checked.
-      const double x = laggedAt(static_cast<int>(s), first, pole), target = lag_target_[s];
+      const double x = laggedAt(static_cast<int>(s), first), target = lag_target_[s];
       if (cellOf(lv, target) == cell || x == target) continue;
       const double bound = target < x
                                ? lv[static_cast<std::size_t>(std::max(cell, 0))]
@@ -87,7 +89,7 @@ class HeldLaggedForm {
       int h = first + 1;
       if (ratio > 0.0 && ratio < 1.0)
         h = std::max(first + 1, first + static_cast<int>(std::log(ratio) / std::log(pole)) - 1);
-      while (h <= last && cellOf(lv, laggedAt(static_cast<int>(s), h, pole)) == cell) ++h;
+      while (h <= last && cellOf(lv, laggedAt(static_cast<int>(s), h)) == cell) ++h;
       last = std::min(last, h - 1);
     }
     return last;
@@ -107,7 +109,7 @@ class HeldLaggedForm {
     for (int s = 0; s < inputs; ++s) {
       const auto ss = static_cast<std::size_t>(s);
       const std::vector<double>& lv = grid.levels[ss];
-      const double x = laggedAt(s, first, m.schedule_pole), target = lag_target_[ss];
+      const double x = laggedAt(s, first), target = lag_target_[ss];
       const int cell = cellOf(lv, x);
       if (cell < 0 || cell == static_cast<int>(lv.size()) - 1) {  // outside: the edge node, weight 1
         for (int c = 0; c < corners; ++c)
@@ -140,45 +142,66 @@ class HeldLaggedForm {
           if (v == 0.0) continue;
           const double* row =
               table + static_cast<std::ptrdiff_t>(corner_node_[static_cast<std::size_t>(c)] * channels + ch) * block;
-          for (int d = 0; d <= inputs; ++d) {
-            const double w = v * corner_poly_[static_cast<std::size_t>(c)][static_cast<std::size_t>(d)];
-            if (w == 0.0) continue;
-            double* level = held_levels_.data() + static_cast<std::ptrdiff_t>(d) * merged_.size() + j * block;
-            for (int i = 0; i < block; ++i) level[i] += w * row[i];
-          }
+          std::array<double, 5> w{};
+          for (int d = 0; d <= inputs; ++d)
+            w[static_cast<std::size_t>(d)] = v * corner_poly_[static_cast<std::size_t>(c)][static_cast<std::size_t>(d)];
+          spreadRow(row, block, w.data(), inputs + 1, merged_.size(), held_levels_.data() + j * block);
         }
     }
   }
 
   // Rows first..last: y = base + sum over each output's modes of
-  // S(m) zeta(first) + sum_d KS_d(m) beta level_d (rho^d - 1), m = h - first:
-  // one table product per output and input that moves.
+  // S(m) zeta(first) + sum_d KS_d(m) c_d, c_d = beta level_d (rho^d - 1),
+  // m = h - first. With KS_d = (S - S_d) / (lambda - rho^d) (ModalForm::
+  // lag_gap_inverse) that is one product with the power sums of the modes
+  // and of the rates rho^d; the pairs too close to divide add their own KS_d.
   void heldStretchRows(const CompiledModel& m, int first, int last, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
     const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
-    const int rows = last - first + 1, width = (inputs + 1) * n;
+    const int rows = last - first + 1, modes = m.n_u * n;
     const Eigen::Index slots = merged_.size();
     std::array<double, 5> drop{};  // rho^d - 1
-    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(m.schedule_pole, d) - 1.0;
-    auto x = lag_drive_.head(width);
+    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = f.lag_power(d) - 1.0;
+    double* x = lag_drive_.data();
+    const Eigen::Index gaps = f.lag_gap_inverse.rows();
     for (int o = 0; o < m.n_y; ++o) {
-      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
+      for (int j = 0; j < m.n_u; ++j) {
+        for (int i = 0; i < n; ++i) x[j * n + i] = merged_(j * block + o * n + i);
+      }
+      for (int d = 1; d <= inputs; ++d) {  // each mode's c_d / (lambda - rho^d), and their sum for S_{rho^d}
+        double rate = 0.0;
+        const double* level = held_levels_.data() + d * slots;
+        const double* gap = f.lag_gap_inverse.data() + (d - 1) * gaps;
+        for (int j = 0; j < m.n_u; ++j) {
+          const Eigen::Index slot = j * block + o * n, q = (j * m.n_y + o) * n;
+          for (int i = 0; i < n; ++i) {
+            const double c = f.merged_beta(slot + i) * level[slot + i] * drop[static_cast<std::size_t>(d)] * gap[q + i];
+            x[j * n + i] += c;
+            rate -= c;
+          }
+        }
+        x[modes + d - 1] = rate;
+      }
       auto column = out.col(o).segment(first, rows);
       column.setConstant(base_[static_cast<std::size_t>(o)]);
-      for (int j = 0; j < m.n_u; ++j) {
-        bool moves = false;
-        for (int i = 0; i < n; ++i) {
-          const Eigen::Index slot = j * block + o * n + i;
-          x(i) = merged_(slot);
-          for (int d = 1; d <= inputs; ++d)
-            x(d * n + i) = f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)];
-        }
-        for (int k = 0; k < width; ++k) moves = moves || x(k) != 0.0;
-        if (moves)
-          accumulateColumns(table.data() + j * width * table.rows(), table.rows(), rows, width, x.data(),
-                            &out(first, o));
+      const Eigen::MatrixXd& sums = f.power_sum[static_cast<std::size_t>(o)];
+      accumulateMovingGroups(sums.data(), sums.rows(), rows, m.n_u, n, x, column.data());
+      accumulateColumns(sums.data() + modes * sums.rows(), sums.rows(), rows, inputs, x + modes, column.data());
+      const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
+      for (const auto& [q, d] : f.lag_coincident[static_cast<std::size_t>(o)]) {
+        const int j = q / (m.n_y * n), i = q % n;
+        const double c = drive(f, j * block + o * n + i, d, slots, drop);
+        if (c != 0.0)
+          accumulateColumns(table.data() + (j * (inputs + 1) * n + d * n + i) * table.rows(), table.rows(), rows, 1, &c,
+                            column.data());
       }
     }
+  }
+
+  // c_d of a merged mode: beta level_d (rho^d - 1).
+  double drive(const ModalForm& f, Eigen::Index slot, int d, Eigen::Index slots,
+               const std::array<double, 5>& drop) const noexcept {
+    return f.merged_beta(slot) * held_levels_(d * slots + slot) * drop[static_cast<std::size_t>(d)];
   }
 
   // From the last step of one stretch to the first of the next: the modes
@@ -188,9 +211,9 @@ class HeldLaggedForm {
     const int n = m.poles, block = f.block, inputs = static_cast<int>(m.node_grid.inputs.size());
     const int steps = last - first;
     const Eigen::Index slots = merged_.size();
-    const double pole = m.schedule_pole, e = std::pow(pole, steps);
+    const double e = f.lag_power(steps);
     std::array<double, 5> drop{};  // rho^d - 1
-    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = std::pow(pole, d) - 1.0;
+    for (int d = 1; d <= inputs; ++d) drop[static_cast<std::size_t>(d)] = f.lag_power(d) - 1.0;
     const int width = (inputs + 1) * n;
     for (int o = 0; o < m.n_y; ++o) {
       const Eigen::MatrixXd& table = f.lag_sum[static_cast<std::size_t>(o)];
@@ -215,7 +238,7 @@ class HeldLaggedForm {
     }
     // The level one step on, in its new cell, explicitly.
     for (std::size_t s = 0; s < m.node_grid.inputs.size(); ++s)
-      work_us_(m.node_grid.inputs[s]) = laggedAt(static_cast<int>(s), last + 1, pole);
+      work_us_(m.node_grid.inputs[s]) = laggedAt(static_cast<int>(s), last + 1);
     ScheduleBlend blend;
     m.node_partition.blend(work_us_, DirectionState{}, blend);
     for (int j = 0; j < m.n_u; ++j) merged::levelsOfInput<0>(m, j, blend, vc_->data(), g_next_.data() + j * block);
@@ -223,7 +246,8 @@ class HeldLaggedForm {
       merged_(k) = f.merged_lambda(k) * merged_(k) + f.merged_beta(k) * (g_next_(k) - g_(k));
   }
 
-  const Eigen::VectorXd* vc_ = nullptr;  // the channels of the run under way
+  const Eigen::VectorXd* vc_ = nullptr;         // the channels of the run under way
+  const Eigen::VectorXd* lag_power_ = nullptr;  // the model's rho^h
   Eigen::VectorXd merged_, g_, g_next_, work_us_;
   // The scheduling inputs' start and target, the stretch's corners (node,
   // weight polynomial) and level polynomials.

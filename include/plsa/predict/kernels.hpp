@@ -10,6 +10,9 @@
 #if defined(__SSE2__)
 #include <xmmintrin.h>
 #endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#endif
 
 // x86-64 with GCC or Clang: the hot kernels also come compiled for AVX2 and
 // FMA, chosen at run time when the processor has them.
@@ -67,6 +70,25 @@ inline void accumulateColumns(const double* a, Eigen::Index ld, int rows, int co
     accumulateColumnsGeneric(a, ld, rows, cols, x, y);
 }
 
+/// The same over `groups` groups of `group` columns (one input's modes
+/// each), skipping the groups whose x is all zero (an input at rest): one
+/// product per run of groups that move.
+inline void accumulateMovingGroups(const double* a, Eigen::Index ld, int rows, int groups, int group, const double* x,
+                                   double* y) noexcept {
+  int run = 0;  // groups in the run that ends before g
+  for (int g = 0; g <= groups; ++g) {
+    bool moves = false;
+    for (int i = 0; g < groups && i < group; ++i) moves = moves || x[g * group + i] != 0.0;
+    if (moves) {
+      ++run;
+      continue;
+    }
+    const int start = (g - run) * group;
+    if (run > 0) accumulateColumns(a + start * ld, ld, rows, run * group, x + start, y);
+    run = 0;
+  }
+}
+
 /// y[0, n) = a x[0, n), or += with `add`, in a generic and an AVX2 build.
 PLSA_ALWAYS_INLINE void addScaledBody(const double* __restrict x, double a, Eigen::Index n, double* __restrict y,
                                       bool add) noexcept {
@@ -88,39 +110,88 @@ inline void addScaled(const double* x, double a, Eigen::Index n, double* y, bool
     addScaledGeneric(x, a, n, y, add);
 }
 
+/// levels[d * stride, + n) += w[d] row[0, n) for d < count: one table row
+/// into several weighted sums (zero weights skipped), generic and AVX2.
+PLSA_ALWAYS_INLINE void spreadRowBody(const double* __restrict row, int n, const double* __restrict w, int count,
+                                      Eigen::Index stride, double* __restrict levels) noexcept {
+  for (int d = 0; d < count; ++d) {
+    const double wd = w[d];
+    if (wd == 0.0) continue;
+    double* __restrict level = levels + d * stride;
+    for (int i = 0; i < n; ++i) level[i] += wd * row[i];
+  }
+}
+inline void spreadRowGeneric(const double* row, int n, const double* w, int count, Eigen::Index stride,
+                             double* levels) noexcept {
+  spreadRowBody(row, n, w, count, stride, levels);
+}
+PLSA_TARGET_AVX2 inline void spreadRowAvx2(const double* row, int n, const double* w, int count, Eigen::Index stride,
+                                           double* levels) noexcept {
+  spreadRowBody(row, n, w, count, stride, levels);
+}
+inline void spreadRow(const double* row, int n, const double* w, int count, Eigen::Index stride,
+                      double* levels) noexcept {
+  if (predictorUsesAvx2())
+    spreadRowAvx2(row, n, w, count, stride, levels);
+  else
+    spreadRowGeneric(row, n, w, count, stride, levels);
+}
+
+/// The turn (rad) from direction (px, py) to (x, y) by the arctangent
+/// series, into `turn`; 1 when the turn is too large for the series (or
+/// points back), else 0.
+PLSA_ALWAYS_INLINE double tipTurnOf(double px, double py, double x, double y, double& turn) noexcept {
+  const double cross = px * y - py * x, dot = px * x + py * y;
+  const double t = cross / dot, t2 = t * t;
+  constexpr double c3 = -1.0 / 3, c5 = 1.0 / 5, c7 = -1.0 / 7, c9 = 1.0 / 9, c11 = -1.0 / 11, c13 = 1.0 / 13,
+                   c15 = -1.0 / 15;
+  turn = t * (1.0 + t2 * (c3 + t2 * (c5 + t2 * (c7 + t2 * (c9 + t2 * (c11 + t2 * (c13 + t2 * c15)))))));
+  return (dot > 0.0) & (std::abs(cross) <= 0.1 * dot) ? 0.0 : 1.0;
+}
+
 /// The turn (rad) from each tip-frame row (x[h], y[h]) to the next, the
 /// first from (x0, y0), by the arctangent series (double precision for a
 /// tangent up to 0.1), into `turn`; false when some turn is too large for it
-/// (or a row points back), and the caller goes row by row with atan2. Also
-/// each row's length into `bend`. Vectorises: no row waits for another.
+/// (or a row points back), and the caller goes row by row with atan2.
+/// Vectorises: no row waits for another, and the first row (the only one
+/// from outside the arrays) is taken on its own.
 PLSA_ALWAYS_INLINE bool tipTurnsBody(const double* __restrict x, const double* __restrict y, int rows, double x0,
-                                     double y0, double* __restrict turn, double* __restrict bend) noexcept {
-  int rough = 0;
-  for (int h = 0; h < rows; ++h) {
-    const double px = h ? x[h - 1] : x0, py = h ? y[h - 1] : y0;
-    const double cross = px * y[h] - py * x[h], dot = px * x[h] + py * y[h];
-    rough |= static_cast<int>(!((dot > 0.0) & (std::abs(cross) <= 0.1 * dot)));
-    const double t = cross / dot, t2 = t * t;
-    turn[h] =
-        t *
-        (1.0 + t2 * (-1.0 / 3 +
-                     t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 * (1.0 / 13 - t2 / 15)))))));
-    bend[h] = std::sqrt(x[h] * x[h] + y[h] * y[h]);
-  }
-  return rough == 0;
+                                     double y0, double* __restrict turn) noexcept {
+  if (rows <= 0) return true;
+  double rough = tipTurnOf(x0, y0, x[0], y[0], turn[0]);
+  for (int h = 1; h < rows; ++h) rough += tipTurnOf(x[h - 1], y[h - 1], x[h], y[h], turn[h]);
+  return rough == 0.0;
 }
+
+/// tipTurnsBody, and each row's length into `bend`: by Eigen's packet square
+/// root in the generic build (std::sqrt's errno would keep a loop scalar),
+/// four rows at a time in the AVX2 build.
 inline bool tipTurnsGeneric(const double* x, const double* y, int rows, double x0, double y0, double* turn,
                             double* bend) noexcept {
-  return tipTurnsBody(x, y, rows, x0, y0, turn, bend);
+  const bool smooth = tipTurnsBody(x, y, rows, x0, y0, turn);
+  const Eigen::Map<const Eigen::ArrayXd> xs(x, rows), ys(y, rows);
+  Eigen::Map<Eigen::ArrayXd>(bend, rows) = (xs * xs + ys * ys).sqrt();
+  return smooth;
 }
+#if PLSA_PREDICT_AVX2
 PLSA_TARGET_AVX2 inline bool tipTurnsAvx2(const double* x, const double* y, int rows, double x0, double y0,
                                           double* turn, double* bend) noexcept {
-  return tipTurnsBody(x, y, rows, x0, y0, turn, bend);
+  const bool smooth = tipTurnsBody(x, y, rows, x0, y0, turn);
+  int h = 0;
+  for (; h + 4 <= rows; h += 4) {
+    const __m256d xs = _mm256_loadu_pd(x + h), ys = _mm256_loadu_pd(y + h);
+    _mm256_storeu_pd(bend + h, _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(xs, xs), _mm256_mul_pd(ys, ys))));
+  }
+  for (; h < rows; ++h) bend[h] = std::sqrt(x[h] * x[h] + y[h] * y[h]);
+  return smooth;
 }
+#endif
 inline bool tipTurns(const double* x, const double* y, int rows, double x0, double y0, double* turn,
                      double* bend) noexcept {
-  return predictorUsesAvx2() ? tipTurnsAvx2(x, y, rows, x0, y0, turn, bend)
-                             : tipTurnsGeneric(x, y, rows, x0, y0, turn, bend);
+#if PLSA_PREDICT_AVX2
+  if (predictorUsesAvx2()) return tipTurnsAvx2(x, y, rows, x0, y0, turn, bend);
+#endif
+  return tipTurnsGeneric(x, y, rows, x0, y0, turn, bend);
 }
 
 /// Filter states smaller than this are zero (far below any measurable

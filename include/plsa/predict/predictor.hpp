@@ -408,7 +408,7 @@ class NStepPredictor {
       auto column = out.col(o).head(horizon);
       column.setConstant(work_y_(o));
       const Eigen::MatrixXd& sums = f.power_sum[static_cast<std::size_t>(o)];
-      accumulateColumns(sums.data(), sums.rows(), horizon, static_cast<int>(zeta.size()), zeta.data(), column.data());
+      accumulateMovingGroups(sums.data(), sums.rows(), horizon, m.n_u, m.poles, zeta.data(), column.data());
     }
     return PredictorStatus::kOk;
   }

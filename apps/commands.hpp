@@ -57,6 +57,7 @@ void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
+void addConvertCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);
 void addCanBridgeCommand(CLI::App& app);
 void addDiagnoseCommands(CLI::App& app);

@@ -30,6 +30,7 @@ struct CrossvalArgs {
   std::string json;
   IdentifyOptions options;
   std::string channel = "PLSA_STATE";
+  std::string can_profile;
 };
 
 // The models' keys in the JSON (MATLAB's jsondecode and pandas take them as
@@ -50,6 +51,7 @@ void runCrossval(CrossvalArgs& a) {
   ro.required = a.inputs;
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
   ro.lcm_channel = a.channel;
+  ro.can_profile = a.can_profile;
   std::vector<io::Log> logs;
   refuseOverwritingInputs(a.json, "--json", files, "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
@@ -161,6 +163,8 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
+  c->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+      ->check(CLI::ExistingFile);
   c->callback([a] { runCrossval(*a); });
 }
 

@@ -26,6 +26,7 @@ struct DiagnoseArgs {
   std::vector<std::string> pressures = io::standard_columns::pressures();
   diagnose::DiagnoseOptions options;
   std::string channel = "PLSA_STATE";
+  std::string can_profile;
 };
 
 void runDiagnose(DiagnoseArgs& a) {
@@ -44,6 +45,7 @@ void runDiagnose(DiagnoseArgs& a) {
     ro.required = a.columns.inputs;
     ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());
     ro.lcm_channel = a.channel;
+    ro.can_profile = a.can_profile;
     runs.push_back(diagnose::runFromLog(readLogWithWarnings(path, ro, "diagnose"), a.columns, config.max_pressure_bar));
   }
   a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
@@ -135,6 +137,8 @@ void addDiagnoseCommands(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
+  c->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+      ->check(CLI::ExistingFile);
   c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');

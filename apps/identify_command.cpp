@@ -27,6 +27,7 @@ struct IdentifyArgs {
   bool compare_poles = false;
   IdentifyOptions options;
   std::string channel = "PLSA_STATE";
+  std::string can_profile;
 };
 
 struct ValidateArgs {
@@ -37,13 +38,15 @@ struct ValidateArgs {
   std::string csv;
   SimulationStart start;
   std::string channel = "PLSA_STATE";
+  std::string can_profile;
 };
 
 std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
-                              const std::string& tool, const std::string& channel) {
+                              const std::string& tool, const std::string& channel, const std::string& can_profile) {
   io::CsvReadOptions ro;
   ro.required = required;
   ro.lcm_channel = channel;
+  ro.can_profile = can_profile;
   std::vector<io::Log> logs;
   for (const auto& p : logPaths(paths, tool, false)) logs.push_back(readLogWithWarnings(p, ro, tool));
   return logs;
@@ -58,7 +61,7 @@ void runIdentify(IdentifyArgs& a) {
   std::vector<std::string> required = a.inputs;
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
   refuseOverwritingInputs(a.out, "--out", a.logs, "plsa identify");
-  const auto logs = readLogs(a.logs, required, "identify", a.channel);
+  const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
   IdentifyReport report;
   const DioPwlObfModel model = identifyModel(logs, o, &report);
   for (const auto& pp : report.pairs)
@@ -113,7 +116,7 @@ void runValidate(const ValidateArgs& a) {
   std::vector<std::string> required = model.inputs;
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   required.push_back(io::standard_columns::kTime);  // the sample rate and gaps are checked against the model's
-  const io::Log log = readLogs({a.log}, required, "validate", a.channel).front();
+  const io::Log log = readLogs({a.log}, required, "validate", a.channel, a.can_profile).front();
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   for (const std::string& w : inputCoverageWarnings(model, v.outside_training))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
@@ -207,6 +210,8 @@ void addIdentifyCommands(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   id->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
+  id->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+      ->check(CLI::ExistingFile);
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
@@ -323,6 +328,8 @@ void addIdentifyCommands(CLI::App& app) {
   va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
   va->add_option("--channel", v->channel, "LCM logs: the channel of the actuator-state messages");
+  va->add_option("--can-profile", v->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+      ->check(CLI::ExistingFile);
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
                  "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "
                  "simulation, which is scored after them (default 5); 0 carries the training run's yaw")

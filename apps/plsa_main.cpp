@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "plsa/can/candump_log.hpp"
 #if PLSA_WITH_LCM
 #include "plsa/lcm/lcm_log.hpp"
 #endif
@@ -19,6 +20,7 @@ constexpr int kExitFailed = 1, kExitUsage = 2;
 int main(int argc, char** argv) {
   // Progress reaches a pipe or a log line by line, not in one burst at exit.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  plsa::can::registerLogFormats();  // candump bus logs, read wherever a tool takes a log
 #if PLSA_WITH_LCM
   plsa::lcm::registerLogFormats();  // LCM event logs, read and written wherever a tool takes a log
 #endif
@@ -34,6 +36,7 @@ int main(int argc, char** argv) {
 #endif
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
+  plsa::app::addConvertCommand(app);
   plsa::app::addGeneraliseCommand(app);
 #if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);

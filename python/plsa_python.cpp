@@ -16,7 +16,9 @@
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/eval/validation.hpp"
 #include "plsa/io/csv_log.hpp"
+#include "plsa/io/log_readers.hpp"
 #include "plsa/model/model_file.hpp"
+#include "plsa/can/candump_log.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
@@ -28,7 +30,7 @@ namespace {
 std::vector<plsa::io::Log> readLogs(const std::vector<std::string>& paths) {
   if (paths.empty()) throw std::invalid_argument("identify: no logs given");
   std::vector<plsa::io::Log> logs;
-  for (const std::string& p : paths) logs.push_back(plsa::io::readCsvLog(p));
+  for (const std::string& p : paths) logs.push_back(plsa::io::readLog(p));
   return logs;
 }
 
@@ -57,7 +59,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
 }
 
 py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {
-  const plsa::ValidationResult v = plsa::validateModel(model, plsa::io::readCsvLog(log), horizons);
+  const plsa::ValidationResult v = plsa::validateModel(model, plsa::io::readLog(log), horizons);
   py::dict result;
   for (const plsa::OutputValidation& o : v.outputs) {
     py::dict entry;
@@ -71,7 +73,7 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
 }
 
 py::dict readLog(const std::string& path) {
-  const plsa::io::Log log = plsa::io::readCsvLog(path);
+  const plsa::io::Log log = plsa::io::readLog(path);
   py::dict columns;
   for (const std::string& name : log.columns) columns[py::str(name)] = Eigen::VectorXd(log.column(name));
   return columns;
@@ -149,6 +151,7 @@ class PyPredictor {
 
 PYBIND11_MODULE(_plsa, m) {
   m.doc() = "plsa: identification and prediction of pneumatic soft actuators (DIO-PWL-OBF)";
+  plsa::can::registerLogFormats();  // candump bus logs, as the tools read them
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -184,7 +187,8 @@ PYBIND11_MODULE(_plsa, m) {
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
         "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim}}");
   m.def("read_log", &readLog, py::arg("path"),
-        "A CSV log as {column: array}, read (and checked) as the library reads it");
+        "A log (CSV, or a candump bus log decoded with plsa's CAN profile) as {column: array}, read (and "
+        "checked) as the library reads it");
   m.def("simulate", &simulate, py::arg("experiment"), py::arg("path"), py::arg("seed") = 1, py::arg("duration_s") = 0.0,
         "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
         "joystick run's length, default 60 s) into a CSV log");

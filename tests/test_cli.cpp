@@ -247,7 +247,9 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
   fs::create_directories(file("empty"));
   EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
-  EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, or LCM event logs by content)"), std::string::npos)
+  EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, .candump, LCM event logs by content, or candump "
+                      "bus logs by content)"),
+            std::string::npos)
       << err_;
 }
 
@@ -562,4 +564,45 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
   fs::rename(file("j.lcmlog"), file("lcmlog-2026-11-25.00"));
   EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("lcmlog-2026-11-25.00") + " --horizons 40"), 0)
       << err_;
+}
+
+// A bus recording as users make one (candump -l) feeds the tools like any
+// log: a simulated run written as CAN frames, read back to the signals'
+// resolution, and validated on directly; a log the bus could not carry and
+// an unknown profile are named.
+TEST_F(Cli, CandumpBusLogsConvertBothWaysAndFeedValidate) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.csv")), 0) << err_;
+  ASSERT_EQ(run("convert --in " + file("j.csv") + " --out " + file("j.candump")), 0) << err_;
+  const std::string bus = slurp(file("j.candump"));
+  ASSERT_EQ(bus.find("(40.012500) can0 200#"), 0u) << bus.substr(0, 200);  // the run's own times
+  // By content, under candump's own file name.
+  fs::copy_file(file("j.candump"), file("candump-2026-11-26_120000.log"));
+  ASSERT_EQ(run("convert --in " + file("candump-2026-11-26_120000.log") + " --out " + file("back.csv")), 0) << err_;
+  const plsa::io::Log before = plsa::io::readCsvLog(file("j.csv")), after = plsa::io::readCsvLog(file("back.csv"));
+  ASSERT_EQ(after.samples(), before.samples());
+  for (const char* c : {"p_1", "p_2", "p_3", "cmd_1", "cmd_3"})
+    EXPECT_LT((after.column(c) - before.column(c)).cwiseAbs().maxCoeff(), 0.6e-5) << c;  // 1e-5 bar per count
+  for (const char* c : {"bend_deg", "steer_deg"})
+    EXPECT_LT((after.column(c) - before.column(c)).cwiseAbs().maxCoeff(), 0.6e-2) << c;  // 0.01 deg per count
+  std::ofstream(file("m.json")) << smallModelJson(0.1);
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.candump") + " --horizons 40 --json " +
+                file("fits.json")),
+            0)
+      << err_;
+  EXPECT_TRUE(nlohmann::json::parse(slurp(file("fits.json"))).dump().find("bend_deg") != std::string::npos);
+  // A pressure beyond what the 16-bit signal carries (0.65535 bar) is named, not wrapped.
+  {
+    std::string text = slurp(file("j.csv"));
+    const auto row = text.find('\n', text.find("\ntime_s,") + 1) + 1;  // the first row after the header
+    const auto p1 = text.find(',', text.find(',', text.find(',', text.find(',', row) + 1) + 1) + 1) + 1;
+    text.replace(p1, text.find(',', p1) - p1, "0.9");
+    std::ofstream(file("high.csv")) << text;
+  }
+  EXPECT_EQ(run("convert --in " + file("high.csv") + " --out " + file("high.candump")), 1);
+  EXPECT_NE(err_.find("row 1 of " + file("high.csv") + ": pressure_sensor cannot carry its values"), std::string::npos)
+      << err_;
+  EXPECT_FALSE(fs::exists(file("high.candump")));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.candump") + " --can-profile " +
+                file("nothing.json")),
+            2);
 }

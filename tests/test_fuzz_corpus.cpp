@@ -29,6 +29,7 @@ const std::map<std::string, Target>& targets() {
       {"signal_map", plsa::fuzz::signalMap},
       {"can_frame", plsa::fuzz::canFrames},
       {"udp_datagram", plsa::fuzz::udpDatagram},
+      {"candump_log", plsa::fuzz::candumpLog},
       {"lcm_command", plsa::fuzz::lcmMessage<plsa_lcm::pressure_command_t>},
       {"lcm_state", plsa::fuzz::lcmMessage<plsa_lcm::actuator_state_t>},
       {"lcm_prediction", plsa::fuzz::lcmMessage<plsa_lcm::prediction_t>},

@@ -154,6 +154,29 @@ TEST_F(LogReadersTest, TheToolsRegistryStartsWithCsvAndKnowsLcmLogsByContent) {
   EXPECT_EQ(message([&] { plsa::io::readLog(missing); }), missing + ": cannot open the log");
 }
 
+// A text format without magic bytes is known by a test of its first bytes:
+// after every format's magic, before the extensions, and in a folder scan.
+TEST_F(LogReadersTest, ASniffedFormatIsKnownByContentBeforeExtensions) {
+  LogReaderRegistry r;
+  r.add(plsa::io::csvLogFormat());
+  r.add(fakeFormat("bin", {".bin"}, "BIN1"));
+  LogFormat sniffed = fakeFormat("bus", {".bus"});
+  std::string seen;
+  sniffed.sniff = [&seen](const std::string& head) {
+    seen = head;
+    return head.rfind("(1.0) can0", 0) == 0;
+  };
+  r.add(std::move(sniffed));
+  EXPECT_EQ(r.logFileKinds(), "(.csv, .bin, .bus, bin logs by content, or bus logs by content)");
+  const std::string bus = "(1.0) can0 123#00\n" + std::string(400, 'x');
+  EXPECT_EQ(r.read(write("candump.log", bus)).metadata.at("format"), "bus");
+  EXPECT_EQ(seen.size(), plsa::io::kSniffBytes);                                  // the head it saw, no more
+  EXPECT_EQ(r.read(write("named.csv", bus)).metadata.at("format"), "bus");        // content first
+  EXPECT_EQ(r.read(write("magic.bus", "BIN1...")).metadata.at("format"), "bin");  // magic before sniff
+  EXPECT_TRUE(r.looksLikeLog(write("bus-2026.log", bus)));
+  EXPECT_FALSE(r.looksLikeLog(write("notes.log", "(2.0) can1 hello")));
+}
+
 TEST_F(LogReadersTest, ASecondRegistrationIsRefusedOrReplacesInPlace) {
   LogReaderRegistry r;
   EXPECT_FALSE(r.add(plsa::io::csvLogFormat()));

@@ -90,3 +90,30 @@ def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "ok"
     assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "time did not increase"
     assert p.update(math.nan, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "sample has NaN or Inf"
+
+
+def test_read_log_decodes_a_candump_bus_log(tmp_path):
+    # Three cycles of plsa's default CAN profile, as `candump -l` writes them:
+    # counter in byte 6, checksum (id low + id high + other bytes) in byte 7.
+    def frame(can_id, raw16, counter):
+        data = []
+        for v in raw16 + [0] * (3 - len(raw16)):
+            data += [v & 0xFF, v >> 8]
+        data.append(counter)
+        data.append((can_id & 0xFF) + (can_id >> 8) + sum(data))
+        data[-1] &= 0xFF
+        return "%03X#" % can_id + "".join("%02X" % b for b in data)
+
+    lines = []
+    for k in range(4):
+        t = 1764150000.0 + 0.0125 * k
+        lines.append("(%.6f) can0 %s" % (t, frame(0x100, [10000 + k, 20000, 0], k)))
+        lines.append("(%.6f) can0 %s" % (t, frame(0x200, [10000 + 1000 * k, 20000, 0], k)))
+        lines.append("(%.6f) can0 %s" % (t, frame(0x210, [1000 + k, 65536 - 500], k)))
+    path = tmp_path / "candump-2026-11-26_120000.log"
+    path.write_text("\n".join(lines) + "\n")
+    data = plsa.read_log(str(path))
+    assert list(data) == ["time_s", "p_1", "p_2", "p_3", "cmd_1", "cmd_2", "cmd_3", "bend_deg", "steer_deg"]
+    assert np.allclose(data["time_s"], [0.0, 0.0125, 0.025, 0.0375], atol=1e-6)
+    assert np.allclose(data["p_1"], [0.1, 0.11, 0.12, 0.13], atol=1e-9)
+    assert np.allclose(data["steer_deg"], -5.0, atol=1e-9)

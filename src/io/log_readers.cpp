@@ -48,9 +48,11 @@ struct LogReaderRegistry::State {
     std::lock_guard<std::mutex> lock(mutex);
     return formats;
   }
-  std::size_t longestMagic() const {
+  // How many first bytes recognition needs: the longest magic, or kSniffBytes
+  // when some format sniffs.
+  std::size_t headBytes() const {
     std::size_t n = 0;
-    for (const auto& f : snapshot()) n = std::max(n, f->magic.size());
+    for (const auto& f : snapshot()) n = std::max(n, f->sniff ? kSniffBytes : f->magic.size());
     return n;
   }
 };
@@ -110,6 +112,8 @@ std::shared_ptr<const LogFormat> LogReaderRegistry::recognise(const std::string&
   const auto formats = state_->snapshot();
   for (const auto& f : formats)
     if (!f->magic.empty() && head.compare(0, f->magic.size(), f->magic) == 0) return f;
+  for (const auto& f : formats)
+    if (f->sniff && f->sniff(head)) return f;
   const std::string name = fileName(path);
   for (const auto& f : formats)
     if (f->magic.empty())
@@ -126,12 +130,13 @@ bool LogReaderRegistry::looksLikeLog(const std::string& path) const {
   for (const auto& f : formats)
     for (const auto& e : f->extensions)
       if (endsWith(name, e)) return true;
-  const std::size_t n = state_->longestMagic();
+  const std::size_t n = state_->headBytes();
   if (n == 0) return false;
   std::ifstream in(path, std::ios::binary);
   const std::string head = headOf(in, n);
   for (const auto& f : formats)
-    if (!f->magic.empty() && head.compare(0, f->magic.size(), f->magic) == 0) return true;
+    if ((!f->magic.empty() && head.compare(0, f->magic.size(), f->magic) == 0) || (f->sniff && f->sniff(head)))
+      return true;
   return false;
 }
 
@@ -140,7 +145,7 @@ std::string LogReaderRegistry::logFileKinds() const {
   for (const auto& f : state_->snapshot())
     for (const auto& e : f->extensions) kinds.push_back(e);
   for (const auto& f : state_->snapshot())
-    if (!f->magic.empty()) kinds.push_back(f->plural + " by content");
+    if (!f->magic.empty() || f->sniff) kinds.push_back(f->plural + " by content");
   std::string s;  // "a", "a or b", "a, b, or c"
   for (std::size_t i = 0; i < kinds.size(); ++i) {
     if (i > 0) s += kinds.size() > 2 ? ", " : " ";
@@ -151,7 +156,7 @@ std::string LogReaderRegistry::logFileKinds() const {
 }
 
 Log LogReaderRegistry::read(std::istream& in, const std::string& source, const ReadOptions& options) const {
-  const auto format = recognise(source, headOf(in, state_->longestMagic()));
+  const auto format = recognise(source, headOf(in, state_->headBytes()));
   if (!format)
     throw std::invalid_argument(source + ": not a log format this build knows; it reads: " + joined(readable()));
   if (!format->read)

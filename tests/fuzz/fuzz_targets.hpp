@@ -18,6 +18,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/can/candump_log.hpp"
 #include "plsa/can/signal_map.hpp"
 #include "plsa/can/udp_transport.hpp"
 #include "plsa/can/valve_driver.hpp"
@@ -66,6 +67,21 @@ inline void csvLog(const std::uint8_t* data, std::size_t size) {
     const Eigen::VectorXd t = log.column("time_s");
     for (Eigen::Index k = 1; k < t.size(); ++k) require(t(k) > t(k - 1));
   }
+}
+
+/// candump bus logs: a read log has the recorded columns, finite values and
+/// a uniform time grid from 0; recognising one never throws.
+inline void candumpLog(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes = text(data, size);
+  (void)can::looksLikeCandump(bytes.substr(0, io::kSniffBytes));
+  std::istringstream in(bytes);
+  io::Log log;
+  if (!acceptedOrRefused([&] { log = can::readCandumpLog(in, "fuzz.log", can::defaultSignalMap()); })) return;
+  require(log.samples() >= 2 && static_cast<std::size_t>(log.data.cols()) == log.columns.size());
+  require(log.data.allFinite() && log.columns.front() == "time_s" && log.hasColumn("p_1"));
+  const Eigen::VectorXd t = log.column("time_s");
+  require(t(0) == 0.0);
+  for (Eigen::Index k = 1; k < t.size(); ++k) require(t(k) > t(k - 1));
 }
 
 /// Model files: a loaded model validates, writes and reads back to the same

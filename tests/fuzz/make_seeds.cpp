@@ -4,6 +4,7 @@
 // folder as its argument after a format changes, and commit what it writes:
 //   cmake --build build --target fuzz_seeds && build/tests/fuzz_seeds tests/fuzz/corpus
 #include <array>
+#include <cstdio>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <plsa_lcm/pressure_command_t.hpp>
 #include <plsa_lcm/status_t.hpp>
 
+#include "plsa/can/candump_log.hpp"
 #include "plsa/can/udp_transport.hpp"
 #include "plsa/lcm/lcm_log.hpp"
 #include "plsa/model/model_file.hpp"
@@ -114,6 +116,30 @@ void signalMapSeeds() {
       R"({"profile":"p","messages":[{"name":"m","id":1,"dlc":8,"signals":[{"name":"a","byte":0,"bits":16,"scale":1},{"name":"a","byte":2,"bits":16,"scale":1}]}]})");
 }
 
+void candumpSeeds() {
+  const plsa::can::SignalMap map = plsa::can::defaultSignalMap();
+  std::string good;
+  for (int k = 0; k < 4; ++k)
+    for (const char* name : {"valve_command", "pressure_sensor", "tip_angle"}) {
+      const std::vector<double> values = std::string(name) == "tip_angle" ? std::vector<double>{10.0 + k, -20.0}
+                                                                          : std::vector<double>{0.1 * k, 0.2, 0.0};
+      plsa::can::CanFrame f;
+      if (!plsa::can::encodeFrame(map.message(name), values.data(), static_cast<std::uint8_t>(k), f))
+        throw std::runtime_error("make_seeds: a seed frame does not encode");
+      good += plsa::can::candumpLine(1764150000.0 + 0.0125 * k, "can0", f);
+    }
+  put("candump_log", "seed-four-cycles.log", good);
+  put("candump_log", "seed-other-kinds.log",
+      good +
+          "(1764150001.000000) can1 1FFFFFFF#00\n(1764150001.000001) can0 123#R\n(1764150001.000002) can0 123##1AA\n");
+  put("candump_log", "regression-time-back.log", good + good.substr(0, good.find('\n') + 1));
+  put("candump_log", "regression-one-sensor-frame.log", good.substr(0, good.find("210#")));
+  // Found by fuzz_candump_log: one stamp 56 years on sized a grid of 10^11 rows.
+  put("candump_log", "regression-stamp-far-off.log",
+      replaceFirst(good, "(1764150000.037500) can0 200", "(3528300000.037500) can0 200"));
+  put("candump_log", "regression-long-line.log", "(1.000000) can0 200#00" + std::string(400, ' ') + "\n");
+}
+
 void datagramSeeds() {
   plsa::can::CanFrame f;
   f.id = 0x200;
@@ -199,6 +225,7 @@ int main(int argc, char** argv) {
   modelSeeds();
   simConfigSeeds();
   signalMapSeeds();
+  candumpSeeds();
   datagramSeeds();
   lcmMessageSeeds();
   lcmLogSeeds();

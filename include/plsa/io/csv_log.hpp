@@ -44,6 +44,9 @@ struct CsvReadOptions {
   /// When the file is an LCM event log (lcm::readLogFile): the channel whose
   /// actuator-state messages are read.
   std::string lcm_channel = "PLSA_STATE";
+  /// When the file is a candump bus log (can::readCandumpLog): the signal map
+  /// JSON that decodes its frames ("" for plsa's default profile).
+  std::string can_profile;
 };
 
 /// Longest line the reader takes: a log's rows are a few hundred bytes, and a

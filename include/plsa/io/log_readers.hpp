@@ -26,7 +26,13 @@ using ReadOptions = CsvReadOptions;
 struct WriteOptions {
   /// LCM event logs: the channel the actuator-state messages go on.
   std::string lcm_channel = "PLSA_STATE";
+  /// candump bus logs: the signal map JSON that encodes the frames ("" for
+  /// plsa's default profile).
+  std::string can_profile;
 };
+
+/// The first bytes of a file LogFormat::sniff looks at.
+inline constexpr std::size_t kSniffBytes = 256;
 
 /// Most bytes read from a log that is not a regular file (a pipe is read
 /// whole, then recognised by its first bytes).
@@ -46,6 +52,10 @@ struct LogFormat {
   /// bytes is recognised by its content alone, whatever the file's name; its
   /// extensions still pick its files out of a folder and choose the writer.
   std::string magic;
+  /// For a text format without magic bytes: whether a file's first
+  /// kSniffBytes bytes have its shape (empty: none). Tried after every
+  /// format's magic bytes and before the extensions.
+  std::function<bool(const std::string& head)> sniff;
   /// Reads whatever no other format claims (one format at most: CSV).
   bool fallback = false;
   /// Empty when this build cannot read the format: then it is only recognised.
@@ -84,11 +94,13 @@ class LogReaderRegistry {
   std::vector<std::string> writable() const;
 
   /// The format of a file whose name is `path` and which starts with `head`:
-  /// the first whose magic bytes start `head`, else the first without magic
-  /// bytes whose extension `path` ends with, else the fallback; null if none.
+  /// the first whose magic bytes start `head`, else the first whose sniff
+  /// takes `head`, else the first without magic bytes whose extension `path`
+  /// ends with, else the fallback; null if none.
   std::shared_ptr<const LogFormat> recognise(const std::string& path, const std::string& head) const;
   /// Whether a folder's file is a log: its extension is a format's, or its
-  /// first bytes are a format's magic bytes (so read only when needed).
+  /// first bytes are a format's magic bytes or sniffed as one (so read only
+  /// when needed).
   bool looksLikeLog(const std::string& path) const;
   /// "(.csv, .lcmlog, or LCM event logs by content)": what looksLikeLog takes.
   std::string logFileKinds() const;

@@ -146,7 +146,7 @@ PLSA_ALWAYS_INLINE double tipTurnOf(double px, double py, double x, double y, do
   constexpr double c3 = -1.0 / 3, c5 = 1.0 / 5, c7 = -1.0 / 7, c9 = 1.0 / 9, c11 = -1.0 / 11, c13 = 1.0 / 13,
                    c15 = -1.0 / 15;
   turn = t * (1.0 + t2 * (c3 + t2 * (c5 + t2 * (c7 + t2 * (c9 + t2 * (c11 + t2 * (c13 + t2 * c15)))))));
-  return (dot > 0.0) & (std::abs(cross) <= 0.1 * dot) ? 0.0 : 1.0;
+  return ((dot > 0.0) & (std::abs(cross) <= 0.1 * dot)) ? 0.0 : 1.0;
 }
 
 /// The turn (rad) from each tip-frame row (x[h], y[h]) to the next, the

@@ -18,7 +18,8 @@ void addCanBridgeCommand(CLI::App& app) {
       app.add_subcommand("can-bridge", "Bridge LCM pressure commands and actuator state to CAN valves and sensors");
   c->add_option("--iface", *iface, "can0, socketcan:<iface>, or udp:<listen-port>:<peer-port>[?drop=..&delay_us=..]")
       ->required();
-  c->add_option("--profile", *profile, "Signal map (JSON; default: the built-in profile, docs/can.md)")
+  c->add_option("--profile", *profile,
+                "Signal map: JSON or a DBC file (.dbc) (default: the built-in profile, docs/can.md)")
       ->check(CLI::ExistingFile);
   c->add_option("--url", o->url, "LCM URL (default: LCM_DEFAULT_URL)");
   c->add_option("--rate", o->rate_hz, "Driver ticks and state messages per second (at most 1000)");

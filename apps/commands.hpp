@@ -58,6 +58,7 @@ void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
 void addConvertCommand(CLI::App& app);
+void addCanProfileCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);
 void addCanBridgeCommand(CLI::App& app);
 void addDiagnoseCommands(CLI::App& app);

@@ -1,12 +1,17 @@
 // `plsa convert`: a log from any format this build reads (CSV, LCM event
 // logs, candump bus logs) into any it writes, chosen by the output's name:
 // how a bus recording becomes a CSV to look at, or a run one to replay.
+// `plsa can-profile`: a CAN signal map (plsa's default, a JSON profile or a
+// DBC file) written as DBC or JSON.
 #include <cstdio>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
 #include "log_paths.hpp"
+#include "plsa/can/dbc.hpp"
+#include "plsa/can/signal_map.hpp"
+#include "plsa/core/text_file.hpp"
 #include "plsa/io/log_readers.hpp"
 
 namespace plsa::app {
@@ -39,7 +44,30 @@ void runConvert(const ConvertArgs& a) {
                   .c_str());
 }
 
+struct CanProfileArgs {
+  std::string in, out;
+};
+
+void runCanProfile(const CanProfileArgs& a) {
+  refuseOverwritingInputs(a.out, "--out", {a.in}, "plsa can-profile");
+  const can::SignalMap map = a.in.empty() ? can::defaultSignalMap() : can::loadSignalMap(a.in);
+  for (const std::string& w : can::driverProfileWarnings(map))
+    std::fprintf(stderr, "plsa can-profile: warning: %s\n", w.c_str());
+  const bool dbc = a.out.size() > 4 && a.out.compare(a.out.size() - 4, 4, ".dbc") == 0;
+  writeTextFile(a.out, dbc ? can::signalMapToDbc(map) : can::signalMapToJson(map), dbc ? "DBC file" : "signal map");
+  std::printf("plsa can-profile: '%s' (%zu messages) -> %s\n", map.profile.c_str(), map.messages.size(), a.out.c_str());
+}
+
 }  // namespace
+
+void addCanProfileCommand(CLI::App& app) {
+  auto a = std::make_shared<CanProfileArgs>();
+  auto* c = app.add_subcommand("can-profile", "Write a CAN signal map as DBC (.dbc) or plsa's JSON (any other name)");
+  c->add_option("--in", a->in, "Signal map to read: a DBC file (.dbc) or JSON (default: plsa's profile)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--out", a->out, "File to write: .dbc for DBC, else JSON")->required();
+  c->callback([a] { runCanProfile(*a); });
+}
 
 void addConvertCommand(CLI::App& app) {
   auto a = std::make_shared<ConvertArgs>();
@@ -49,7 +77,8 @@ void addConvertCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   c->add_option("--out", a->out, "Log to write: .csv, .candump, or .lcmlog in a build with LCM")->required();
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+  c->add_option("--can-profile", a->can_profile,
+                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
       ->check(CLI::ExistingFile);
   c->callback([a] { runConvert(*a); });
 }

@@ -163,7 +163,8 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+  c->add_option("--can-profile", a->can_profile,
+                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
       ->check(CLI::ExistingFile);
   c->callback([a] { runCrossval(*a); });
 }

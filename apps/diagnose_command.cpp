@@ -137,7 +137,8 @@ void addDiagnoseCommands(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+  c->add_option("--can-profile", a->can_profile,
+                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
       ->check(CLI::ExistingFile);
   c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');

@@ -210,7 +210,8 @@ void addIdentifyCommands(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   id->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  id->add_option("--can-profile", a->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+  id->add_option("--can-profile", a->can_profile,
+                 "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
       ->check(CLI::ExistingFile);
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
@@ -328,7 +329,8 @@ void addIdentifyCommands(CLI::App& app) {
   va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
   va->add_option("--channel", v->channel, "LCM logs: the channel of the actuator-state messages");
-  va->add_option("--can-profile", v->can_profile, "candump logs: the signal map JSON of their bus (default: plsa's)")
+  va->add_option("--can-profile", v->can_profile,
+                 "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
       ->check(CLI::ExistingFile);
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
                  "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "

@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
   plsa::app::addIdentifyCommands(app);
   plsa::app::addCrossvalCommand(app);
   plsa::app::addConvertCommand(app);
+  plsa::app::addCanProfileCommand(app);
   plsa::app::addGeneraliseCommand(app);
 #if PLSA_WITH_LCM
   plsa::app::addPredictCommand(app);

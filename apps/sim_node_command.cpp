@@ -70,7 +70,7 @@ void addSimNodeCommand(CLI::App& app) {
   cmd->add_option("--status-channel", a->node.status_channel, "Channel of status messages");
   cmd->add_option("--can", a->can,
                   "Sit behind CAN instead of LCM commands: can0, socketcan:<iface> or udp:<listen-port>:<peer-port>");
-  cmd->add_option("--profile", a->profile, "CAN signal map (JSON; default: the built-in profile)")
+  cmd->add_option("--profile", a->profile, "CAN signal map: JSON or a DBC file (.dbc) (default: the built-in profile)")
       ->check(CLI::ExistingFile);
   cmd->callback([a] { runSimNodeCommand(*a); });
 }

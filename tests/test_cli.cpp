@@ -606,3 +606,26 @@ TEST_F(Cli, CandumpBusLogsConvertBothWaysAndFeedValidate) {
                 file("nothing.json")),
             2);
 }
+
+// CAN profiles as the bus's own DBC file: plsa's written as DBC, read back
+// (as JSON it is the documented profile file), and taken by --can-profile.
+TEST_F(Cli, CanProfilesGoBetweenJsonAndDbc) {
+  ASSERT_EQ(run("can-profile --out " + file("plsa.dbc")), 0) << err_;
+  EXPECT_NE(slurp(file("plsa.dbc")).find("BO_ 512 pressure_sensor: 8 plsa"), std::string::npos);
+  ASSERT_EQ(run("can-profile --in " + file("plsa.dbc") + " --out " + file("back.json")), 0) << err_;
+  std::string documented = slurp(std::string(PLSA_SOURCE_DIR) + "/docs/can-default-profile.json");
+  documented.replace(documented.find("plsa-default"), 12, "plsa");  // a DBC's profile is its file's name
+  EXPECT_EQ(slurp(file("back.json")), documented);
+  ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed 2 --out " + file("j.csv")), 0) << err_;
+  ASSERT_EQ(run("convert --in " + file("j.csv") + " --out " + file("j.candump") + " --can-profile " + file("plsa.dbc")),
+            0)
+      << err_;
+  ASSERT_EQ(
+      run("convert --in " + file("j.candump") + " --out " + file("j2.csv") + " --can-profile " + file("plsa.dbc")), 0)
+      << err_;
+  std::ofstream(file("bad.dbc")) << "BO_ 512 pressure_sensor: 8 A\n SG_ p : 3|16@1+ (1,0) [0|0] \"\" A\n";
+  EXPECT_EQ(run("convert --in " + file("j.candump") + " --out " + file("j3.csv") + " --can-profile " + file("bad.dbc")),
+            1);
+  EXPECT_NE(err_.find("bad.dbc:2: message 'pressure_sensor', signal 'p': starts at bit 3"), std::string::npos) << err_;
+  EXPECT_EQ(run("can-profile --in " + file("plsa.dbc") + " --out " + file("plsa.dbc")), 1);  // never over an input
+}

@@ -1,12 +1,15 @@
 #include "plsa/can/signal_map.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
 
+#include "plsa/can/dbc.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/io/strict_json.hpp"
 
@@ -208,7 +211,15 @@ std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
   return out;
 }
 
-SignalMap loadSignalMap(const std::string& path) { return signalMapFromJson(readTextFile(path, "signal map"), path); }
+SignalMap loadSignalMap(const std::string& path) {
+  const std::string name = std::filesystem::path(path).filename().string();
+  const auto dot = name.rfind('.');
+  std::string ext = dot == std::string::npos ? "" : name.substr(dot);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".dbc" && dot > 0)
+    return signalMapFromDbc(readTextFile(path, "DBC file", kMaxDbcBytes), path, name.substr(0, dot));
+  return signalMapFromJson(readTextFile(path, "signal map"), path);
+}
 
 SignalMap defaultSignalMap() {
   auto pressures = [](const std::string& prefix) {

@@ -6,8 +6,10 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${PLSA_BUILD_DIR} --prefix ${
 if(rc)
   message(FATAL_ERROR "install failed (${rc})")
 endif()
+# Components predict and io need Eigen alone: NLopt and pkg-config (LCM) are hidden from it.
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${CONSUMER_SOURCE_DIR} -B ${WORK_DIR}/build
-                -G ${GENERATOR} -DCMAKE_PREFIX_PATH=${prefix} RESULT_VARIABLE rc)
+                -G ${GENERATOR} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_DISABLE_FIND_PACKAGE_NLopt=TRUE
+                -DCMAKE_DISABLE_FIND_PACKAGE_PkgConfig=TRUE RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "configuring the consumer against ${prefix} failed (${rc})")
 endif()
@@ -18,4 +20,43 @@ endif()
 execute_process(COMMAND ${WORK_DIR}/build/consumer RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "the consumer failed (${rc})")
+endif()
+
+# No components: every one this install has, each target defined.
+file(WRITE ${WORK_DIR}/all/CMakeLists.txt "cmake_minimum_required(VERSION 3.16)
+project(plsa_all LANGUAGES CXX)
+find_package(plsa 0.2 REQUIRED)
+foreach(t core predict io model eval identify sim can can_sim diagnose report)
+  if(NOT TARGET plsa::\${t})
+    message(FATAL_ERROR \"plsa::\${t} missing\")
+  endif()
+endforeach()
+")
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${WORK_DIR}/all -B ${WORK_DIR}/all/build -G ${GENERATOR}
+                -DCMAKE_PREFIX_PATH=${prefix} RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "find_package(plsa) with every component failed (${rc})")
+endif()
+
+# The same program without CMake, through pkg-config (predict, model, io).
+find_program(PKG_CONFIG pkg-config)
+if(NOT PKG_CONFIG)
+  message(STATUS "pkg-config not found: the pkg-config build is skipped")
+  return()
+endif()
+set(ENV{PKG_CONFIG_PATH} ${prefix}/lib/pkgconfig)
+execute_process(COMMAND ${PKG_CONFIG} --cflags --libs plsa OUTPUT_VARIABLE flags RESULT_VARIABLE rc
+                OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(rc)
+  message(FATAL_ERROR "pkg-config knows no plsa under ${prefix}/lib/pkgconfig (${rc})")
+endif()
+separate_arguments(flags UNIX_COMMAND "${flags}")
+execute_process(COMMAND c++ -std=c++17 ${CONSUMER_SOURCE_DIR}/main.cpp ${flags} -o ${WORK_DIR}/consumer_pc
+                RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "building the consumer with pkg-config's flags (${flags}) failed (${rc})")
+endif()
+execute_process(COMMAND ${WORK_DIR}/consumer_pc RESULT_VARIABLE rc)
+if(rc)
+  message(FATAL_ERROR "the pkg-config consumer failed (${rc})")
 endif()

@@ -19,6 +19,7 @@
 #include <Eigen/Dense>
 
 #include "plsa/can/candump_log.hpp"
+#include "plsa/can/dbc.hpp"
 #include "plsa/can/signal_map.hpp"
 #include "plsa/can/udp_transport.hpp"
 #include "plsa/can/valve_driver.hpp"
@@ -124,10 +125,17 @@ inline void simConfig(const std::uint8_t* data, std::size_t size) {
 }
 
 /// Signal maps: a parsed map validates, and every message encodes and decodes back.
-inline void signalMap(const std::uint8_t* data, std::size_t size) {
-  can::SignalMap map;
-  if (!acceptedOrRefused([&] { map = can::signalMapFromJson(text(data, size), "fuzz.json"); })) return;
+/// Signal maps, as JSON and as DBC: a parsed map validates, writes and reads
+/// back the same in both formats, and every message encodes and decodes back.
+inline void checkSignalMap(const can::SignalMap& map) {
   map.validate();
+  const std::string json = can::signalMapToJson(map);
+  require(can::signalMapToJson(can::signalMapFromJson(json, "again.json")) == json);
+  std::string dbc;
+  if (acceptedOrRefused([&] { dbc = can::signalMapToDbc(map); })) {  // names that are no identifiers: refused
+    can::SignalMap back = can::signalMapFromDbc(dbc, "again.dbc", map.profile);
+    require(can::signalMapToJson(back) == json);
+  }
   (void)can::driverProfileWarnings(map);
   for (const auto& m : map.messages) {
     double values[can::MessageLayout::kMaxSignals] = {};
@@ -140,6 +148,12 @@ inline void signalMap(const std::uint8_t* data, std::size_t size) {
     for (std::size_t s = 0; s < m.signals.size(); ++s)
       require(std::abs(back[s] - values[s]) <= 1e-9 * (1 + std::abs(values[s])));
   }
+}
+inline void signalMap(const std::uint8_t* data, std::size_t size) {
+  can::SignalMap map;
+  if (acceptedOrRefused([&] { map = can::signalMapFromJson(text(data, size), "fuzz.json"); })) checkSignalMap(map);
+  if (acceptedOrRefused([&] { map = can::signalMapFromDbc(text(data, size), "fuzz.dbc", "fuzz"); }))
+    checkSignalMap(map);
 }
 
 // A transport that plays back bytes as frames, 11 bytes each (id 2, dlc 1, data 8).

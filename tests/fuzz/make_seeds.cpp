@@ -18,6 +18,7 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/can/candump_log.hpp"
+#include "plsa/can/dbc.hpp"
 #include "plsa/can/udp_transport.hpp"
 #include "plsa/lcm/lcm_log.hpp"
 #include "plsa/model/model_file.hpp"
@@ -114,6 +115,13 @@ void signalMapSeeds() {
   put("signal_map", "regression-one-id-two-messages.json", two);
   put("signal_map", "regression-duplicate-signal.json",
       R"({"profile":"p","messages":[{"name":"m","id":1,"dlc":8,"signals":[{"name":"a","byte":0,"bits":16,"scale":1},{"name":"a","byte":2,"bits":16,"scale":1}]}]})");
+  put("signal_map", "seed-default.dbc", plsa::can::signalMapToDbc(plsa::can::defaultSignalMap()));
+  // Found by fuzz_signal_map: a unit that is no UTF-8 read from DBC, which JSON cannot write.
+  put("signal_map", "regression-unit-not-utf8.dbc",
+      replaceFirst(plsa::can::signalMapToDbc(plsa::can::defaultSignalMap()), "\"deg\"", "\"d\xE9g\""));
+  put("signal_map", "seed-motorola-and-comments.dbc",
+      "VERSION \"\"\nBU_: A\nBO_ 512 s: 8 A\n SG_ p : 7|16@0- (0.5,-1) [0|0] \"bar\" A\n"
+      " SG_ counter : 48|8@1+ (1,0) [0|255] \"\" A\nCM_ \"two\n SG_ lines\";\n");
 }
 
 void candumpSeeds() {

@@ -61,6 +61,8 @@ inline constexpr std::size_t kMaxMessages = 64;
 /// Parses a profile: unknown and duplicate keys, duplicate message names, ids
 /// or signal names, and out-of-range numbers are errors naming the source and field.
 SignalMap signalMapFromJson(const std::string& text, const std::string& source = "<json>");
+/// A profile file: a DBC file (`.dbc`, can/dbc.hpp; the profile named by the
+/// file's stem) or plsa's JSON.
 SignalMap loadSignalMap(const std::string& path);
 /// What a valve/sensor profile allows that the driver cannot guard against:
 /// no counter or checksum on a message it reads or writes, signals in an order

@@ -45,7 +45,7 @@ struct CsvReadOptions {
   /// actuator-state messages are read.
   std::string lcm_channel = "PLSA_STATE";
   /// When the file is a candump bus log (can::readCandumpLog): the signal map
-  /// JSON that decodes its frames ("" for plsa's default profile).
+  /// (JSON or DBC) that decodes its frames ("" for plsa's default profile).
   std::string can_profile;
 };
 

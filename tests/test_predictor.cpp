@@ -14,6 +14,7 @@
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/testing/alloc_guard.hpp"
+#include "support/predictor_agreement.hpp"
 
 using namespace plsa;
 using namespace plsa::identify;
@@ -93,41 +94,18 @@ template <int NP>
 void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double dt) {
   const int H = 40;
   // In the log's frame, whatever the model's.
-  const std::vector<std::map<int, AlignedPrediction>> offline_all = predictOutputs(m, u, y, {H});
-  std::vector<AlignedPrediction> offline;
-  for (const auto& by_h : offline_all) offline.push_back(by_h.at(H));
   Predictor<NP> p(m);
-  Eigen::MatrixXd out(H, m.outputCount());
-  double worst = 0.0;
-  int compared = 0;
-  for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
-    ASSERT_EQ(p.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk) << "t=" << t;
-    if (t % 7 != 0) continue;
-    ASSERT_EQ(p.predict(H, u.middleRows(t + 1, H - 1), out), PredictorStatus::kOk);
-    for (int o = 0; o < m.outputCount(); ++o)
-      worst = std::max(worst, std::abs(out(H - 1, o) - offline[static_cast<std::size_t>(o)].values(t)));
-    ++compared;
-  }
-  EXPECT_GT(compared, 100);
-  EXPECT_LT(worst, 1e-9) << "predictor and offline 40-step predictions differ";
+  const test::Agreement planned = test::plannedAgainstOffline(p, u, y, dt, predictOutputs(m, u, y, {H}), {H}, 7);
+  EXPECT_GT(planned.compared, 100);
+  EXPECT_LT(planned.worst, 1e-9) << "predictor and offline 40-step predictions differ";
   // Holding the input (no plan) takes a faster path (modal when the bases
   // allow): it must equal a plan that repeats the last input, at every
   // horizon up to the longest, all along the run.
-  const int HL = 400;
   Predictor<NP> q(m, PredictorOptions{});
-  Eigen::MatrixXd held(HL, m.outputCount()), repeated(HL, m.outputCount());
-  double worst_held = 0.0, moved = 0.0;
-  for (Eigen::Index t = 0; t < u.rows(); ++t) {
-    ASSERT_EQ(q.update(t * dt, u.row(t), y.row(t)), PredictorStatus::kOk);
-    if (t % 97 != 5) continue;
-    ASSERT_EQ(q.predict(HL, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
-    const Eigen::MatrixXd same = u.row(t).replicate(HL - 1, 1);
-    ASSERT_EQ(q.predict(HL, same, repeated), PredictorStatus::kOk);
-    worst_held = std::max(worst_held, (held - repeated).cwiseAbs().maxCoeff());
-    moved = std::max(moved, (held.row(HL - 1) - held.row(0)).norm());
-  }
-  EXPECT_LT(worst_held, 1e-9) << "held-input path and a repeated plan differ";
-  EXPECT_GT(moved, 1e-3);
+  const test::Agreement held = test::heldAgainstRepeatedPlan(q, u, y, dt, 400, 97, 5);
+  EXPECT_LT(held.worst, 1e-9) << "held-input path and a repeated plan differ";
+  EXPECT_GT(held.moved, 1e-3);
+  Eigen::MatrixXd out(1, m.outputCount());
   // Free simulation agrees with the offline simulation too.
   PredictorOptions so;
   so.simulate = true;

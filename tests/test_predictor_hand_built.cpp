@@ -17,6 +17,7 @@
 #include "plsa/predict/predictor.hpp"
 #include "plsa/testing/alloc_guard.hpp"
 #include "support/hand_built_models.hpp"
+#include "support/predictor_agreement.hpp"
 
 using namespace plsa;
 using namespace plsa::hand_built;
@@ -345,23 +346,11 @@ TYPED_TEST(PredictorSizes, PredictionsEqualTheOfflineOnes) {
     const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, H});
     P p(m);
     EXPECT_EQ(p.heldPathIsModal(), TestFixture::modal(v));
-    Eigen::MatrixXd out(H, m.outputCount());
-    double worst = 0.0, moved = 0.0;
-    int compared = 0;
-    for (Eigen::Index t = 0; t + H < u.rows(); ++t) {
-      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk) << "t=" << t;
-      if (t % 5 != 0) continue;
-      ASSERT_EQ(p.predict(H, u.middleRows(t + 1, H - 1), out), PredictorStatus::kOk);
-      for (int o = 0; o < m.outputCount(); ++o)
-        for (int k : {1, 10, H}) {
-          worst = std::max(worst, std::abs(out(k - 1, o) - offline[static_cast<std::size_t>(o)].at(k).values(t)));
-          moved = std::max(moved, std::abs(out(k - 1, o) - y(t, o)));
-        }
-      ++compared;
-    }
-    EXPECT_GT(compared, 100);
-    EXPECT_GT(moved, 1e-2) << "the predictions never moved: the check shows nothing";
-    EXPECT_LT(worst, 1e-9) << "predictor and offline predictions differ";
+    const test::Agreement a = test::plannedAgainstOffline(p, u, y, kDt, offline, {1, 10, H}, 5);
+    EXPECT_GT(a.compared, 100);
+    EXPECT_GT(a.moved, 1e-2) << "the predictions never moved: the check shows nothing";
+    EXPECT_LT(a.worst, 1e-9) << "predictor and offline predictions differ";
+    Eigen::MatrixXd out(1, m.outputCount());
     // Free simulation.
     PredictorOptions so;
     so.simulate = true;
@@ -383,20 +372,10 @@ TYPED_TEST(PredictorSizes, HeldInputEqualsARepeatedPlan) {
     SCOPED_TRACE(name(v));
     const DioPwlObfModel m = variant(v, TestFixture::kPoles);
     const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
-    const int HL = 400;
     P p(m);
-    Eigen::MatrixXd held(HL, m.outputCount()), repeated(HL, m.outputCount());
-    double worst = 0.0, moved = 0.0;
-    for (Eigen::Index t = 0; t < u.rows(); ++t) {
-      ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
-      if (t % 11 != 5) continue;
-      ASSERT_EQ(p.predict(HL, Eigen::MatrixXd(0, m.inputCount()), held), PredictorStatus::kOk);
-      ASSERT_EQ(p.predict(HL, u.row(t).replicate(HL - 1, 1), repeated), PredictorStatus::kOk);
-      worst = std::max(worst, (held - repeated).cwiseAbs().maxCoeff());
-      moved = std::max(moved, (held.row(HL - 1) - held.row(0)).norm());
-    }
-    EXPECT_GT(moved, 1e-3) << "the held predictions never moved: the check shows nothing";
-    EXPECT_LT(worst, 1e-9) << "held-input path and a repeated plan differ";
+    const test::Agreement a = test::heldAgainstRepeatedPlan(p, u, y, kDt, 400, 11, 5);
+    EXPECT_GT(a.moved, 1e-3) << "the held predictions never moved: the check shows nothing";
+    EXPECT_LT(a.worst, 1e-9) << "held-input path and a repeated plan differ";
   }
 }
 

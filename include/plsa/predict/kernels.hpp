@@ -110,6 +110,39 @@ inline void addScaled(const double* x, double a, Eigen::Index n, double* y, bool
     addScaledGeneric(x, a, n, y, add);
 }
 
+/// out[q] = a[offset[q], offset[q + 1]) . x[the same] for q < count: each
+/// mode's copies merged through one coefficient row, four lanes a segment
+/// (generic and AVX2).
+PLSA_ALWAYS_INLINE void segmentDotsBody(const double* __restrict a, const double* __restrict x, const int* offset,
+                                        int count, double* __restrict out) noexcept {
+  for (int q = 0; q < count; ++q) {
+    const int end = offset[q + 1];
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int i = offset[q];
+    for (; i + 4 <= end; i += 4) {
+      s0 += a[i] * x[i];
+      s1 += a[i + 1] * x[i + 1];
+      s2 += a[i + 2] * x[i + 2];
+      s3 += a[i + 3] * x[i + 3];
+    }
+    for (; i < end; ++i) s0 += a[i] * x[i];
+    out[q] = (s0 + s1) + (s2 + s3);
+  }
+}
+inline void segmentDotsGeneric(const double* a, const double* x, const int* offset, int count, double* out) noexcept {
+  segmentDotsBody(a, x, offset, count, out);
+}
+PLSA_TARGET_AVX2 inline void segmentDotsAvx2(const double* a, const double* x, const int* offset, int count,
+                                             double* out) noexcept {
+  segmentDotsBody(a, x, offset, count, out);
+}
+inline void segmentDots(const double* a, const double* x, const int* offset, int count, double* out) noexcept {
+  if (predictorUsesAvx2())
+    segmentDotsAvx2(a, x, offset, count, out);
+  else
+    segmentDotsGeneric(a, x, offset, count, out);
+}
+
 /// levels[d * stride, + n) += w[d] row[0, n) for d < count: one table row
 /// into several weighted sums (zero weights skipped), generic and AVX2.
 PLSA_ALWAYS_INLINE void spreadRowBody(const double* __restrict row, int n, const double* __restrict w, int count,

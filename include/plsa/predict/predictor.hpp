@@ -313,12 +313,8 @@ class NStepPredictor {
     ScheduleBlend blend;
     m.partition.blend(us, dir, blend);
     if (blend.count == 1) {  // one region (always on the input side): its row as it is
-      const auto row = f.coefficient.row(blend.region[0]);
-      for (Eigen::Index q = 0; q < zeta.size(); ++q) {
-        const int begin = f.offset[static_cast<std::size_t>(q)],
-                  width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
-        zeta(q) = row.segment(begin, width).dot(state.segment(begin, width));
-      }
+      segmentDots(f.coefficient.data() + static_cast<Eigen::Index>(blend.region[0]) * f.coefficient.cols(),
+                  state.data(), f.offset.data(), static_cast<int>(zeta.size()), zeta.data());
       return;
     }
     blended_.setZero();

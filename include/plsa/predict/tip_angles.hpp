@@ -41,9 +41,10 @@ inline void tipAnglesFromComponents(int horizon, double reference, double* turn,
   if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, std::cos(reference * kRadPerDeg),
                 std::sin(reference * kRadPerDeg), turn, bend))
     return tipAnglesRowByRow(horizon, reference, out);
+  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;  // a product per row, not a division
   double steer = reference;
   for (int h = 0; h < horizon; ++h) {
-    steer += turn[h] / kRadPerDeg;
+    steer += turn[h] * kDegPerRad;
     out(h, 0) = bend[h];
     out(h, 1) = steer;
   }

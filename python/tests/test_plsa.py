@@ -117,3 +117,41 @@ def test_read_log_decodes_a_candump_bus_log(tmp_path):
     assert np.allclose(data["time_s"], [0.0, 0.0125, 0.025, 0.0375], atol=1e-6)
     assert np.allclose(data["p_1"], [0.1, 0.11, 0.12, 0.13], atol=1e-9)
     assert np.allclose(data["steer_deg"], -5.0, atol=1e-9)
+
+
+def lcm_events(path):
+    """(channel, data) of every event of an LCM event log (its documented layout)."""
+    import struct
+    raw = path.read_bytes()
+    at, events = 0, []
+    while at < len(raw):
+        sync, _, _, channel_len, data_len = struct.unpack(">IqqII", raw[at:at + 28])
+        assert sync == 0xEDA1DA01
+        channel = raw[at + 28:at + 28 + channel_len].decode()
+        data = raw[at + 28 + channel_len:at + 28 + channel_len + data_len]
+        events.append((channel, data))
+        at += 28 + channel_len + data_len
+    return events
+
+
+def test_the_lcm_types_decode_what_plsa_records(tmp_path):
+    import os
+    import subprocess
+    plsa_lcm = pytest.importorskip("plsa_lcm", reason="a build without LCM has no plsa_lcm")
+    if "PLSA_EXE" not in os.environ:
+        pytest.skip("PLSA_EXE (the plsa tool, which records LCM event logs) is not set")
+    log = tmp_path / "run.lcmlog"
+    subprocess.run([os.environ["PLSA_EXE"], "simulate", "--experiment", "joystick", "--duration", "2", "--seed", "2",
+                    "--out", str(log)], check=True, capture_output=True)
+    states = [plsa_lcm.actuator_state_t.decode(d) for c, d in lcm_events(log) if c == "PLSA_STATE"]
+    csv = tmp_path / "run.csv"
+    subprocess.run([os.environ["PLSA_EXE"], "convert", "--in", str(log), "--out", str(csv)], check=True,
+                   capture_output=True)
+    as_csv = plsa.read_log(str(csv))
+    assert len(states) == len(as_csv["bend_deg"]) >= 160  # 2 s at 80 Hz at least
+    assert [s.seq for s in states[:3]] == [states[0].seq, states[0].seq + 1, states[0].seq + 2]
+    assert np.allclose([s.bend_deg for s in states], as_csv["bend_deg"])
+    assert np.allclose([s.pressure_bar[0] for s in states], as_csv["p_1"])
+    # Encoded in Python, decoded the same: the types carry plsa's fields.
+    again = plsa_lcm.actuator_state_t.decode(states[5].encode())
+    assert again.steer_deg == states[5].steer_deg and again.n_chambers == 3

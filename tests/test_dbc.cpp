@@ -104,6 +104,7 @@ TEST(Dbc, WhatASignalMapCannotCarryIsNamedWithItsLine) {
       {"VERSION \"\"\n", "no BO_ messages"},
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"d\xE9g\" A\n", "the unit is not printable UTF-8"},  // Latin-1
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\xED\xA0\x80\" A\n", "the unit is not printable UTF-8"},
+      {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\\\" A\n", "the unit is not printable UTF-8"},
       {head + std::string(5000, ' ') + "\n", "line longer than 4096 bytes"},
   };
   for (const Case& c : cases) {
@@ -122,6 +123,11 @@ TEST(Dbc, AUnitIsCarriedAsUtf8AndOneDbcCannotHoldIsRefused) {
   map.messages[2].signals[0].unit = "\xC2\xB0";  // the degree sign
   EXPECT_EQ(signalMapFromDbc(signalMapToDbc(map), "p.dbc", "p").messages[2].signals[0].unit, "\xC2\xB0");
   map.messages[2].signals[0].unit = "a \"b\"";
+  EXPECT_THROW(signalMapToDbc(map), std::invalid_argument);
+  map.messages[2].signals[0].unit = "a\\";  // found by fuzz_signal_map: read back, it opened a string
+  EXPECT_THROW(signalMapToDbc(map), std::invalid_argument);
+  map.messages[2].signals[0].unit = "deg";
+  map.messages[2].signals[1].name = "counter";  // a DBC would read it back as the counter byte
   EXPECT_THROW(signalMapToDbc(map), std::invalid_argument);
 }
 

@@ -40,13 +40,13 @@ bool togglesQuote(const std::string& line) {
 }
 
 // Whether text is well-formed UTF-8 (no overlong forms, surrogates or code
-// points past U+10FFFF) without control characters or double quotes: a unit
-// both a DBC string and JSON carry as it is.
+// points past U+10FFFF) without control characters, double quotes or
+// backslashes: a unit both a DBC string and JSON carry as it is.
 bool printableUtf8(const std::string& text) {
   for (std::size_t k = 0; k < text.size();) {
     const auto c = static_cast<unsigned char>(text[k]);
     if (c < 0x80) {
-      if (c < 0x20 || c == 0x7F || c == '"') return false;
+      if (c < 0x20 || c == 0x7F || c == '"' || c == '\\') return false;
       ++k;
       continue;
     }
@@ -222,6 +222,9 @@ std::string signalMapToDbc(const SignalMap& map) {
     out += "BO_ " + std::to_string(m.id) + " " + m.name + ": " + std::to_string(m.dlc) + " plsa\n";
     for (const Signal& s : m.signals) {
       if (!identifier(s.name)) throw std::invalid_argument("DBC: signal name '" + s.name + "' is not an identifier");
+      if (s.name == "counter" || s.name == "checksum")
+        throw std::invalid_argument("DBC: signal '" + s.name + "' of message '" + m.name +
+                                    "': in a DBC that name is the message's counter or checksum byte");
       if (!printableUtf8(s.unit))
         throw std::invalid_argument("DBC: signal '" + s.name + "': a unit that is not printable UTF-8 without quotes");
       const PhysicalRange r = physicalRange(s);

@@ -119,6 +119,9 @@ void signalMapSeeds() {
   // Found by fuzz_signal_map: a unit that is no UTF-8 read from DBC, which JSON cannot write.
   put("signal_map", "regression-unit-not-utf8.dbc",
       replaceFirst(plsa::can::signalMapToDbc(plsa::can::defaultSignalMap()), "\"deg\"", "\"d\xE9g\""));
+  // Found by fuzz_signal_map in CI: a unit "\" read as a backslash, written back it opened a string.
+  put("signal_map", "regression-backslash-unit.dbc",
+      replaceFirst(plsa::can::signalMapToDbc(plsa::can::defaultSignalMap()), "\"bar\"", "\"\\\""));
   put("signal_map", "seed-motorola-and-comments.dbc",
       "VERSION \"\"\nBU_: A\nBO_ 512 s: 8 A\n SG_ p : 7|16@0- (0.5,-1) [0|0] \"bar\" A\n"
       " SG_ counter : 48|8@1+ (1,0) [0|255] \"\" A\nCM_ \"two\n SG_ lines\";\n");

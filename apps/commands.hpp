@@ -52,6 +52,15 @@ inline const CLI::Validator kSeed = CLI::Validator(
     },
     "SEED");
 
+/// How a command reads logs of other formats: the LCM channel of the
+/// actuator-state messages and the signal map of a candump log's bus.
+inline void addLogFormatOptions(CLI::App* app, std::string& channel, std::string& can_profile) {
+  app->add_option("--channel", channel, "LCM logs: the channel of the actuator-state messages");
+  app->add_option("--can-profile", can_profile,
+                  "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
+      ->check(CLI::ExistingFile);
+}
+
 void addDemoCommand(CLI::App& app);
 void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);

@@ -76,10 +76,7 @@ void addConvertCommand(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--out", a->out, "Log to write: .csv, .candump, or .lcmlog in a build with LCM")->required();
-  c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile,
-                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
-      ->check(CLI::ExistingFile);
+  addLogFormatOptions(c, a->channel, a->can_profile);
   c->callback([a] { runConvert(*a); });
 }
 

@@ -162,10 +162,7 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--arx-na", a->arx_na, "ARX output lags");
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
-  c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile,
-                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
-      ->check(CLI::ExistingFile);
+  addLogFormatOptions(c, a->channel, a->can_profile);
   c->callback([a] { runCrossval(*a); });
 }
 

@@ -209,10 +209,7 @@ void addIdentifyCommands(CLI::App& app) {
                  "Training log(s): CSV, or LCM event logs (known by their content, any name); repeat for more")
       ->required()
       ->check(CLI::ExistingFile);
-  id->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  id->add_option("--can-profile", a->can_profile,
-                 "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
-      ->check(CLI::ExistingFile);
+  addLogFormatOptions(id, a->channel, a->can_profile);
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
@@ -328,10 +325,7 @@ void addIdentifyCommands(CLI::App& app) {
   va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
   va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
-  va->add_option("--channel", v->channel, "LCM logs: the channel of the actuator-state messages");
-  va->add_option("--can-profile", v->can_profile,
-                 "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
-      ->check(CLI::ExistingFile);
+  addLogFormatOptions(va, v->channel, v->can_profile);
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
                  "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "
                  "simulation, which is scored after them (default 5); 0 carries the training run's yaw")

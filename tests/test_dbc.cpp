@@ -9,6 +9,7 @@
 #include <string>
 
 #include "plsa/can/dbc.hpp"
+#include "support/refusals.hpp"
 
 namespace plsa::can {
 namespace {
@@ -85,10 +86,7 @@ VAL_ 512 counter 0 "zero" ;
 
 TEST(Dbc, WhatASignalMapCannotCarryIsNamedWithItsLine) {
   const std::string head = "BU_: A\n\nBO_ 256 valve_command: 8 A\n";
-  struct Case {
-    std::string text, says;
-  };
-  const Case cases[] = {
+  const std::vector<test::Refusal> cases = {
       {"BU_: A\nBO_ 2147483904 ext: 8 A\n SG_ a : 0|16@1+ (1,0) [0|0] \"\" A\n", ":2: message 'ext': id 2147483904"},
       {head + " SG_ a : 4|16@1+ (1,0) [0|0] \"\" A\n", ":4: message 'valve_command', signal 'a': starts at bit 4"},
       {head + " SG_ a : 0|12@1+ (1,0) [0|0] \"\" A\n", "12 bits; plsa reads 8-, 16- and 32-bit signals"},
@@ -107,15 +105,8 @@ TEST(Dbc, WhatASignalMapCannotCarryIsNamedWithItsLine) {
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\\\" A\n", "the unit is not printable UTF-8"},
       {head + std::string(5000, ' ') + "\n", "line longer than 4096 bytes"},
   };
-  for (const Case& c : cases) {
-    try {
-      signalMapFromDbc(c.text, "bus.dbc", "bus");
-      ADD_FAILURE() << "accepted: " << c.text;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("bus.dbc"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what() << "\nwanted: " << c.says;
-    }
-  }
+  test::expectEachRefused<std::invalid_argument>(
+      cases, [](const std::string& text) { signalMapFromDbc(text, "bus.dbc", "bus"); }, "bus.dbc");
 }
 
 TEST(Dbc, AUnitIsCarriedAsUtf8AndOneDbcCannotHoldIsRefused) {

@@ -140,7 +140,7 @@ Eigen::MatrixXd eigenbasis(const StateSpaceForm& s, std::size_t group, int n) {
 // would lose digits) and the pair keeps its own KS column (lag_coincident).
 void addLagRates(const CompiledModel& c, ModalForm& f, int orders) {
   const auto modes = static_cast<Eigen::Index>(f.lambda.size());
-  f.lag_power.resize(std::max(c.max_horizon, 4) + 1);
+  f.lag_power.resize(std::max({c.max_horizon, orders, 4}) + 1);
   f.lag_power(0) = 1.0;
   for (Eigen::Index h = 1; h < f.lag_power.size(); ++h)
     f.lag_power(h) = f.lag_power(h - 1) * c.schedule_pole < 1e-200 ? 0.0 : f.lag_power(h - 1) * c.schedule_pole;
@@ -148,7 +148,7 @@ void addLagRates(const CompiledModel& c, ModalForm& f, int orders) {
   f.lag_coincident.assign(static_cast<std::size_t>(c.n_y), {});
   for (Eigen::Index q = 0; q < modes; ++q)
     for (int d = 1; d <= orders; ++d) {
-      const double gap = f.lambda(q) - std::pow(c.schedule_pole, d);
+      const double gap = f.lambda(q) - f.lag_power(d);
       if (std::abs(gap) >= kLagGapFloor)
         f.lag_gap_inverse(q, d - 1) = 1.0 / gap;
       else
@@ -158,7 +158,7 @@ void addLagRates(const CompiledModel& c, ModalForm& f, int orders) {
     const Eigen::Index first = sum.cols();
     sum.conservativeResize(Eigen::NoChange, first + orders);
     for (int d = 1; d <= orders; ++d) {
-      const double rate = std::pow(c.schedule_pole, d);
+      const double rate = f.lag_power(d);
       double power = 1.0, acc = 0.0;
       for (int h = 0; h < c.max_horizon; ++h) {
         acc += power;

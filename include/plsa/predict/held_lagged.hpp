@@ -170,12 +170,11 @@ class HeldLaggedForm {
       }
       for (int d = 1; d <= inputs; ++d) {  // each mode's c_d / (lambda - rho^d), and their sum for S_{rho^d}
         double rate = 0.0;
-        const double* level = held_levels_.data() + d * slots;
         const double* gap = f.lag_gap_inverse.data() + (d - 1) * gaps;
         for (int j = 0; j < m.n_u; ++j) {
           const Eigen::Index slot = j * block + o * n, q = (j * m.n_y + o) * n;
           for (int i = 0; i < n; ++i) {
-            const double c = f.merged_beta(slot + i) * level[slot + i] * drop[static_cast<std::size_t>(d)] * gap[q + i];
+            const double c = drive(f, slot + i, d, slots, drop) * gap[q + i];
             x[j * n + i] += c;
             rate -= c;
           }

@@ -123,6 +123,19 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
   if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");
 }
 
+// The simulator runs a diagnosis may spend, as both commands take them.
+void addCalibrationBudget(CLI::App* app, diagnose::DiagnoseOptions& o) {
+  app->add_option("--evaluations-per-parameter", o.calibration.evaluations_per_parameter,
+                  "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
+      ->check(CLI::Range(0, 1000));
+  app->add_option("--evaluations", o.calibration.max_evaluations, "Simulator runs per calibration")
+      ->check(CLI::Range(20, 100000));
+  app->add_option("--screen-evaluations", o.screen_evaluations,
+                  "Simulator runs of the short calibration from each spread start of a candidate; the best "
+                  "becomes its second start (0: the spread start with the smallest gap)")
+      ->check(CLI::Range(0, 10000));
+}
+
 }  // namespace
 
 void addDiagnoseCommands(CLI::App& app) {
@@ -136,10 +149,7 @@ void addDiagnoseCommands(CLI::App& app) {
                 "Real run(s): CSV or LCM event logs (known by content); several: split by run, one: split by time")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--channel", a->channel, "LCM logs: the channel of the actuator-state messages");
-  c->add_option("--can-profile", a->can_profile,
-                "candump logs: the signal map of their bus, JSON or DBC (default: plsa's)")
-      ->check(CLI::ExistingFile);
+  addLogFormatOptions(c, a->channel, a->can_profile);
   c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');
@@ -155,11 +165,7 @@ void addDiagnoseCommands(CLI::App& app) {
       "--fixed-laws", [a](std::int64_t n) { a->options.flexible_laws = n == 0; },
       "Calibrate each candidate with the formulation its configuration names, instead of its flexible "
       "law (stiffening and pneumatic_lag: a power law spanning the fixed ones)");
-  c->add_option("--evaluations-per-parameter", a->options.calibration.evaluations_per_parameter,
-                "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
-      ->check(CLI::Range(0, 1000));
-  c->add_option("--evaluations", a->options.calibration.max_evaluations, "Simulator runs per calibration")
-      ->check(CLI::Range(20, 100000));
+  addCalibrationBudget(c, a->options);
   c->add_option("--margin", a->options.margin, "An effect must shrink the held-out gap by this many noise floors")
       ->check(kNonNegative);
   c->add_option("--heldout-fraction", a->options.heldout_fraction, "With one run: the share held out at its end")
@@ -194,11 +200,7 @@ void addDiagnoseCommands(CLI::App& app) {
   sc->add_option("--seed", s->options.seed, "First seed")->check(kSeed);
   sc->add_option("--train-s", s->options.train_s, "Training run length (s)")->check(CLI::Range(10.0, 600.0));
   sc->add_option("--heldout-s", s->options.heldout_s, "Held-out run length (s)")->check(CLI::Range(10.0, 600.0));
-  sc->add_option("--evaluations-per-parameter", s->options.diagnose.calibration.evaluations_per_parameter,
-                 "At least this many simulator runs per calibrated parameter (0: --evaluations alone)")
-      ->check(CLI::Range(0, 1000));
-  sc->add_option("--evaluations", s->options.diagnose.calibration.max_evaluations, "Simulator runs per calibration")
-      ->check(CLI::Range(20, 100000));
+  addCalibrationBudget(sc, s->options.diagnose);
   sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")
       ->check(CLI::Range(1, 64));
   sc->add_option("--out", s->out, "Results as JSON");

@@ -243,6 +243,31 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   EXPECT_EQ(d.verdict.find("misses something"), std::string::npos) << "the gap is at the noise floor";
 }
 
+// Hysteresis whose loop is steeper on unloading, with a remanent strain
+// (a stop-type operator, as elastoplastic and Bouc-Wen laws): outside the
+// play-only family the candidate had, and reached from a start of that
+// orientation, which the screening stage picks (ranking the spread points
+// by their raw gap instead ends at a 38% shrink here).
+TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
+  sim::SimConfig truth = allOff();
+  truth.setEffectEnabled("hysteresis", true);
+  auto& h = truth.hysteresis;
+  h.formulation = "weighted_pi";
+  h.width = 0.2;
+  h.weight_narrow = -0.15, h.weight_mid = -0.3, h.weight_wide = -0.15;
+  h.fixed_band_share = 0.6;
+  DiagnoseOptions o = quick();
+  o.candidates = {"hysteresis"};
+  const Diagnosis d = runDiagnosis(allOff(), {recorded(truth, 40, 41), recorded(truth, 30, 42)}, o);
+  ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
+  ASSERT_FALSE(d.ranking.empty());
+  EXPECT_GT(d.ranking[0].shrink_percent, 50.0) << d.verdict;
+  double weights = 0.0;
+  for (const auto& [name, value] : d.ranking[0].params)
+    if (name.rfind("hysteresis.weight_", 0) == 0) weights += value;
+  EXPECT_LT(weights, -0.1) << "the loop's orientation: a stop, not a play";
+}
+
 TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
   // A periodic wobble of the steering output that no candidate makes and
   // the nominal physics cannot absorb.

@@ -85,3 +85,24 @@ TEST(IndependentActuator, RejectsUnknownLawsValuesAndCommands) {
   IndependentActuator a(IndependentPhysics{}, 1);
   EXPECT_THROW(a.step({std::nan(""), 0, 0}), std::invalid_argument);
 }
+
+// A mounting offset belongs to the sensor: with its direction set, runs
+// recorded with other seeds read the same offset; left unset, each run
+// draws its own (a sensor re-mounted per run).
+TEST(IndependentActuator, ASensorOffsetsDirectionIsSharedByEveryRunWhenSet) {
+  IndependentPhysics p = quietIndependent();
+  setIndependentEffect(p, "sensor_bias", "scale_offset", 2.0);
+  auto restingOffset = [&](std::uint64_t seed) {
+    IndependentActuator a(p, seed);
+    return holdIndependent(a, {0, 0, 0}, 1.0).back().bending_deg;
+  };
+  p.sensor_offset_direction_deg = 120.0;
+  const Eigen::Vector2d one = restingOffset(1), other = restingOffset(2);
+  EXPECT_NEAR((one - other).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(one.norm(), 2.0, 0.05);
+  EXPECT_NEAR(std::atan2(one.y(), one.x()) * 180.0 / 3.14159265358979323846, 120.0, 1.0);
+  p.sensor_offset_direction_deg = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_GT((restingOffset(1) - restingOffset(2)).norm(), 0.1);
+  p.sensor_offset_direction_deg = 400.0;
+  EXPECT_THROW(IndependentActuator(p, 1), std::invalid_argument);
+}

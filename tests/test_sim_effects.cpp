@@ -300,7 +300,56 @@ TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
   }
   EXPECT_GT(differs, 0.05);  // other weights give another loop
   EXPECT_EQ(flexibleFormulationOf("hysteresis"), "weighted_pi");
-  EXPECT_EQ(pi.parameters("hysteresis").size(), 4u);
+  EXPECT_EQ(pi.parameters("hysteresis").size(), 5u);
+  for (const ParamRef& p : pi.parameters("hysteresis")) {  // calibration may turn each play's loop over
+    if (p.name.rfind("weight_", 0) == 0) {
+      EXPECT_EQ(p.lower, -1.0) << p.name;
+    }
+  }
+}
+
+namespace {
+// The bend at 0.15 bar on the way up and on the way down (after 0.35 bar),
+// and what is left when the chamber vents, for one weighted-PI setting.
+struct Loop {
+  double up, down, vented;
+};
+Loop loopOf(double weight, double fixed_band_share) {
+  SimConfig c = only("hysteresis");
+  c.hysteresis.formulation = "weighted_pi";
+  c.hysteresis.width = 0.1;
+  c.hysteresis.weight_narrow = c.hysteresis.weight_wide = 0.0;
+  c.hysteresis.weight_mid = weight;
+  c.hysteresis.fixed_band_share = fixed_band_share;
+  Actuator a(c, 1);
+  const ActuatorSample up = hold(a, {0.15, 0, 0}, 4.0).back();
+  // Signed: along the direction chamber 1 bends the segment (a strain below
+  // rest bends it the other way).
+  auto along = [&](const ActuatorSample& s) {
+    return s.true_bend_deg * std::cos((s.true_steer_deg - up.true_steer_deg) * 3.14159265358979323846 / 180.0);
+  };
+  Loop l{};
+  l.up = along(up);
+  hold(a, {0.35, 0, 0}, 4.0);
+  l.down = along(hold(a, {0.15, 0, 0}, 4.0).back());
+  l.vented = along(hold(a, {0.0, 0, 0}, 4.0).back());
+  return l;
+}
+}  // namespace
+
+// A positive weight lags (a play: higher on the way down), a negative one
+// turns the loop over (a stop: lower on the way down, as elastoplastic and
+// Bouc-Wen laws); bands proportional to the strain close the loop at zero,
+// fixed bands leave a remanent bend of the weight's sign.
+TEST(SimEffects, WeightedPrandtlIshlinskiisSignTurnsTheLoopAndFixedBandsLeaveRemanence) {
+  const Loop play = loopOf(0.5, 0.0), stop = loopOf(-0.5, 0.0);
+  EXPECT_GT(play.down - play.up, 0.2) << play.up << " " << play.down;
+  EXPECT_LT(stop.down - stop.up, -0.2) << stop.up << " " << stop.down;
+  EXPECT_NEAR(play.vented, 0.0, 1e-3);  // the pressure's exponential tail after 4 s
+  EXPECT_NEAR(stop.vented, 0.0, 1e-3);
+  const Loop fixed_play = loopOf(0.5, 1.0), fixed_stop = loopOf(-0.5, 1.0);
+  EXPECT_GT(fixed_play.vented, 0.2) << fixed_play.vented;
+  EXPECT_LT(fixed_stop.vented, -0.2) << fixed_stop.vented;
 }
 
 TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {

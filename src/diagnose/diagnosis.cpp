@@ -99,10 +99,13 @@ sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& tr
   return c;
 }
 
-std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train, const GapOptions& g) {
-  sim::SimConfig neutral = c;
-  setNeutral(neutral, effect);
+// Spread points for an effect: the simulator's own values and two points
+// across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis
+// both loop orientations (plays: the output lags; stops: steeper on
+// unloading, as elastoplastic or Bouc-Wen laws) with bands closing at zero
+// and fixed bands; for sensor bias the residual's offset and drift.
+std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
+                                      const std::vector<RunData>& train) {
   std::vector<sim::SimConfig> spread = {c};
   if (effect == "pneumatic_lag") lagTimesAtNominal(spread[0]);
   for (double u : {0.2, 0.6}) {
@@ -114,16 +117,56 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
     if (effect == "pneumatic_lag") trial.pneumatic_lag.delay_s = u * 0.1;
     spread.push_back(trial);
   }
+  if (effect == "hysteresis" && c.hysteresis.formulation == "weighted_pi")
+    for (double weight : {-0.4, 0.4})
+      for (double fixed : {0.0, 1.0}) {
+        sim::SimConfig trial = c;
+        auto& h = trial.hysteresis;
+        h.weight_narrow = h.weight_mid = h.weight_wide = weight / 3.0;
+        h.width = 0.15;
+        h.fixed_band_share = fixed;
+        spread.push_back(trial);
+      }
   if (effect == "sensor_bias") spread.push_back(biasFromResidual(c, train));
+  return spread;
+}
+
+// Two starts for a candidate's calibration: neutral, and the spread point
+// that a short calibration (the screening stage, `screen` simulator runs
+// each) takes furthest: ranking the spread points by their raw gap picked
+// the wrong basin whenever the effect shifts what the nominal physics must
+// do (a stop-type loop moves the static gain). Adds the runs spent to `spent`.
+std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
+                                      const std::vector<std::string>& modules, const std::vector<RunData>& train,
+                                      const CalibrationOptions& o, int screen, int& spent) {
+  sim::SimConfig neutral = c;
+  setNeutral(neutral, effect);
+  CalibrationOptions quick = o;
+  quick.max_evaluations = screen;
+  quick.evaluations_per_parameter = 0;
+  quick.progress = nullptr;
   double best_gap = INFINITY;
-  sim::SimConfig best = spread[0];
-  for (const auto& s : spread) {
+  sim::SimConfig best = c;
+  for (const auto& s : spreadFor(c, effect, train)) {
     try {
-      const double gap = measureGap(s, train, g).total;
-      if (gap < best_gap) best_gap = gap, best = s;
+      if (screen <= 0) {
+        const double gap = measureGap(s, train, o.gap).total;
+        if (gap < best_gap) best_gap = gap, best = s;
+        continue;
+      }
+      const CalibrationResult r = calibrate(s, modules, train, quick);
+      spent += r.evaluations;
+      if (r.train_gap.total < best_gap) best_gap = r.train_gap.total, best = r.config;
     } catch (const std::invalid_argument&) {}
   }
   return {neutral, best};
+}
+
+// A candidate switched on, with its flexible law unless told otherwise.
+void enableCandidate(sim::SimConfig& c, const std::string& effect, const DiagnoseOptions& o) {
+  c.setEffectEnabled(effect, true);
+  const std::string flexible = sim::flexibleFormulationOf(effect);
+  if (o.flexible_laws && !flexible.empty()) c.formulationOf(effect) = flexible;
 }
 
 // Runs work(0) .. work(count - 1) on `threads` threads (at least one), each
@@ -342,6 +385,10 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
     // and later rounds kept effects that were not there.
     // It gets the budget of the largest candidate, spent as the candidates
     // spend theirs: two calibrations, the second from where the first ended.
+    // Screening in the first round only: it finds the basin of the effect
+    // that moves the nominal physics most; later rounds start from a model
+    // that has absorbed it (and would take twice as long).
+    const int screen = round == 1 ? o.screen_evaluations : 0;
     Gap null_gap = current_gap;
     auto recalibrateAlone = [&] {
       std::vector<std::string> modules = {"nominal"};
@@ -351,6 +398,18 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       CalibrationResult r = calibrate(current, modules, train, same);
       const CalibrationResult again = calibrate(r.config, modules, train, same);
       if (again.train_gap.total < r.train_gap.total) r = again;
+      if (screen > 0) {  // ...and the runs of the largest screening stage
+        std::size_t points = 0;
+        for (const auto& e : remaining) {
+          sim::SimConfig c = current;
+          enableCandidate(c, e, o);
+          points = std::max(points, spreadFor(c, e, train).size());
+        }
+        same.max_evaluations = screen * static_cast<int>(points);
+        same.evaluations_per_parameter = 0;
+        const CalibrationResult third = calibrate(r.config, modules, train, same);
+        if (third.train_gap.total < r.train_gap.total) r = third;
+      }
       OutputFit f = r.fit;
       null_gap = measureGap(r.config, held, g, &f, false);
     };
@@ -358,16 +417,14 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
       if (i == remaining.size()) return recalibrateAlone();
       const std::string& e = remaining[i];
       sim::SimConfig c = current;
-      c.setEffectEnabled(e, true);
-      const std::string flexible = sim::flexibleFormulationOf(e);
-      if (o.flexible_laws && !flexible.empty()) c.formulationOf(e) = flexible;
+      enableCandidate(c, e, o);
       std::vector<std::string> modules = {"nominal"};
       modules.insert(modules.end(), selected.begin(), selected.end());
       modules.push_back(e);
       CalibrationResult r;
       CandidateResult cr;
       bool first = true;
-      for (const sim::SimConfig& start : startsFor(c, e, train, g)) {
+      for (const sim::SimConfig& start : startsFor(c, e, modules, train, o.calibration, screen, cr.evaluations)) {
         CalibrationResult trial = calibrate(start, modules, train, o.calibration);
         ++cr.starts;
         cr.evaluations += trial.evaluations;

@@ -219,6 +219,9 @@ sim::IndependentPhysics independentTruth(const Spec& spec, bool flexible, std::m
     const double strength = between(lo, hi);
     sim::setIndependentEffect(t, e, law, strength);
     if (e == "creep") t.creep_time_s = between(3.0, 12.0);
+    // One sensor, one mounting: the training and held-out runs share the
+    // offset's direction (drawn per run, no constant offset could carry over).
+    if (e == "sensor_bias") t.sensor_offset_direction_deg = between(0.0, 360.0);
     c.truth.emplace_back(e + "." + law, strength);
     forms += (forms.empty() ? "" : ", ") + e + " " + law;
   }

@@ -56,7 +56,9 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   if (weighted_pi_) {
     const auto& h = config_.hysteresis;
     pi_weights_ = {h.weight_narrow, h.weight_mid, h.weight_wide};
-    const double sum = pi_weights_[0] + pi_weights_[1] + pi_weights_[2];
+    const double p = config_.max_pressure_bar;
+    full_strain_ = std::abs(config_.elongation.strain_per_bar * p + config_.elongation.quadratic * p * p);
+    const double sum = std::abs(pi_weights_[0]) + std::abs(pi_weights_[1]) + std::abs(pi_weights_[2]);
     if (sum > 1.0)
       for (double& w : pi_weights_) w /= sum;
   }
@@ -131,9 +133,11 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
                                      : std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
     if (c.hysteresis.enabled && weighted_pi_) {
       auto& plays = play_[i];
+      const double share = c.hysteresis.fixed_band_share;
+      const double band = (1.0 - share) * std::abs(strain) + share * full_strain_;
       double out = strain;
       for (std::size_t k = 0; k < 3; ++k) {
-        const double r = c.hysteresis.width * (k == 0 ? 0.5 : k == 1 ? 1.0 : 2.0) * std::abs(strain);
+        const double r = c.hysteresis.width * (k == 0 ? 0.5 : k == 1 ? 1.0 : 2.0) * band;
         plays[k] = std::clamp(plays[k], strain - r, strain + r);
         out += pi_weights_[k] * (plays[k] - strain);
       }

@@ -134,6 +134,8 @@ void IndependentPhysics::validate() const {
   requireIn(creep_fraction, 0.0, 0.5, "creep_fraction");
   requireIn(creep_time_s, 0.1, 200.0, "creep_time_s");
   requireIn(sensor_offset_deg, 0.0, 20.0, "sensor_offset_deg");
+  if (!std::isnan(sensor_offset_direction_deg))
+    requireIn(sensor_offset_direction_deg, -360.0, 360.0, "sensor_offset_direction_deg");
 }
 
 IndependentActuator::IndependentActuator(const IndependentPhysics& physics, std::uint64_t seed)
@@ -142,7 +144,8 @@ IndependentActuator::IndependentActuator(const IndependentPhysics& physics, std:
   substeps_ = std::max(1, static_cast<int>(std::lround(1.0 / (ph_.sample_rate_hz * kSubstep_s))));
   // The sensor errors' fixed parts: a direction for the offset, a sign for the gain.
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  const double a = 2.0 * kPi * uni(rng_);
+  const double drawn = 2.0 * kPi * uni(rng_);  // drawn either way: the noise that follows is the same
+  const double a = std::isnan(ph_.sensor_offset_direction_deg) ? drawn : ph_.sensor_offset_direction_deg * kPi / 180.0;
   wander_ = Eigen::Vector2d(std::cos(a), std::sin(a));  // the offset's direction until the walk starts
 }
 

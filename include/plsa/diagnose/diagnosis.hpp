@@ -34,6 +34,11 @@ struct DiagnoseOptions {
   /// Identify a DIO-PWL OBF model on the training runs as the reference
   /// for what the data allow (IdentifiedReference).
   bool identified_reference = true;
+  /// The screening stage (first round): a short calibration (this many
+  /// simulator runs) from each spread point of a candidate; the best
+  /// becomes its second start. The re-calibration bar gets the same runs.
+  /// Later rounds, and 0, rank the spread points by their gap alone.
+  int screen_evaluations = 40;
   int max_selected = 3;
   std::vector<std::string> candidates;  ///< empty: every effect switched off in the simulator
   /// A switched-on candidate takes its flexible law where the simulator has
@@ -52,10 +57,11 @@ struct CandidateResult {
   Gap heldout_before, heldout_after, train_after;
   double shrink_percent = 0.0;                         ///< 100 (1 - gap_after% / gap_before%), held out
   std::vector<std::pair<std::string, double>> params;  ///< its fitted parameters (nominal ones too)
-  /// How its calibration went: the starts tried (neutral, then the best of
-  /// the configured values, spread points and, for sensor bias, the
-  /// residual's offset and drift), the simulator runs spent over all of
-  /// them, and the training gap each start ended at (%).
+  /// How its calibration went: the starts tried (neutral, then the best
+  /// after the screening stage of the configured values, spread points and,
+  /// for sensor bias, the residual's offset and drift), the simulator runs
+  /// spent over all of them (screening included), and the training gap each
+  /// start ended at (%).
   int starts = 0, evaluations = 0;
   std::vector<double> train_gap_per_start;
   Signature signature;  ///< of the residual before it was added

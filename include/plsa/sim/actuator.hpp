@@ -81,6 +81,7 @@ class Actuator {
   StiffeningLaw stiffening_law_ = StiffeningLaw::kLinear;
   bool saturating_coupling_ = false, two_rate_creep_ = false, random_walk_bias_ = false;
   bool weighted_pi_ = false;
+  double full_strain_ = 0.0;  ///< |strain| at max_pressure_bar (weighted_pi's fixed bands)
   std::array<double, 3> pi_weights_{};
   Eigen::Vector2d bend_ = Eigen::Vector2d::Zero();  ///< theta * (cos phi, sin phi), rad
   Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();

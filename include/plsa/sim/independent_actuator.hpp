@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -81,6 +82,10 @@ struct IndependentPhysics {
   /// the offset (deg).
   std::string sensor_bias;
   double sensor_offset_deg = 1.5;
+  /// The offset's direction in the bending plane (deg), a property of the
+  /// sensor's mounting, so every run recorded with these physics shares it.
+  /// NaN: drawn from each recording's seed (a sensor re-mounted per run).
+  double sensor_offset_direction_deg = std::numeric_limits<double>::quiet_NaN();
 
   /// Throws std::invalid_argument naming an unknown law or a value out of range.
   void validate() const;

@@ -68,11 +68,19 @@ struct SimConfig {
     /// "play" | "prandtl_ishlinskii" (five equal plays, widths spread to 2x) |
     /// "weighted_pi": a Prandtl-Ishlinskii operator with fitted weights,
     /// strain + sum_k w_k (play_k - strain) over plays of width/2, width and
-    /// 2 width (weights scaled to sum to at most 1; the rest is the linear
-    /// part). It contains "play" (weights 0, 1, 0) and no hysteresis (0, 0, 0).
+    /// 2 width (|weights| scaled to sum to at most 1; the rest is the linear
+    /// part). A positive weight adds a loop whose output lags the strain (a
+    /// play); a negative one the opposite loop, steeper on unloading (a
+    /// stop: elastoplastic, as Bouc-Wen's). It contains "play" (weights 0,
+    /// 1, 0) and no hysteresis (0, 0, 0).
     std::string formulation = "play";
     double width = 0.12;                                              ///< play half-width as a fraction of the strain
     double weight_narrow = 0.0, weight_mid = 1.0, weight_wide = 0.0;  ///< only for "weighted_pi"
+    /// Only for "weighted_pi": the share of each band that is fixed, a
+    /// fraction of the strain at full pressure, instead of proportional to
+    /// the strain. 0: the loop closes at zero; 1: classic plays of fixed
+    /// width, which leave a remanent strain when the chamber vents.
+    double fixed_band_share = 0.0;
   } hysteresis;
   struct Stiffening {
     bool enabled = true;

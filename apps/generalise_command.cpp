@@ -82,6 +82,11 @@ sim::IndependentPhysics drawPhysics(const PhysicsCase& c, std::mt19937_64& rng, 
     sim::setIndependentEffect(t, effect, law, strength);
     drawn[effect + "." + law] = strength;
   }
+  // One mount for the case: its training and validation runs read the same
+  // offset direction (drawn after the strengths, so they stay as they were).
+  const bool biased =
+      std::any_of(c.effects.begin(), c.effects.end(), [](const auto& e) { return e.first == "sensor_bias"; });
+  if (biased) drawn["sensor_offset_direction_deg"] = t.sensor_offset_direction_deg = 360.0 * uni(rng);
   return t;
 }
 

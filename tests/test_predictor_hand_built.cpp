@@ -429,3 +429,51 @@ TYPED_TEST(PredictorSizes, RefusesAModelOfAnotherPoleCount) {
     }
   }
 }
+
+// The input side's planned path (merged modes) on the shapes the typed
+// variants' 2x2 grid leaves out: one scheduling input on three nodes; three
+// scheduling inputs, one of them a single node (its cell's upper corner is
+// the node itself); a block of 28 modes, wider than the sizes compiled in
+// (the run with the block read from the model); one channel per input and
+// two. The run reaches below and past every grid. Each prediction against the
+// offline ones.
+TEST(PredictorHandBuilt, PlannedPathAgreesOnEveryGridAndBlockShape) {
+  struct Shape {
+    const char* name;
+    int inputs, outputs, poles, channels;
+    std::vector<std::vector<double>> levels;
+  };
+  const std::vector<Shape> shapes = {
+      {"one scheduling input on three nodes", 2, 2, 3, 1, {{0.15, 0.3, 0.45}}},
+      {"three scheduling inputs, one a single node", 3, 2, 2, 1, {{0.2, 0.4}, {0.25}, {0.1, 0.3, 0.5}}},
+      {"a block of 28 modes, two channels", 2, 4, 7, 2, {{0.2, 0.4}, {0.2, 0.4}}},
+  };
+  const int T = static_cast<int>(run().u.rows());
+  for (const Shape& shape : shapes) {
+    SCOPED_TRACE(shape.name);
+    Spec s;
+    s.inputs = shape.inputs;
+    s.outputs = shape.outputs;
+    s.poles = realPoles(shape.poles);
+    s.grid = Grid::kLevels;
+    s.levels = shape.levels;
+    s.side = ScheduleSide::kInput;
+    s.schedule_lag_s = 0.3;
+    s.threshold = 0.05;
+    s.coupling = 0.8;
+    if (shape.channels == 2) s.channels = {PlayChannel(0.0), PlayChannel(0.03, 0.1)};
+    const DioPwlObfModel m = build(s);
+    Eigen::MatrixXd u(T, shape.inputs), y(T, shape.outputs);
+    for (int k = 0; k < T; ++k) {
+      for (int j = 0; j < shape.inputs; ++j) u(k, j) = j < 2 ? run().u(k, j) : 0.3 + 0.25 * std::sin(0.05 * k);
+      for (int o = 0; o < shape.outputs; ++o) y(k, o) = run().y(k, o % 2) + 0.5 * o;
+    }
+    const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, 40});
+    Predictor<> p(m);
+    ASSERT_TRUE(p.heldPathIsModal()) << "the modal form (and so the merged path) is not taken";
+    const test::Agreement a = test::plannedAgainstOffline(p, u, y, kDt, offline, {1, 10, 40}, 5);
+    EXPECT_GT(a.compared, 100);
+    EXPECT_GT(a.moved, 1e-2) << "the predictions never moved: the check shows nothing";
+    EXPECT_LT(a.worst, 1e-9) << "merged planned path and offline predictions differ";
+  }
+}

@@ -213,6 +213,8 @@ void compileModal(CompiledModel& c) {
     f.block = (c.n_y * n + 3) / 4 * 4;
     f.merged_lambda = Eigen::VectorXd::Zero(c.n_u * f.block);
     f.merged_beta = Eigen::VectorXd::Zero(c.n_u * f.block);
+    f.output_mask = Eigen::VectorXd::Zero(c.n_y * f.block);
+    for (int o = 0; o < c.n_y; ++o) f.output_mask.segment(o * f.block + o * n, n).setOnes();
     for (int j = 0; j < c.n_u; ++j) {
       RowMajorMatrix t = RowMajorMatrix::Zero(c.nodes * c.channels(j), f.block);
       for (int o = 0; o < c.n_y; ++o)

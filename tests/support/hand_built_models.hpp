@@ -28,6 +28,7 @@ inline constexpr double kInputMax = 0.6;
 enum class Grid {
   kOneRegion,  ///< PwlPartition::single()
   kGrid2x2,    ///< interpolated on inputs 0 and 1, nodes {kNodeLow, kNodeHigh} each: 4 regions
+  kLevels,     ///< interpolated on inputs 0 .. levels.size() - 1, each at its Spec::levels
 };
 
 /// What to build; build() writes it into a model (the shaping fields into
@@ -38,6 +39,7 @@ struct Spec {
   /// Every bank's poles (each input-output pair has the same set).
   std::vector<std::complex<double>> poles = {{0.8, 0.0}};
   Grid grid = Grid::kOneRegion;
+  std::vector<std::vector<double>> levels;  ///< Grid::kLevels: each scheduling input's nodes
   ScheduleSide side = ScheduleSide::kOutput;
   double schedule_lag_s = 0.0;
   /// Each input's play channels (the same list for every input); one width-0 channel = the raw input.
@@ -87,6 +89,11 @@ inline DioPwlObfModel build(const Spec& spec) {
   m.schedule_side = spec.side;
   if (spec.grid == Grid::kGrid2x2)
     m.partition = PwlPartition::interpolated({0, 1}, {{kNodeLow, kNodeHigh}, {kNodeLow, kNodeHigh}});
+  if (spec.grid == Grid::kLevels) {
+    std::vector<int> on;
+    for (std::size_t s = 0; s < spec.levels.size(); ++s) on.push_back(static_cast<int>(s));
+    m.partition = PwlPartition::interpolated(on, spec.levels);
+  }
   const auto regions = static_cast<std::size_t>(m.partition.regionCount());
   m.coefficients.resize(regions);
   for (std::size_t r = 0; r < regions; ++r)

@@ -53,6 +53,10 @@ struct ModalForm {
   /// a multiple of 4 so the per-step loops run whole vectors.
   int block = 0;
   Eigen::VectorXd merged_lambda, merged_beta;  ///< [inputs * block], 0 on the padding
+  /// [outputs * block]: output o's block is 1 on its modes (o * poles ..
+  /// o * poles + poles - 1) and 0 elsewhere, so an output's share of a
+  /// block-long total is one masked vector sum.
+  Eigen::VectorXd output_mask;
   /// Per input j: [nodes * channels(j)] x [block], the coefficients
   /// transposed so a node's contribution to all of j's modes is one row.
   std::vector<RowMajorMatrix> by_copy;

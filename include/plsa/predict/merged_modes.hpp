@@ -1,10 +1,12 @@
 // The input side's planned prediction on merged modes (docs/predictor.md):
 // each bank's node and channel copies merged once into one state per mode,
 // then per step zeta <- lambda zeta + beta (g' - g), g each input's level
-// over the grid nodes its lagged input blends. Everything a step reads and
-// writes besides the tables lives in this run's own fixed arrays, so the
-// compiler keeps it in registers and no store of a predicted row (through
-// the caller's matrix) forces it to reload them.
+// over the grid nodes its lagged input blends. Steps go in chunks: first the
+// schedule's pass over the chunk (plan rows, lag, channels, the cell's
+// corners), whose only carried state is the schedule's, then each input's
+// vector pass over the same steps, whose only carried state is its modes;
+// neither waits on the other step by step. Everything a run reads and writes
+// besides the tables lives in its own fixed arrays.
 #pragma once
 
 #include <algorithm>
@@ -40,10 +42,10 @@ struct PlannedSchedule {
   const InputShaping* shaping = nullptr;  ///< the compiled model's (outlives the run)
   bool shaped = false;
   std::array<double, kMaxInputs> u{}, us{};
-  std::array<double, kMaxChannels> vc{};
-  std::array<PlayChannel, kMaxChannels> play{};
-  std::array<int, kMaxChannels> input_of{};
-  std::array<int, kMaxGridInputs> grid_input{}, last_level{}, stride{}, hint{};
+  std::array<double, kMaxChannels> vc;  ///< the first nc set
+  const PlayChannel* play = nullptr;    ///< [nc] the compiled model's
+  const int* input_of = nullptr;        ///< [nc] each channel's input
+  std::array<int, kMaxGridInputs> grid_input{}, last_level{}, stride{}, upper_step{}, hint{};
   std::array<const double*, kMaxGridInputs> levels{};
 
   PlannedSchedule(const CompiledModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& us0,
@@ -53,13 +55,13 @@ struct PlannedSchedule {
         grid_inputs(static_cast<int>(m.node_grid.inputs.size())),
         pole(m.schedule_pole),
         shaping(&m.shaping),
-        shaped(m.shaping.shapesLevels()) {
+        shaped(m.shaping.shapesLevels()),
+        play(m.play.data()),
+        input_of(m.channel_input.data()) {
     for (int j = 0; j < nu; ++j) u[j] = u0(j), us[j] = us0(j);
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       vc[cc] = vc0(c);
-      play[cc] = m.play[cc];
-      input_of[cc] = m.channel_input[cc];
     }
     for (int s = 0; s < grid_inputs; ++s) {
       const auto ss = static_cast<std::size_t>(s);
@@ -67,64 +69,90 @@ struct PlannedSchedule {
       levels[ss] = m.node_grid.levels[ss].data();
       last_level[ss] = static_cast<int>(m.node_grid.levels[ss].size()) - 1;
       stride[ss] = m.node_grid.strides[ss];
+      upper_step[ss] = last_level[ss] > 0 ? stride[ss] : 0;  // one level: the upper corner is the node itself
     }
   }
 
-  /// Row h of a column-major plan (leading dimension ld).
-  PLSA_ALWAYS_INLINE void take(const double* plan, Eigen::Index ld, int h) noexcept {
-    for (int j = 0; j < nu; ++j) u[static_cast<std::size_t>(j)] = plan[h + j * ld];
+  /// One step's inputs: row h of a column-major plan (leading dimension ld)
+  /// when `take`, else u held; the lag's next value toward u (lagTowards, as
+  /// the predictor's own); returns positiveSum(u) when the coupling needs it.
+  PLSA_ALWAYS_INLINE double takeAndLag(const double* plan, Eigen::Index ld, int h, bool take) noexcept {
+    const double threshold = shaping->threshold;
+    const bool coupled = shaping->coupling != 0.0;
+    double positive_sum = 0.0;
+    for (int j = 0; j < nu; ++j) {
+      const auto jj = static_cast<std::size_t>(j);
+      if (take) u[jj] = plan[h + j * ld];
+      us[jj] = lagTowards(us[jj], u[jj], pole);
+      if (coupled) positive_sum += std::max(0.0, u[jj] - threshold);
+    }
+    return positive_sum;
   }
 
-  /// The lag's next value toward u (lagTowards, as the predictor's own).
-  PLSA_ALWAYS_INLINE void lag() noexcept {
-    for (std::size_t j = 0; j < static_cast<std::size_t>(nu); ++j) us[j] = lagTowards(us[j], u[j], pole);
-  }
-
-  /// The played channels moved to u (threshold, coupling, softening first).
-  PLSA_ALWAYS_INLINE void moveChannels() noexcept {
-    const double positive_sum =
-        shaping->coupling != 0.0 ? shaping->positiveSum(Eigen::Map<const Eigen::VectorXd>(u.data(), nu)) : 0.0;
+  /// The played channels moved to u (threshold, coupling, softening first;
+  /// positive_sum from takeAndLag): `next` from `previous` (either may be vc).
+  PLSA_ALWAYS_INLINE void moveChannels(double positive_sum, const double* previous, double* next) const noexcept {
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       double level = u[static_cast<std::size_t>(input_of[cc])];
       if (shaped) level = shaping->level(level, positive_sum);
-      vc[cc] = play[cc].follow(level, vc[cc]);
+      next[c] = play[cc].follow(level, previous[c]);
     }
   }
 
-  /// The grid's blend at us: the same regions and weights as
-  /// PwlPartition::blend, each input's cell searched from its last one.
+  /// The grid's blend at us: the regions and weights of PwlPartition::blend,
+  /// each input's cell searched from its last one, always all 2^inputs
+  /// corners of the cell (a corner the blend does not use weighs 0; an input
+  /// at or past its last level takes the cell below at weight 1), so the
+  /// step has no branch on where the input sits in its cell.
   PLSA_ALWAYS_INLINE void blend(ScheduleBlend& out) noexcept {
-    out.count = 1;
-    out.region[0] = 0;
-    out.weight[0] = 1.0;
+    int base = 0;
+    double t[kMaxGridInputs];
     for (int s = 0; s < grid_inputs; ++s) {
       const auto ss = static_cast<std::size_t>(s);
       const double* lv = levels[ss];
       const int last = last_level[ss];
       const double x = us[static_cast<std::size_t>(grid_input[ss])];
       int i = 0;
-      double t = 0.0;
-      if (x >= lv[last]) {
-        i = last;
-      } else if (x > lv[0]) {
+      t[s] = 0.0;
+      if (last > 0 && x >= lv[last]) {
+        i = last - 1;
+        t[s] = 1.0;
+      } else if (last > 0 && x > lv[0]) {
         i = std::min(hint[ss], last - 1);
         while (x < lv[i]) --i;
         while (x >= lv[i + 1]) ++i;
-        t = (x - lv[i]) / (lv[i + 1] - lv[i]);
+        t[s] = (x - lv[i]) / (lv[i + 1] - lv[i]);
       }
       hint[ss] = i;
-      const int c = out.count;
-      for (int k = 0; k < c; ++k) {
-        const auto kk = static_cast<std::size_t>(k);
-        if (t > 0.0) {
-          out.region[kk + static_cast<std::size_t>(c)] = out.region[kk] + (i + 1) * stride[ss];
-          out.weight[kk + static_cast<std::size_t>(c)] = out.weight[kk] * t;
-        }
-        out.region[kk] += i * stride[ss];
-        out.weight[kk] *= 1.0 - t;
+      base += i * stride[ss];
+    }
+    switch (grid_inputs) {  // the usual grids with their loops unrolled
+      case 1:
+        return corners<1>(base, t, out);
+      case 2:
+        return corners<2>(base, t, out);
+      default:
+        return corners<0>(base, t, out);
+    }
+  }
+
+  /// The cell's corners from its lowest node `base` and the inputs' places
+  /// t in it; G: the grid's inputs fixed at compile time, or 0.
+  template <int G>
+  PLSA_ALWAYS_INLINE void corners(int base, const double* t, ScheduleBlend& out) const noexcept {
+    const int g = G > 0 ? G : grid_inputs;
+    out.count = 1 << g;
+    for (int k = 0; k < (1 << g); ++k) {
+      int region = base;
+      double weight = 1.0;
+      for (int s = 0; s < g; ++s) {
+        const bool upper = (k >> s) & 1;
+        region += upper ? upper_step[static_cast<std::size_t>(s)] : 0;
+        weight *= upper ? t[s] : 1.0 - t[s];
       }
-      if (t > 0.0) out.count = 2 * c;
+      out.region[static_cast<std::size_t>(k)] = region;
+      out.weight[static_cast<std::size_t>(k)] = weight;
     }
   }
 };
@@ -149,17 +177,25 @@ PLSA_ALWAYS_INLINE void levelsOfInput(const CompiledModel& m, int j, const Sched
   const int count = (B > 0 ? B : f.block) / 4;
   const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
   const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
+  const std::ptrdiff_t node_rows = static_cast<std::ptrdiff_t>(channels) * count * 4;  // one node's rows
   Quad acc[B > 0 ? B / 4 : kMaxBlock / 4];
   for (int i = 0; i < count; ++i) acc[i] = Quad{0.0, 0.0, 0.0, 0.0};
-  for (int c = 0; c < channels; ++c) {
-    const double v = vc[first + c];
-    if (v == 0.0) continue;
+  if (channels == 1) {  // the usual input: one channel, a row per node
+    const double v = vc[first];
     for (int k = 0; k < blend.count; ++k) {
       const double weight = blend.weight[static_cast<std::size_t>(k)] * v;
       const Quad w = {weight, weight, weight, weight};
-      const double* row =
-          table + static_cast<std::ptrdiff_t>(blend.region[static_cast<std::size_t>(k)] * channels + c) * count * 4;
-      const LooseQuad* r = merged::quads(row);
+      const LooseQuad* r = merged::quads(table + blend.region[static_cast<std::size_t>(k)] * node_rows);
+      for (int i = 0; i < count; ++i) acc[i] += w * r[i];
+    }
+  }
+  for (int k = 0; k < (channels == 1 ? 0 : blend.count); ++k) {
+    const double* node = table + blend.region[static_cast<std::size_t>(k)] * node_rows;
+    const double w_k = blend.weight[static_cast<std::size_t>(k)];
+    for (int c = 0; c < channels; ++c) {
+      const double weight = w_k * vc[first + c];
+      const Quad w = {weight, weight, weight, weight};
+      const LooseQuad* r = merged::quads(node + c * count * 4);
       for (int i = 0; i < count; ++i) acc[i] += w * r[i];
     }
   }
@@ -167,15 +203,14 @@ PLSA_ALWAYS_INLINE void levelsOfInput(const CompiledModel& m, int j, const Sched
   for (int i = 0; i < count; ++i) out[i] = acc[i];
 }
 
-/// Output o's share of a block-long total (its modes o * n .. o * n + n - 1),
-/// summed in pairs (half the dependent additions of a running sum).
-PLSA_ALWAYS_INLINE double outputSum(const double* total, int o, int n) noexcept {
-  const double* t = total + o * n;
-  double even = 0.0, odd = 0.0;
-  int i = 0;
-  for (; i + 1 < n; i += 2) even += t[i], odd += t[i + 1];
-  if (i < n) even += t[i];
-  return even + odd;
+/// Output o's share of a block-long total: its modes summed through the
+/// output's mask (ModalForm::output_mask), a vector at a time.
+template <int B>
+PLSA_ALWAYS_INLINE double outputShare(const double* total, const double* mask, int block) noexcept {
+  const LooseQuad *t = quads(total), *k = quads(mask);
+  Quad acc = t[0] * k[0];
+  for (int i = 1; i < (B > 0 ? B : block) / 4; ++i) acc += t[i] * k[i];
+  return (acc[0] + acc[2]) + (acc[1] + acc[3]);
 }
 
 /// Where a run starts: each input's merged modes (one block each, padding
@@ -188,75 +223,112 @@ struct MergedStart {
   const double* y = nullptr;  ///< [outputs]
 };
 
+/// Steps a run takes its schedule for at once (the schedule's pass), before
+/// the modes follow them (the vector pass).
+inline constexpr int kChunk = 8;
+
+/// One chunk's schedule: per step the grid's blend and the channels' values.
+struct ScheduleChunk {
+  int steps = 0;
+  std::array<ScheduleBlend, kChunk> blend;
+  double vc[kChunk][kMaxChannels];
+};
+
+/// The schedule's pass: steps first .. first + chunk.steps - 1, each taking
+/// its plan row (held past the plan's last), lagging, moving the channels and
+/// blending. Its only carried state is the schedule's own, so successive
+/// steps overlap in the processor instead of waiting on the modes.
+PLSA_ALWAYS_INLINE void scheduleSteps(PlannedSchedule& sched, int first, const double* plan, Eigen::Index plan_ld,
+                                      Eigen::Index plan_rows, ScheduleChunk& chunk) noexcept {
+  for (int k = 0; k < chunk.steps; ++k) {
+    const int h = first + k;
+    const double positive_sum = sched.takeAndLag(plan, plan_ld, h, h < plan_rows);
+    sched.moveChannels(positive_sum, k == 0 ? sched.vc.data() : chunk.vc[k - 1], chunk.vc[k]);
+    sched.blend(chunk.blend[static_cast<std::size_t>(k)]);
+  }
+  if (chunk.steps > 0) std::copy(chunk.vc[chunk.steps - 1], chunk.vc[chunk.steps - 1] + sched.nc, sched.vc.data());
+}
+
+/// Whether input j's channels stay zero over the whole chunk.
+inline bool channelsRestIn(const CompiledModel& m, int j, const ScheduleChunk& chunk) noexcept {
+  const auto jj = static_cast<std::size_t>(j);
+  for (int k = 0; k < chunk.steps; ++k)
+    for (int c = m.first_channel[jj]; c < m.first_channel[jj + 1]; ++c)
+      if (chunk.vc[k][c] != 0.0) return false;
+  return true;
+}
+
+/// The vector pass for input j over the chunk: its levels at each step's
+/// blend, zeta <- lambda zeta + beta (g' - g), and zeta added into each
+/// step's total (inputs in order, as one step at a time would).
+template <int B>
+PLSA_ALWAYS_INLINE void modesOverChunk(const CompiledModel& m, int j, const ScheduleChunk& chunk,
+                                       double* __restrict zeta, double* __restrict level,
+                                       double* __restrict totals) noexcept {
+  const ModalForm& f = m.modal_form;
+  const int block = B > 0 ? B : f.block, at = j * block;
+  const LooseQuad *l = quads(f.merged_lambda.data() + at), *b = quads(f.merged_beta.data() + at);
+  LooseQuad *z = quads(zeta + at), *now = quads(level + at);
+  for (int k = 0; k < chunk.steps; ++k) {
+    alignas(32) double next[B > 0 ? B : kMaxBlock];
+    levelsOfInput<B>(m, j, chunk.blend[static_cast<std::size_t>(k)], chunk.vc[k], next);
+    const LooseQuad* g = quads(next);
+    LooseQuad* t = quads(totals + k * block);
+    for (int i = 0; i < block / 4; ++i) {
+      z[i] = l[i] * z[i] + b[i] * (g[i] - now[i]);
+      now[i] = g[i];
+      t[i] += z[i];
+    }
+  }
+}
+
 /// The run: rows 0..horizon-1 of `out` (column-major, leading dimension
 /// ldo) from the merged modes at `start`, the plan (column-major, `plan_rows`
 /// rows, held past its last) driving the schedule; `y_end` gets the last
-/// row. An input whose channels are zero and whose modes are at rest (a
-/// chamber never pressurised) is skipped until it moves.
+/// row. Steps go in chunks of kChunk: the schedule's pass, then each input's
+/// vector pass, then the rows. An input whose channels are zero and whose
+/// modes are at rest (a chamber never pressurised) is skipped until it moves.
 template <int B>
 PLSA_ALWAYS_INLINE void runPlanned(const CompiledModel& m, PlannedSchedule& sched, const MergedStart& start,
                                    int horizon, const double* plan, Eigen::Index plan_ld, Eigen::Index plan_rows,
                                    double* out, Eigen::Index ldo, double* y_end) noexcept {
   const ModalForm& f = m.modal_form;
-  const int n = m.poles, block = B > 0 ? B : f.block, nu = m.n_u, ny = m.n_y;
+  const int block = B > 0 ? B : f.block, nu = m.n_u, ny = m.n_y;
   alignas(32) double own_zeta[kMaxInputs * (B > 0 ? B : 1)];
   alignas(32) double own_level[kMaxInputs * (B > 0 ? B : 1)];
-  alignas(32) double total[B > 0 ? B : kMaxBlock];
+  alignas(32) double totals[kChunk * (B > 0 ? B : kMaxBlock)];
   double* __restrict zeta = B > 0 ? own_zeta : start.zeta;
   double* __restrict level = B > 0 ? own_level : start.level;
   if (B > 0)
     for (int i = 0; i < nu * block; ++i) zeta[i] = start.zeta[i];
-  ScheduleBlend blend;
-  sched.blend(blend);
-  for (int j = 0; j < nu; ++j) levelsOfInput<B>(m, j, blend, sched.vc.data(), level + j * block);
+  ScheduleChunk chunk;
+  sched.blend(chunk.blend[0]);
+  for (int j = 0; j < nu; ++j) levelsOfInput<B>(m, j, chunk.blend[0], sched.vc.data(), level + j * block);
   std::array<bool, kMaxInputs> resting{};
   for (int j = 0; j < nu; ++j) {
     bool rest = true;
     for (int i = 0; i < block; ++i) rest = rest && zeta[j * block + i] == 0.0 && level[j * block + i] == 0.0;
     resting[static_cast<std::size_t>(j)] = rest;
   }
-  for (int i = 0; i < block; ++i) total[i] = 0.0;
+  for (int i = 0; i < block; ++i) totals[i] = 0.0;
   for (int j = 0; j < nu; ++j)
-    for (int i = 0; i < block; ++i) total[i] += zeta[j * block + i];
-  double y[kMaxOutputs], dy[kMaxOutputs];
-  for (int o = 0; o < ny; ++o) {
-    y[o] = start.y[o];
-    dy[o] = outputSum(total, o, n);
-  }
-  const double* lambda = f.merged_lambda.data();
-  const double* beta = f.merged_beta.data();
-  for (int h = 0; h < horizon; ++h) {
-    for (int o = 0; o < ny; ++o) out[h + o * ldo] = y[o] += dy[o];
-    if (h + 1 == horizon) break;
-    if (h < plan_rows) sched.take(plan, plan_ld, h);
-    sched.lag();
-    sched.moveChannels();
-    sched.blend(blend);
-    Quad sum[B > 0 ? B / 4 : kMaxBlock / 4];
-    for (int i = 0; i < block / 4; ++i) sum[i] = Quad{0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < block; ++i) totals[i] += zeta[j * block + i];
+  const double* mask = f.output_mask.data();
+  double y[kMaxOutputs];
+  for (int o = 0; o < ny; ++o) out[o * ldo] = y[o] = start.y[o] + outputShare<B>(totals, mask + o * block, block);
+  for (int first = 0; first + 1 < horizon; first += kChunk) {
+    chunk.steps = std::min(kChunk, horizon - 1 - first);
+    scheduleSteps(sched, first, plan, plan_ld, plan_rows, chunk);
+    for (int i = 0; i < chunk.steps * block; ++i) totals[i] = 0.0;
     for (int j = 0; j < nu; ++j) {
       const auto jj = static_cast<std::size_t>(j);
-      if (resting[jj]) {
-        bool still = true;
-        for (int c = m.first_channel[jj]; c < m.first_channel[jj + 1]; ++c)
-          still = still && sched.vc[static_cast<std::size_t>(c)] == 0.0;
-        if (still) continue;
-        resting[jj] = false;
-      }
-      const int at = j * block;
-      alignas(32) double next[B > 0 ? B : kMaxBlock];
-      levelsOfInput<B>(m, j, blend, sched.vc.data(), next);
-      const LooseQuad *l = quads(lambda + at), *b = quads(beta + at), *g = quads(next);
-      LooseQuad *z = quads(zeta + at), *now = quads(level + at);
-      for (int i = 0; i < block / 4; ++i) {
-        z[i] = l[i] * z[i] + b[i] * (g[i] - now[i]);
-        now[i] = g[i];
-        sum[i] += z[i];
-      }
+      if (resting[jj] && channelsRestIn(m, j, chunk)) continue;
+      resting[jj] = false;
+      modesOverChunk<B>(m, j, chunk, zeta, level, totals);
     }
-    LooseQuad* t = quads(total);
-    for (int i = 0; i < block / 4; ++i) t[i] = sum[i];
-    for (int o = 0; o < ny; ++o) dy[o] = outputSum(total, o, n);
+    for (int k = 0; k < chunk.steps; ++k)
+      for (int o = 0; o < ny; ++o)
+        out[first + k + 1 + o * ldo] = y[o] += outputShare<B>(totals + k * block, mask + o * block, block);
   }
   for (int o = 0; o < ny; ++o) y_end[o] = y[o];
 }

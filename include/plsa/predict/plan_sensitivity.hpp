@@ -155,9 +155,9 @@ class PlanSensitivity {
         const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y;
         const double inv_r = r2 == 0.0 ? 0.0 : 1.0 / std::sqrt(r2);  // straight: no direction to move
         const double inv_r2 = inv_r * inv_r / kRadPerDeg;
-        turn_(h, 0) = x * inv_r;
-        turn_(h, 1) = y * inv_r;
-        turn_(h, 2) = -y * inv_r2;
+        turn_(h, 0) = x * inv_r;  // (d bend, d steer) = (0, 1) * d x + (2, 3) * d y
+        turn_(h, 1) = -y * inv_r2;
+        turn_(h, 2) = y * inv_r;
         turn_(h, 3) = x * inv_r2;
       }
     double* __restrict rows_by_output = rows_.data();  // [(h - s - 1) * ny + o]: a column's order
@@ -188,15 +188,13 @@ class PlanSensitivity {
   void channelResponse(int ny, Eigen::Index c, Eigen::Index s, Eigen::Index rows, Eigen::Index tail, bool tip,
                        double* __restrict out) const noexcept {
     const Eigen::Index held = std::min(tail, rows);
-    if (tip) {  // two outputs, turned on the way
+    if (tip) {  // two outputs, turned on the way: a row's pair at once
       const double *kx = kernel_.col(c * 2).data(), *ky = kernel_.col(c * 2 + 1).data();
-      const double *t0 = turn_.col(0).data() + s + 1, *t1 = turn_.col(1).data() + s + 1;
-      const double *t2 = turn_.col(2).data() + s + 1, *t3 = turn_.col(3).data() + s + 1;
-      for (Eigen::Index r = 0; r < rows; ++r) {
-        const double bx = r < held ? kx[r] : kx[r] - kx[r - tail], by = r < held ? ky[r] : ky[r] - ky[r - tail];
-        out[2 * r] = t0[r] * bx + t1[r] * by;
-        out[2 * r + 1] = t2[r] * bx + t3[r] * by;
-      }
+      const Pair* turn = reinterpret_cast<const Pair*>(turn_.data()) + 2 * (s + 1);  // rows s + 1 on
+      LoosePair* row = reinterpret_cast<LoosePair*>(out);
+      for (Eigen::Index r = 0; r < held; ++r) row[r] = turnedPair(turn + 2 * r, kx[r], ky[r]);
+      for (Eigen::Index r = held; r < rows; ++r)
+        row[r] = turnedPair(turn + 2 * r, kx[r] - kx[r - tail], ky[r] - ky[r - tail]);
       return;
     }
     for (int o = 0; o < ny; ++o) {
@@ -206,10 +204,21 @@ class PlanSensitivity {
     }
   }
 
+  // Two doubles as one vector (GCC and Clang vector extensions: one SSE2
+  // register); `Loose` at any double's alignment.
+  typedef double Pair __attribute__((vector_size(16)));
+  typedef double LoosePair __attribute__((vector_size(16), aligned(8)));
+
+  // A row's (d bend, d steer) from its (d x, d y): turn[0] dx + turn[1] dy.
+  static PLSA_ALWAYS_INLINE Pair turnedPair(const Pair* turn, double dx, double dy) noexcept {
+    return turn[0] * Pair{dx, dx} + turn[1] * Pair{dy, dy};
+  }
+
   Eigen::MatrixXd kernel_;  // [h][c * n_y + o]: CK
   RowMajorMatrix drive_;    // [step * channels + channel] x inputs
   Eigen::VectorXi next_, pushed_;
-  Eigen::MatrixXd turn_, rows_;
+  Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> turn_;  // [h]: two pairs (turnedPair)
+  Eigen::MatrixXd rows_;
   Eigen::VectorXd weight_;  // one kernel's beta a per pole
   Eigen::VectorXd vc_;      // the channels along the plan
 };

@@ -51,15 +51,24 @@ Stats stats(std::vector<double>& ns) {
   return {at(0.5), at(0.99), at(0.999), ns.back()};
 }
 
-template <class F>
-Stats timeCalls(long calls, F&& f) {
+/// Times call(i) for i < calls, each on its own; prepare(i) runs before it,
+/// untimed (the updates and plans that move the schedule between calls).
+template <class P, class F>
+Stats timeCalls(long calls, P&& prepare, F&& call) {
   std::vector<double> ns(static_cast<std::size_t>(calls));
   for (long i = 0; i < calls; ++i) {
+    prepare(i);
     const auto t0 = Clock::now();
-    f(i);
+    call(i);
     ns[static_cast<std::size_t>(i)] = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
   }
   return stats(ns);
+}
+
+template <class F>
+Stats timeCalls(long calls, F&& call) {
+  return timeCalls(
+      calls, [](long) {}, call);
 }
 
 std::map<std::string, Stats> g_results;
@@ -145,24 +154,27 @@ void measureModel(const BenchModel& bm, const Drive& d, long calls) {
   for (int k = 0; k < 2000; ++k) feed();
   report(tag + ": update", timeCalls(calls, [&](long) { feed(); }));
   const long predicts = std::max(1000L, calls / 2);
-  report(tag + ": predict 80, input held, moving", timeCalls(predicts, [&](long i) {
-           if ((i & 3) == 0) feed();
+  // Every fourth call a new sample (and plan) first, untimed: the schedule moves between calls.
+  auto moveOn = [&](long i) {
+    if ((i & 3) == 0) feed();
+  };
+  auto moveOnWithPlan = [&](long i) {
+    if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
+  };
+  report(tag + ": predict 80, input held, moving", timeCalls(predicts, moveOn, [&](long) {
            p.predict(80, hold, out);
            benchmark::DoNotOptimize(out.data());
          }));
-  report(tag + ": predict 80, planned input", timeCalls(predicts, [&](long i) {
-           if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
+  report(tag + ": predict 80, planned input", timeCalls(predicts, moveOnWithPlan, [&](long) {
            p.predict(80, plan, out);
            benchmark::DoNotOptimize(out.data());
          }));
   Eigen::MatrixXd jacobian(80 * m.outputCount(), 79 * m.inputCount());
-  report(tag + ": sensitivity 80 (jacobian to the plan)", timeCalls(predicts / 4, [&](long i) {
-           if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
+  report(tag + ": sensitivity 80 (jacobian to the plan)", timeCalls(predicts / 4, moveOnWithPlan, [&](long) {
            p.sensitivity(80, plan, jacobian);
            benchmark::DoNotOptimize(jacobian.data());
          }));
-  report(tag + ": predict 400, input held, moving", timeCalls(predicts / 4, [&](long i) {
-           if ((i & 3) == 0) feed();
+  report(tag + ": predict 400, input held, moving", timeCalls(predicts / 4, moveOn, [&](long) {
            p.predict(400, hold, out);
            benchmark::DoNotOptimize(out.data());
          }));
@@ -171,11 +183,15 @@ void measureModel(const BenchModel& bm, const Drive& d, long calls) {
   for (int k = 0; k < 10000; ++k) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
   g_figures[tag + ": subnormal states after a 125 s hold"] = p.subnormalStates();
   for (int h : {80, 400}) {
-    const Stats s = timeCalls(predicts / (h / 80), [&](long i) {
-      if ((i & 3) == 0) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
-      p.predict(h, hold, out);
-      benchmark::DoNotOptimize(out.data());
-    });
+    const Stats s = timeCalls(
+        predicts / (h / 80),
+        [&](long i) {
+          if ((i & 3) == 0) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
+        },
+        [&](long) {
+          p.predict(h, hold, out);
+          benchmark::DoNotOptimize(out.data());
+        });
     report(tag + ": predict " + std::to_string(h) + ", after a 125 s hold", s);
     g_figures[tag + ": predict " + std::to_string(h) + " after a hold, p99.9/p50"] = s.p999 / s.p50;
   }
@@ -281,11 +297,40 @@ Drive syntheticDrive(int chambers) {
   return d;
 }
 
+// The machine's own tail: a fixed amount of arithmetic, the same in every
+// call, timed like the predictor's calls. Its p99.9 / p50 is what interrupts
+// and the host's scheduling add to a call of that length, whatever it does.
+double fixedWork(long steps) {
+  double x = 1.0;
+  for (long k = 0; k < steps; ++k) {
+    x = x * 0.999999 + 1e-6;
+    benchmark::DoNotOptimize(x);  // every step done, none folded away
+  }
+  return x;
+}
+
+void measureMachineTail(long calls) {
+  long steps = 1;
+  const auto t0 = Clock::now();
+  benchmark::DoNotOptimize(fixedWork(100000));
+  const double ns_per_step = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / 100000.0;
+  for (double target_ns : {1000.0, 3000.0, 10000.0}) {
+    steps = std::max(1L, static_cast<long>(target_ns / ns_per_step));
+    const Stats s = timeCalls(calls / 4, [&](long) { benchmark::DoNotOptimize(fixedWork(steps)); });
+    const std::string name = "fixed work of about " + std::to_string(static_cast<int>(target_ns / 1000)) + " us";
+    report(name, s);
+    g_figures[name + ": p99.9/p50"] = s.p999 / s.p50;
+  }
+}
+
 void runLatency(long calls, const std::string& only) {
   std::printf("plsa-bench latency: %ld calls per line (predict: %ld), p50 and p99.9 of each call\n", calls,
               std::max(1000L, calls / 2));
   const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, say);
   const plsa::io::Log run = plsa::bench::drivingRun(1);
+  // As a controller's thread would run (after identification, whose threads must not inherit it).
+  std::printf("real time: %s\n", plsa::enterRealTime(50).words.c_str());
+  measureMachineTail(calls);
   for (const BenchModel& bm : models) {
     if (!only.empty() && bm.name != only) continue;
     Drive d;
@@ -350,6 +395,8 @@ void runLoop(double seconds, int segments) {
   report("loop wake-up jitter", stats(jitter));
   report("loop work per tick", stats(work));
   g_figures["loop deadline misses"] = static_cast<double>(misses);
+  g_figures["loop ticks"] = static_cast<double>(ticks);
+  g_figures["loop segments"] = static_cast<double>(segments);
   std::printf("  deadline misses: %ld of %ld\n", misses, ticks);
 }
 

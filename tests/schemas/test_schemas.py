@@ -134,7 +134,7 @@ def diagnosis(out, sim_config):
 
 ALL = sorted(p.name[: -len(".schema.json")] for p in SCHEMAS.glob("*.schema.json"))
 CHECKED = {"model", "sim-config", "signal-map", "diagnosis", "diagnose-selfcheck", "demo-fits", "validate-fits",
-           "crossval-fits", "bench"}
+           "crossval-fits", "generalise", "bench"}
 
 
 def test_every_schema_is_checked_here():
@@ -369,6 +369,22 @@ def test_crossval_fits(out):
     assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")
     assert_refused("crossval-fits", broken(doc, without("folds", "joystick2", "plsa")), "a fold without the model")
     assert_refused("crossval-fits", broken(doc, setting({}, "folds", "joystick2", "LSTM")), "an unknown model 'LSTM'")
+
+
+@needs_cli
+def test_generalise(out):
+    """One case with a sensor bias (its physics carries the offset's direction), one seed."""
+    path = out / "generalise.json"
+    run("generalise", "--case", "sensor_bias.scale_offset", "--seeds", "1", "--json", path, timeout=240)
+    doc = load(path)
+    assert_valid("generalise", doc, "plsa generalise --json")
+    assert [r["case"] for r in doc["rows"]] == ["sensor_bias.scale_offset"]
+    assert "sensor_offset_direction_deg" in doc["rows"][0]["physics"]
+    assert_refused("generalise", broken(doc, without("rows", 0, "fits", "arx")), "a row without ARX's fits")
+    assert_refused("generalise", broken(doc, without("summary", "plsa", "steer_deg", "sim")), "no simulation summary")
+    assert_refused("generalise", broken(doc, setting("fast", "rows", 0, "fits", "plsa", "bend_deg", "40")),
+                   "a fit that is not a number")
+    assert_refused("generalise", broken(doc, setting({}, "rows", 0, "fits", "LSTM")), "an unknown model 'LSTM'")
 
 
 # --- plsa-bench --------------------------------------------------------------

@@ -17,9 +17,9 @@ namespace plsa {
 template <class T>
 class ModelHandOff {
  public:
-  explicit ModelHandOff(std::shared_ptr<const T> first) : active_(new Holder{std::move(first), 0}) {}
+  explicit ModelHandOff(std::shared_ptr<const T> first)
+      : active_(std::make_unique<Holder>(Holder{std::move(first), 0})) {}
   ~ModelHandOff() {
-    std::unique_ptr<Holder>(active_).reset();
     std::unique_ptr<Holder>(pending_.exchange(nullptr)).reset();
     std::unique_ptr<Holder>(retired_.exchange(nullptr)).reset();
   }
@@ -44,9 +44,9 @@ class ModelHandOff {
     if (retired_.load(std::memory_order_acquire) != nullptr) return false;
     Holder* next = pending_.exchange(nullptr, std::memory_order_acq_rel);
     if (!next) return false;
-    Holder* previous = active_;
-    on_swap(*previous->value, *next->value);
-    active_ = next;
+    on_swap(*active_->value, *next->value);
+    Holder* previous = active_.release();  // handed to retired_, never freed here
+    active_.reset(next);
     retired_.store(previous, std::memory_order_release);  // from here another thread may free it
     return true;
   }
@@ -62,7 +62,8 @@ class ModelHandOff {
     std::shared_ptr<const T> value;
     std::uint64_t id;
   };
-  Holder* active_;  // owned; read and replaced by the real-time thread only
+  std::unique_ptr<Holder> active_;  // read and replaced by the real-time thread only
+  // Owned while set: a shared_ptr cannot travel through a lock-free atomic, a raw pointer can.
   std::atomic<Holder*> pending_{nullptr};
   std::atomic<Holder*> retired_{nullptr};
 };

@@ -59,13 +59,17 @@ int main(int argc, char** argv) {
   const double target = state.bend_deg + 2.0;  // bend two degrees further
   std::printf("start: bend %.2f deg, target %.2f deg\n", state.bend_deg, target);
   Eigen::MatrixXd plan = u.transpose().replicate(kHorizon - 1, 1), trial(kHorizon - 1, nu);
-  Eigen::MatrixXd predicted(kHorizon, 2), jacobian(kHorizon * 2, (kHorizon - 1) * nu);
+  Eigen::MatrixXd predicted(kHorizon, 2);
+  // Zeroed once: each tick writes only the rows a plan step moves (the rest stays zero).
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(kHorizon * 2, (kHorizon - 1) * nu);
   for (int tick = 0; tick < 160; ++tick) {
     // A few projected-gradient steps on the plan, warm-started from the last one.
     predictor.predict(kHorizon, plan, predicted);
     double now = cost(predicted, target, plan, u.transpose());
     for (int iteration = 0; iteration < 5; ++iteration) {
-      if (predictor.sensitivity(kHorizon, plan, jacobian) != plsa::PredictorStatus::kOk) return 1;
+      if (predictor.sensitivity(kHorizon, plan, jacobian, plsa::JacobianFill::kMovingRows) !=
+          plsa::PredictorStatus::kOk)
+        return 1;
       Eigen::MatrixXd gradient = Eigen::MatrixXd::Zero(kHorizon - 1, nu);
       for (int h = 0; h < kHorizon; ++h)
         for (Eigen::Index s = 0; s + 1 < kHorizon; ++s)

@@ -476,6 +476,38 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   }
 }
 
+// JacobianFill::kMovingRows writes exactly the rows after each plan step:
+// on a matrix of NaN those rows equal the whole fill's, and every row at or
+// before its step keeps its NaN; the whole fill writes zeros there.
+TEST(Predictor, SensitivityWritesOnlyTheMovingRowsWhenAsked) {
+  const Data& d = data();
+  Predictor<> p(d.tip);
+  const int H = 30, ny = 2, nu = 3;
+  for (int t = 0; t < 300; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+  const Eigen::MatrixXd plan = d.u.middleRows(300, H - 1);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Eigen::MatrixXd whole = Eigen::MatrixXd::Constant(H * ny, (H - 1) * nu, nan), moving = whole;
+  ASSERT_EQ(p.sensitivity(H, plan, whole), PredictorStatus::kOk);
+  ASSERT_EQ(p.sensitivity(H, plan, moving, JacobianFill::kMovingRows), PredictorStatus::kOk);
+  EXPECT_TRUE(whole.allFinite());
+  int upper = 0, lower = 0;
+  for (int s = 0; s < H - 1; ++s)
+    for (int j = 0; j < nu; ++j)
+      for (int r = 0; r < H * ny; ++r) {
+        const int h = r / ny, c = s * nu + j;
+        if (h <= s) {
+          EXPECT_EQ(whole(r, c), 0.0) << "row " << r << ", column " << c;
+          EXPECT_TRUE(std::isnan(moving(r, c))) << "row " << r << ", column " << c << " written";
+          ++upper;
+        } else {
+          EXPECT_EQ(moving(r, c), whole(r, c)) << "row " << r << ", column " << c;
+          lower += whole(r, c) != 0.0;
+        }
+      }
+  EXPECT_GT(upper, 0);
+  EXPECT_GT(lower, 100) << "the plan moves nothing: the check shows nothing";
+}
+
 // A robot at rest for 125 s: every filter state decays toward zero. None may
 // end as a subnormal number (they slow arithmetic down by orders of
 // magnitude), and predictions stay those of a fresh predictor at rest.

@@ -14,6 +14,7 @@
 
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
+#include "plsa/predict/predictor_options.hpp"
 
 namespace plsa {
 
@@ -41,10 +42,10 @@ class PlanSensitivity {
   void compute(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                const Eigen::VectorXd& us, const DirectionState& dir, const Eigen::VectorXd& node_w,
                const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
-               Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+               Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill what) noexcept {
     frozenKernels(m, horizon, us, dir, node_w);
     channelPath(m, plan, vc);
-    fill(m, horizon, nominal, jacobian);
+    fill(m, horizon, nominal, jacobian, what == JacobianFill::kWhole);
   }
 
  private:
@@ -144,9 +145,10 @@ class PlanSensitivity {
   // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
   // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
   // t); a tip_cartesian model's row pairs turned from components into angles
-  // at the nominal prediction on the way (d(bend, steer) / d(x, y)).
+  // at the nominal prediction on the way (d(bend, steer) / d(x, y)); the
+  // structural zeros (rows h <= s of column (s, j)) only when `whole`.
   void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
-            Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+            Eigen::Ref<Eigen::MatrixXd> jacobian, bool whole) noexcept {
     const int ny = m.n_y, nu = m.n_u;
     const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
     const bool tip = m.frame == OutputFrame::kTipCartesian;
@@ -164,7 +166,8 @@ class PlanSensitivity {
     for (Eigen::Index s = 0; s + 1 < horizon; ++s) {
       const Eigen::Index rows = horizon - 1 - s;  // rows h = s + 1 .. horizon - 1 move with step s
       std::array<bool, kMaxSensitivityInputs> written{};
-      for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
+      if (whole)
+        for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
       for (Eigen::Index c = 0; c < channels; ++c) {
         const auto d = drive_.row(s * channels + c);
         if (d.isZero(0.0)) continue;

@@ -158,9 +158,11 @@ class NStepPredictor {
   /// horizon - 1 rows, `jacobian` horizon * n_y rows and (horizon - 1) * n_u
   /// columns. A tip_cartesian model answers in bending and steering (through
   /// the angles at the predicted trajectory). Modal form only (kUnsupported
-  /// otherwise); no allocation.
+  /// otherwise); no allocation. `fill`: every entry, or only the rows each
+  /// plan step moves (JacobianFill::kMovingRows, for a matrix zeroed once and
+  /// passed every tick).
   PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
-                              Eigen::Ref<Eigen::MatrixXd> jacobian) noexcept {
+                              Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill fill = JacobianFill::kWhole) noexcept {
     const SubnormalsFlushed flushed;
     const CompiledModel& m = model();
     if (samples_ == 0) return PredictorStatus::kNotReady;
@@ -175,7 +177,7 @@ class NStepPredictor {
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
     if (status != PredictorStatus::kOk) return status;
-    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, jacobian);
+    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, jacobian, fill);
     return PredictorStatus::kOk;
   }
 

@@ -19,6 +19,15 @@ enum class PredictorStatus : int {
   kUnsupported = -8,        ///< not available for this model (sensitivity: no modal form)
 };
 
+/// What Predictor::sensitivity writes. Column (s, j) of the Jacobian moves
+/// only in the rows after plan step s (h > s); its rows up to the step are
+/// structurally zero.
+enum class JacobianFill {
+  kWhole,       ///< every entry, the structural zeros too
+  kMovingRows,  ///< only rows h > s of each column (s, j); the rest is left as it is: zero the matrix
+                ///< once and pass the same one every tick (half the entries are not written)
+};
+
 inline const char* toString(PredictorStatus s) {
   switch (s) {
     case PredictorStatus::kOk:

@@ -3,10 +3,13 @@
 // every call is the C++ library's, errors arrive as ValueError with the
 // library's message, matrices as NumPy arrays (float64, samples x columns).
 #include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
 #include <pybind11/functional.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -94,12 +97,17 @@ void simulate(const std::string& experiment, const std::string& path, std::uint6
   plsa::io::writeCsvLog(path, plsa::sim::runExperiment(actuator, e));
 }
 
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 // The predictor with its buffers: status codes become exceptions for the
 // calls a Python user makes one at a time, names for update's.
 class PyPredictor {
  public:
   PyPredictor(const plsa::DioPwlObfModel& model, int max_horizon)
-      : options_(optionsFor(max_horizon)), p_(model, options_) {}
+      : options_(optionsFor(max_horizon)),
+        p_(model, options_),
+        plan_(max_horizon, model.inputCount()),
+        out_(max_horizon, model.outputCount()) {}
 
   std::string update(double time_s, const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
     if (u.size() != p_.inputCount() || y.size() != p_.outputCount())
@@ -109,12 +117,39 @@ class PyPredictor {
     return plsa::toString(p_.update(time_s, u, y));
   }
 
-  Eigen::MatrixXd predict(int horizon, std::optional<Eigen::MatrixXd> plan) {
+  // The plan read in place when it is a C-ordered float64 array (numpy's
+  // default), copied into the predictor's own buffer; the rows written into
+  // the one array returned.
+  py::array_t<double> predict(int horizon, std::optional<Eigen::Ref<const RowMajor>> plan) {
     checkHorizon(horizon);
-    Eigen::MatrixXd out(horizon, p_.outputCount());
-    const Eigen::MatrixXd held(0, p_.inputCount());
-    check("predict", p_.predict(horizon, plan ? *plan : held, out));
-    return out;
+    const Eigen::Index rows = plan ? plan->rows() : 0;
+    if (plan && (rows > plan_.rows() || plan->cols() != plan_.cols()))
+      check("predict", plsa::PredictorStatus::kBadShape);
+    if (plan) plan_.topRows(rows) = *plan;
+    auto out = out_.topRows(horizon);
+    check("predict", p_.predict(horizon, plan_.topRows(rows), out));
+    py::array_t<double> result({static_cast<py::ssize_t>(horizon), static_cast<py::ssize_t>(p_.outputCount())});
+    Eigen::Map<RowMajor>(result.mutable_data(), horizon, p_.outputCount()) = out;
+    return result;
+  }
+
+  // The bench's reference: the p50 of `calls` C++ predict() calls on the
+  // current state and this plan, each timed on its own (ns).
+  double timePredictNs(int horizon, const Eigen::Ref<const RowMajor>& plan, int calls) {
+    checkHorizon(horizon);
+    if (plan.rows() > plan_.rows() || plan.cols() != plan_.cols() || calls < 1)
+      throw std::invalid_argument(
+          "_time_predict: a plan of at most max_horizon rows and the model's inputs, calls >= 1");
+    plan_.topRows(plan.rows()) = plan;
+    auto out = out_.topRows(horizon);
+    std::vector<double> ns(static_cast<std::size_t>(calls));
+    for (auto& t : ns) {
+      const auto t0 = std::chrono::steady_clock::now();
+      check("predict", p_.predict(horizon, plan_.topRows(plan.rows()), out));
+      t = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
+    }
+    std::nth_element(ns.begin(), ns.begin() + calls / 2, ns.end());
+    return ns[static_cast<std::size_t>(calls / 2)];
   }
 
   Eigen::MatrixXd sensitivity(int horizon, const Eigen::MatrixXd& plan) {
@@ -145,6 +180,7 @@ class PyPredictor {
 
   plsa::PredictorOptions options_;
   plsa::Predictor<> p_;
+  Eigen::MatrixXd plan_, out_;  // max_horizon rows: the plan as the predictor reads it, the rows it writes
 };
 
 }  // namespace
@@ -199,6 +235,8 @@ PYBIND11_MODULE(_plsa, m) {
            "Feed one measured sample; returns the status ('ok', or what was rejected or restarted)")
       .def("predict", &PyPredictor::predict, py::arg("horizon"), py::arg("plan") = py::none(),
            "horizon x outputs: the next samples under the plan (rows: inputs from the next sample on; none: hold)")
+      .def("_time_predict", &PyPredictor::timePredictNs, py::arg("horizon"), py::arg("plan"), py::arg("calls"),
+           "For the bench: the p50 (ns) of `calls` C++ predict() calls on the current state, each timed alone")
       .def("sensitivity", &PyPredictor::sensitivity, py::arg("horizon"), py::arg("plan"),
            "(horizon * outputs) x ((horizon - 1) * inputs): d prediction / d plan")
       .def_property_readonly("inputs", &PyPredictor::inputs)

@@ -90,6 +90,17 @@ def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "ok"
     assert p.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "time did not increase"
     assert p.update(math.nan, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0])) == "sample has NaN or Inf"
+    with pytest.raises(ValueError, match="buffer of the wrong size"):
+        p.predict(10, np.zeros((9, 2)))
+    with pytest.raises(ValueError, match="buffer of the wrong size"):
+        p.predict(10, np.zeros((51, 3)))
+    # A plan in any layout or integer type predicts as the same plan in numpy's default one.
+    plan = np.array([[0.25, 0.2, 0.0]] * 9) + 0.01 * np.arange(9)[:, None]
+    expected = p.predict(10, plan)
+    assert np.array_equal(p.predict(10, np.asfortranarray(plan)), expected)
+    assert np.array_equal(p.predict(10, plan[::-1][::-1]), expected)
+    assert p.predict(10, np.zeros((9, 3), dtype=np.int64)).shape == (10, 2)
+    assert not np.array_equal(p.predict(10, plan[:4]), expected), "a shorter plan holds its last row"
 
 
 def test_read_log_decodes_a_candump_bus_log(tmp_path):

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "comparison.hpp"
 #include "log_paths.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
@@ -28,6 +29,7 @@ struct IdentifyArgs {
   IdentifyOptions options;
   std::string channel = "PLSA_STATE";
   std::string can_profile;
+  std::string structure = "plsa";  ///< plsa, paper or global-linear
 };
 
 struct ValidateArgs {
@@ -52,6 +54,22 @@ std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::
   return logs;
 }
 
+// The global linear OBF on the training logs: plsa's poles and play, one
+// region, coefficients refitted (on the outputs with the drift identification
+// took out, as plsa's own were).
+DioPwlObfModel globalLinearOnLogs(const DioPwlObfModel& model, const IdentifyReport& report,
+                                  const std::vector<io::Log>& logs) {
+  std::vector<Eigen::MatrixXd> U, Y;
+  std::vector<Eigen::VectorXd> T;
+  for (const io::Log& log : logs) {
+    U.push_back(log.columnsOf(model.inputs));
+    Y.push_back(log.columnsOf(model.outputs));
+    T.push_back(log.column(io::standard_columns::kTime));
+  }
+  if (report.drift_taken_out) Y = removeOutputDrift(Y, T, report.output_drift);
+  return globalLinearOf(model, U, Y);
+}
+
 void runIdentify(IdentifyArgs& a) {
   IdentifyOptions o = a.options;
   o.inputs = a.inputs;
@@ -62,8 +80,14 @@ void runIdentify(IdentifyArgs& a) {
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
   refuseOverwritingInputs(a.out, "--out", a.logs, "plsa identify");
   const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
+  if (a.structure == "paper") {  // the peers the demo and generalise score plsa against
+    const auto progress = o.progress;
+    o = paperConfiguration(o);
+    o.progress = progress;
+  }
   IdentifyReport report;
-  const DioPwlObfModel model = identifyModel(logs, o, &report);
+  DioPwlObfModel model = identifyModel(logs, o, &report);
+  if (a.structure == "global-linear") model = globalLinearOnLogs(model, report, logs);
   for (const auto& pp : report.pairs)
     for (const auto& why : pp.rejections)
       std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n",
@@ -313,6 +337,11 @@ void addIdentifyCommands(CLI::App& app) {
                "Fit samples that lie more than 50 times the width of their column's 1-99% band from its median "
                "(by default such a glitch is an error naming its row)");
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
+  id->add_option("--structure", a->structure,
+                 "plsa (the method with its extensions), paper (the paper's configuration: switched PWL, no play, "
+                 "outputs as logged) or global-linear (plsa's poles and play, one region: the linear baseline)")
+      ->check(CLI::IsMember({"plsa", "paper", "global-linear"}))
+      ->capture_default_str();
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });
 

@@ -10,6 +10,7 @@
 
 #include "plsa/eval/fit.hpp"
 #include "plsa/io/csv_log.hpp"
+#include "plsa/model/model_file.hpp"
 #include "support/cli_run.hpp"
 
 namespace fs = std::filesystem;
@@ -156,6 +157,30 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
 // The README's main job end to end: every file it names, the fits the issue
 // asks for, a report that needs nothing from the network, and models that
 // `plsa validate` re-scores to the demo's own figures.
+// The peers the demo and generalise score plsa against, fitted on a user's
+// own logs: the paper's configuration (switched PWL on the raw inputs, no
+// play, the angles as logged) and the global linear OBF (one region).
+TEST_F(Cli, IdentifyFitsThePapersConfigurationAndTheGlobalLinearObf) {
+  ASSERT_EQ(run("simulate --experiment grid2 --seed 1 --out " + file("train.csv")), 0) << err_;
+  ASSERT_EQ(run("identify --log " + file("train.csv") + " --structure paper --out " + file("paper.json")), 0) << err_;
+  const plsa::DioPwlObfModel paper = plsa::loadModel(file("paper.json"));
+  EXPECT_EQ(paper.partition.scheduling(), plsa::Scheduling::kSwitched);
+  EXPECT_GT(paper.partition.regionCount(), 1);
+  EXPECT_EQ(paper.schedule_lag_s, 0.0);
+  EXPECT_EQ(paper.output_frame, plsa::OutputFrame::kAsLogged);
+  for (const auto& channels : paper.shaping.play)
+    for (const plsa::PlayChannel& c : channels) EXPECT_TRUE(c.passesThrough());
+  ASSERT_EQ(run("identify --log " + file("train.csv") + " --structure global-linear --out " + file("linear.json")), 0)
+      << err_;
+  const plsa::DioPwlObfModel linear = plsa::loadModel(file("linear.json"));
+  EXPECT_EQ(linear.partition.regionCount(), 1);
+  EXPECT_EQ(linear.schedule_lag_s, 0.0);
+  ASSERT_EQ(run("validate --model " + file("linear.json") + " --log " + file("train.csv")), 0) << err_;
+  EXPECT_NE(run("identify --log " + file("train.csv") + " --structure lstm --out " + file("x.json")), 0);
+  EXPECT_NE(err_.find("lstm"), std::string::npos) << err_;
+  EXPECT_FALSE(std::filesystem::exists(file("x.json")));
+}
+
 TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   ASSERT_EQ(run("demo --out " + file("demo")), 0) << err_;
   const std::string printed = slurp(file("stdout.txt"));

@@ -8,6 +8,7 @@
 #include "plsa/eval/fit.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/eval/validation.hpp"
+#include "plsa/io/standard_columns.hpp"
 
 namespace plsa::app {
 using namespace plsa::identify;  // this command drives identification
@@ -98,6 +99,18 @@ identify::IdentifyOptions paperConfiguration(identify::IdentifyOptions o) {
   o.slow_pole_candidates = {};
   o.output_drift = OutputDriftChoice::kOff;
   return o;
+}
+
+BaselineData baselineData(const DioPwlObfModel& m, const IdentifyReport& report, const std::vector<io::Log>& logs) {
+  BaselineData b;
+  std::vector<Eigen::VectorXd> time;
+  for (const io::Log& log : logs) {
+    b.U.push_back(log.columnsOf(m.inputs));
+    b.Y.push_back(log.columnsOf(m.outputs));
+    time.push_back(log.column(io::standard_columns::kTime));
+  }
+  if (report.drift_taken_out) b.Y = removeOutputDrift(b.Y, time, report.output_drift);
+  return b;
 }
 
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

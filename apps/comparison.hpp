@@ -11,6 +11,7 @@
 #include "plsa/eval/arx.hpp"
 #include "plsa/eval/validation.hpp"
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa::app {
@@ -49,6 +50,15 @@ std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vec
 /// `o` with plsa's extensions off: the paper's configuration (switched PWL,
 /// no play, the outputs as logged, no lag, drift or slow pole); no progress.
 identify::IdentifyOptions paperConfiguration(identify::IdentifyOptions o);
+
+/// The training logs as the baselines are fitted to them: the model's inputs,
+/// and its outputs less any sensor drift identification took out (as plsa's
+/// own were fitted). One matrix per log.
+struct BaselineData {
+  std::vector<Eigen::MatrixXd> U, Y;
+};
+BaselineData baselineData(const DioPwlObfModel& m, const identify::IdentifyReport& report,
+                          const std::vector<io::Log>& logs);
 
 /// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

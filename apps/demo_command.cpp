@@ -82,11 +82,8 @@ void runDemo(const DemoOptions& opt) {
   IdentifyReport report;
   const DioPwlObfModel model = identifyModel({train}, io_, &report);
   const DioPwlObfModel paper = identifyModel({train}, paperConfiguration(io_));
-  const Eigen::MatrixXd Ut = train.columnsOf(model.inputs);
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
-  Eigen::MatrixXd Yt = train.columnsOf(model.outputs);
-  if (report.drift_taken_out)
-    Yt = removeOutputDrift({Yt}, {train.column(io::standard_columns::kTime)}, report.output_drift)[0];
+  const BaselineData training = baselineData(model, report, {train});
   const std::string drift_text =
       report.drift_taken_out
           ? "A sensor yaw drift of " + std::to_string(report.output_drift.rate[1]).substr(0, 6) +
@@ -94,8 +91,8 @@ void runDemo(const DemoOptions& opt) {
                 "linear baselines; their simulations (sim) turn at that rate over the validation run, as its sensor "
                 "drifts on (sim, no drift: they do not). "
           : std::string();
-  const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});
-  const ArxModel arx = ArxModel::fit({Ut}, {Yt}, 4, 4);
+  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
+  const ArxModel arx = ArxModel::fit(training.U, training.Y, 4, 4);
   saveModel(path("model.json"), model);
   // The baselines that are DIO models too, so that `plsa validate` can re-score them.
   saveModel(path("baseline_paper.json"), paper);

@@ -122,12 +122,9 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, double& bey
   identify::IdentifyReport report;
   const DioPwlObfModel model = identify::identifyModel({train}, o, &report);
   const DioPwlObfModel paper = identify::identifyModel({train}, paperConfiguration(o));
-  const Eigen::MatrixXd Ut = train.columnsOf(model.inputs);
-  Eigen::MatrixXd Yt = train.columnsOf(model.outputs);
-  if (report.drift_taken_out)
-    Yt = identify::removeOutputDrift({Yt}, {train.column(io::standard_columns::kTime)}, report.output_drift)[0];
-  const DioPwlObfModel linear = globalLinearOf(model, {Ut}, {Yt});
-  const ArxModel arx = ArxModel::fit({Ut}, {Yt}, 4, 4);
+  const BaselineData training = baselineData(model, report, {train});
+  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
+  const ArxModel arx = ArxModel::fit(training.U, training.Y, 4, 4);
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
   beyond_grid = inputsOutsideTraining(model, Uv).any_beyond_grid;
   const std::vector<double> arx_drift = report.drift_taken_out ? report.output_drift.rate : std::vector<double>{};

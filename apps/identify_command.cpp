@@ -54,22 +54,6 @@ std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::
   return logs;
 }
 
-// The global linear OBF on the training logs: plsa's poles and play, one
-// region, coefficients refitted (on the outputs with the drift identification
-// took out, as plsa's own were).
-DioPwlObfModel globalLinearOnLogs(const DioPwlObfModel& model, const IdentifyReport& report,
-                                  const std::vector<io::Log>& logs) {
-  std::vector<Eigen::MatrixXd> U, Y;
-  std::vector<Eigen::VectorXd> T;
-  for (const io::Log& log : logs) {
-    U.push_back(log.columnsOf(model.inputs));
-    Y.push_back(log.columnsOf(model.outputs));
-    T.push_back(log.column(io::standard_columns::kTime));
-  }
-  if (report.drift_taken_out) Y = removeOutputDrift(Y, T, report.output_drift);
-  return globalLinearOf(model, U, Y);
-}
-
 void runIdentify(IdentifyArgs& a) {
   IdentifyOptions o = a.options;
   o.inputs = a.inputs;
@@ -87,7 +71,10 @@ void runIdentify(IdentifyArgs& a) {
   }
   IdentifyReport report;
   DioPwlObfModel model = identifyModel(logs, o, &report);
-  if (a.structure == "global-linear") model = globalLinearOnLogs(model, report, logs);
+  if (a.structure == "global-linear") {  // plsa's poles and play, one region, refitted on the logs
+    const BaselineData b = baselineData(model, report, logs);
+    model = globalLinearOf(model, b.U, b.Y);
+  }
   for (const auto& pp : report.pairs)
     for (const auto& why : pp.rejections)
       std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n",

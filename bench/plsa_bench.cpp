@@ -324,12 +324,11 @@ double fixedWork(long steps) {
 }
 
 void measureMachineTail(long calls) {
-  long steps = 1;
   const auto t0 = Clock::now();
   benchmark::DoNotOptimize(fixedWork(100000));
   const double ns_per_step = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / 100000.0;
   for (double target_ns : {1000.0, 3000.0, 10000.0}) {
-    steps = std::max(1L, static_cast<long>(target_ns / ns_per_step));
+    const long steps = std::max(1L, static_cast<long>(target_ns / ns_per_step));
     const Stats s = timeCalls(calls / 4, [&](long) { benchmark::DoNotOptimize(fixedWork(steps)); });
     const std::string name = "fixed work of about " + std::to_string(static_cast<int>(target_ns / 1000)) + " us";
     report(name, s);

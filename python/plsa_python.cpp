@@ -122,10 +122,7 @@ class PyPredictor {
   // the one array returned.
   py::array_t<double> predict(int horizon, std::optional<Eigen::Ref<const RowMajor>> plan) {
     checkHorizon(horizon);
-    const Eigen::Index rows = plan ? plan->rows() : 0;
-    if (plan && (rows > plan_.rows() || plan->cols() != plan_.cols()))
-      check("predict", plsa::PredictorStatus::kBadShape);
-    if (plan) plan_.topRows(rows) = *plan;
+    const Eigen::Index rows = plan ? takePlan(*plan) : 0;
     auto out = out_.topRows(horizon);
     check("predict", p_.predict(horizon, plan_.topRows(rows), out));
     py::array_t<double> result({static_cast<py::ssize_t>(horizon), static_cast<py::ssize_t>(p_.outputCount())});
@@ -137,15 +134,13 @@ class PyPredictor {
   // current state and this plan, each timed on its own (ns).
   double timePredictNs(int horizon, const Eigen::Ref<const RowMajor>& plan, int calls) {
     checkHorizon(horizon);
-    if (plan.rows() > plan_.rows() || plan.cols() != plan_.cols() || calls < 1)
-      throw std::invalid_argument(
-          "_time_predict: a plan of at most max_horizon rows and the model's inputs, calls >= 1");
-    plan_.topRows(plan.rows()) = plan;
+    if (calls < 1) throw std::invalid_argument("_time_predict: calls >= 1");
+    const Eigen::Index rows = takePlan(plan);
     auto out = out_.topRows(horizon);
     std::vector<double> ns(static_cast<std::size_t>(calls));
     for (auto& t : ns) {
       const auto t0 = std::chrono::steady_clock::now();
-      check("predict", p_.predict(horizon, plan_.topRows(plan.rows()), out));
+      check("predict", p_.predict(horizon, plan_.topRows(rows), out));
       t = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count();
     }
     std::nth_element(ns.begin(), ns.begin() + calls / 2, ns.end());
@@ -173,6 +168,13 @@ class PyPredictor {
     if (horizon < 1 || horizon > p_.maxHorizon())
       throw std::invalid_argument("horizon " + std::to_string(horizon) + " outside 1.." +
                                   std::to_string(p_.maxHorizon()) + " (max_horizon at construction)");
+  }
+  // The plan copied into the predictor's buffer; its rows. A plan of another
+  // width or of more than max_horizon rows is refused as predict() refuses it.
+  Eigen::Index takePlan(const Eigen::Ref<const RowMajor>& plan) {
+    if (plan.rows() > plan_.rows() || plan.cols() != plan_.cols()) check("predict", plsa::PredictorStatus::kBadShape);
+    plan_.topRows(plan.rows()) = plan;
+    return plan.rows();
   }
   static void check(const char* what, plsa::PredictorStatus s) {
     if (static_cast<int>(s) < 0) throw std::invalid_argument(std::string(what) + ": " + plsa::toString(s));

@@ -131,6 +131,9 @@ void runValidate(const ValidateArgs& a) {
   const ValidationResult v = validateModel(model, log, a.horizons, a.start);
   for (const std::string& w : inputCoverageWarnings(model, v.outside_training))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
+  const std::vector<SimulationDeparture> departures = simulationDepartures(v);
+  for (const std::string& w : simulationWarnings(departures))
+    std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
   std::fprintf(table, "%-12s", "output");
   for (int k : a.horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
   std::fprintf(table, " %9s\n", "sim");
@@ -182,6 +185,14 @@ void runValidate(const ValidateArgs& a) {
   if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
   j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
+  j["simulation_departures"] = nlohmann::json::array();
+  for (const SimulationDeparture& d : departures)
+    j["simulation_departures"].push_back({{"output", d.output},
+                                          {"measured_low", d.measured_low},
+                                          {"measured_high", d.measured_high},
+                                          {"farthest", d.farthest},
+                                          {"share_of_width", d.share},
+                                          {"first_time_s", d.first_time_s}});
   std::fprintf(table, "(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) {
     writeTextFile(a.json, j.dump(2) + "\n", "fits file");

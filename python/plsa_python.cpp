@@ -63,6 +63,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
 
 py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {
   const plsa::ValidationResult v = plsa::validateModel(model, plsa::io::readLog(log), horizons);
+  const std::vector<plsa::SimulationDeparture> departures = plsa::simulationDepartures(v);
   py::dict result;
   for (const plsa::OutputValidation& o : v.outputs) {
     py::dict entry;
@@ -70,6 +71,11 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
     entry["fit_sim"] = o.fit_sim;
     entry["rms"] = o.rms_k;
     entry["rms_sim"] = o.rms_sim;
+    entry["sim_departure"] = py::none();
+    for (const plsa::SimulationDeparture& d : departures)
+      if (d.output == o.name)
+        entry["sim_departure"] = py::dict(py::arg("farthest") = d.farthest, py::arg("share_of_width") = d.share,
+                                          py::arg("first_time_s") = d.first_time_s);
     result[py::str(o.name)] = entry;
   }
   return result;
@@ -223,7 +229,9 @@ PYBIND11_MODULE(_plsa, m) {
         py::arg("progress") = py::none(),
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
-        "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim}}");
+        "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim, "
+        "sim_departure}}; sim_departure is None, or how far the free simulation leaves the measured range "
+        "(farthest, share_of_width, first_time_s) when it does by more than half its width");
   m.def("read_log", &readLog, py::arg("path"),
         "A log (CSV, or a candump bus log decoded with plsa's CAN profile) as {column: array}, read (and "
         "checked) as the library reads it");

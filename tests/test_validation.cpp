@@ -267,3 +267,45 @@ TEST(Validation, ReportsSamplesBeyondTheGridPerInput) {
   EXPECT_DOUBLE_EQ(s.any_beyond_grid, 0.0);
   EXPECT_NE(inputCoverageWarnings(m, s).at(0).find("outside its training range [0, 0.4] on 10.0%"), std::string::npos);
 }
+
+// A simulation that leaves the measured range by more than half its width is
+// named with how far and when; one that follows the run, error and all, is not.
+TEST(Validation, NamesASimulationThatLeavesTheMeasuredRange) {
+  const Eigen::Index n = 200;
+  ValidationResult v;
+  v.time = Eigen::VectorXd::LinSpaced(n, 0.0, 0.0125 * static_cast<double>(n - 1));
+  v.scored_from = 10;
+  OutputValidation follows, departs;
+  follows.name = "steering";
+  departs.name = "bending";
+  follows.measured = (v.time.array() * 2.0).sin().matrix() * 10.0;  // spans [-10, 10]
+  follows.simulated = follows.measured.array() * 1.4;               // 4 beyond: 20% of the width
+  departs.measured = follows.measured;
+  departs.simulated = follows.measured;
+  // From t = 1.25 s on it runs away: 11 beyond the range's top at sample 110 (0.55 of 20).
+  for (Eigen::Index k = 100; k < n; ++k) departs.simulated(k) = 10.0 + static_cast<double>(k - 99) * 1.0;
+  v.outputs = {follows, departs};
+  const std::vector<SimulationDeparture> d = simulationDepartures(v);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d[0].output, "bending");
+  EXPECT_NEAR(d[0].measured_low, follows.measured.segment(10, n - 10).minCoeff(), 1e-12);
+  EXPECT_NEAR(d[0].farthest, 110.0 - d[0].measured_high, 1e-9);
+  EXPECT_NEAR(d[0].share, d[0].farthest / (d[0].measured_high - d[0].measured_low), 1e-12);
+  // First beyond half the width: the first sample more than ~10 above the top.
+  const double half = 0.5 * (d[0].measured_high - d[0].measured_low);
+  Eigen::Index first = 100;
+  while (departs.simulated(first) - d[0].measured_high <= half) ++first;
+  EXPECT_DOUBLE_EQ(d[0].first_time_s, v.time(first));
+  const std::vector<std::string> w = simulationWarnings(d);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("the free simulation of bending leaves the measured range"), std::string::npos) << w[0];
+  // A tighter tolerance names the 20% overshoot too; a departure before the
+  // scored samples is not counted.
+  EXPECT_EQ(simulationDepartures(v, 0.1).size(), 2u);
+  v.outputs[1].simulated.head(10).setConstant(1e6);
+  EXPECT_EQ(simulationDepartures(v).size(), 1u);
+  v.outputs[1].simulated.segment(100, 100) = v.outputs[1].measured.segment(100, 100);
+  EXPECT_TRUE(simulationDepartures(v).empty());
+  expectThrowContaining([&] { simulationDepartures(v, 0.0); }, "tolerance");
+  expectThrowContaining([&] { simulationDepartures(v, std::nan("")); }, "tolerance");
+}

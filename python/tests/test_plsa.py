@@ -32,6 +32,7 @@ def test_identified_model_predicts_the_validation_run(model, runs, tmp_path):
     for name in model.outputs:
         assert fits[name]["fit"][40] > 90.0, fits
         assert fits[name]["fit_sim"] > 80.0, fits
+        assert fits[name]["sim_departure"] is None, fits
     path = tmp_path / "model.json"
     model.save(str(path))
     again = plsa.Model.load(str(path))
@@ -166,3 +167,22 @@ def test_the_lcm_types_decode_what_plsa_records(tmp_path):
     # Encoded in Python, decoded the same: the types carry plsa's fields.
     again = plsa_lcm.actuator_state_t.decode(states[5].encode())
     assert again.steer_deg == states[5].steer_deg and again.n_chambers == 3
+
+
+def test_import_refuses_a_numpy_its_pybind11_cannot_read(tmp_path):
+    """A numpy 2 beside a module built with pybind11 < 2.12 is an ImportError naming both, not a crash later."""
+    import os
+    import subprocess
+    import sys
+
+    fake = tmp_path / "numpy"
+    fake.mkdir()
+    (fake / "__init__.py").write_text('__version__ = "2.0.0"\n')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
+    r = subprocess.run([sys.executable, "-c", "import plsa"], env=env, capture_output=True, text=True)
+    if plsa._PYBIND11_VERSION < (2, 12):
+        assert r.returncode != 0
+        assert "ImportError" in r.stderr and "numpy 2.0.0" in r.stderr and "pybind11" in r.stderr, r.stderr
+        assert sys.executable in r.stderr or plsa._BUILT_PYTHON in r.stderr, r.stderr
+    else:
+        assert r.returncode == 0, r.stderr

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -309,6 +310,61 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     res.outputs.push_back(std::move(ov));
   }
   return res;
+}
+
+namespace {
+
+// The departure of one output's simulation from its measured range, or none
+// when it stays within `tolerance` of the range's width.
+std::optional<SimulationDeparture> departureOf(const OutputValidation& o, const Eigen::VectorXd& time,
+                                               Eigen::Index from, double tolerance) {
+  const Eigen::Index n = o.measured.size() - from;
+  if (n < 1 || o.simulated.size() != o.measured.size()) return std::nullopt;
+  const auto measured = o.measured.segment(from, n).array();
+  const auto simulated = o.simulated.segment(from, n).array();
+  SimulationDeparture d;
+  d.output = o.name;
+  d.measured_low = measured.minCoeff();
+  d.measured_high = measured.maxCoeff();
+  const double width = d.measured_high - d.measured_low;
+  if (!(width > 0)) return std::nullopt;  // a constant output has no range to leave
+  const Eigen::ArrayXd outside = (simulated - d.measured_high).max(d.measured_low - simulated).max(0.0);
+  d.farthest = outside.maxCoeff();
+  d.share = d.farthest / width;
+  if (!(d.share > tolerance)) return std::nullopt;
+  Eigen::Index first = 0;
+  while (!(outside(first) > tolerance * width)) ++first;
+  d.first_time_s = time(from + first);
+  return d;
+}
+
+std::string formatted(const char* format, double value) {
+  char b[48];
+  std::snprintf(b, sizeof b, format, value);
+  return b;
+}
+
+}  // namespace
+
+std::vector<SimulationDeparture> simulationDepartures(const ValidationResult& v, double tolerance) {
+  if (!(tolerance > 0) || !std::isfinite(tolerance))
+    throw std::invalid_argument("simulationDepartures: tolerance " + std::to_string(tolerance) +
+                                " must be positive and finite");
+  std::vector<SimulationDeparture> out;
+  for (const OutputValidation& o : v.outputs)
+    if (auto d = departureOf(o, v.time, v.scored_from, tolerance)) out.push_back(*d);
+  return out;
+}
+
+std::vector<std::string> simulationWarnings(const std::vector<SimulationDeparture>& departures) {
+  std::vector<std::string> out;
+  for (const SimulationDeparture& d : departures)
+    out.push_back("the free simulation of " + d.output + " leaves the measured range [" +
+                  formatted("%.4g", d.measured_low) + ", " + formatted("%.4g", d.measured_high) + "] by up to " +
+                  formatted("%.4g", d.farthest) + " (" + formatted("%.0f", 100 * d.share) +
+                  "% of its width), first at t = " + formatted("%.4g", d.first_time_s) +
+                  " s: the model departs from this run; do not trust its long-horizon predictions here");
+  return out;
 }
 
 io::Log predictionLog(const ValidationResult& v) {

@@ -123,6 +123,28 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
                                                              const SimulationStart& start = {});
 
+/// How far an output's free simulation leaves the range its measurements
+/// span, over the scored samples (from scored_from). A model that extrapolates
+/// (inputs beyond its grid, another kind of run than it was trained on) can
+/// drift or diverge in simulation while its k-step predictions, re-anchored on
+/// every measurement, still look fine: this names it.
+struct SimulationDeparture {
+  std::string output;
+  double measured_low = 0.0, measured_high = 0.0;  ///< the measured output's range
+  double farthest = 0.0;      ///< largest distance of the simulation outside that range, output units
+  double share = 0.0;         ///< farthest / (measured_high - measured_low)
+  double first_time_s = 0.0;  ///< when the simulation first left the range by more than the tolerance
+};
+
+/// The outputs whose free simulation leaves the measured range by more than
+/// `tolerance` times its width (a model that follows the run stays inside,
+/// give or take its error); empty when none does. Throws for a tolerance that
+/// is not positive and finite.
+std::vector<SimulationDeparture> simulationDepartures(const ValidationResult& v, double tolerance = 0.5);
+
+/// One sentence per departure, for a user.
+std::vector<std::string> simulationWarnings(const std::vector<SimulationDeparture>& departures);
+
 /// Throws naming the missing column, the bad or repeated horizon, a registration
 /// window as long as the log, a time gap, or a sample time (from `time_s`, when
 /// the log has it) 2% or more off the model's.

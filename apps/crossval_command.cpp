@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "comparison.hpp"
 #include "log_paths.hpp"
+#include "plsa/eval/comparison.hpp"
 #include "plsa/core/check.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"

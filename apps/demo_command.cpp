@@ -15,7 +15,8 @@
 
 #include "commands.hpp"
 #include "log_paths.hpp"
-#include "comparison.hpp"
+#include "plsa/eval/comparison.hpp"
+#include "plsa/identify/baselines.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/model/model_file.hpp"

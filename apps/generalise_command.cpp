@@ -18,7 +18,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "comparison.hpp"
+#include "plsa/eval/comparison.hpp"
+#include "plsa/identify/baselines.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/pipeline.hpp"
@@ -121,9 +122,9 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, double& bey
   identify::IdentifyOptions o;
   identify::IdentifyReport report;
   const DioPwlObfModel model = identify::identifyModel({train}, o, &report);
-  const DioPwlObfModel paper = identify::identifyModel({train}, paperConfiguration(o));
-  const BaselineData training = baselineData(model, report, {train});
-  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
+  const DioPwlObfModel paper = identify::identifyModel({train}, identify::paperConfiguration(o));
+  const identify::BaselineData training = identify::baselineData(model, report, {train});
+  const DioPwlObfModel linear = identify::globalLinearOf(model, training.U, training.Y);
   const ArxModel arx = ArxModel::fit(training.U, training.Y, 4, 4);
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
   beyond_grid = inputsOutsideTraining(model, Uv).any_beyond_grid;
@@ -154,7 +155,8 @@ void printRow(const nlohmann::json& row) {
   std::printf("  %-32s %4d %5.1f%%", row.at("case").get<std::string>().c_str(), row.at("seed").get<int>(),
               100 * row.at("beyond_grid").get<double>());
   for (const char* m : kModels)
-    std::printf(" | %s  %s", cell(row, m, "bend_deg").c_str(), cell(row, m, "steer_deg").c_str());
+    std::printf(" | %s  %s", cell(row, m, io::standard_columns::kBend).c_str(),
+                cell(row, m, io::standard_columns::kSteer).c_str());
   std::printf("\n");
 }
 
@@ -162,7 +164,7 @@ void printRow(const nlohmann::json& row) {
 nlohmann::json summarise(const nlohmann::json& rows) {
   nlohmann::json s;
   for (const char* m : kModels)
-    for (const char* out : {"bend_deg", "steer_deg"})
+    for (const char* out : {io::standard_columns::kBend, io::standard_columns::kSteer})
       for (const char* h : {"40", "80", "sim"}) {
         double sum = 0.0, worst = 1e300;
         for (const auto& r : rows) {
@@ -175,7 +177,7 @@ nlohmann::json summarise(const nlohmann::json& rows) {
   int meets = 0;
   for (const auto& r : rows) {
     bool ok = true;
-    for (const char* out : {"bend_deg", "steer_deg"}) {
+    for (const char* out : {io::standard_columns::kBend, io::standard_columns::kSteer}) {
       const nlohmann::json& f = r.at("fits").at("plsa").at(out);
       ok = ok && f.at("40").get<double>() >= 90 && f.at("80").get<double>() >= 90 && f.at("sim").get<double>() >= 85;
     }
@@ -189,7 +191,7 @@ nlohmann::json summarise(const nlohmann::json& rows) {
 void printSummary(const nlohmann::json& s) {
   std::printf("\n  mean (worst) over %zu rows, 40-step / 80-step / sim:\n", s.at("rows").get<std::size_t>());
   for (const char* m : kModels)
-    for (const char* out : {"bend_deg", "steer_deg"}) {
+    for (const char* out : {io::standard_columns::kBend, io::standard_columns::kSteer}) {
       std::printf("  %-14s %-10s", m, out);
       for (const char* h : {"40", "80", "sim"})
         std::printf("  %6.1f (%6.1f)", s[m][out][h]["mean"].get<double>(), s[m][out][h]["worst"].get<double>());

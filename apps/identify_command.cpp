@@ -7,8 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "comparison.hpp"
 #include "log_paths.hpp"
+#include "plsa/identify/baselines.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/eval/validation.hpp"

@@ -2,8 +2,10 @@
 
 #include <cstdio>
 
+#include "plsa/identify/baselines.hpp"
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/io/standard_columns.hpp"
 #include "plsa/sim/experiment.hpp"
 
 namespace plsa::bench {
@@ -84,22 +86,15 @@ std::vector<BenchModel> identifiedModels(std::uint64_t seed, void (*say)(const s
   output_side.schedule_side = ScheduleSide::kOutput;
   add("demo, output side", refit(output_side, grid));
   IdentifyOptions two = demo;
-  two.inputs = {"p_1", "p_2"};
+  two.inputs = {io::standard_columns::pressure(1), io::standard_columns::pressure(2)};
   add("2 chambers", identifyModel({grid}, two));
   IdentifyOptions one = demo;  // one chamber bends the segment in one plane: no steering to predict
-  one.inputs = {"p_1"};
-  one.outputs = {"bend_deg"};
+  one.inputs = {io::standard_columns::pressure(1)};
+  one.outputs = {io::standard_columns::kBend};
   one.output_frame = OutputFrame::kAsLogged;
   add("1 chamber", identifyModel({stairs}, one));
-  IdentifyOptions paper;  // the paper's structure: switched, no play, no lag, angles as logged
-  paper.scheduling = SchedulingChoice::kSwitched;
-  paper.play_candidates = {{0.0}};
-  paper.play_coupling_candidates = {};
-  paper.play_threshold_candidates = {};
-  paper.schedule_lag_candidates = {};
-  paper.slow_pole_candidates = {};
-  paper.output_drift = OutputDriftChoice::kOff;
-  add("paper's structure", identifyModel({grid}, paper));
+  // The paper's structure: switched, no play, no lag, angles as logged.
+  add("paper's structure", identifyModel({grid}, paperConfiguration(IdentifyOptions{})));
   return out;
 }
 

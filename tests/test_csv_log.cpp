@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -150,7 +151,9 @@ TEST_F(CsvLogTest, SampleTimeAndGaps) {
 }
 
 TEST(RealData, Bruder2021TrialsParse) {
-  const std::string dir = PLSA_SHARED_DATA_DIR "/softarm-bruder2021";
+  const char* shared = std::getenv("PLSA_SHARED_DATA_DIR");
+  if (shared == nullptr) GTEST_SKIP() << "PLSA_SHARED_DATA_DIR is not set (ctest sets it)";
+  const std::string dir = std::string(shared) + "/softarm-bruder2021";
   if (!fs::exists(dir)) GTEST_SKIP() << "shared data not found at " << dir;
   plsa::io::CsvReadOptions opt;
   opt.required = {"u_1", "u_2", "u_3", "y_1", "y_2"};

@@ -208,7 +208,7 @@ TEST(Predictor, StatusCodesRejectBadSamplesAndKeepState) {
   ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 3), out), PredictorStatus::kOk);
   ASSERT_EQ(clean.predict(40, Eigen::MatrixXd(0, 3), out_clean), PredictorStatus::kOk);
   EXPECT_EQ(out, out_clean);
-  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 3), out), PredictorStatus::kHorizonTooLong);
+  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 3), out), PredictorStatus::kHorizonOutOfRange);
   EXPECT_EQ(p.predict(41, Eigen::MatrixXd(0, 3), out), PredictorStatus::kBadShape);
   EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Zero(4, 2), out), PredictorStatus::kBadShape);
   // A time gap restarts the filters at rest: the next prediction is y itself.

@@ -278,8 +278,8 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
     worst = std::max(worst, std::abs(out(h, 0) - yh));
   }
   EXPECT_LT(worst, 1e-11);
-  EXPECT_EQ(p.predict(0, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonTooLong);
-  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonTooLong);
+  EXPECT_EQ(p.predict(0, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonOutOfRange);
+  EXPECT_EQ(p.predict(401, Eigen::MatrixXd(0, 1), out), PredictorStatus::kHorizonOutOfRange);
   EXPECT_EQ(p.predict(41, Eigen::MatrixXd(0, 1), out), PredictorStatus::kBadShape);
   EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Zero(4, 2), out), PredictorStatus::kBadShape);
   EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Constant(4, 1, nan), out), PredictorStatus::kNotFinite);

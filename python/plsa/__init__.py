@@ -12,6 +12,8 @@ Errors in the inputs raise ValueError with the library's message.
 """
 import sys as _sys
 
+__version__ = "@PROJECT_VERSION@"
+
 # What the compiled _plsa was built for, filled in by CMake (configure_file).
 _BUILT_PYTHON = "@Python3_EXECUTABLE@"
 _BUILT_VERSION = (@Python3_VERSION_MAJOR@, @Python3_VERSION_MINOR@)
@@ -42,4 +44,4 @@ _refuse_another_runtime()
 
 from ._plsa import Model, Predictor, identify, read_log, simulate, validate  # noqa: E402
 
-__all__ = ["Model", "Predictor", "identify", "read_log", "simulate", "validate"]
+__all__ = ["__version__", "Model", "Predictor", "identify", "read_log", "simulate", "validate"]

@@ -186,3 +186,15 @@ def test_import_refuses_a_numpy_its_pybind11_cannot_read(tmp_path):
         assert sys.executable in r.stderr or plsa._BUILT_PYTHON in r.stderr, r.stderr
     else:
         assert r.returncode == 0, r.stderr
+
+
+def test_version_is_the_tools():
+    import os
+    import re
+    import subprocess
+
+    assert re.fullmatch(r"\d+\.\d+\.\d+", plsa.__version__), plsa.__version__
+    exe = os.environ.get("PLSA_EXE")
+    if exe:
+        out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True).stdout
+        assert plsa.__version__ in out, out

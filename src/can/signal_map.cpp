@@ -11,6 +11,7 @@
 
 #include "plsa/can/dbc.hpp"
 #include "plsa/core/text_file.hpp"
+#include "plsa/io/standard_columns.hpp"
 #include "plsa/io/strict_json.hpp"
 
 namespace plsa::can {
@@ -187,7 +188,7 @@ std::vector<std::string> driverProfileWarnings(const SignalMap& map) {
   const std::pair<const char*, std::vector<std::string>> expected[] = {
       {"valve_command", {"setpoint_1", "setpoint_2", "setpoint_3"}},
       {"pressure_sensor", {"pressure_1", "pressure_2", "pressure_3"}},
-      {"tip_angle", {"bend_deg", "steer_deg"}}};
+      {"tip_angle", io::standard_columns::tipAngles()}};
   for (const auto& [name, signals] : expected) {
     const MessageLayout* m = map.find(name);
     if (!m) continue;
@@ -227,16 +228,16 @@ SignalMap defaultSignalMap() {
     for (int i = 0; i < 3; ++i) s.push_back({prefix + std::to_string(i + 1), 2 * i, 16, true, false, 1e-5, 0.0, "bar"});
     return s;
   };
-  SignalMap map{
-      "plsa-default",
-      {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
-       {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")},
-       {"tip_angle",
-        0x210,
-        8,
-        6,
-        7,
-        {{"bend_deg", 0, 16, true, true, 0.01, 0.0, "deg"}, {"steer_deg", 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
+  SignalMap map{"plsa-default",
+                {{"valve_command", 0x100, 8, 6, 7, pressures("setpoint_")},
+                 {"pressure_sensor", 0x200, 8, 6, 7, pressures("pressure_")},
+                 {"tip_angle",
+                  0x210,
+                  8,
+                  6,
+                  7,
+                  {{io::standard_columns::kBend, 0, 16, true, true, 0.01, 0.0, "deg"},
+                   {io::standard_columns::kSteer, 2, 16, true, true, 0.01, 0.0, "deg"}}}}};
   map.validate();
   return map;
 }

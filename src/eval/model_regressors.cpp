@@ -8,6 +8,8 @@
 #include <limits>
 #include <thread>
 
+#include "plsa/obf/obf_bank.hpp"
+
 namespace plsa {
 
 namespace {

@@ -38,12 +38,6 @@ namespace detail {
 
 namespace plsa {
 
-/// Throws std::invalid_argument(message) unless `condition` holds (the
-/// message is built even when it holds: inside plsa, PLSA_CHECK).
-inline void require(bool condition, const std::string& message) {
-  if (!condition) throw std::invalid_argument(message);
-}
-
 /// Prediction horizons (samples ahead) as every tool takes them: given, each
 /// >= 1 and each once (a repeat would be scored, averaged or published twice).
 /// Messages start with `tool`.

@@ -18,7 +18,6 @@
 #include "plsa/model/input_shaping.hpp"
 #include "plsa/model/output_frame.hpp"
 #include "plsa/model/pwl_partition.hpp"
-#include "plsa/obf/obf_bank.hpp"
 
 namespace plsa {
 

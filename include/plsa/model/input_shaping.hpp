@@ -75,11 +75,15 @@ inline double levelAbove(double u, double threshold) noexcept {
   return threshold > 0.0 ? std::max(0.0, u - threshold) : u;
 }
 
+/// One input's term of coupledLevel's `positive_sum`: its part above
+/// `threshold`. Loops that fuse the sum with other work add these.
+inline double positivePartAbove(double u, double threshold) noexcept { return std::max(0.0, u - threshold); }
+
 /// coupledLevel's `positive_sum` for levels counted from `threshold`.
 template <typename Derived>
 double positiveSumAbove(const Eigen::MatrixBase<Derived>& u, double threshold) noexcept {
   double s = 0.0;
-  for (Eigen::Index j = 0; j < u.size(); ++j) s += std::max(0.0, u(j) - threshold);
+  for (Eigen::Index j = 0; j < u.size(); ++j) s += positivePartAbove(u(j), threshold);
   return s;
 }
 

@@ -84,7 +84,7 @@ struct PlannedSchedule {
       const auto jj = static_cast<std::size_t>(j);
       if (take) u[jj] = plan[h + j * ld];
       us[jj] = lagTowards(us[jj], u[jj], pole);
-      if (coupled) positive_sum += std::max(0.0, u[jj] - threshold);
+      if (coupled) positive_sum += positivePartAbove(u[jj], threshold);
     }
     return positive_sum;
   }

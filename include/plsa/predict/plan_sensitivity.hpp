@@ -105,7 +105,7 @@ class PlanSensitivity {
       double positive_sum = 0.0;
       for (int j = 0; j < nu; ++j) {
         u[j] = plan(s, j);
-        positive_sum += std::max(0.0, u[j] - shaping.threshold);
+        positive_sum += positivePartAbove(u[j], shaping.threshold);
       }
       for (Eigen::Index c = 0; c < channels; ++c) {
         const PlayChannel& play = m.play[static_cast<std::size_t>(c)];

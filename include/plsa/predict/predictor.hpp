@@ -167,7 +167,7 @@ class NStepPredictor {
     const CompiledModel& m = model();
     if (samples_ == 0) return PredictorStatus::kNotReady;
     if (!m.modal || m.n_y > 8 || m.n_u > kMaxSensitivityInputs) return PredictorStatus::kUnsupported;
-    if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
+    if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
     const Eigen::Index steps = horizon - 1;
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
         jacobian.cols() != steps * m.n_u)
@@ -374,7 +374,7 @@ class NStepPredictor {
                                       Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const CompiledModel& m = model();
     if (samples_ == 0) return PredictorStatus::kNotReady;
-    if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonTooLong;
+    if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
     if (out.rows() < horizon || out.cols() != m.n_y || (plan.rows() > 0 && plan.cols() != m.n_u))
       return PredictorStatus::kBadShape;
     if (!plan.allFinite()) return PredictorStatus::kNotFinite;

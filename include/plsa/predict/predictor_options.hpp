@@ -13,10 +13,11 @@ enum class PredictorStatus : int {
   kNotFinite = -1,          ///< a NaN or Inf in the sample: rejected, state kept
   kInputOutOfRange = -2,    ///< an input outside the accepted range: rejected, state kept
   kTimeNotIncreasing = -3,  ///< time did not advance: rejected, state kept
-  kHorizonTooLong = -5,     ///< horizon above the capacity set at construction
-  kBadShape = -6,           ///< plan or output buffer of the wrong size
-  kNotReady = -7,           ///< predict() before the first accepted sample
-  kUnsupported = -8,        ///< not available for this model (sensitivity: no modal form)
+  kHorizonOutOfRange = -5,  ///< horizon below 1 (sensitivity: 2) or above the capacity set at construction
+  kHorizonTooLong [[deprecated("use kHorizonOutOfRange")]] = kHorizonOutOfRange,
+  kBadShape = -6,     ///< plan or output buffer of the wrong size
+  kNotReady = -7,     ///< predict() before the first accepted sample
+  kUnsupported = -8,  ///< not available for this model (sensitivity: no modal form)
 };
 
 /// What Predictor::sensitivity writes. Column (s, j) of the Jacobian moves
@@ -42,8 +43,8 @@ inline const char* toString(PredictorStatus s) {
       return "input outside the accepted range";
     case PredictorStatus::kTimeNotIncreasing:
       return "time did not increase";
-    case PredictorStatus::kHorizonTooLong:
-      return "horizon above capacity";
+    case PredictorStatus::kHorizonOutOfRange:
+      return "horizon below 1 (sensitivity: 2) or above capacity";
     case PredictorStatus::kBadShape:
       return "buffer of the wrong size";
     case PredictorStatus::kNotReady:

@@ -1,5 +1,6 @@
-// Shared by `plsa demo` and `plsa crossval`: fits of several models on one
-// log, every model scored over the same samples.
+// Several models' predictions of one log, every model scored over the same
+// samples: the comparisons `plsa demo`, `crossval`, `generalise` and
+// `identify --structure` print.
 #pragma once
 
 #include <map>
@@ -10,11 +11,9 @@
 
 #include "plsa/eval/arx.hpp"
 #include "plsa/eval/validation.hpp"
-#include "plsa/identify/pipeline.hpp"
-#include "plsa/io/csv_log.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa::app {
+namespace plsa {
 
 /// Full-length predictions (NaN where a model predicts nothing) per horizon
 /// (0 = free simulation), per output.
@@ -47,21 +46,4 @@ Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models);
 std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
                                                                   const Eigen::MatrixXd& y);
 
-/// `o` with plsa's extensions off: the paper's configuration (switched PWL,
-/// no play, the outputs as logged, no lag, drift or slow pole); no progress.
-identify::IdentifyOptions paperConfiguration(identify::IdentifyOptions o);
-
-/// The training logs as the baselines are fitted to them: the model's inputs,
-/// and its outputs less any sensor drift identification took out (as plsa's
-/// own were fitted). One matrix per log.
-struct BaselineData {
-  std::vector<Eigen::MatrixXd> U, Y;
-};
-BaselineData baselineData(const DioPwlObfModel& m, const identify::IdentifyReport& report,
-                          const std::vector<io::Log>& logs);
-
-/// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
-DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
-                              const std::vector<Eigen::MatrixXd>& Y);
-
-}  // namespace plsa::app
+}  // namespace plsa

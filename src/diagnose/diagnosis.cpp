@@ -299,19 +299,19 @@ void judgeConfidence(Diagnosis& d, const Gap& bar, const DiagnoseOptions& o) {
     d.confidence = "confident";
 }
 
-}  // namespace
-
-Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& o) {
-  const auto t0 = std::chrono::steady_clock::now();
+// The same run twice would be held out and trained on: a held-out gap that holds nothing out.
+void refuseRepeatedRuns(const std::vector<RunData>& runs) {
   if (runs.empty()) throw std::invalid_argument("diagnose: no real runs given");
-  // The same run twice would be held out and trained on: a held-out gap that holds nothing out.
   for (std::size_t i = 0; i < runs.size(); ++i)
     for (std::size_t j = i + 1; j < runs.size(); ++j)
       if (runs[i].samples() == runs[j].samples() && runs[i].commands == runs[j].commands &&
           runs[i].outputs == runs[j].outputs)
         throw std::invalid_argument("diagnose: runs '" + runs[i].name + "' and '" + runs[j].name +
                                     "' hold the same samples; each run may appear once");
-  simulator.validate();
+}
+
+// The candidates asked for, or every effect the simulator has off; each known and off.
+std::vector<std::string> checkedCandidates(const sim::SimConfig& simulator, const DiagnoseOptions& o) {
   std::vector<std::string> candidates = o.candidates;
   if (candidates.empty())
     for (const auto& e : sim::effectNames())
@@ -322,197 +322,237 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
     if (simulator.effectEnabled(e))
       throw std::invalid_argument("diagnose: candidate '" + e + "' is already switched on in the simulator");
   }
-  Diagnosis d;
-  d.map = o.calibration.gap.map;
+  return candidates;
+}
+
+// The runs calibration trains on and the runs every gap is scored on: one
+// run split in time, else the last third of the runs (at least one) held out.
+struct RunSplit {
   std::vector<RunData> train, held;
+};
+
+RunSplit splitRuns(const std::vector<RunData>& runs, const DiagnoseOptions& o) {
+  RunSplit s;
   if (runs.size() == 1) {
     auto [a, b] = splitByTime(runs[0], o.heldout_fraction);
-    train.push_back(a);
-    held.push_back(b);
+    s.train.push_back(a);
+    s.held.push_back(b);
   } else {
     const std::size_t n_held = std::max<std::size_t>(1, runs.size() / 3);
-    train.assign(runs.begin(), runs.end() - static_cast<std::ptrdiff_t>(n_held));
-    held.assign(runs.end() - static_cast<std::ptrdiff_t>(n_held), runs.end());
+    s.train.assign(runs.begin(), runs.end() - static_cast<std::ptrdiff_t>(n_held));
+    s.held.assign(runs.end() - static_cast<std::ptrdiff_t>(n_held), runs.end());
   }
-  for (const auto& r : train) d.train_runs.push_back(r.name);
-  for (const auto& r : held) d.heldout_runs.push_back(r.name);
+  return s;
+}
+
+// The simulator as calibrated so far: its configuration, held-out and
+// training gaps, the output fit the held-out gap used, and where that gap lies.
+struct CalibratedState {
+  sim::SimConfig config;
+  Gap heldout, train;
+  OutputFit fit;
+  Breakdown where;
+};
+
+// What every stage of the forward selection reads.
+struct SelectionContext {
+  const RunSplit& runs;
+  const DiagnoseOptions& o;
+  OutputMap map;
+};
+
+// Calibration modules: the nominal physics, the kept effects, then `extra` if given.
+std::vector<std::string> modulesWith(const std::vector<std::string>& selected, const std::string& extra = "") {
+  std::vector<std::string> modules = {"nominal"};
+  modules.insert(modules.end(), selected.begin(), selected.end());
+  if (!extra.empty()) modules.push_back(extra);
+  return modules;
+}
+
+// Noise floor, the simulator as given, the identified reference, then the
+// nominal calibration: the baseline every candidate is measured against.
+CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
+  const DiagnoseOptions& o = x.o;
   const GapOptions& g = o.calibration.gap;
-  d.noise = noiseFloor(held, g);
+  const RunSplit& r = x.runs;
+  d.noise = noiseFloor(r.held, g);
   OutputFit raw_fit;
-  measureGap(simulator, train, g, &raw_fit);
-  d.heldout_uncalibrated = measureGap(simulator, held, g, &raw_fit, false);
-  say(o, "plsa diagnose: " + std::to_string(train.size()) + " training / " + std::to_string(held.size()) +
+  measureGap(simulator, r.train, g, &raw_fit);
+  d.heldout_uncalibrated = measureGap(simulator, r.held, g, &raw_fit, false);
+  say(o, "plsa diagnose: " + std::to_string(r.train.size()) + " training / " + std::to_string(r.held.size()) +
              " held-out run(s); held-out gap of the simulator as given " + pct(d.heldout_uncalibrated.percent()) +
              ", noise floor " + pct(d.noise.percent()));
-
   if (o.identified_reference) {
-    d.reference = identifiedReference(train, held);
+    d.reference = identifiedReference(r.train, r.held);
     say(o, d.reference.available ? "plsa diagnose: an identified model reaches a held-out gap of " +
                                        pct(d.reference.gap.percent()) + " (" + d.reference.note + ")"
                                  : "plsa diagnose: no identified reference: " + d.reference.note);
   }
-
-  // 1. Nominal calibration: the baseline.
   CalibrationOptions nominal_opts = o.calibration;
   nominal_opts.max_evaluations = o.nominal_evaluations;
   nominal_opts.progress = [&](int e, double best) {
     say(o, "  nominal calibration: " + std::to_string(e) + " evaluations, training gap " + pct(100 * std::sqrt(best)));
   };
-  const CalibrationResult base = calibrateNominal(simulator, train, nominal_opts, o, d.nominal_evaluations);
+  const CalibrationResult base = calibrateNominal(simulator, r.train, nominal_opts, o, d.nominal_evaluations);
+  CalibratedState s{base.config, {}, base.train_gap, base.fit, {}};
+  s.heldout = measureGap(base.config, r.held, g, &s.fit, false);
+  s.where = breakdownFor(base.config, r.held, s.fit, x.map);
   d.calibrated = base.config;
   d.nominal_params = base.values;
   d.train_before = base.train_gap;
-  OutputFit fit = base.fit;
-  d.gap_before = measureGap(base.config, held, g, &fit, false);
+  d.gap_before = s.heldout;
+  d.where = s.where;
   say(o, "plsa diagnose: nominal physics calibrated (" + std::to_string(d.nominal_evaluations) +
              " simulator runs); held-out gap " + pct(d.gap_before.percent()));
-  d.where = breakdownFor(base.config, held, fit, d.map);
+  return s;
+}
 
-  // 2. Candidates, forward selection.
-  std::vector<std::string> selected, remaining = candidates;
-  sim::SimConfig current = base.config;
-  Gap current_gap = d.gap_before;
-  Gap current_train = d.train_before;
-  Breakdown current_where = d.where;
-  OutputFit current_fit = fit;
-  for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round) {
-    std::vector<CandidateResult> results(remaining.size());
-    std::vector<sim::SimConfig> configs(remaining.size());
-    std::vector<OutputFit> fits(remaining.size());
-    // The bar a candidate must clear: the current model re-calibrated with a
-    // candidate's budget and nothing added. Without it, any candidate was
-    // credited with what further optimisation of the kept parameters buys,
-    // and later rounds kept effects that were not there.
-    // It gets the budget of the largest candidate, spent as the candidates
-    // spend theirs: two calibrations, the second from where the first ended.
-    // Screening in the first round only: it finds the basin of the effect
-    // that moves the nominal physics most; later rounds start from a model
-    // that has absorbed it (and would take twice as long).
-    const int screen = round == 1 ? o.screen_evaluations : 0;
-    Gap null_gap = current_gap;
-    auto recalibrateAlone = [&] {
-      std::vector<std::string> modules = {"nominal"};
-      modules.insert(modules.end(), selected.begin(), selected.end());
-      CalibrationOptions same = o.calibration;
-      same.max_evaluations = candidateBudget(current, modules, remaining, o.calibration);
-      CalibrationResult r = calibrate(current, modules, train, same);
-      const CalibrationResult again = calibrate(r.config, modules, train, same);
-      if (again.train_gap.total < r.train_gap.total) r = again;
-      if (screen > 0) {  // ...and the runs of the largest screening stage
-        std::size_t points = 0;
-        for (const auto& e : remaining) {
-          sim::SimConfig c = current;
-          enableCandidate(c, e, o);
-          points = std::max(points, spreadFor(c, e, train).size());
-        }
-        same.max_evaluations = screen * static_cast<int>(points);
-        same.evaluations_per_parameter = 0;
-        const CalibrationResult third = calibrate(r.config, modules, train, same);
-        if (third.train_gap.total < r.train_gap.total) r = third;
-      }
-      OutputFit f = r.fit;
-      null_gap = measureGap(r.config, held, g, &f, false);
-    };
-    auto work = [&](std::size_t i) {
-      if (i == remaining.size()) return recalibrateAlone();
-      const std::string& e = remaining[i];
-      sim::SimConfig c = current;
+// The bar a candidate must clear: the current model re-calibrated with a
+// candidate's budget and nothing added. Without it, any candidate was
+// credited with what further optimisation of the kept parameters buys, and
+// later rounds kept effects that were not there. It gets the budget of the
+// largest candidate, spent as the candidates spend theirs: two calibrations,
+// the second from where the first ended, and with screening the runs of the
+// largest screening stage. Returns its held-out gap.
+Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std::string>& selected,
+                                 const std::vector<std::string>& remaining, int screen, const SelectionContext& x) {
+  const DiagnoseOptions& o = x.o;
+  const std::vector<std::string> modules = modulesWith(selected);
+  CalibrationOptions same = o.calibration;
+  same.max_evaluations = candidateBudget(s.config, modules, remaining, o.calibration);
+  CalibrationResult r = calibrate(s.config, modules, x.runs.train, same);
+  const CalibrationResult again = calibrate(r.config, modules, x.runs.train, same);
+  if (again.train_gap.total < r.train_gap.total) r = again;
+  if (screen > 0) {
+    std::size_t points = 0;
+    for (const auto& e : remaining) {
+      sim::SimConfig c = s.config;
       enableCandidate(c, e, o);
-      std::vector<std::string> modules = {"nominal"};
-      modules.insert(modules.end(), selected.begin(), selected.end());
-      modules.push_back(e);
-      CalibrationResult r;
-      CandidateResult cr;
-      bool first = true;
-      for (const sim::SimConfig& start : startsFor(c, e, modules, train, o.calibration, screen, cr.evaluations)) {
-        CalibrationResult trial = calibrate(start, modules, train, o.calibration);
-        ++cr.starts;
-        cr.evaluations += trial.evaluations;
-        cr.train_gap_per_start.push_back(trial.train_gap.percent());
-        if (first || trial.train_gap.total < r.train_gap.total) r = std::move(trial);
-        first = false;
-      }
-      OutputFit f = r.fit;
-      cr.effect = e;
-      cr.formulation = c.formulationOf(e);
-      cr.round = round;
-      cr.heldout_before = current_gap;
-      cr.heldout_after = measureGap(r.config, held, g, &f, false);
-      cr.train_after = r.train_gap;
-      cr.shrink_percent = 100.0 * (1.0 - cr.heldout_after.percent() / std::max(1e-12, current_gap.percent()));
-      cr.params = r.values;
-      const auto sig = current_where.signatures.find(e);
-      if (sig != current_where.signatures.end()) cr.signature = sig->second;
-      results[i] = cr;
-      configs[i] = r.config;
-      fits[i] = f;
-    };
-    forEachInParallel(remaining.size() + 1, o.threads, work);  // the last index: the nothing-added bar
-    std::vector<std::size_t> order(results.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return results[a].heldout_after.total < results[b].heldout_after.total;
-    });
-    for (std::size_t i : order) {
-      char line[256];
-      std::snprintf(line, sizeof line, "  round %d: %-14s held-out gap %s -> %s (shrink %.1f%%)", round,
-                    results[i].effect.c_str(), pct(results[i].heldout_before.percent()).c_str(),
-                    pct(results[i].heldout_after.percent()).c_str(), results[i].shrink_percent);
-      say(o, line);
-      (round == 1 ? d.ranking : d.later_rounds).push_back(results[i]);
+      points = std::max(points, spreadFor(c, e, x.runs.train).size());
     }
-    say(o, "  round " + std::to_string(round) + ": re-calibrated with nothing added: held-out gap " +
-               pct(current_gap.percent()) + " -> " + pct(null_gap.percent()));
-    const CandidateResult& best = results[order[0]];
-    const Gap bar = null_gap.total < current_gap.total ? null_gap : current_gap;
-    if (round == 1) d.recalibrated_round1 = bar;
-    const double drop = bar.total - best.heldout_after.total;
-    const bool beats_noise = drop > o.margin * d.noise.total && drop > o.min_relative * bar.total;
-    if (!beats_noise) {
-      say(o, "plsa diagnose: round " + std::to_string(round) + ": the best, " + best.effect +
-                 ", does not beat the noise level by the margin over re-calibrating without it; stopping");
-      break;
-    }
-    selected.push_back(best.effect);
-    current = configs[order[0]];
-    current_gap = best.heldout_after;
-    current_train = best.train_after;
-    current_fit = fits[order[0]];
-    current_where = breakdownFor(current, held, current_fit, d.map);
-    d.final_params = best.params;
-    remaining.erase(std::find(remaining.begin(), remaining.end(), best.effect));
-    {
-      // Polish the kept model with the nominal fit's budget (chosen on
-      // training data): the next round's baseline, so a candidate is never
-      // credited with what more optimisation alone buys.
-      std::vector<std::string> modules = {"nominal"};
-      modules.insert(modules.end(), selected.begin(), selected.end());
-      CalibrationOptions polish = o.calibration;
-      polish.max_evaluations = o.nominal_evaluations;
-      const CalibrationResult refit = calibrate(current, modules, train, polish);
-      if (refit.train_gap.total < current_train.total) {
-        OutputFit f = refit.fit;
-        current = refit.config;
-        current_train = refit.train_gap;
-        current_gap = measureGap(refit.config, held, g, &f, false);
-        current_fit = f;
-        current_where = breakdownFor(current, held, current_fit, d.map);
-        d.final_params = refit.values;
-      }
-    }
-    d.steps.push_back({best.effect, current_gap});
-    say(o, "plsa diagnose: keeping " + best.effect + " (calibration polished); held-out gap now " +
-               pct(current_gap.percent()));
+    same.max_evaluations = screen * static_cast<int>(points);
+    same.evaluations_per_parameter = 0;
+    const CalibrationResult third = calibrate(r.config, modules, x.runs.train, same);
+    if (third.train_gap.total < r.train_gap.total) r = third;
   }
-  d.selected = selected;
-  d.gap_after = current_gap;
-  d.final_config = current;
-  d.where_after = selected.empty() ? d.where : current_where;
-  if (d.final_params.empty()) d.final_params = d.nominal_params;
+  OutputFit f = r.fit;
+  return measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
+}
 
-  judgeConfidence(d, d.recalibrated_round1, o);
+// One candidate added to the current model and calibrated from each of its
+// starts; the best start's result.
+struct CandidateTrial {
+  CandidateResult result;
+  sim::SimConfig config;
+  OutputFit fit;
+};
+
+CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::string>& selected, const std::string& e,
+                            int round, int screen, const SelectionContext& x) {
+  const DiagnoseOptions& o = x.o;
+  sim::SimConfig c = s.config;
+  enableCandidate(c, e, o);
+  const std::vector<std::string> modules = modulesWith(selected, e);
+  CalibrationResult r;
+  CandidateResult cr;
+  bool first = true;
+  for (const sim::SimConfig& start : startsFor(c, e, modules, x.runs.train, o.calibration, screen, cr.evaluations)) {
+    CalibrationResult trial = calibrate(start, modules, x.runs.train, o.calibration);
+    ++cr.starts;
+    cr.evaluations += trial.evaluations;
+    cr.train_gap_per_start.push_back(trial.train_gap.percent());
+    if (first || trial.train_gap.total < r.train_gap.total) r = std::move(trial);
+    first = false;
+  }
+  OutputFit f = r.fit;
+  cr.effect = e;
+  cr.formulation = c.formulationOf(e);
+  cr.round = round;
+  cr.heldout_before = s.heldout;
+  cr.heldout_after = measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
+  cr.train_after = r.train_gap;
+  cr.shrink_percent = 100.0 * (1.0 - cr.heldout_after.percent() / std::max(1e-12, s.heldout.percent()));
+  cr.params = r.values;
+  const auto sig = s.where.signatures.find(e);
+  if (sig != s.where.signatures.end()) cr.signature = sig->second;
+  return {cr, r.config, f};
+}
+
+// Polish the kept model with the nominal fit's budget (chosen on training
+// data): the next round's baseline, so a candidate is never credited with
+// what more optimisation alone buys.
+void polishKept(CalibratedState& s, const std::vector<std::string>& selected, const SelectionContext& x, Diagnosis& d) {
+  CalibrationOptions polish = x.o.calibration;
+  polish.max_evaluations = x.o.nominal_evaluations;
+  const CalibrationResult refit = calibrate(s.config, modulesWith(selected), x.runs.train, polish);
+  if (!(refit.train_gap.total < s.train.total)) return;
+  s.fit = refit.fit;
+  s.config = refit.config;
+  s.train = refit.train_gap;
+  s.heldout = measureGap(refit.config, x.runs.held, x.o.calibration.gap, &s.fit, false);
+  s.where = breakdownFor(s.config, x.runs.held, s.fit, x.map);
+  d.final_params = refit.values;
+}
+
+// One round of forward selection: every remaining candidate and the
+// nothing-added bar in parallel, ranked by held-out gap; the best is kept
+// (moved from `remaining` to `selected`, `s` updated and polished) when it
+// beats the bar by the noise margin. Returns whether it was.
+bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& selected,
+                    std::vector<std::string>& remaining, const SelectionContext& x, Diagnosis& d) {
+  const DiagnoseOptions& o = x.o;
+  // Screening in the first round only: it finds the basin of the effect
+  // that moves the nominal physics most; later rounds start from a model
+  // that has absorbed it (and would take twice as long).
+  const int screen = round == 1 ? o.screen_evaluations : 0;
+  std::vector<CandidateTrial> trials(remaining.size());
+  Gap null_gap = s.heldout;
+  forEachInParallel(remaining.size() + 1, o.threads, [&](std::size_t i) {  // the last index: the bar
+    if (i == remaining.size())
+      null_gap = recalibratedWithNothingAdded(s, selected, remaining, screen, x);
+    else
+      trials[i] = tryCandidate(s, selected, remaining[i], round, screen, x);
+  });
+  std::vector<std::size_t> order(trials.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return trials[a].result.heldout_after.total < trials[b].result.heldout_after.total;
+  });
+  for (std::size_t i : order) {
+    const CandidateResult& r = trials[i].result;
+    char line[256];
+    std::snprintf(line, sizeof line, "  round %d: %-14s held-out gap %s -> %s (shrink %.1f%%)", round, r.effect.c_str(),
+                  pct(r.heldout_before.percent()).c_str(), pct(r.heldout_after.percent()).c_str(), r.shrink_percent);
+    say(o, line);
+    (round == 1 ? d.ranking : d.later_rounds).push_back(r);
+  }
+  say(o, "  round " + std::to_string(round) + ": re-calibrated with nothing added: held-out gap " +
+             pct(s.heldout.percent()) + " -> " + pct(null_gap.percent()));
+  const CandidateTrial& best = trials[order[0]];
+  const Gap bar = null_gap.total < s.heldout.total ? null_gap : s.heldout;
+  if (round == 1) d.recalibrated_round1 = bar;
+  const double drop = bar.total - best.result.heldout_after.total;
+  if (!(drop > o.margin * d.noise.total && drop > o.min_relative * bar.total)) {
+    say(o, "plsa diagnose: round " + std::to_string(round) + ": the best, " + best.result.effect +
+               ", does not beat the noise level by the margin over re-calibrating without it; stopping");
+    return false;
+  }
+  const std::string kept = best.result.effect;
+  selected.push_back(kept);
+  s = {best.config, best.result.heldout_after, best.result.train_after, best.fit, {}};
+  s.where = breakdownFor(s.config, x.runs.held, s.fit, x.map);
+  d.final_params = best.result.params;
+  remaining.erase(std::find(remaining.begin(), remaining.end(), kept));
+  polishKept(s, selected, x, d);
+  d.steps.push_back({kept, s.heldout});
+  say(o, "plsa diagnose: keeping " + kept + " (calibration polished); held-out gap now " + pct(s.heldout.percent()));
+  return true;
+}
+
+// The verdict in words, with its confidence's qualification.
+std::string verdictOf(const Diagnosis& d, const DiagnoseOptions& o) {
   char v[768];
-  if (selected.empty()) {
+  if (d.selected.empty()) {
     std::snprintf(
         v, sizeof v,
         "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is %.1f%% "
@@ -522,35 +562,68 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
         d.ranking.empty() ? 0.0 : d.ranking[0].shrink_percent);
   } else {
     std::string list;
-    for (const auto& s : selected) list += (list.empty() ? "" : ", then ") + s;
+    for (const auto& s : d.selected) list += (list.empty() ? "" : ", then ") + s;
     std::snprintf(v, sizeof v,
                   "The gap is explained by %s: adding %s shrinks the held-out gap from %.1f%% to %.1f%% "
                   "(noise floor %.1f%%).",
-                  selected[0].c_str(), list.c_str(), d.gap_before.percent(), d.gap_after.percent(), d.noise.percent());
+                  d.selected[0].c_str(), list.c_str(), d.gap_before.percent(), d.gap_after.percent(),
+                  d.noise.percent());
   }
-  d.verdict = v;
+  std::string verdict = v;
   if (d.confidence == "uncertain")
-    d.verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
-                 selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";
+    verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
+               d.selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";
   const std::string reached = d.reference.available && d.reference.gap.percent() < d.gap_after.percent()
                                   ? " and above the " + pct(d.reference.gap.percent()) + " an identified model reaches"
                                   : "";
+  const std::string times = std::to_string(static_cast<int>(o.qualified_noise_multiple)) + " times the noise floor";
   if (d.confidence == "qualified")
-    d.verdict += " Qualified: the gap left, " + pct(d.gap_after.percent()) + ", is over " +
-                 std::to_string(static_cast<int>(o.qualified_noise_multiple)) + " times the noise floor" + reached +
-                 ": part of the gap is something no candidate models.";
-  if (selected.empty() && farAboveWhatTheDataAllow(d, d.gap_before, o))
-    d.verdict += " But the gap, " + pct(d.gap_before.percent()) + ", is over " +
-                 std::to_string(static_cast<int>(o.qualified_noise_multiple)) + " times the noise floor" + reached +
-                 ": the simulator misses something no candidate models.";
+    verdict += " Qualified: the gap left, " + pct(d.gap_after.percent()) + ", is over " + times + reached +
+               ": part of the gap is something no candidate models.";
+  if (d.selected.empty() && farAboveWhatTheDataAllow(d, d.gap_before, o))
+    verdict += " But the gap, " + pct(d.gap_before.percent()) + ", is over " + times + reached +
+               ": the simulator misses something no candidate models.";
+  return verdict;
+}
 
-  // Traces of the first held-out run.
-  const Residuals before = residualsOf(base.config, {held[0]}, fit, d.map);
-  const Residuals after = residualsOf(current, {held[0]}, current_fit, d.map);
-  d.trace_real = held[0].outputs;
-  d.trace_before = held[0].outputs - before.residual[0];
-  d.trace_after = held[0].outputs - after.residual[0];
-  d.trace_dt = held[0].sample_time_s;
+// The first held-out run as measured, as the nominal calibration simulates
+// it and as the final model does.
+void traceFirstHeldOutRun(Diagnosis& d, const CalibratedState& before, const CalibratedState& after,
+                          const RunData& run) {
+  const Residuals b = residualsOf(before.config, {run}, before.fit, d.map);
+  const Residuals a = residualsOf(after.config, {run}, after.fit, d.map);
+  d.trace_real = run.outputs;
+  d.trace_before = run.outputs - b.residual[0];
+  d.trace_after = run.outputs - a.residual[0];
+  d.trace_dt = run.sample_time_s;
+}
+
+}  // namespace
+
+Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  refuseRepeatedRuns(runs);
+  simulator.validate();
+  std::vector<std::string> remaining = checkedCandidates(simulator, o);
+  Diagnosis d;
+  d.map = o.calibration.gap.map;
+  const RunSplit split = splitRuns(runs, o);
+  for (const auto& r : split.train) d.train_runs.push_back(r.name);
+  for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
+  const SelectionContext x{split, o, d.map};
+  const CalibratedState base = calibrateBaseline(simulator, x, d);
+  CalibratedState current = base;
+  std::vector<std::string> selected;
+  for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)
+    if (!selectionRound(round, current, selected, remaining, x, d)) break;
+  d.selected = selected;
+  d.gap_after = current.heldout;
+  d.final_config = current.config;
+  d.where_after = selected.empty() ? d.where : current.where;
+  if (d.final_params.empty()) d.final_params = d.nominal_params;
+  judgeConfidence(d, d.recalibrated_round1, o);
+  d.verdict = verdictOf(d, o);
+  traceFirstHeldOutRun(d, base, current, split.held[0]);
   d.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }

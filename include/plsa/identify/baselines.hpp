@@ -22,8 +22,7 @@ IdentifyOptions paperConfiguration(IdentifyOptions o);
 struct BaselineData {
   std::vector<Eigen::MatrixXd> U, Y;
 };
-BaselineData baselineData(const DioPwlObfModel& m, const IdentifyReport& report,
-                          const std::vector<io::Log>& logs);
+BaselineData baselineData(const DioPwlObfModel& m, const IdentifyReport& report, const std::vector<io::Log>& logs);
 
 /// A copy of `m` with one region, coefficients refitted: the global linear OBF baseline.
 DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,

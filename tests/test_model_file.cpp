@@ -252,6 +252,127 @@ std::vector<FieldCase> fieldCases() {
                      },
                      "interpolated partition"},
                 }});
+  cases.push_back(
+      FieldCase{"SampleTime",
+                [](DioPwlObfModel& m) { m.sample_time_s = 0.01; },
+                [](const DioPwlObfModel&, const DioPwlObfModel& back) { EXPECT_EQ(back.sample_time_s, 0.01); },
+                "",
+                {},
+                nullptr,
+                {
+                    {"a zero sample time", false, [](J& j) { j["sample_time_s"] = 0.0; }, "sample_time_s"},
+                    {"a sample time that is text", false, [](J& j) { j["sample_time_s"] = "fast"; }, "sample_time_s"},
+                }});
+
+  cases.push_back(FieldCase{"UnitsAndAcceptedRange",
+                            [](DioPwlObfModel& m) {
+                              m.input_unit = "kPa";
+                              m.output_unit = "rad";
+                              m.input_min = 0.0;
+                              m.input_max = 300.0;
+                            },
+                            [](const DioPwlObfModel&, const DioPwlObfModel& back) {
+                              EXPECT_EQ(back.input_unit, "kPa");
+                              EXPECT_EQ(back.output_unit, "rad");
+                              EXPECT_EQ(back.input_min, 0.0);
+                              EXPECT_EQ(back.input_max, 300.0);
+                            },
+                            "",
+                            {},
+                            nullptr,
+                            {
+                                {"a unit that is a number", false, [](J& j) { j["units"]["inputs"] = 1; }, "units"},
+                                {"a range of one entry", false, [](J& j) { j["input_range"] = {0.0}; },
+                                 "'input_range' must have two entries"},
+                                {"a range upside down", false,
+                                 [](J& j) {
+                                   j["input_range"] = {300.0, 0.0};
+                                 },
+                                 "input_min must be below input_max"},
+                            }});
+
+  cases.push_back(FieldCase{
+      "InputRanges",
+      [](DioPwlObfModel& m) {
+        m.input_ranges = {{0.1, 0.9}};
+      },
+      [](const DioPwlObfModel& m, const DioPwlObfModel& back) { EXPECT_EQ(back.input_ranges, m.input_ranges); },
+      "input_ranges",  // none: not written (files from before the field: the one input_range)
+      {},
+      nullptr,
+      {
+          {"a range of one entry", false, [](J& j) { j["input_ranges"][0] = {0.1}; }, "input_ranges"},
+          {"a range upside down", false,
+           [](J& j) {
+             j["input_ranges"][0] = {0.9, 0.1};
+           },
+           "input_ranges"},
+          {"two ranges for one input", false,
+           [](J& j) {
+             j["input_ranges"].push_back({0.1, 0.9});
+           },
+           "input_ranges"},
+      }});
+
+  // An input-side model: interpolated levels, a lag, and the output level it simulates from.
+  cases.push_back(FieldCase{"InputSideLevelsAndOutputLevel",
+                            [](DioPwlObfModel& m) {
+                              m.partition = PwlPartition::interpolated({0}, {{0.2, 0.8}});
+                              m.schedule_side = ScheduleSide::kInput;
+                              m.schedule_lag_s = 0.3;
+                              m.output_level = {1.5};
+                            },
+                            [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+                              EXPECT_EQ(back.partition.scheduling(), Scheduling::kInterpolated);
+                              EXPECT_EQ(back.partition.breakpoints(), m.partition.breakpoints());
+                              EXPECT_EQ(back.schedule_side, ScheduleSide::kInput);
+                              EXPECT_EQ(back.output_level, m.output_level);
+                            },
+                            "output_level",
+                            {},
+                            nullptr,
+                            {
+                                {"two levels for one output", false,
+                                 [](J& j) {
+                                   j["output_level"] = {1.0, 2.0};
+                                 },
+                                 "output_level"},
+                                {"levels out of order", false,
+                                 [](J& j) {
+                                   j["partition"]["levels"][0] = {0.8, 0.2};
+                                 },
+                                 "must increase strictly"},
+                                {"a switched partition on the input side", false,
+                                 [](J& j) {
+                                   j["partition"]["scheduling"] = "switched";
+                                   j["partition"]["breakpoints"] = {{0.5}};
+                                   j["partition"].erase("levels");
+                                 },
+                                 "interpolated partition"},
+                            }});
+
+  cases.push_back(FieldCase{
+      "RegionFits",
+      [](DioPwlObfModel& m) {
+        m.region_fits[0].samples = 480;
+        m.region_fits[1] = RegionFit{12, 0, "too few samples: region 0's coefficients"};
+      },
+      [](const DioPwlObfModel& m, const DioPwlObfModel& back) {
+        ASSERT_EQ(back.region_fits.size(), 2u);
+        EXPECT_EQ(back.region_fits[0].samples, 480);
+        EXPECT_EQ(back.region_fits[1].samples, 12);
+        EXPECT_EQ(back.region_fits[1].fallback_from, 0);
+        EXPECT_EQ(back.region_fits[1].note, m.region_fits[1].note);
+      },
+      "",
+      {},
+      nullptr,
+      {
+          {"a fallback from -3", false, [](J& j) { j["regions"][1]["fallback_from"] = -3; },
+           "regions[1].fallback_from"},
+          {"a negative sample count", false, [](J& j) { j["regions"][0]["samples"] = -1; }, "regions[0].samples"},
+          {"a note that is a number", false, [](J& j) { j["regions"][0]["note"] = 5; }, "regions[0].note"},
+      }});
   return cases;
 }
 

@@ -289,6 +289,59 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
   EXPECT_EQ((out.array() - 7.0).abs().maxCoeff(), 0.0);
 }
 
+// One sample stamped far in the future (utime = INT64_MAX) once stopped the
+// predictor for good: every later sample was "time did not increase". Now
+// samples behind the last accepted time are rejected until kClockStepSamples
+// of them advance in a row; then it restarts at rest. A stale or repeated
+// sample alone changes nothing.
+TEST(PredictorHandBuilt, RecoversFromAJumpInTimeButRejectsAStaleSample) {
+  Predictor<1> p(onePole(0.8, 1.7));
+  const Eigen::VectorXd u = run().u.col(0), y = run().y.col(0);
+  Eigen::MatrixXd out(3, 1);
+  for (int t = 0; t < 100; ++t) ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk);
+  // Repeated and stale samples, never advancing among themselves: rejected however many.
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(p.update(99 * kDt, u.row(99), y.row(99)), PredictorStatus::kTimeNotIncreasing) << i;
+  EXPECT_EQ(p.update(99 * kDt, u.row(100), y.row(100)), PredictorStatus::kTimeNotIncreasing);
+  EXPECT_EQ(p.update(100 * kDt, u.row(100), y.row(100)), PredictorStatus::kOk);
+  // The jump: accepted as a gap.
+  EXPECT_EQ(p.update(9.2e12, u.row(101), y.row(101)), PredictorStatus::kTimeGap);
+  EXPECT_TRUE(accepted(PredictorStatus::kTimeGap));
+  int t = 102;
+  for (int i = 1; i < kClockStepSamples; ++i, ++t)
+    EXPECT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kTimeNotIncreasing) << i;
+  EXPECT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kClockStepBack);
+  ASSERT_EQ(p.predict(3, Eigen::MatrixXd(0, 1), out), PredictorStatus::kOk);
+  EXPECT_EQ(out(2, 0), y(t)) << "restarted at rest from this sample";
+  for (++t; t < 130; ++t) ASSERT_EQ(p.update(t * kDt, u.row(t), y.row(t)), PredictorStatus::kOk) << t;
+  EXPECT_FALSE(accepted(PredictorStatus::kTimeNotIncreasing));
+  EXPECT_STREQ(toString(PredictorStatus::kClockStepBack), "clock stepped back: filters restarted");
+}
+
+// Options that would allocate a mode table of hundreds of gigabytes, or
+// silently switch a check off, are refused by name at setup.
+TEST(PredictorHandBuilt, RefusesOptionsItCannotHonour) {
+  const auto message = [&](const PredictorOptions& o) {
+    try {
+      Predictor<1> p(onePole(0.8, 1.7), o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  PredictorOptions o;
+  o.max_horizon = std::numeric_limits<int>::max();
+  EXPECT_NE(message(o).find("max_horizon"), std::string::npos) << message(o);
+  o.max_horizon = kMaxPredictorHorizon;
+  EXPECT_EQ(message(o), "accepted");
+  o = {};
+  o.input_margin = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message(o).find("input_margin"), std::string::npos) << message(o);
+  o = {};
+  o.max_gap_factor = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message(o).find("max_gap_factor"), std::string::npos) << message(o);
+}
+
 // ---------------------------------------------------------------------------
 // Every pole count: the template's fixed sizes and Eigen::Dynamic.
 

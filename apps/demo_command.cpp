@@ -42,36 +42,42 @@ std::string fmt(double v, const char* f = "%.1f") {
   return b;
 }
 
-void runDemo(const DemoOptions& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const sim::SimConfig config = opt.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(opt.config);
-  std::string effects;
-  for (const auto& e : sim::effectNames())
-    if (config.effectEnabled(e)) effects += (effects.empty() ? "" : ", ") + e;
-  std::printf("plsa demo: simulated three-chamber actuator at %.0f Hz, effects on: %s\n", config.sample_rate_hz,
-              effects.empty() ? "none" : effects.c_str());
-  fs::create_directories(opt.out_dir);
-  auto path = [&](const std::string& f) { return (fs::path(opt.out_dir) / f).string(); };
-  for (const char* f : {"train_grid2.csv", "validate_joystick.csv", "model.json", "baseline_paper.json",
-                        "baseline_global_linear.json", "fits.json", "report.html"})
-    refuseOverwritingInputs(path(f), "--out", {opt.config}, "plsa demo");
+// The demo's output folder: the path of each file, refused when it is an input.
+struct OutputFolder {
+  std::string dir;
+  std::string operator()(const std::string& f) const { return (fs::path(dir) / f).string(); }
+};
 
-  // 1. Experiments (paper Table I, step 3; validation run as in its Section VI).
+// 1. Experiments (paper Table I, step 3; validation run as in its Section VI).
+struct DemoRuns {
+  io::Log train, val;
+};
+
+DemoRuns recordRuns(const sim::SimConfig& config, std::uint64_t seed, const OutputFolder& path) {
   sim::ExperimentOptions eo;
   eo.sample_rate_hz = config.sample_rate_hz;
-  eo.seed = opt.seed + 1;
-  sim::Actuator rig_id(config, opt.seed);
-  const io::Log train = sim::runExperiment(rig_id, sim::gridExperiment(eo));
-  sim::Actuator rig_val(config, opt.seed + 100);
-  const io::Log val = sim::runExperiment(rig_val, sim::joystickExperiment(eo));
-  io::writeCsvLog(path("train_grid2.csv"), train);
-  io::writeCsvLog(path("validate_joystick.csv"), val);
+  eo.seed = seed + 1;
+  sim::Actuator rig_id(config, seed);
+  DemoRuns r{sim::runExperiment(rig_id, sim::gridExperiment(eo)), {}};
+  sim::Actuator rig_val(config, seed + 100);
+  r.val = sim::runExperiment(rig_val, sim::joystickExperiment(eo));
+  io::writeCsvLog(path("train_grid2.csv"), r.train);
+  io::writeCsvLog(path("validate_joystick.csv"), r.val);
   std::printf("  experiments: two-chamber grid 0.20-0.35 bar (%lld samples), joystick validation (%lld samples)\n",
-              static_cast<long long>(train.samples()), static_cast<long long>(val.samples()));
+              static_cast<long long>(r.train.samples()), static_cast<long long>(r.val.samples()));
+  return r;
+}
 
-  // 2. Identification: plsa's (tip frame, input side; play, coupling, lag,
-  // threshold, sensor drift and slow pole by cross-validation) and the
-  // paper's (switched, no play, the angles as logged).
+// 2. Identification: plsa's (tip frame, input side; play, coupling, lag,
+// threshold, sensor drift and slow pole by cross-validation), the paper's
+// (switched, no play, the angles as logged) and the two linear baselines.
+struct DemoModels {
+  IdentifyReport report;
+  DioPwlObfModel model, paper, linear;
+  ArxModel arx;
+};
+
+DemoModels identifyModels(const io::Log& train, const OutputFolder& path) {
   IdentifyOptions io_;
   // The output frame is identification's own choice: bend_deg and steer_deg
   // are read as the tip direction's polar coordinates (output_frame_choice.hpp).
@@ -80,72 +86,82 @@ void runDemo(const DemoOptions& opt) {
   // (docs/identification.md).
   io_.scheduling = SchedulingChoice::kInputSide;
   io_.progress = [](const std::string& l) { std::printf("  identify: %s\n", l.c_str()); };
-  IdentifyReport report;
-  const DioPwlObfModel model = identifyModel({train}, io_, &report);
-  const DioPwlObfModel paper = identifyModel({train}, paperConfiguration(io_));
+  DemoModels m;
+  m.model = identifyModel({train}, io_, &m.report);
+  m.paper = identifyModel({train}, paperConfiguration(io_));
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
-  const BaselineData training = baselineData(model, report, {train});
-  const std::string drift_text =
-      report.drift_taken_out
-          ? "A sensor yaw drift of " + std::to_string(report.output_drift.rate[1]).substr(0, 6) +
-                " deg/s was found in the grid run and taken out of the training outputs of plsa's model and of the "
-                "linear baselines; their simulations (sim) turn at that rate over the validation run, as its sensor "
-                "drifts on (sim, no drift: they do not). "
-          : std::string();
-  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
-  const ArxModel arx = ArxModel::fit(training.U, training.Y, 4, 4);
-  saveModel(path("model.json"), model);
+  const BaselineData training = baselineData(m.model, m.report, {train});
+  m.linear = globalLinearOf(m.model, training.U, training.Y);
+  m.arx = ArxModel::fit(training.U, training.Y, 4, 4);
+  saveModel(path("model.json"), m.model);
   // The baselines that are DIO models too, so that `plsa validate` can re-score them.
-  saveModel(path("baseline_paper.json"), paper);
-  saveModel(path("baseline_global_linear.json"), linear);
+  saveModel(path("baseline_paper.json"), m.paper);
+  saveModel(path("baseline_global_linear.json"), m.linear);
+  return m;
+}
 
-  // 3. Validation on the joystick run.
+// 3. Validation on the joystick run: every model, horizon and simulation
+// start scored over the same samples.
+struct DemoScores {
+  std::vector<ModelPredictions> preds;                       ///< the four models, simulations as validate starts them
+  std::vector<std::vector<std::map<int, CommonScore>>> all;  ///< preds, then the two other starts
+  Eigen::Index scored_from = 0;
+  Eigen::VectorXd t;  ///< the run's time from its start
+  std::string window, reg_s;
+  double fit(std::size_t start, std::size_t m, std::size_t o, int key) const {
+    return all[start * preds.size() + m][o].at(key).fit;
+  }
+  const std::map<int, CommonScore>& at(std::size_t m, std::size_t o) const { return all[m][o]; }
+};
+
+DemoScores scoreOnJoystick(const DemoModels& m, const io::Log& val) {
   const std::vector<int> horizons = {40, 80};
-  const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
-  const InputsOutsideTraining coverage = inputsOutsideTraining(model, Uv);
+  const Eigen::MatrixXd Uv = val.columnsOf(m.model.inputs), Yv = val.columnsOf(m.model.outputs);
+  const InputsOutsideTraining coverage = inputsOutsideTraining(m.model, Uv);
   std::printf(
       "  the joystick run has an input outside its training range on %.1f%% of its samples and beyond the "
       "training grid's outer nodes on %.1f%%\n",
       100 * coverage.any, 100 * coverage.any_beyond_grid);
-  for (const std::string& w : inputCoverageWarnings(model, coverage)) std::printf("    %s\n", w.c_str());
+  for (const std::string& w : inputCoverageWarnings(m.model, coverage)) std::printf("    %s\n", w.c_str());
   // ARX was fitted to the same drift-free outputs: its simulation gets the same drift back.
-  const std::vector<double> arx_drift = report.drift_taken_out ? report.output_drift.rate : std::vector<double>{};
-  const std::vector<ModelPredictions> preds = {
-      predictDio("DIO-PWL-OBF (plsa)", model, Uv, Yv, horizons),
-      predictDio("DIO-PWL-OBF as in the paper", paper, Uv, Yv, horizons),
-      predictDio("global linear OBF (same poles, play)", linear, Uv, Yv, horizons),
-      predictArx("linear ARX(4,4)", arx, Uv, Yv, horizons, arx_drift, model.sample_time_s)};
+  const std::vector<double> arx_drift = m.report.drift_taken_out ? m.report.output_drift.rate : std::vector<double>{};
+  DemoScores s;
+  s.preds = {predictDio("DIO-PWL-OBF (plsa)", m.model, Uv, Yv, horizons),
+             predictDio("DIO-PWL-OBF as in the paper", m.paper, Uv, Yv, horizons),
+             predictDio("global linear OBF (same poles, play)", m.linear, Uv, Yv, horizons),
+             predictArx("linear ARX(4,4)", m.arx, Uv, Yv, horizons, arx_drift, m.model.sample_time_s)};
   // The simulations again without the training drift; then, for the
   // tip-frame models, carrying the grid run's sensor yaw instead of
   // registering the joystick run's on its first 5 s, with no drift either.
   // The paper's model starts from the measured sample either way. All scored
   // on one window: after the registration.
   const SimulationStart no_drift{SimulationStart{}.yaw_registration_s, false}, training_yaw{0, false};
-  const std::string reg_s = fmt(SimulationStart{}.yaw_registration_s, "%g");
-  std::vector<ModelPredictions> all = preds;
+  s.reg_s = fmt(SimulationStart{}.yaw_registration_s, "%g");
+  std::vector<ModelPredictions> all = s.preds;
   for (const SimulationStart& st : {no_drift, training_yaw}) {
-    all.push_back(predictDio("", model, Uv, Yv, horizons, st));
-    all.push_back(preds[1]);
-    all.push_back(predictDio("", linear, Uv, Yv, horizons, st));
-    all.push_back(predictArx("", arx, Uv, Yv, horizons));
+    all.push_back(predictDio("", m.model, Uv, Yv, horizons, st));
+    all.push_back(s.preds[1]);
+    all.push_back(predictDio("", m.linear, Uv, Yv, horizons, st));
+    all.push_back(predictArx("", m.arx, Uv, Yv, horizons));
   }
-  const auto scores_all = commonScores(all, Yv);
-  const Eigen::Index scored_from = commonScoringStart(all);
-  const Eigen::VectorXd tv =
-      val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
-  const std::string window = "samples " + std::to_string(scored_from) + " to " + std::to_string(Yv.rows() - 1) +
-                             ", t = " + fmt(tv(scored_from), "%g") + " to " + fmt(tv(tv.size() - 1), "%g") + " s";
-  const std::size_t nm = preds.size();
-  const std::vector<std::vector<std::map<int, CommonScore>>> scores(scores_all.begin(), scores_all.begin() + nm);
-  auto fitNoDrift = [&](std::size_t m, std::size_t o) { return scores_all[nm + m][o].at(0).fit; };
-  auto fitTrainingYaw = [&](std::size_t m, std::size_t o) { return scores_all[2 * nm + m][o].at(0).fit; };
+  s.all = commonScores(all, Yv);
+  s.scored_from = commonScoringStart(all);
+  s.t = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
+  s.window = "samples " + std::to_string(s.scored_from) + " to " + std::to_string(Yv.rows() - 1) +
+             ", t = " + fmt(s.t(s.scored_from), "%g") + " to " + fmt(s.t(s.t.size() - 1), "%g") + " s";
+  return s;
+}
+
+// The fits table on standard output and in fits.json.
+void writeFits(const DemoModels& m, const DemoScores& s, const OutputFolder& path) {
+  const std::vector<std::string>& outputs = m.model.outputs;
   std::printf("\n  NRMSE fit %% on the joystick run (100 = perfect; every model, horizon and error on the same %s)\n",
-              window.c_str());
+              s.window.c_str());
   std::printf(
       "  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
       "  from its first sample, and the models fitted without the grid run's sensor drift turn at its rate;\n"
       "  no drift: they do not; training yaw: the tip-frame models carry the grid run's yaw, no drift\n",
-      reg_s.c_str());
+      s.reg_s.c_str());
   std::printf("  %-36s %-10s %8s %8s %8s %9s %13s\n", "model", "output", "40-step", "80-step", "sim", "no drift",
               "training yaw");
   nlohmann::json j;
@@ -153,51 +169,106 @@ void runDemo(const DemoOptions& opt) {
   // the name people read is the entry's "label".
   const std::array<const char*, 4> keys = {"plsa", "paper", "global_linear", "arx"};
   const std::array<const char*, 4> files = {"model.json", "baseline_paper.json", "baseline_global_linear.json", ""};
-  for (std::size_t m = 0; m < preds.size(); ++m) {
-    j["models"][keys[m]]["label"] = preds[m].name;
-    if (*files[m]) j["models"][keys[m]]["file"] = files[m];
+  for (std::size_t k = 0; k < s.preds.size(); ++k) {
+    j["models"][keys[k]]["label"] = s.preds[k].name;
+    if (*files[k]) j["models"][keys[k]]["file"] = files[k];
   }
-  for (std::size_t m = 0; m < preds.size(); ++m)
-    for (std::size_t o = 0; o < model.outputs.size(); ++o) {
-      const auto& f = scores[m][o];
-      const double f_nd = fitNoDrift(m, o), f_ty = fitTrainingYaw(m, o);
-      std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %9.1f %13.1f\n", preds[m].name.c_str(), model.outputs[o].c_str(),
+  for (std::size_t k = 0; k < s.preds.size(); ++k)
+    for (std::size_t o = 0; o < outputs.size(); ++o) {
+      const auto& f = s.at(k, o);
+      const double f_nd = s.fit(1, k, o, 0), f_ty = s.fit(2, k, o, 0);
+      std::printf("  %-36s %-10s %8.1f %8.1f %8.1f %9.1f %13.1f\n", s.preds[k].name.c_str(), outputs[o].c_str(),
                   f.at(40).fit, f.at(80).fit, f.at(0).fit, f_nd, f_ty);
-      j["models"][keys[m]][model.outputs[o]] = {{"fit_k40", f.at(40).fit},      {"fit_k80", f.at(80).fit},
-                                                {"fit_sim", f.at(0).fit},       {"fit_sim_no_drift", f_nd},
-                                                {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms},
-                                                {"rms_k80", f.at(80).rms},      {"rms_sim", f.at(0).rms}};
+      j["models"][keys[k]][outputs[o]] = {{"fit_k40", f.at(40).fit},      {"fit_k80", f.at(80).fit},
+                                          {"fit_sim", f.at(0).fit},       {"fit_sim_no_drift", f_nd},
+                                          {"fit_sim_training_yaw", f_ty}, {"rms_k40", f.at(40).rms},
+                                          {"rms_k80", f.at(80).rms},      {"rms_sim", f.at(0).rms}};
     }
   // A fit divides by the run's spread, and a run that hardly bends makes a
   // small error a large miss: say both.
   std::printf("  plsa's errors in degrees (rms; 40-step / 80-step / sim) against the measured spread (std):\n");
-  for (std::size_t o = 0; o < model.outputs.size(); ++o) {
-    const auto& f = scores[0][o];
-    std::printf("    %-10s %.3f / %.3f / %.3f deg rms, spread %.2f deg\n", model.outputs[o].c_str(), f.at(40).rms,
+  for (std::size_t o = 0; o < outputs.size(); ++o) {
+    const auto& f = s.at(0, o);
+    std::printf("    %-10s %.3f / %.3f / %.3f deg rms, spread %.2f deg\n", outputs[o].c_str(), f.at(40).rms,
                 f.at(80).rms, f.at(0).rms, f.at(0).spread);
-    j["outputs"][model.outputs[o]] = {{"fit_k40", f.at(40).fit},
-                                      {"fit_k80", f.at(80).fit},
-                                      {"fit_sim", f.at(0).fit},
-                                      {"fit_sim_no_drift", fitNoDrift(0, o)},
-                                      {"fit_sim_training_yaw", fitTrainingYaw(0, o)},
-                                      {"rms_k40", f.at(40).rms},
-                                      {"rms_k80", f.at(80).rms},
-                                      {"rms_sim", f.at(0).rms},
-                                      {"std", f.at(0).spread}};
+    j["outputs"][outputs[o]] = {{"fit_k40", f.at(40).fit},
+                                {"fit_k80", f.at(80).fit},
+                                {"fit_sim", f.at(0).fit},
+                                {"fit_sim_no_drift", s.fit(1, 0, o, 0)},
+                                {"fit_sim_training_yaw", s.fit(2, 0, o, 0)},
+                                {"rms_k40", f.at(40).rms},
+                                {"rms_k80", f.at(80).rms},
+                                {"rms_sim", f.at(0).rms},
+                                {"std", f.at(0).spread}};
   }
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
   j["rms_metric"] =
       "rms_*: sqrt(mean (y - yhat)^2) in degrees; std: the measured output's standard deviation; "
       "every fit, rms and std over the same samples (scored_samples)";
-  j["scored_samples"] = {{"first", scored_from},
-                         {"count", Yv.rows() - scored_from},
-                         {"first_time_s", tv(scored_from)},
-                         {"last_time_s", tv(tv.size() - 1)}};
+  j["scored_samples"] = {{"first", s.scored_from},
+                         {"count", s.t.size() - s.scored_from},
+                         {"first_time_s", s.t(s.scored_from)},
+                         {"last_time_s", s.t(s.t.size() - 1)}};
   writeTextFile(path("fits.json"), j.dump(2) + "\n", "fits file");
+}
 
-  // 4. Report.
-  const Eigen::VectorXd t =
-      val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
+// The report's fit and error tables.
+void reportTables(std::ostringstream& html, const DemoModels& m, const DemoScores& s) {
+  html << "<h2>Fits (NRMSE %)</h2><p>Every model, horizon and error is scored on the same " << s.window
+       << " into the run. sim: the tip-frame models (plsa's and the global linear OBF) register the joystick run's "
+       << "sensor yaw on its first " << s.reg_s << " s, as the other two start from its first sample; the models "
+       << "fitted without the grid run's sensor drift turn at its rate. sim, no drift: they do not. sim, training "
+       << "yaw: the tip-frame models carry the grid run's yaw instead, with no drift.</p><table><tr><th>model</th>"
+       << "<th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>sim, no drift</th><th>sim, training yaw</th>"
+       << "</tr>";
+  for (std::size_t k = 0; k < s.preds.size(); ++k)
+    for (std::size_t o = 0; o < m.model.outputs.size(); ++o)
+      html << "<tr><td>" << report::escape(s.preds[k].name) << "</td><td>" << m.model.outputs[o] << "</td><td>"
+           << fmt(s.at(k, o).at(40).fit) << "</td><td>" << fmt(s.at(k, o).at(80).fit) << "</td><td>"
+           << fmt(s.at(k, o).at(0).fit) << "</td><td>" << fmt(s.fit(1, k, o, 0)) << "</td><td>"
+           << fmt(s.fit(2, k, o, 0)) << "</td></tr>";
+  html << "</table><p>The same errors in degrees (rms), against the spread each fit divides by:</p><table><tr>"
+       << "<th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>measured std</th></tr>";
+  for (std::size_t k = 0; k < s.preds.size(); ++k)
+    for (std::size_t o = 0; o < m.model.outputs.size(); ++o)
+      html << "<tr><td>" << report::escape(s.preds[k].name) << "</td><td>" << m.model.outputs[o] << "</td><td>"
+           << fmt(s.at(k, o).at(40).rms, "%.3f") << "</td><td>" << fmt(s.at(k, o).at(80).rms, "%.3f") << "</td><td>"
+           << fmt(s.at(k, o).at(0).rms, "%.3f") << "</td><td>" << fmt(s.at(k, o).at(0).spread, "%.2f") << "</td></tr>";
+  html << "</table>";
+}
+
+// The pole map: identified local poles, FKcM centres and the cross-validated slow pole.
+std::string demoPoleMap(const DemoModels& m) {
+  std::vector<report::PoleGroup> groups;
+  std::vector<std::complex<double>> identified, centres, slow;
+  for (const auto& pp : m.report.pairs) {
+    identified.insert(identified.end(), pp.identified.begin(), pp.identified.end());
+    centres.insert(centres.end(), pp.chosen.centres.begin(), pp.chosen.centres.end());
+    // Poles the model carries beyond the FKcM centres: the cross-validated slow pole.
+    const auto used = m.model.poles[static_cast<std::size_t>(pp.output)][static_cast<std::size_t>(pp.input)].poles();
+    if (used.size() > pp.chosen.centres.size()) slow.push_back(used.back());
+  }
+  double zoom = 1.0;
+  for (const auto& p : identified) zoom = std::min(zoom, p.real());
+  for (const auto& p : centres) zoom = std::min(zoom, p.real());
+  groups.push_back({"identified local poles", identified, "#1f77b4", false});
+  groups.push_back({"FKcM centres (OBF poles)", centres, "#d62728", true});
+  if (!slow.empty()) groups.push_back({"slow pole (cross-validated)", slow, "#2ca02c", true});
+  return report::poleMap("Pole map: identified poles, FKcM centres and the slow pole", groups,
+                         std::max(-1.0, zoom - 0.05));
+}
+
+// 4. The self-contained HTML report.
+void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, const std::string& effects,
+                 const OutputFolder& path) {
+  const std::string drift_text =
+      m.report.drift_taken_out
+          ? "A sensor yaw drift of " + std::to_string(m.report.output_drift.rate[1]).substr(0, 6) +
+                " deg/s was found in the grid run and taken out of the training outputs of plsa's model and of the "
+                "linear baselines; their simulations (sim) turn at that rate over the validation run, as its sensor "
+                "drifts on (sim, no drift: they do not). "
+          : std::string();
+  const Eigen::MatrixXd Yv = val.columnsOf(m.model.outputs);
   std::ostringstream html;
   html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
        << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
@@ -209,59 +280,42 @@ void runDemo(const DemoOptions& opt) {
        << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ". plsa's model runs "
        << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
        << "coupling, schedule lag, play threshold, sensor drift and slow pole chosen by cross-validation on the grid. "
-       << drift_text << "Every model is scored on the logged angles.</p>"
-       << "<h2>Fits (NRMSE %)</h2><p>Every model, horizon and error is scored on the same " << window
-       << " into the run. sim: the tip-frame models (plsa's and the global linear OBF) register the joystick run's "
-       << "sensor yaw on its first " << reg_s << " s, as the other two start from its first sample; the models fitted "
-       << "without the grid run's sensor drift turn at its rate. sim, no drift: they do not. sim, training yaw: the "
-       << "tip-frame models carry the grid run's yaw instead, with no drift.</p><table><tr><th>model</th>"
-       << "<th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>sim, no drift</th><th>sim, training yaw</th>"
-       << "</tr>";
-  for (std::size_t m = 0; m < preds.size(); ++m)
-    for (std::size_t o = 0; o < model.outputs.size(); ++o)
-      html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
-           << fmt(scores[m][o].at(40).fit) << "</td><td>" << fmt(scores[m][o].at(80).fit) << "</td><td>"
-           << fmt(scores[m][o].at(0).fit) << "</td><td>" << fmt(fitNoDrift(m, o)) << "</td><td>"
-           << fmt(fitTrainingYaw(m, o)) << "</td></tr>";
-  html << "</table><p>The same errors in degrees (rms), against the spread each fit divides by:</p><table><tr>"
-       << "<th>model</th><th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>measured std</th></tr>";
-  for (std::size_t m = 0; m < preds.size(); ++m)
-    for (std::size_t o = 0; o < model.outputs.size(); ++o)
-      html << "<tr><td>" << report::escape(preds[m].name) << "</td><td>" << model.outputs[o] << "</td><td>"
-           << fmt(scores[m][o].at(40).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(80).rms, "%.3f") << "</td><td>"
-           << fmt(scores[m][o].at(0).rms, "%.3f") << "</td><td>" << fmt(scores[m][o].at(0).spread, "%.2f")
-           << "</td></tr>";
-  html << "</table>";
-  for (std::size_t o = 0; o < model.outputs.size(); ++o) {
-    const auto& p = preds[0].by_output[o];
-    html << report::lineChart(model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, plsa)", t,
+       << drift_text << "Every model is scored on the logged angles.</p>";
+  reportTables(html, m, s);
+  for (std::size_t o = 0; o < m.model.outputs.size(); ++o) {
+    const auto& p = s.preds[0].by_output[o];
+    html << report::lineChart(m.model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, plsa)", s.t,
                               {{"measured", Yv.col(static_cast<Eigen::Index>(o)), "#222", false},
                                {"40-step", p.at(40), "#1f77b4", false},
                                {"80-step", p.at(80), "#2ca02c", true},
                                {"simulation", p.at(0), "#d62728", false}},
-                              "time (s)", model.outputs[o]);
+                              "time (s)", m.model.outputs[o]);
   }
-  std::vector<report::PoleGroup> groups;
-  std::vector<std::complex<double>> identified, centres, slow;
-  for (const auto& pp : report.pairs) {
-    identified.insert(identified.end(), pp.identified.begin(), pp.identified.end());
-    centres.insert(centres.end(), pp.chosen.centres.begin(), pp.chosen.centres.end());
-    // Poles the model carries beyond the FKcM centres: the cross-validated slow pole.
-    const auto used = model.poles[static_cast<std::size_t>(pp.output)][static_cast<std::size_t>(pp.input)].poles();
-    if (used.size() > pp.chosen.centres.size()) slow.push_back(used.back());
-  }
-  double zoom = 1.0;
-  for (const auto& p : identified) zoom = std::min(zoom, p.real());
-  for (const auto& p : centres) zoom = std::min(zoom, p.real());
-  groups.push_back({"identified local poles", identified, "#1f77b4", false});
-  groups.push_back({"FKcM centres (OBF poles)", centres, "#d62728", true});
-  if (!slow.empty()) groups.push_back({"slow pole (cross-validated)", slow, "#2ca02c", true});
-  html << report::poleMap("Pole map: identified poles, FKcM centres and the slow pole", groups,
-                          std::max(-1.0, zoom - 0.05));
+  html << demoPoleMap(m);
   html << "<h2>Identification log</h2><pre>";
-  for (const auto& l : report.lines) html << report::escape(l) << "\n";
+  for (const auto& l : m.report.lines) html << report::escape(l) << "\n";
   html << "</pre></body></html>\n";
   writeTextFile(path("report.html"), html.str(), "HTML report");
+}
+
+void runDemo(const DemoOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const sim::SimConfig config = opt.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(opt.config);
+  std::string effects;
+  for (const auto& e : sim::effectNames())
+    if (config.effectEnabled(e)) effects += (effects.empty() ? "" : ", ") + e;
+  std::printf("plsa demo: simulated three-chamber actuator at %.0f Hz, effects on: %s\n", config.sample_rate_hz,
+              effects.empty() ? "none" : effects.c_str());
+  fs::create_directories(opt.out_dir);
+  const OutputFolder path{opt.out_dir};
+  for (const char* f : {"train_grid2.csv", "validate_joystick.csv", "model.json", "baseline_paper.json",
+                        "baseline_global_linear.json", "fits.json", "report.html"})
+    refuseOverwritingInputs(path(f), "--out", {opt.config}, "plsa demo");
+  const DemoRuns runs = recordRuns(config, opt.seed, path);
+  const DemoModels models = identifyModels(runs.train, path);
+  const DemoScores scores = scoreOnJoystick(models, runs.val);
+  writeFits(models, scores, path);
+  writeReport(models, scores, runs.val, effects, path);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv,\n"

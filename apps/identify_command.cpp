@@ -115,6 +115,68 @@ std::string rateText(double r) {
   return b;
 }
 
+// The fits and rms errors as a table a person reads, and into `j`.
+void printFits(FILE* table, const ValidationResult& v, const std::vector<int>& horizons, nlohmann::json& j) {
+  std::fprintf(table, "%-12s", "output");
+  for (int k : horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
+  std::fprintf(table, " %9s\n", "sim");
+  for (const auto& o : v.outputs) {
+    std::fprintf(table, "%-12s", o.name.c_str());
+    for (int k : horizons) {
+      std::fprintf(table, " %9.2f", o.fit_k.at(k));
+      j["outputs"][o.name]["fit_k" + std::to_string(k)] = o.fit_k.at(k);
+    }
+    std::fprintf(table, " %9.2f\n", o.fit_sim);
+    j["outputs"][o.name]["fit_sim"] = o.fit_sim;
+  }
+  // The same errors in the outputs' units, beside the spread the fit divides by.
+  std::fprintf(table, "%-12s", "rms error");
+  for (int k : horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
+  std::fprintf(table, " %9s %12s\n", "sim", "measured std");
+  for (const auto& o : v.outputs) {
+    std::fprintf(table, "%-12s", o.name.c_str());
+    for (int k : horizons) {
+      std::fprintf(table, " %9.4g", o.rms_k.at(k));
+      j["outputs"][o.name]["rms_k" + std::to_string(k)] = o.rms_k.at(k);
+    }
+    std::fprintf(table, " %9.4g %12.4g\n", o.rms_sim, o.spread);
+    j["outputs"][o.name]["rms_sim"] = o.rms_sim;
+    j["outputs"][o.name]["std"] = o.spread;
+  }
+  const Eigen::Index scored = v.time.size() - v.scored_from;
+  std::fprintf(table, "(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
+               static_cast<long long>(scored), static_cast<long long>(v.scored_from),
+               seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
+  j["scored_samples"] = {{"first", v.scored_from},
+                         {"count", scored},
+                         {"first_time_s", v.time(v.scored_from)},
+                         {"last_time_s", v.time(v.time.size() - 1)}};
+}
+
+// How the simulation started, in words (the ways differ when the log starts
+// unsettled), into `j` with the yaw drift it carried and where it departed.
+std::string describeSimulation(const DioPwlObfModel& model, const SimulationStart& s,
+                               const std::vector<SimulationDeparture>& departures, nlohmann::json& j) {
+  const bool registered = yawRegistrationSamples(model, s) > 0;
+  std::string start = model.output_level.empty() ? "first measured sample"
+                      : registered               ? "model output level, sensor yaw registered on the first " +
+                                         seconds(s.yaw_registration_s) + " s (not scored)"
+                                   : "model output level";
+  const double yaw_rate = carriedYawRate(model, s);
+  if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
+  j["simulation_start"] = start;
+  j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
+  j["simulation_departures"] = nlohmann::json::array();
+  for (const SimulationDeparture& d : departures)
+    j["simulation_departures"].push_back({{"output", d.output},
+                                          {"measured_low", d.measured_low},
+                                          {"measured_high", d.measured_high},
+                                          {"farthest", d.farthest},
+                                          {"share_of_width", d.share},
+                                          {"first_time_s", d.first_time_s}});
+  return start;
+}
+
 void runValidate(const ValidateArgs& a) {
   for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}})
     refuseOverwritingInputs(out, option, {a.model, a.log}, "plsa validate");
@@ -134,69 +196,17 @@ void runValidate(const ValidateArgs& a) {
   const std::vector<SimulationDeparture> departures = simulationDepartures(v);
   for (const std::string& w : simulationWarnings(departures))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
-  std::fprintf(table, "%-12s", "output");
-  for (int k : a.horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
-  std::fprintf(table, " %9s\n", "sim");
   nlohmann::json j;
-  for (const auto& o : v.outputs) {
-    std::fprintf(table, "%-12s", o.name.c_str());
-    for (int k : a.horizons) {
-      std::fprintf(table, " %9.2f", o.fit_k.at(k));
-      j["outputs"][o.name]["fit_k" + std::to_string(k)] = o.fit_k.at(k);
-    }
-    std::fprintf(table, " %9.2f\n", o.fit_sim);
-    j["outputs"][o.name]["fit_sim"] = o.fit_sim;
-  }
-  // The same errors in the outputs' units, beside the spread the fit divides by.
-  std::fprintf(table, "%-12s", "rms error");
-  for (int k : a.horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
-  std::fprintf(table, " %9s %12s\n", "sim", "measured std");
-  for (const auto& o : v.outputs) {
-    std::fprintf(table, "%-12s", o.name.c_str());
-    for (int k : a.horizons) {
-      std::fprintf(table, " %9.4g", o.rms_k.at(k));
-      j["outputs"][o.name]["rms_k" + std::to_string(k)] = o.rms_k.at(k);
-    }
-    std::fprintf(table, " %9.4g %12.4g\n", o.rms_sim, o.spread);
-    j["outputs"][o.name]["rms_sim"] = o.rms_sim;
-    j["outputs"][o.name]["std"] = o.spread;
-  }
-  const Eigen::Index scored = v.time.size() - v.scored_from;
-  std::fprintf(table, "(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
-               static_cast<long long>(scored), static_cast<long long>(v.scored_from),
-               seconds(v.time(v.scored_from)).c_str(), seconds(v.time(v.time.size() - 1)).c_str());
-  j["scored_samples"] = {{"first", v.scored_from},
-                         {"count", scored},
-                         {"first_time_s", v.time(v.scored_from)},
-                         {"last_time_s", v.time(v.time.size() - 1)}};
+  printFits(table, v, a.horizons, j);
   j["model"] = a.model;
   j["log"] = a.log;
   j["metric"] = "NRMSE fit %, 100 (1 - ||y - yhat|| / ||y - mean y||)";
   j["rms_metric"] =
       "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
       "deviation; every fit, rms and std over the same samples (scored_samples)";
-  // Say how the simulation started: the ways differ when the log starts unsettled.
-  const bool registered = yawRegistrationSamples(model, a.start) > 0;
-  std::string start = model.output_level.empty() ? "first measured sample"
-                      : registered               ? "model output level, sensor yaw registered on the first " +
-                                         seconds(a.start.yaw_registration_s) + " s (not scored)"
-                                   : "model output level";
-  const double yaw_rate = carriedYawRate(model, a.start);
-  if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
-  j["simulation_start"] = start;
-  j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
-  j["simulation_departures"] = nlohmann::json::array();
-  for (const SimulationDeparture& d : departures)
-    j["simulation_departures"].push_back({{"output", d.output},
-                                          {"measured_low", d.measured_low},
-                                          {"measured_high", d.measured_high},
-                                          {"farthest", d.farthest},
-                                          {"share_of_width", d.share},
-                                          {"first_time_s", d.first_time_s}});
+  const std::string start = describeSimulation(model, a.start, departures, j);
   std::fprintf(table, "(sim from the %s)\n", start.c_str());
-  if (!a.json.empty()) {
-    writeTextFile(a.json, j.dump(2) + "\n", "fits file");
-  }
+  if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
   if (!a.csv.empty()) io::writeCsvLog(a.csv, predictionLog(v));
 }
 
@@ -222,11 +232,8 @@ CLI::Validator secondsValidator(const std::string& example) {
       "SECONDS");
 }
 
-}  // namespace
-
-void addIdentifyCommands(CLI::App& app) {
-  auto a = std::make_shared<IdentifyArgs>();
-  CLI::App* id = app.add_subcommand("identify", "Identify a DIO-PWL-OBF model from logs (paper Table I)");
+// identify's training logs and their columns.
+void addTrainingLogOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option("--log", a->logs,
                  "Training log(s): CSV, or LCM event logs (known by their content, any name); repeat for more")
       ->required()
@@ -235,6 +242,10 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--inputs", a->inputs, "Input columns (chamber pressures)")->delimiter(',');
   id->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   id->add_option("--reference", a->reference, "Step reference columns (default cmd_* when present)")->delimiter(',');
+}
+
+// identify's local fits and pole clustering.
+void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option("--poles", a->options.poles_per_pair, "OBF poles per input-output pair")->check(CLI::Range(1, 20));
   id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")
       ->check(CLI::Range(1, 6));
@@ -246,6 +257,10 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_option("--levels", a->options.quantile_levels, "Levels per input when the logs have no staircase")
       ->check(CLI::Range(1, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
+}
+
+// identify's output frame and scheduling.
+void addFrameAndScheduling(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option_function<std::string>(
         "--output-frame",
         [a](const std::string& f) {
@@ -263,6 +278,10 @@ void addIdentifyCommands(CLI::App& app) {
             "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
             "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "
             "simulation)");
+}
+
+// identify's candidates for the input shaping, the schedule's lag and the slow pole.
+void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {
@@ -321,6 +340,10 @@ void addIdentifyCommands(CLI::App& app) {
                  "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
+}
+
+// identify's output drift, cross-validation layout and outlier check.
+void addDriftAndValidationOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   addChoice(id, "--output-drift", a->options.output_drift,
             "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
             "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
@@ -334,6 +357,16 @@ void addIdentifyCommands(CLI::App& app) {
   id->add_flag("!--keep-outliers", a->options.refuse_outliers,
                "Fit samples that lie more than 50 times the width of their column's 1-99% band from its median "
                "(by default such a glitch is an error naming its row)");
+}
+
+void addIdentifyCommand(CLI::App& app) {
+  auto a = std::make_shared<IdentifyArgs>();
+  CLI::App* id = app.add_subcommand("identify", "Identify a DIO-PWL-OBF model from logs (paper Table I)");
+  addTrainingLogOptions(id, a);
+  addPoleOptions(id, a);
+  addFrameAndScheduling(id, a);
+  addShapingCandidates(id, a);
+  addDriftAndValidationOptions(id, a);
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
   id->add_option("--structure", a->structure,
                  "plsa (the method with its extensions), paper (the paper's configuration: switched PWL, no play, "
@@ -342,7 +375,9 @@ void addIdentifyCommands(CLI::App& app) {
       ->capture_default_str();
   id->add_option("--out", a->out, "Model file (JSON)")->required();
   id->callback([a] { runIdentify(*a); });
+}
 
+void addValidateCommand(CLI::App& app) {
   auto v = std::make_shared<ValidateArgs>();
   CLI::App* va = app.add_subcommand("validate", "k-step-ahead and simulation NRMSE fits of a model on a log");
   va->add_option("--model", v->model, "Model file")->required()->check(CLI::ExistingFile);
@@ -367,6 +402,13 @@ void addIdentifyCommands(CLI::App& app) {
                "tip_cartesian models with a training_output_drift: simulate without the sensor yaw drift the training "
                "run showed (by default the simulation turns at that rate over the log)");
   va->callback([v] { runValidate(*v); });
+}
+
+}  // namespace
+
+void addIdentifyCommands(CLI::App& app) {
+  addIdentifyCommand(app);
+  addValidateCommand(app);
 }
 
 }  // namespace plsa::app

@@ -82,12 +82,17 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   saturating_coupling_ = config_.coupling.formulation == "saturating";
   two_rate_creep_ = config_.creep.formulation == "two_rate";
   random_walk_bias_ = config_.sensor_bias.formulation == "random_walk";
+  smooth_deadzone_ = config_.deadzone.formulation == "smooth";
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double dir = config_.geometry.bend_direction_deg[i] * kDeg;
+    bend_direction_[i] = {std::cos(dir), std::sin(dir)};
+  }
 }
 
 double Actuator::effectivePressure(double p) const {
   const auto& dz = config_.deadzone;
   if (!dz.enabled) return p;
-  if (dz.formulation == "smooth") {
+  if (smooth_deadzone_) {
     const double w = dz.smooth_width_bar;
     return w * (softplus((p - dz.threshold_bar) / w) - softplus(-dz.threshold_bar / w));
   }
@@ -168,8 +173,7 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
       }
     }
     // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
-    const double dir = c.geometry.bend_direction_deg[i] * kDeg;
-    target += lever * strain * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+    target += lever * strain * Eigen::Vector2d(bend_direction_[i][0], bend_direction_[i][1]);
   }
 
   double omega = 2.0 * kPi * c.bending.natural_freq_hz;

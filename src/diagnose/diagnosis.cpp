@@ -1,14 +1,12 @@
 #include "plsa/diagnose/diagnosis.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <functional>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
+
+#include "plsa/core/parallel_for.hpp"
 
 namespace plsa::diagnose {
 namespace {
@@ -169,28 +167,6 @@ void enableCandidate(sim::SimConfig& c, const std::string& effect, const Diagnos
   if (o.flexible_laws && !flexible.empty()) c.formulationOf(effect) = flexible;
 }
 
-// Runs work(0) .. work(count - 1) on `threads` threads (at least one), each
-// index once; rethrows the first exception any of them threw.
-void forEachInParallel(std::size_t count, int threads, const std::function<void(std::size_t)>& work) {
-  std::vector<std::thread> pool;
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  for (int t = 0; t < std::max(1, threads); ++t)
-    pool.emplace_back([&] {
-      for (std::size_t i = next++; i < count; i = next++) {
-        try {
-          work(i);
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(failure_mutex);
-          if (!failure) failure = std::current_exception();
-        }
-      }
-    });
-  for (auto& th : pool) th.join();
-  if (failure) std::rethrow_exception(failure);
-}
-
 // Starts for the nominal fit taken from the data: the static gain scaled by
 // regressing the measured bending on the simulated one, then a coarse grid
 // of bending frequency, damping and chamber time constant around it, ranked
@@ -243,9 +219,8 @@ CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::v
   std::vector<CalibrationResult> results(starts.size());
   CalibrationOptions quiet = nominal;
   quiet.progress = nullptr;
-  forEachInParallel(starts.size(), o.threads, [&](std::size_t i) {
-    results[i] = calibrate(starts[i], {"nominal"}, train, i == 0 ? nominal : quiet);
-  });
+  parallelFor(starts.size(), o.threads,
+              [&](std::size_t i) { results[i] = calibrate(starts[i], {"nominal"}, train, i == 0 ? nominal : quiet); });
   CalibrationResult best = results[0];
   for (const auto& r : results) {
     spent += r.evaluations;
@@ -507,7 +482,7 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   const int screen = round == 1 ? o.screen_evaluations : 0;
   std::vector<CandidateTrial> trials(remaining.size());
   Gap null_gap = s.heldout;
-  forEachInParallel(remaining.size() + 1, o.threads, [&](std::size_t i) {  // the last index: the bar
+  parallelFor(remaining.size() + 1, o.threads, [&](std::size_t i) {  // the last index: the bar
     if (i == remaining.size())
       null_gap = recalibratedWithNothingAdded(s, selected, remaining, screen, x);
     else

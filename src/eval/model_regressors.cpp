@@ -5,10 +5,9 @@
 
 #include <algorithm>
 #include <exception>
-#include <functional>
 #include <limits>
-#include <thread>
 
+#include "plsa/core/parallel_for.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
 namespace plsa {
@@ -156,26 +155,6 @@ void markLiveTiles(const Eigen::MatrixXd& phi, int copies, Eigen::Array<bool, Ei
                        .any();
 }
 
-// work(0) .. work(count - 1), one thread each when the record is long enough
-// to pay for them; rethrows the first failure.
-void forEachOutput(std::size_t count, Eigen::Index T, const std::function<void(std::size_t)>& work) {
-  std::vector<std::exception_ptr> failed(count);
-  auto guarded = [&](std::size_t o) {
-    try {
-      work(o);
-    } catch (...) {
-      failed[o] = std::current_exception();
-    }
-  };
-  std::vector<std::thread> workers;
-  const bool threaded = T >= 2048;  // below that a thread costs more than it saves
-  for (std::size_t o = 1; o < count && threaded; ++o) workers.emplace_back(guarded, o);
-  for (std::size_t o = 0; o < (threaded ? 1 : count); ++o) guarded(o);
-  for (std::thread& t : workers) t.join();
-  for (const std::exception_ptr& e : failed)
-    if (e) std::rethrow_exception(e);
-}
-
 void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   PLSA_CHECK(!model.poles.empty(), "modelRegressors: no outputs");
   PLSA_CHECK(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
@@ -190,8 +169,10 @@ void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eig
   out.level0.resize(input_side ? outputs : 0);
   out.live.resize(input_side ? outputs : 0);
   Eigen::RowVectorXd unused;  // the output side has no level0
-  // The outputs' regressors are independent: one thread each.
-  forEachOutput(outputs, u.rows(), [&](std::size_t o) {
+  // The outputs' regressors are independent: one thread each, when the
+  // record is long enough to pay for them.
+  const bool threaded = u.rows() >= 2048;
+  parallelFor(outputs, threaded ? static_cast<int>(outputs) : 1, [&](std::size_t o) {
     filler.fill(model.poles[o], input_side, out.phi[o], input_side ? out.level0[o] : unused);
     if (input_side) markLiveTiles(out.phi[o], filler.copies, out.live[o]);
   });

@@ -2,8 +2,8 @@
 
 #include <climits>
 #include <cmath>
-#include <exception>
-#include <thread>
+
+#include "plsa/core/parallel_for.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -57,95 +57,87 @@ CoefficientSums::Group emptyGroup(const DioPwlObfModel& model) {
   return g;
 }
 
-// One record's terms into the sums: sample k joins group(k) (group 0 when
-// `group` is null), times its weight (1 when `w` is null).
-void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
-                const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
-  const int ny = model.outputCount();
-  const Eigen::Index T = Y.rows();
-  const bool input_side = model.schedule_side == ScheduleSide::kInput;
-  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
-  auto weightOf = [&](Eigen::Index k) { return w ? (*w)(k) : 1.0; };
-  auto groupOf = [&](Eigen::Index k) { return group ? (*group)(k) : 0; };
+// Sample k's record: its weight (1 when `w` is null) and group (0 when `group` is null).
+struct RecordWeights {
+  const Eigen::VectorXd* w;
+  const Eigen::VectorXi* group;
+  double weightOf(Eigen::Index k) const { return w ? (*w)(k) : 1.0; }
+  int groupOf(Eigen::Index k) const { return group ? (*group)(k) : 0; }
+};
+
+// Each group's weighted sample count per region.
+void countRegions(const ModelRegressors& reg, Eigen::Index T, const RecordWeights& rw, CoefficientSums& sums) {
   for (Eigen::Index k = 1; k < T; ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-    std::vector<double>& count = sums.groups[static_cast<std::size_t>(groupOf(k))].count;
+    std::vector<double>& count = sums.groups[static_cast<std::size_t>(rw.groupOf(k))].count;
     for (int m = 0; m < b.count; ++m)
       count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] +=
-          weightOf(k) * b.weight[static_cast<std::size_t>(m)];
+          rw.weightOf(k) * b.weight[static_cast<std::size_t>(m)];
   }
-  if (input_side) {
-    // Every node's regressors side by side: one dense least-squares problem,
-    // the largest cost of identification. Over a tile of samples most nodes'
-    // regressors are negligible (ModelRegressors::live): each run of samples
-    // in one tile and group adds the Gram matrix of its live nodes' blocks,
-    // which changes no sum beyond rounding and cuts the work about twentyfold
-    // on a grid experiment. The outputs' problems are independent: one thread each.
-    const Eigen::Index tile = ModelRegressors::kTileRows;
-    auto terms = [&](int out) {
-      const auto oo = static_cast<std::size_t>(out);
-      const Eigen::MatrixXd& phi = reg.phi[oo];
-      const Eigen::Index width = model.regressorSize(out);
-      const auto nodes = static_cast<int>(phi.cols() / width);
-      std::vector<int> active;
-      Eigen::MatrixXd P, G;
-      Eigen::VectorXd dy, h;
-      for (Eigen::Index a = 1; a < T;) {
-        Eigen::Index e = a + 1;
-        while (e < T && e % tile != 0 && groupOf(e) == groupOf(a)) ++e;
-        const Eigen::Index len = e - a;
-        active.clear();
-        for (int node = 0; node < nodes; ++node)
-          if (reg.live.empty() || reg.live[oo](a / tile, node)) active.push_back(node);
-        if (!active.empty()) {
-          const auto m = static_cast<Eigen::Index>(active.size()) * width;
-          P.resize(len, m);
-          for (std::size_t i = 0; i < active.size(); ++i)
-            P.middleCols(static_cast<Eigen::Index>(i) * width, width) = phi.block(a, active[i] * width, len, width);
-          dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
-          if (w) {
-            const Eigen::VectorXd root = w->segment(a, len).cwiseSqrt();
-            P = root.asDiagonal() * P;
-            dy.array() *= root.array();
-          }
-          G.setZero(m, m);
-          G.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
-          h.noalias() = P.transpose() * dy;
-          CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(a))];
-          // Active nodes ascend, so block (i, j), i >= j, lands in J's lower triangle.
-          for (std::size_t i = 0; i < active.size(); ++i) {
-            const Eigen::Index gi = static_cast<Eigen::Index>(i) * width, ji = active[i] * width;
-            g.Jh[oo].segment(ji, width) += h.segment(gi, width);
-            for (std::size_t j = 0; j <= i; ++j)
-              g.J[oo].block(ji, active[j] * width, width, width) +=
-                  G.block(gi, static_cast<Eigen::Index>(j) * width, width, width);
-          }
-        }
-        a = e;
+}
+
+// Input side, one output: every node's regressors side by side, one dense
+// least-squares problem, the largest cost of identification. Over a tile of
+// samples most nodes' regressors are negligible (ModelRegressors::live):
+// each run of samples in one tile and group adds the Gram matrix of its live
+// nodes' blocks, which changes no sum beyond rounding and cuts the work about
+// twentyfold on a grid experiment.
+void accumulateInputSide(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+                         const RecordWeights& rw, int out, CoefficientSums& sums) {
+  const Eigen::Index T = Y.rows(), tile = ModelRegressors::kTileRows;
+  const auto oo = static_cast<std::size_t>(out);
+  const Eigen::MatrixXd& phi = reg.phi[oo];
+  const Eigen::Index width = model.regressorSize(out);
+  const auto nodes = static_cast<int>(phi.cols() / width);
+  std::vector<int> active;
+  Eigen::MatrixXd P, G;
+  Eigen::VectorXd dy, h;
+  for (Eigen::Index a = 1; a < T;) {
+    Eigen::Index e = a + 1;
+    while (e < T && e % tile != 0 && rw.groupOf(e) == rw.groupOf(a)) ++e;
+    const Eigen::Index len = e - a;
+    active.clear();
+    for (int node = 0; node < nodes; ++node)
+      if (reg.live.empty() || reg.live[oo](a / tile, node)) active.push_back(node);
+    if (!active.empty()) {
+      const auto m = static_cast<Eigen::Index>(active.size()) * width;
+      P.resize(len, m);
+      for (std::size_t i = 0; i < active.size(); ++i)
+        P.middleCols(static_cast<Eigen::Index>(i) * width, width) = phi.block(a, active[i] * width, len, width);
+      dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
+      if (rw.w) {
+        const Eigen::VectorXd root = rw.w->segment(a, len).cwiseSqrt();
+        P = root.asDiagonal() * P;
+        dy.array() *= root.array();
       }
-    };
-    std::vector<std::exception_ptr> failed(static_cast<std::size_t>(ny));
-    auto guarded = [&](int out) {
-      try {
-        terms(out);
-      } catch (...) {
-        failed[static_cast<std::size_t>(out)] = std::current_exception();
+      G.setZero(m, m);
+      G.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
+      h.noalias() = P.transpose() * dy;
+      CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(rw.groupOf(a))];
+      // Active nodes ascend, so block (i, j), i >= j, lands in J's lower triangle.
+      for (std::size_t i = 0; i < active.size(); ++i) {
+        const Eigen::Index gi = static_cast<Eigen::Index>(i) * width, ji = active[i] * width;
+        g.Jh[oo].segment(ji, width) += h.segment(gi, width);
+        for (std::size_t j = 0; j <= i; ++j)
+          g.J[oo].block(ji, active[j] * width, width, width) +=
+              G.block(gi, static_cast<Eigen::Index>(j) * width, width, width);
       }
-    };
-    std::vector<std::thread> workers;
-    for (int out = 1; out < ny; ++out) workers.emplace_back(guarded, out);
-    if (ny > 0) guarded(0);
-    for (std::thread& t : workers) t.join();
-    for (const std::exception_ptr& e : failed)
-      if (e) std::rethrow_exception(e);
-    return;
+    }
+    a = e;
   }
-  for (Eigen::Index k = 1; k < T; ++k) {
-    const double wk = weightOf(k);
+}
+
+// Output side: each sample's outer product into the regions its schedule
+// blends (and, interpolated, the joint problem's blocks).
+void accumulateOutputSide(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+                          const RecordWeights& rw, CoefficientSums& sums) {
+  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated;
+  for (Eigen::Index k = 1; k < Y.rows(); ++k) {
+    const double wk = rw.weightOf(k);
     if (wk == 0.0) continue;
-    CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(groupOf(k))];
+    CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(rw.groupOf(k))];
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
-    for (int out = 0; out < ny; ++out) {
+    for (int out = 0; out < model.outputCount(); ++out) {
       const auto oo = static_cast<std::size_t>(out);
       const auto phi = reg.phi[oo].row(k).transpose();
       const double dy = Y(k, out) - Y(k - 1, out);
@@ -166,6 +158,19 @@ void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const E
       }
     }
   }
+}
+
+// One record's terms into the sums: sample k joins group(k) (group 0 when
+// `group` is null), times its weight (1 when `w` is null).
+void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+                const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
+  const RecordWeights rw{w, group};
+  countRegions(reg, Y.rows(), rw, sums);
+  if (model.schedule_side != ScheduleSide::kInput) return accumulateOutputSide(model, reg, Y, rw, sums);
+  // The outputs' problems are independent: one thread each.
+  const auto ny = static_cast<std::size_t>(model.outputCount());
+  parallelFor(ny, static_cast<int>(ny),
+              [&](std::size_t out) { accumulateInputSide(model, reg, Y, rw, static_cast<int>(out), sums); });
 }
 
 // A record's outputs (model frame) against the model and its sample count.
@@ -215,17 +220,13 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   return solveCoefficients(model, sums, -1, o);
 }
 
-CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
-                                       const CoefficientFitOptions& o) {
-  PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
-             "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
-  const int R = model.partition.regionCount();
-  const int ny = model.outputCount();
-  const bool input_side = model.schedule_side == ScheduleSide::kInput;
-  const bool joint = model.partition.scheduling() == Scheduling::kInterpolated || input_side;
-  PLSA_CHECK(
-      static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
-      "solveCoefficients: the sums were made for another model structure");
+namespace {
+
+// Every group's sums but `leave_out`'s (-1: none left out); on the input side
+// the per-node blocks G and h read off the joint problem's diagonal.
+CoefficientSums::Group summedGroups(const DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
+                                    bool joint) {
+  const int R = model.partition.regionCount(), ny = model.outputCount();
   CoefficientSums::Group total = emptyGroup(model);
   for (std::size_t gi = 0; gi < sums.groups.size(); ++gi) {
     if (static_cast<int>(gi) == leave_out) continue;
@@ -243,79 +244,97 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
     }
     for (int l = 0; l < R; ++l) total.count[static_cast<std::size_t>(l)] += g.count[static_cast<std::size_t>(l)];
   }
-  model.output_level.clear();  // it belongs to the old coefficients
-  auto& G = total.G;
-  auto& h = total.h;
-  auto& J = total.J;
-  auto& Jh = total.Jh;
-  const std::vector<double>& count = total.count;
-  if (input_side)
-    for (int out = 0; out < ny; ++out) {
-      const auto oo = static_cast<std::size_t>(out);
-      const int n = model.regressorSize(out);
-      J[oo] = Eigen::MatrixXd(J[oo].selfadjointView<Eigen::Lower>());
-      G[oo].resize(static_cast<std::size_t>(R));
-      h[oo].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
-      for (int l = 0; l < R; ++l) {
-        G[oo][static_cast<std::size_t>(l)] = J[oo].block(l * n, l * n, n, n);
-        h[oo][static_cast<std::size_t>(l)] = Jh[oo].segment(l * n, n);
-      }
+  if (model.schedule_side != ScheduleSide::kInput) return total;
+  for (int out = 0; out < ny; ++out) {
+    const auto oo = static_cast<std::size_t>(out);
+    const int n = model.regressorSize(out);
+    total.J[oo] = Eigen::MatrixXd(total.J[oo].selfadjointView<Eigen::Lower>());
+    total.G[oo].resize(static_cast<std::size_t>(R));
+    total.h[oo].assign(static_cast<std::size_t>(R), Eigen::VectorXd::Zero(n));
+    for (int l = 0; l < R; ++l) {
+      total.G[oo][static_cast<std::size_t>(l)] = total.J[oo].block(l * n, l * n, n, n);
+      total.h[oo][static_cast<std::size_t>(l)] = total.Jh[oo].segment(l * n, n);
     }
-  model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
-  model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
+  }
+  return total;
+}
+
+// Which regions have the samples for a fit of their own; records each
+// region's sample count in the model.
+std::vector<bool> regionsWithOwnFit(DioPwlObfModel& model, const std::vector<double>& count,
+                                    const CoefficientFitOptions& o) {
+  const int R = model.partition.regionCount();
   std::vector<bool> own(static_cast<std::size_t>(R), false);
   int max_params = 0;
-  for (int out = 0; out < ny; ++out) max_params = std::max(max_params, model.regressorSize(out));
+  for (int out = 0; out < model.outputCount(); ++out) max_params = std::max(max_params, model.regressorSize(out));
   for (int l = 0; l < R; ++l) {
     own[static_cast<std::size_t>(l)] = count[static_cast<std::size_t>(l)] >= o.min_samples_per_parameter * max_params;
     model.region_fits[static_cast<std::size_t>(l)].samples =
         static_cast<int>(std::lround(count[static_cast<std::size_t>(l)]));
   }
-  std::vector<Eigen::VectorXd> global(static_cast<std::size_t>(ny));
-  for (int out = 0; out < ny; ++out) {
-    const auto oo = static_cast<std::size_t>(out);
-    const int n = model.regressorSize(out);
-    Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(n, n);
-    Eigen::VectorXd hs = Eigen::VectorXd::Zero(n);
-    for (int l = 0; l < R; ++l) {
-      Gs += G[oo][static_cast<std::size_t>(l)];
-      hs += h[oo][static_cast<std::size_t>(l)];
-    }
-    PLSA_CHECK(Gs.trace() > 0, "fitCoefficients: the inputs never move, nothing to fit");
-    const double scale = Gs.trace() / n;
-    Gs.diagonal().array() += o.ridge * scale;
-    if (!joint) {
-      global[oo] = Gs.ldlt().solve(hs);
-    } else {
-      // The global solution of the blended model is the one with all nodes equal.
-      Eigen::MatrixXd Gsum = Eigen::MatrixXd::Zero(n, n);
-      for (int a = 0; a < R; ++a)
-        for (int c = 0; c < R; ++c) Gsum += J[oo].block(a * n, c * n, n, n);
-      Eigen::VectorXd hsum = Eigen::VectorXd::Zero(n);
-      for (int a = 0; a < R; ++a) hsum += Jh[oo].segment(a * n, n);
-      Gsum.diagonal().array() += o.ridge * scale;
-      global[oo] = Gsum.ldlt().solve(hsum);
-    }
-    if (joint) {
-      for (int l = 0; l < R; ++l) {
-        const double sl = std::max(G[oo][static_cast<std::size_t>(l)].trace() / n, 1e-12 * scale);
-        const double w = o.pull_to_global * (own[static_cast<std::size_t>(l)] ? sl : scale);
-        J[oo].block(l * n, l * n, n, n).diagonal().array() += w;
-        Jh[oo].segment(l * n, n) += w * global[oo];
-      }
-      const Eigen::VectorXd c = J[oo].ldlt().solve(Jh[oo]);
-      for (int l = 0; l < R; ++l) model.coefficients[static_cast<std::size_t>(l)][oo] = c.segment(l * n, n);
-      continue;
-    }
-    for (int l = 0; l < R; ++l) {
-      const auto ll = static_cast<std::size_t>(l);
-      if (!own[ll]) continue;
-      Eigen::MatrixXd Gl = G[oo][ll];
-      const double s = std::max(Gl.trace() / n, 1e-12 * scale);
-      Gl.diagonal().array() += o.pull_to_global * s;
-      model.coefficients[ll][oo] = Gl.ldlt().solve(h[oo][ll] + o.pull_to_global * s * global[oo]);
-    }
+  return own;
+}
+
+// One output's coefficients in every region with its own fit, each pulled
+// toward the global solution (the blended model's: all nodes equal, when
+// joint); returns the global solution, which regions without a fit fall back on.
+Eigen::VectorXd solveOutput(DioPwlObfModel& model, CoefficientSums::Group& total, int out, bool joint,
+                            const std::vector<bool>& own, const CoefficientFitOptions& o) {
+  const int R = model.partition.regionCount();
+  const auto oo = static_cast<std::size_t>(out);
+  const int n = model.regressorSize(out);
+  const auto& G = total.G[oo];
+  const auto& h = total.h[oo];
+  Eigen::MatrixXd& J = total.J[oo];
+  Eigen::VectorXd& Jh = total.Jh[oo];
+  Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd hs = Eigen::VectorXd::Zero(n);
+  for (int l = 0; l < R; ++l) {
+    Gs += G[static_cast<std::size_t>(l)];
+    hs += h[static_cast<std::size_t>(l)];
   }
+  PLSA_CHECK(Gs.trace() > 0, "fitCoefficients: the inputs never move, nothing to fit");
+  const double scale = Gs.trace() / n;
+  Gs.diagonal().array() += o.ridge * scale;
+  Eigen::VectorXd global;
+  if (!joint) {
+    global = Gs.ldlt().solve(hs);
+  } else {
+    Eigen::MatrixXd Gsum = Eigen::MatrixXd::Zero(n, n);
+    for (int a = 0; a < R; ++a)
+      for (int c = 0; c < R; ++c) Gsum += J.block(a * n, c * n, n, n);
+    Eigen::VectorXd hsum = Eigen::VectorXd::Zero(n);
+    for (int a = 0; a < R; ++a) hsum += Jh.segment(a * n, n);
+    Gsum.diagonal().array() += o.ridge * scale;
+    global = Gsum.ldlt().solve(hsum);
+  }
+  if (joint) {
+    for (int l = 0; l < R; ++l) {
+      const double sl = std::max(G[static_cast<std::size_t>(l)].trace() / n, 1e-12 * scale);
+      const double w = o.pull_to_global * (own[static_cast<std::size_t>(l)] ? sl : scale);
+      J.block(l * n, l * n, n, n).diagonal().array() += w;
+      Jh.segment(l * n, n) += w * global;
+    }
+    const Eigen::VectorXd c = J.ldlt().solve(Jh);
+    for (int l = 0; l < R; ++l) model.coefficients[static_cast<std::size_t>(l)][oo] = c.segment(l * n, n);
+    return global;
+  }
+  for (int l = 0; l < R; ++l) {
+    const auto ll = static_cast<std::size_t>(l);
+    if (!own[ll]) continue;
+    Eigen::MatrixXd Gl = G[ll];
+    const double sl = std::max(Gl.trace() / n, 1e-12 * scale);
+    Gl.diagonal().array() += o.pull_to_global * sl;
+    model.coefficients[ll][oo] = Gl.ldlt().solve(h[ll] + o.pull_to_global * sl * global);
+  }
+  return global;
+}
+
+// Regions without a fit of their own take the mean of their nearest fitted
+// regions' coefficients, or the global ones when none is fitted; each says so.
+CoefficientFitReport fallBack(DioPwlObfModel& model, const std::vector<bool>& own,
+                              const std::vector<Eigen::VectorXd>& global) {
+  const int R = model.partition.regionCount(), ny = model.outputCount();
   CoefficientFitReport report;
   for (int l = 0; l < R; ++l) {
     const auto ll = static_cast<std::size_t>(l);
@@ -355,6 +374,30 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
     report.notes.push_back("region " + std::to_string(l) + " (" + where + "): " + fit.note);
   }
   return report;
+}
+
+}  // namespace
+
+CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
+                                       const CoefficientFitOptions& o) {
+  PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
+             "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
+  const int R = model.partition.regionCount();
+  const int ny = model.outputCount();
+  const bool joint =
+      model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
+  PLSA_CHECK(
+      static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
+      "solveCoefficients: the sums were made for another model structure");
+  CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
+  model.output_level.clear();  // it belongs to the old coefficients
+  model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
+  model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
+  const std::vector<bool> own = regionsWithOwnFit(model, total.count, o);
+  std::vector<Eigen::VectorXd> global(static_cast<std::size_t>(ny));
+  for (int out = 0; out < ny; ++out)
+    global[static_cast<std::size_t>(out)] = solveOutput(model, total, out, joint, own, o);
+  return fallBack(model, own, global);
 }
 
 void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,

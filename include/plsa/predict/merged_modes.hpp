@@ -15,6 +15,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/check.hpp"
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
 
@@ -142,6 +143,7 @@ struct PlannedSchedule {
   template <int G>
   PLSA_ALWAYS_INLINE void corners(int base, const double* t, ScheduleBlend& out) const noexcept {
     const int g = G > 0 ? G : grid_inputs;
+    PLSA_DEBUG_ASSERT(g <= kMaxGridInputs && (G == 0 || G == grid_inputs));
     out.count = 1 << g;
     for (int k = 0; k < (1 << g); ++k) {
       int region = base;
@@ -178,6 +180,8 @@ PLSA_ALWAYS_INLINE void levelsOfInput(const CompiledModel& m, int j, const Sched
   const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
   const double* table = f.by_copy[static_cast<std::size_t>(j)].data();
   const std::ptrdiff_t node_rows = static_cast<std::ptrdiff_t>(channels) * count * 4;  // one node's rows
+  PLSA_DEBUG_ASSERT((B == 0 || B == f.block) && f.block % 4 == 0 && f.block <= kMaxBlock);
+  PLSA_DEBUG_ASSERT(blend.count >= 1 && blend.count <= (1 << kMaxGridInputs));
   Quad acc[B > 0 ? B / 4 : kMaxBlock / 4];
   for (int i = 0; i < count; ++i) acc[i] = Quad{0.0, 0.0, 0.0, 0.0};
   if (channels == 1) {  // the usual input: one channel, a row per node
@@ -294,6 +298,7 @@ PLSA_ALWAYS_INLINE void runPlanned(const CompiledModel& m, PlannedSchedule& sche
                                    double* out, Eigen::Index ldo, double* y_end) noexcept {
   const ModalForm& f = m.modal_form;
   const int block = B > 0 ? B : f.block, nu = m.n_u, ny = m.n_y;
+  PLSA_DEBUG_ASSERT(fits(m) && (B == 0 || B == f.block) && horizon >= 1 && plan_rows >= 0);
   alignas(32) double own_zeta[kMaxInputs * (B > 0 ? B : 1)];
   alignas(32) double own_level[kMaxInputs * (B > 0 ? B : 1)];
   alignas(32) double totals[kChunk * (B > 0 ? B : kMaxBlock)];

@@ -12,6 +12,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/check.hpp"
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
 #include "plsa/predict/predictor_options.hpp"
@@ -95,6 +96,7 @@ class PlanSensitivity {
                    const Eigen::VectorXd& vc_now) noexcept {
     const Eigen::Index steps = plan.rows(), channels = static_cast<Eigen::Index>(m.play.size());
     const int nu = m.n_u;  // at most kMaxSensitivityInputs (sensitivity() checks)
+    PLSA_DEBUG_ASSERT(nu <= kMaxSensitivityInputs && plan.cols() == nu && vc_now.size() == channels);
     const InputShaping& shaping = m.shaping;
     vc_ = vc_now;
     double* vc = vc_.data();

@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/check.hpp"
 #include "plsa/model/output_frame.hpp"
 #include "plsa/predict/kernels.hpp"
 
@@ -17,6 +18,7 @@ namespace plsa {
 /// atan2: a large turn, or a straight tip (no direction: it keeps the
 /// steering it had).
 inline void tipAnglesRowByRow(int horizon, double reference, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+  PLSA_DEBUG_ASSERT(out.cols() == 2 && out.rows() >= horizon);
   double steer = reference;
   double px = std::cos(steer * kRadPerDeg), py = std::sin(steer * kRadPerDeg);
   for (int h = 0; h < horizon; ++h) {
@@ -38,6 +40,7 @@ inline void tipAnglesRowByRow(int horizon, double reference, Eigen::Ref<Eigen::M
 /// (horizon each); otherwise the rows go through tipAnglesRowByRow.
 inline void tipAnglesFromComponents(int horizon, double reference, double* turn, double* bend,
                                     Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+  PLSA_DEBUG_ASSERT(out.cols() == 2 && out.rows() >= horizon && turn != nullptr && bend != nullptr);
   if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, std::cos(reference * kRadPerDeg),
                 std::sin(reference * kRadPerDeg), turn, bend))
     return tipAnglesRowByRow(horizon, reference, out);

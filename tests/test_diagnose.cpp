@@ -15,18 +15,13 @@
 
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
+#include "support/sim_probes.hpp"
 
 using namespace plsa;
 using namespace plsa::diagnose;
 namespace fs = std::filesystem;
 
 namespace {
-
-sim::SimConfig allOff() {
-  sim::SimConfig c;
-  for (const auto& e : sim::effectNames()) c.setEffectEnabled(e, false);
-  return c;
-}
 
 RunData recorded(const sim::SimConfig& truth, double seconds, std::uint64_t seed) {
   RunData r;
@@ -51,7 +46,7 @@ DiagnoseOptions quick() {
 }  // namespace
 
 TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) {
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.sensor.noise_deg = 0.0;
   const RunData clean = recorded(truth, 20, 3);
   EXPECT_LT(measureGap(truth, {clean}, {}).total, 1e-12);
@@ -71,7 +66,7 @@ TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) 
 }
 
 TEST(Diagnose, CalibrationRecoversPerturbedNominalPhysics) {
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   const RunData run = recorded(truth, 30, 4);
   sim::SimConfig start = truth;
   start.bending.natural_freq_hz *= 1.3;
@@ -116,15 +111,18 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   RunColumns c;
   c.outputs = {"bend_deg"};
   EXPECT_NE(errorOf(log, c).find("exactly 2 output columns"), std::string::npos);
-  EXPECT_THROW(runDiagnosis(allOff(), {}, quick()), std::invalid_argument);
+  EXPECT_THROW(runDiagnosis(sim::probes::everyEffectOff(), {}, quick()), std::invalid_argument);
   DiagnoseOptions o = quick();
   o.candidates = {"friction"};
-  EXPECT_THROW(runDiagnosis(allOff(), {recorded(allOff(), 20, 1)}, o), std::invalid_argument);
+  EXPECT_THROW(runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o),
+               std::invalid_argument);
   // One run twice, even under two names, would be its own held-out check.
-  RunData copy = recorded(allOff(), 20, 1);
+  RunData copy = recorded(sim::probes::everyEffectOff(), 20, 1);
   copy.name = "copy_of_run1";
   try {
-    runDiagnosis(allOff(), {recorded(allOff(), 20, 1), recorded(allOff(), 30, 2), copy}, quick());
+    runDiagnosis(sim::probes::everyEffectOff(),
+                 {recorded(sim::probes::everyEffectOff(), 20, 1), recorded(sim::probes::everyEffectOff(), 30, 2), copy},
+                 quick());
     ADD_FAILURE() << "a repeated run was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("'run1' and 'copy_of_run1' hold the same samples"), std::string::npos)
@@ -133,13 +131,14 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
 }
 
 TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.deadzone.enabled = true;
   truth.deadzone.threshold_bar = 0.08;
   truth.bending.natural_freq_hz *= 1.1;  // and a plain parameter mismatch the calibration must absorb
   DiagnoseOptions o = quick();
   o.identified_reference = true;
-  const Diagnosis d = runDiagnosis(allOff(), {recorded(truth, 40, 11), recorded(truth, 30, 12)}, o);
+  const Diagnosis d =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 11), recorded(truth, 30, 12)}, o);
   ASSERT_FALSE(d.ranking.empty());
   EXPECT_EQ(d.ranking[0].effect, "deadzone");
   ASSERT_FALSE(d.selected.empty());
@@ -233,10 +232,11 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
 }
 
 TEST(Diagnose, NullCaseClaimsNothing) {
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.elongation.strain_per_bar *= 0.9;
   truth.pneumatics.time_constant_s *= 1.2;
-  const Diagnosis d = runDiagnosis(allOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, quick());
+  const Diagnosis d =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, quick());
   EXPECT_TRUE(d.selected.empty()) << d.verdict;
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
   EXPECT_EQ(d.confidence, "none");
@@ -249,7 +249,7 @@ TEST(Diagnose, NullCaseClaimsNothing) {
 // orientation, which the screening stage picks (ranking the spread points
 // by their raw gap instead ends at a 38% shrink here).
 TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.setEffectEnabled("hysteresis", true);
   auto& h = truth.hysteresis;
   h.formulation = "weighted_pi";
@@ -258,7 +258,8 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
   h.fixed_band_share = 0.6;
   DiagnoseOptions o = quick();
   o.candidates = {"hysteresis"};
-  const Diagnosis d = runDiagnosis(allOff(), {recorded(truth, 40, 41), recorded(truth, 30, 42)}, o);
+  const Diagnosis d =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 41), recorded(truth, 30, 42)}, o);
   ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
   ASSERT_FALSE(d.ranking.empty());
   EXPECT_GT(d.ranking[0].shrink_percent, 50.0) << d.verdict;
@@ -271,7 +272,7 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
 TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
   // A periodic wobble of the steering output that no candidate makes and
   // the nominal physics cannot absorb.
-  sim::SimConfig truth = allOff();
+  sim::SimConfig truth = sim::probes::everyEffectOff();
   std::vector<RunData> runs = {recorded(truth, 20, 31), recorded(truth, 15, 32)};
   for (auto& r : runs)
     for (Eigen::Index i = 0; i < r.samples(); ++i) {
@@ -280,68 +281,10 @@ TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
     }
   DiagnoseOptions o = quick();
   o.candidates = {"creep"};
-  const Diagnosis d = runDiagnosis(allOff(), runs, o);
+  const Diagnosis d = runDiagnosis(sim::probes::everyEffectOff(), runs, o);
   EXPECT_GT(d.gap_after.percent(), 3.0 * d.noise.percent());
   if (d.selected.empty())
     EXPECT_NE(d.verdict.find("misses something no candidate models"), std::string::npos) << d.verdict;
   else
     EXPECT_EQ(d.confidence, "qualified") << d.verdict;
-}
-
-namespace {
-
-// A settled recording whose first command puts `first_bar` in chamber 1.
-RunData startingAt(const sim::SimConfig& truth, double first_bar, std::uint64_t seed) {
-  RunData r;
-  r.name = "run" + std::to_string(seed);
-  r.sample_time_s = 1.0 / truth.sample_rate_hz;
-  r.commands = excitationCommands(10, truth.sample_rate_hz, seed);
-  r.commands.topRows(80).setZero();
-  r.commands.topRows(80).col(0).setConstant(first_bar);
-  const SimTrace t = replayCommands(truth, r.commands, seed);
-  r.outputs = t.outputs;
-  r.pressures = t.pressures;
-  r.start = RunStart::kSettled;
-  return r;
-}
-
-}  // namespace
-
-TEST(RunStartDetection, TellsARecordingFromRestFromASettledOne) {
-  sim::SimConfig truth = allOff();
-  RunData settled = startingAt(truth, 0.25, 5);
-  settled.start = RunStart::kAuto;
-  EXPECT_EQ(detectRunStart(settled, OutputMap::kAngles), RunStart::kSettled);
-  RunData rest = settled;
-  const SimTrace t = replayCommands(truth, rest.commands, 5, 0.0);  // no pre-roll: from rest
-  rest.outputs = t.outputs;
-  rest.pressures = t.pressures;
-  EXPECT_EQ(detectRunStart(rest, OutputMap::kAngles), RunStart::kAtRest);
-  // Without pressures the bending tells; with affine outputs nothing does: at rest, as users record.
-  RunData no_p = settled;
-  no_p.pressures.resize(0, 0);
-  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAngles), RunStart::kSettled);
-  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAffine), RunStart::kAtRest);
-  no_p.outputs = rest.outputs;
-  EXPECT_EQ(detectRunStart(no_p, OutputMap::kAngles), RunStart::kAtRest);
-  // A chamber a third of the way up after the first sample period is filling, not settled.
-  RunData filling = rest;
-  filling.pressures(0, 0) = 0.34 * filling.commands(0, 0);
-  EXPECT_EQ(detectRunStart(filling, OutputMap::kAngles), RunStart::kAtRest);
-  // A zero first command is a start at rest whatever follows.
-  RunData zero = settled;
-  zero.commands.row(0).setZero();
-  EXPECT_EQ(detectRunStart(zero, OutputMap::kAngles), RunStart::kAtRest);
-}
-
-TEST(RunStartDetection, TheSimulatorReplaysEachStartItsOwnWay) {
-  sim::SimConfig truth = allOff();
-  truth.sensor.noise_deg = 0.0;
-  RunData run = startingAt(truth, 0.25, 6);
-  run.start = RunStart::kSettled;
-  const double settled_gap = measureGap(truth, {run}, GapOptions{}).total;
-  run.start = RunStart::kAtRest;  // replayed from rest: the first second differs
-  const double rest_gap = measureGap(truth, {run}, GapOptions{}).total;
-  EXPECT_LT(settled_gap, 1e-6);
-  EXPECT_GT(rest_gap, 100 * settled_gap + 1e-4);
 }

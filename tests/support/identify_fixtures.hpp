@@ -1,6 +1,6 @@
 // Fixtures shared by the identification tests, one file per unit
-// (test_pwl_partition, test_local_fits, test_coefficient_fit,
-// test_model_file, test_model_values, test_validation, test_identify): a
+// (test_pwl_partition, test_coefficient_fit, test_model_file,
+// test_model_values, test_output_drift, test_validation, test_identify): a
 // model with known coefficients, the simulator's runs, and checks.
 #pragma once
 

@@ -14,9 +14,16 @@
 
 namespace plsa::sim::probes {
 
-inline SimConfig allOff() {
+/// Every effect switched off; the sensor's noise as configured.
+inline SimConfig everyEffectOff() {
   SimConfig c;
   for (const auto& e : effectNames()) c.setEffectEnabled(e, false);
+  return c;
+}
+
+/// Every effect off and a noiseless sensor.
+inline SimConfig allOff() {
+  SimConfig c = everyEffectOff();
   c.sensor.noise_deg = 0.0;
   return c;
 }

@@ -1,0 +1,97 @@
+// The batch regressors: negligible tiles skipped, and a used ModelRegressors refilled (plsa/eval/model_regressors.hpp).
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "plsa/dio/dio_transform.hpp"
+#include "plsa/eval/model_regressors.hpp"
+#include "plsa/identify/coefficient_fit.hpp"
+
+using namespace plsa;
+using namespace plsa::identify;
+
+// Input side over a 4 x 4 grid of nodes, visited in turn as a grid experiment
+// does: over most tiles most nodes' regressors are zero (not yet visited) or
+// decayed below rounding, and skipping them must change no increment or sum
+// beyond rounding. Refilling a used ModelRegressors must equal a fresh one.
+TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
+  DioPwlObfModel m;
+  m.inputs = {"u1", "u2"};
+  m.outputs = {"y", "z"};
+  m.poles = {{PoleSet::real({0.9, 0.7}), PoleSet::real({0.85})}, {PoleSet::real({0.8}), PoleSet::real({0.9, 0.6})}};
+  m.shaping.play = {{0.0}, {0.0}};
+  m.partition = PwlPartition::interpolated({0, 1}, {{0.2, 0.4, 0.6, 0.8}, {0.2, 0.4, 0.6, 0.8}});
+  m.schedule_side = ScheduleSide::kInput;
+  const int R = m.partition.regionCount();
+  ASSERT_EQ(R, 16);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  m.coefficients.assign(static_cast<std::size_t>(R), {});
+  for (auto& block : m.coefficients)
+    for (int out = 0; out < 2; ++out) block.push_back(Eigen::VectorXd::NullaryExpr(3, [&] { return gauss(rng); }));
+  m.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
+  const int hold = 400, T = 16 * hold;
+  Eigen::MatrixXd u(T, 2);
+  for (int k = 0; k < T; ++k) u.row(k) << 0.2 + 0.2 * ((k / hold) % 4), 0.2 + 0.2 * (k / (4 * hold));
+  Eigen::MatrixXd y = dioIntegrate(modelIncrements(m, u));
+  for (Eigen::Index k = 0; k < y.size(); ++k) y.data()[k] += 0.01 * gauss(rng);
+
+  const ModelRegressors sparse = modelRegressors(m, u);
+  ModelRegressors dense = sparse;
+  dense.live.clear();  // every node live: the plain dense sums and products
+  ASSERT_EQ(sparse.live.size(), 2u);
+  for (int out = 0; out < 2; ++out) {
+    const auto& live = sparse.live[static_cast<std::size_t>(out)];
+    EXPECT_EQ(live.rows(), (T + ModelRegressors::kTileRows - 1) / ModelRegressors::kTileRows);
+    EXPECT_EQ(live.cols(), R);
+    EXPECT_LT(live.cast<double>().mean(), 0.5) << "a grid experiment leaves most tiles' nodes negligible";
+    EXPECT_TRUE(live.col(R - 1).head(3).isConstant(false)) << "the last node is not visited before the end";
+  }
+  const Eigen::MatrixXd di_sparse = modelIncrements(m, sparse), di_dense = modelIncrements(m, dense);
+  EXPECT_LT((di_sparse - di_dense).cwiseAbs().maxCoeff(), 1e-12 * di_dense.cwiseAbs().maxCoeff());
+  Eigen::VectorXi fold(T);
+  for (int k = 0; k < T; ++k) fold(k) = (k / 300) % 3;
+  const CoefficientSums s_sparse = coefficientSums(m, {sparse}, {y}, {fold}, 3);
+  const CoefficientSums s_dense = coefficientSums(m, {dense}, {y}, {fold}, 3);
+  // The sums themselves (lower triangles: the only part kept) agree to rounding;
+  // solutions would add the conditioning of a fold's normal equations.
+  for (int g = 0; g < 3; ++g)
+    for (std::size_t out = 0; out < 2; ++out) {
+      const Eigen::MatrixXd& Js = s_sparse.groups[static_cast<std::size_t>(g)].J[out];
+      const Eigen::MatrixXd& Jd = s_dense.groups[static_cast<std::size_t>(g)].J[out];
+      const Eigen::MatrixXd diff =
+          Eigen::MatrixXd(Js.triangularView<Eigen::Lower>()) - Eigen::MatrixXd(Jd.triangularView<Eigen::Lower>());
+      EXPECT_LT(diff.cwiseAbs().maxCoeff(), 1e-12 * Jd.cwiseAbs().maxCoeff()) << "group " << g << ", output " << out;
+      const Eigen::VectorXd& hs = s_sparse.groups[static_cast<std::size_t>(g)].Jh[out];
+      const Eigen::VectorXd& hd = s_dense.groups[static_cast<std::size_t>(g)].Jh[out];
+      EXPECT_LT((hs - hd).cwiseAbs().maxCoeff(), 1e-12 * hd.cwiseAbs().maxCoeff())
+          << "group " << g << ", output " << out;
+    }
+  DioPwlObfModel a = m, b = m;
+  solveCoefficients(a, s_sparse, -1);
+  solveCoefficients(b, s_dense, -1);
+  for (int out = 0; out < 2; ++out)
+    EXPECT_LT((a.stackedCoefficients(out) - b.stackedCoefficients(out)).norm(),
+              1e-9 * b.stackedCoefficients(out).norm());
+
+  // A used ModelRegressors, first filled from another record, refills to the fresh one.
+  ModelRegressors reused = modelRegressors(m, Eigen::MatrixXd(u.topRows(T / 2).reverse()));
+  modelRegressors(m, u, reused);
+  for (std::size_t out = 0; out < 2; ++out) {
+    EXPECT_EQ(reused.phi[out], sparse.phi[out]);
+    EXPECT_TRUE((reused.live[out] == sparse.live[out]).all());
+    EXPECT_EQ(reused.level0[out], sparse.level0[out]);
+  }
+  ASSERT_EQ(reused.schedule.size(), sparse.schedule.size());
+  for (std::size_t k = 0; k < sparse.schedule.size(); ++k) {
+    ASSERT_EQ(reused.schedule[k].count, sparse.schedule[k].count);
+    for (int c = 0; c < sparse.schedule[k].count; ++c)
+      EXPECT_EQ(reused.schedule[k].weight[static_cast<std::size_t>(c)],
+                sparse.schedule[k].weight[static_cast<std::size_t>(c)]);
+  }
+  const ModelRegressors empty = modelRegressors(m, Eigen::MatrixXd(0, 2));
+  modelRegressors(m, Eigen::MatrixXd(0, 2), reused);
+  EXPECT_EQ(reused.live[0].rows(), 0);
+  EXPECT_EQ(empty.phi[0].rows(), 0);
+}

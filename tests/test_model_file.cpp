@@ -422,3 +422,16 @@ TEST(ModelFile, OutputFrameTipCartesianNeedsTwoOutputsInDegrees) {
   one_output.output_frame = OutputFrame::kTipCartesian;
   EXPECT_THROW(one_output.validate(), std::invalid_argument);
 }
+
+// A number beyond double range is a parse error naming the file, not a raw
+// json exception.
+TEST(ModelFile, ANumberBeyondDoubleRangeIsNamed) {
+  std::string text = modelToJson(knownModel());
+  const std::string key = "\"sample_time_s\": ";
+  const std::size_t at = text.find(key);
+  ASSERT_NE(at, std::string::npos) << text;
+  const std::size_t end = text.find_first_of(",\n}", at + key.size());
+  text.replace(at + key.size(), end - at - key.size(), "1e400");
+  expectThrowContaining([&] { modelFromJson(text, "m.json"); }, "m.json: not valid JSON");
+  expectThrowContaining([&] { modelFromJson(text, "m.json"); }, "1e400");
+}

@@ -76,6 +76,8 @@ std::vector<FieldCase> fieldCases() {
           {"an unknown region key", false, [](J& j) { j["regions"][0]["extra"] = 1; },
            "unknown key 'regions[0].extra'"},
           {"an output twice", false, [](J& j) { j["outputs"].push_back(j["outputs"][0]); }, "twice"},
+          {"a column both input and output", false, [](J& j) { j["outputs"][0] = j["inputs"][0]; },
+           "column 'u' is both an input and an output"},
           {"a null range", false, [](J& j) { j["input_range"][0] = nullptr; }, "'input_range[0]' must be a number"},
           {"a range of \"-inf\"", false, [](J& j) { j["input_range"][1] = "-inf"; },
            "'input_range[1]' must be a number or \"inf\""},

@@ -1,0 +1,40 @@
+// The diagnosis's calibration starts and budgets (src/diagnose only, not
+// installed): where a candidate effect's calibration starts, the nominal
+// calibration from data-derived starts, and the budget a candidate gets.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "plsa/diagnose/calibration.hpp"
+#include "plsa/diagnose/diagnosis.hpp"
+
+namespace plsa::diagnose {
+
+/// A candidate switched on, with its flexible law unless told otherwise.
+void enableCandidate(sim::SimConfig& c, const std::string& effect, const DiagnoseOptions& o);
+
+/// Spread points for an effect (the simulator's own values, points across
+/// each parameter's range, designed hysteresis points, sensor bias from the
+/// residual); the first is the configuration itself.
+std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
+                                      const std::vector<RunData>& train);
+
+/// The starts a candidate is calibrated from: neutral, then the best spread
+/// point (after a short calibration of each when `screen` > 0). Adds the
+/// runs spent to `spent`.
+std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
+                                      const std::vector<std::string>& modules, const std::vector<RunData>& train,
+                                      const CalibrationOptions& o, int screen, int& spent);
+
+/// The nominal physics calibrated from the simulator as given and the best
+/// data-derived starts, then restarted from the best; `spent`: the runs of
+/// every stage.
+CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::vector<RunData>& train,
+                                   const CalibrationOptions& nominal, const DiagnoseOptions& o, int& spent);
+
+/// The evaluations the largest candidate's calibration may spend.
+int candidateBudget(sim::SimConfig c, const std::vector<std::string>& modules,
+                    const std::vector<std::string>& candidates, const CalibrationOptions& o);
+
+}  // namespace plsa::diagnose

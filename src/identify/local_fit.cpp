@@ -9,26 +9,27 @@
 
 namespace plsa::identify {
 
-LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order,
-                       double max_std_error, double min_snr) {
-  PLSA_CHECK(order >= 1 && order <= 6, "fitLocalModel: order must be 1 to 6");
-  PLSA_CHECK(u.size() == y.size(), "fitLocalModel: u and y lengths differ");
-  LocalFit fit;
+namespace {
+
+// The segment's ARX(order, order) equation-error fit from the sample before
+// the step (de-offset: both start at 0), with its parameters' covariance.
+struct ArxFit {
+  Eigen::VectorXd theta;  ///< a1..an, then b1..bn
+  Eigen::MatrixXd covariance;
+  double sigma2 = 0.0;     ///< residual variance
+  double amplitude = 0.0;  ///< largest |y - y0|
+};
+
+ArxFit fitSegmentArx(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order) {
   const Eigen::Index T = y.size();
-  if (T < 4 * order + 4) {
-    fit.reason = "segment too short (" + std::to_string(T) + " samples)";
-    return fit;
-  }
-  // Regressors from the sample before the step (de-offset: both start at 0).
   Eigen::VectorXd ud(T + order), yd(T + order);
   ud.head(order).setZero();
   yd.head(order).setZero();
   ud.tail(T) = u.array() - u0;
   yd.tail(T) = y.array() - y0;
-  const Eigen::Index rows = T;
-  Eigen::MatrixXd phi(rows, 2 * order);
-  Eigen::VectorXd target(rows);
-  for (Eigen::Index k = 0; k < rows; ++k) {
+  Eigen::MatrixXd phi(T, 2 * order);
+  Eigen::VectorXd target(T);
+  for (Eigen::Index k = 0; k < T; ++k) {
     const Eigen::Index t = k + order;
     for (int i = 1; i <= order; ++i) {
       phi(k, i - 1) = yd(t - i);
@@ -39,22 +40,26 @@ LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
   // Samples before the step would be all zeros; the first row already sees u.
   const Eigen::MatrixXd gram = phi.transpose() * phi;
   Eigen::LDLT<Eigen::MatrixXd> ldlt(gram);
-  const Eigen::VectorXd theta = ldlt.solve(phi.transpose() * target);
-  const Eigen::VectorXd resid = target - phi * theta;
-  const double sigma2 = resid.squaredNorm() / std::max<Eigen::Index>(1, rows - 2 * order);
-  const Eigen::MatrixXd cov = sigma2 * ldlt.solve(Eigen::MatrixXd::Identity(2 * order, 2 * order));
-  fit.pole_std_error = std::sqrt(cov.diagonal().head(order).maxCoeff());
-  const double amplitude = yd.tail(T).cwiseAbs().maxCoeff();
-  fit.snr = amplitude / std::max(std::sqrt(sigma2), 1e-300);
-  // Poles: roots of z^n - a1 z^{n-1} - ... - an (companion matrix).
+  ArxFit f;
+  f.theta = ldlt.solve(phi.transpose() * target);
+  const Eigen::VectorXd resid = target - phi * f.theta;
+  f.sigma2 = resid.squaredNorm() / std::max<Eigen::Index>(1, T - 2 * order);
+  f.covariance = f.sigma2 * ldlt.solve(Eigen::MatrixXd::Identity(2 * order, 2 * order));
+  f.amplitude = yd.tail(T).cwiseAbs().maxCoeff();
+  return f;
+}
+
+// Poles: roots of z^n - a1 z^{n-1} - ... - an (companion matrix).
+std::vector<std::complex<double>> arxPoles(const Eigen::VectorXd& theta, int order) {
   Eigen::MatrixXd comp = Eigen::MatrixXd::Zero(order, order);
   comp.row(0) = theta.head(order).transpose();
   if (order > 1) comp.block(1, 0, order - 1, order - 1).setIdentity();
   const Eigen::VectorXcd ev = comp.eigenvalues();
-  for (Eigen::Index i = 0; i < ev.size(); ++i) fit.poles.push_back(ev(i));
-  const double den = 1.0 - theta.head(order).sum();
-  fit.gain = std::abs(den) > 1e-12 ? theta.tail(order).sum() / den : INFINITY;
+  return {ev.data(), ev.data() + ev.size()};
+}
 
+// Keeps the physical poles and says why the fit is unusable, if it is.
+void judgeFit(LocalFit& fit, int order, double max_std_error, double min_snr) {
   std::ostringstream why;
   std::vector<std::complex<double>> kept;
   for (const auto& p : fit.poles) {
@@ -81,6 +86,27 @@ LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
   fit.reason = why.str();
   if (!fit.reason.empty()) fit.reason.resize(fit.reason.size() - 2);
   fit.usable = fit.reason.empty();
+}
+
+}  // namespace
+
+LocalFit fitLocalModel(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double u0, double y0, int order,
+                       double max_std_error, double min_snr) {
+  PLSA_CHECK(order >= 1 && order <= 6, "fitLocalModel: order must be 1 to 6");
+  PLSA_CHECK(u.size() == y.size(), "fitLocalModel: u and y lengths differ");
+  LocalFit fit;
+  const Eigen::Index T = y.size();
+  if (T < 4 * order + 4) {
+    fit.reason = "segment too short (" + std::to_string(T) + " samples)";
+    return fit;
+  }
+  const ArxFit arx = fitSegmentArx(u, y, u0, y0, order);
+  fit.pole_std_error = std::sqrt(arx.covariance.diagonal().head(order).maxCoeff());
+  fit.snr = arx.amplitude / std::max(std::sqrt(arx.sigma2), 1e-300);
+  fit.poles = arxPoles(arx.theta, order);
+  const double den = 1.0 - arx.theta.head(order).sum();
+  fit.gain = std::abs(den) > 1e-12 ? arx.theta.tail(order).sum() / den : INFINITY;
+  judgeFit(fit, order, max_std_error, min_snr);
   return fit;
 }
 

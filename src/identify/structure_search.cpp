@@ -1,7 +1,8 @@
 // plsa's structure search after the paper's pipeline (identification_run.hpp):
 // scheduling side and play channels, coupling, schedule lag, threshold and
-// softening, the joint refinement, sensor drift and the slow pole, each
-// chosen by cross-validated held-out score; then the final fit.
+// softening (threshold_search.cpp), the joint refinement
+// (joint_refinement.cpp), sensor drift and the slow pole, each chosen by
+// cross-validated held-out score; then the final fit.
 #include <algorithm>
 #include <cmath>
 
@@ -290,88 +291,6 @@ void IdentificationRun::searchScheduleLag() {
   for (const auto& [lag, sc] : rep.schedule_lag_scores)
     s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
   say(s);
-}
-
-void IdentificationRun::searchThreshold() {
-  // Softening and the joint refinement shape the level by the held-out k-step
-  // score, which does not see what they do to a simulation; only an input-side
-  // model can be scored in held-out simulation, which guards the refinement.
-  // On the output side a softened level kept by the k-step score was seen to
-  // cost a clean plant's simulation points (docs/identification.md, 'Joint
-  // refinement'), so neither runs there.
-  input_side_chosen = model.schedule_side == ScheduleSide::kInput;
-  if (!input_side_chosen && (!o.play_softening_candidates.empty() || o.play_refine_evaluations > 0))
-    say("[5/5] softening and joint refinement: input-side structures only (output side chosen), skipped");
-  // Where the play channels count from, on the chosen model. A threshold moves
-  // where a growing band starts and how much of a neighbour the coupling
-  // sees, so each one is tried with every growing set as well as the chosen
-  // one; each softening (none unless asked for) with each threshold, since
-  // both reshape the same level.
-  if (!o.play_threshold_candidates.empty() || !o.play_softening_candidates.empty()) {
-    std::vector<std::vector<PlayChannel>> sets{best_set};
-    for (const auto& set : o.play_candidates)
-      if (set != best_set && std::any_of(set.begin(), set.end(), [](const PlayChannel& c) { return c.slope > 0; }))
-        sets.push_back(set);
-    std::vector<double> thresholds{0.0}, softenings{0.0};
-    for (double d : o.play_threshold_candidates) {
-      PLSA_CHECK(d >= 0 && d < 1, "identify: play thresholds must be fractions of the top input level in [0, 1)");
-      if (d > 0) thresholds.push_back(d);
-    }
-    for (double f : o.play_softening_candidates) {
-      PLSA_CHECK(f >= 0 && f < 0.5,
-                 "identify: play softenings must be fractions of the top input level above the threshold in [0, 0.5)");
-      if (f > 0 && input_side_chosen) softenings.push_back(f);
-    }
-    // A neighbour's level now counts from the threshold: the chosen coupling
-    // is kept as a fraction of the top level above it.
-    const double coupling_fraction = best_coupling * top_level;
-    double best_threshold = 0.0, best_softening = 0.0;
-    rep.threshold_scores.push_back({best_set, 0.0, coupling_fraction, 0.0, best_score});
-    beginScoring("play thresholds", thresholds.size() * softenings.size() * sets.size() - sets.size());
-    for (double d : thresholds) {
-      model.shaping.threshold = d * top_level;
-      const double above = top_level - model.shaping.threshold;
-      model.shaping.coupling = coupling_fraction / above;
-      for (double f : softenings) {
-        if (d == 0 && f == 0) continue;  // scored already
-        model.shaping.softening = f / above;
-        for (const auto& set : sets) {
-          applyPlay(set);
-          const double score = crossValidated();
-          rep.threshold_scores.push_back({set, d, coupling_fraction, f, score});
-          if (score > best_score + 1e-9) {
-            best_score = score;
-            best_set = set;
-            best_threshold = model.shaping.threshold;
-            best_coupling = model.shaping.coupling;
-            best_softening = model.shaping.softening;
-          }
-        }
-      }
-    }
-    model.shaping.threshold = best_threshold;
-    model.shaping.coupling = best_coupling;
-    model.shaping.softening = best_softening;
-    applyPlay(best_set);
-    const double above = top_level - best_threshold;
-    const bool softened = softenings.size() > 1;
-    std::string s = softened ? "[5/5] play channels counted from a threshold and softened (x top level; coupling "
-                               "and softening x top level above it): "
-                             : "[5/5] play channels counted from a threshold (x top level; coupling x top level above "
-                               "it): ";
-    s += best_threshold > 0 || best_softening > 0
-             ? "kept " + formatNumber(best_threshold / top_level) + " (" + formatNumber(best_threshold) +
-                   " input units), coupling " + formatNumber(best_coupling * above) +
-                   (softened ? ", softening " + formatNumber(best_softening * above) : std::string()) + ", play " +
-                   formatPlaySet(best_set)
-             : std::string("none kept");
-    s += softened ? ". Scores (threshold/coupling/softening{play}):" : ". Scores (threshold/coupling{play}):";
-    for (const auto& t : rep.threshold_scores)
-      s += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) +
-           (softened ? "/" + formatNumber(t.softening) : std::string()) + formatPlaySet(t.set) + "->" +
-           std::to_string(t.score).substr(0, 5);
-    say(s);
-  }
 }
 
 void IdentificationRun::searchOutputDrift() {

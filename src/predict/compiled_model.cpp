@@ -169,17 +169,22 @@ void addLagRates(const CompiledModel& c, ModalForm& f, int orders) {
   }
 }
 
-// Stage 3 (when every bank allows): the modal form.
-void compileModal(CompiledModel& c) {
-  const StateSpaceForm& s = c.state_space;
-  const int n = c.poles, Q = c.n_u * c.n_y * n;
-  ModalForm f;
+// The modal form's eigenbases, one per bank group; false when a group has
+// none fit to use.
+bool addModalBases(const StateSpaceForm& s, int n, ModalForm& f) {
   for (std::size_t g = 0; g < s.A.size(); ++g) {
     Eigen::MatrixXd v = eigenbasis(s, g, n);
-    if (v.size() == 0) return;
+    if (v.size() == 0) return false;
     f.basis_inverse.push_back(v.inverse());
     f.basis.push_back(std::move(v));
   }
+  return true;
+}
+
+// Each mode's pole and input gain, and where its states' coefficients start.
+void addModes(const CompiledModel& c, ModalForm& f) {
+  const StateSpaceForm& s = c.state_space;
+  const int n = c.poles, Q = c.n_u * c.n_y * n;
   f.lambda.resize(Q);
   f.beta.resize(Q);
   f.offset.assign(1, 0);
@@ -194,7 +199,12 @@ void compileModal(CompiledModel& c) {
         f.offset.push_back(f.offset.back() + c.nodes * c.channels(j));
       }
     }
-  // Each bank's coefficients, carried into its eigenbasis (V^T c), go to its states.
+}
+
+// Each bank's coefficients, carried into its eigenbasis (V^T c), go to its states.
+void addModalCoefficients(const CompiledModel& c, ModalForm& f) {
+  const StateSpaceForm& s = c.state_space;
+  const int n = c.poles;
   const auto regions = static_cast<Eigen::Index>(s.coefficient.size());
   f.coefficient = RowMajorMatrix::Zero(regions, f.offset.back());
   for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
@@ -209,25 +219,34 @@ void compileModal(CompiledModel& c) {
         f.coefficient(m, f.offset[static_cast<std::size_t>((j * c.n_y + o) * n + i)] + k) = modal(i);
     }
   }
-  if (c.input_side) {
-    f.block = (c.n_y * n + 3) / 4 * 4;
-    f.merged_lambda = Eigen::VectorXd::Zero(c.n_u * f.block);
-    f.merged_beta = Eigen::VectorXd::Zero(c.n_u * f.block);
-    f.output_mask = Eigen::VectorXd::Zero(c.n_y * f.block);
-    for (int o = 0; o < c.n_y; ++o) f.output_mask.segment(o * f.block + o * n, n).setOnes();
-    for (int j = 0; j < c.n_u; ++j) {
-      RowMajorMatrix t = RowMajorMatrix::Zero(c.nodes * c.channels(j), f.block);
-      for (int o = 0; o < c.n_y; ++o)
-        for (int i = 0; i < n; ++i) {
-          const int q = (j * c.n_y + o) * n + i, slot = j * f.block + o * n + i;
-          f.merged_lambda(slot) = f.lambda(q);
-          f.merged_beta(slot) = f.beta(q);
-          for (Eigen::Index k = 0; k < t.rows(); ++k)
-            t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
-        }
-      f.by_copy.push_back(std::move(t));
-    }
+}
+
+// Input side: each input's modes merged across outputs into blocks of four
+// (merged_lambda, merged_beta) with their node coefficients (by_copy).
+void addMergedBlocks(const CompiledModel& c, ModalForm& f) {
+  const int n = c.poles;
+  f.block = (c.n_y * n + 3) / 4 * 4;
+  f.merged_lambda = Eigen::VectorXd::Zero(c.n_u * f.block);
+  f.merged_beta = Eigen::VectorXd::Zero(c.n_u * f.block);
+  f.output_mask = Eigen::VectorXd::Zero(c.n_y * f.block);
+  for (int o = 0; o < c.n_y; ++o) f.output_mask.segment(o * f.block + o * n, n).setOnes();
+  for (int j = 0; j < c.n_u; ++j) {
+    RowMajorMatrix t = RowMajorMatrix::Zero(c.nodes * c.channels(j), f.block);
+    for (int o = 0; o < c.n_y; ++o)
+      for (int i = 0; i < n; ++i) {
+        const int q = (j * c.n_y + o) * n + i, slot = j * f.block + o * n + i;
+        f.merged_lambda(slot) = f.lambda(q);
+        f.merged_beta(slot) = f.beta(q);
+        for (Eigen::Index k = 0; k < t.rows(); ++k)
+          t(k, o * n + i) = f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
+      }
+    f.by_copy.push_back(std::move(t));
   }
+}
+
+// Per output, the running power sums of its modes over the horizon.
+void addPowerSums(const CompiledModel& c, ModalForm& f) {
+  const int n = c.poles, Q = c.n_u * c.n_y * n;
   f.modes_of_output.resize(static_cast<std::size_t>(c.n_y));
   for (int q = 0; q < Q; ++q) {
     const int o = q / n % c.n_y;
@@ -246,6 +265,12 @@ void compileModal(CompiledModel& c) {
     }
     f.power_sum.push_back(std::move(sum));
   }
+}
+
+// A held input's lagged schedule in closed form (lag_sum), when the table
+// stays within kMaxHeldTableDoubles.
+void addHeldLagSums(const CompiledModel& c, ModalForm& f) {
+  const int n = c.poles, Q = c.n_u * c.n_y * n;
   const auto orders = static_cast<int>(c.node_grid.inputs.size());
   const std::size_t doubles = static_cast<std::size_t>(c.max_horizon) * static_cast<std::size_t>(Q) * (orders + 1);
   if (c.input_side && c.schedule_pole > 0.0 && orders > 0 && doubles <= kMaxHeldTableDoubles) {
@@ -270,6 +295,17 @@ void compileModal(CompiledModel& c) {
       f.lag_sum.push_back(std::move(sum));
     }
   }
+}
+
+// Stage 3 (when every bank allows): the modal form.
+void compileModal(CompiledModel& c) {
+  ModalForm f;
+  if (!addModalBases(c.state_space, c.poles, f)) return;
+  addModes(c, f);
+  addModalCoefficients(c, f);
+  if (c.input_side) addMergedBlocks(c, f);
+  addPowerSums(c, f);
+  addHeldLagSums(c, f);
   c.modal_form = std::move(f);
   c.modal = true;
 }

@@ -99,9 +99,9 @@ double Actuator::effectivePressure(double p) const {
   return std::max(0.0, p - dz.threshold_bar);
 }
 
-void Actuator::substep(const std::array<double, 3>& cmd) {
-  const SimConfig& c = config_;
-  // Transport delay: a ring of past commands, one per internal step.
+// Transport delay: a ring of past commands, one per internal step, read
+// between two taps.
+std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd) {
   const std::size_t size = delay_line_.size();
   delay_line_[delay_head_] = cmd;
   const auto& newer = delay_line_[(delay_head_ + size - delay_whole_) % size];
@@ -109,7 +109,13 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   delay_head_ = (delay_head_ + 1) % size;
   std::array<double, 3> delayed{};
   for (std::size_t i = 0; i < 3; ++i) delayed[i] = (1.0 - delay_frac_) * newer[i] + delay_frac_ * older[i];
+  return delayed;
+}
 
+// Each chamber's pressure one step toward the delayed command, rate-limited;
+// returns the pressures past the deadzone.
+std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delayed) {
+  const SimConfig& c = config_;
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {
     double tau = c.pneumatics.time_constant_s;
@@ -127,55 +133,53 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     pressure_[i] += rate * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
   }
+  return p_eff;
+}
 
-  const double sum_p = p_eff[0] + p_eff[1] + p_eff[2];
-  Eigen::Vector2d target = Eigen::Vector2d::Zero();
-  const double lever = 2.0 * c.geometry.length_m / (3.0 * c.geometry.chamber_radius_m);
-  for (std::size_t i = 0; i < 3; ++i) {
-    double strain = c.elongation.strain_per_bar * p_eff[i] + c.elongation.quadratic * p_eff[i] * p_eff[i];
-    if (c.coupling.enabled)
-      strain *= saturating_coupling_ ? 1.0 / (1.0 + c.coupling.per_bar * (sum_p - p_eff[i]))
-                                     : std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
-    if (c.hysteresis.enabled && weighted_pi_) {
-      auto& plays = play_[i];
-      const double share = c.hysteresis.fixed_band_share;
-      const double band = (1.0 - share) * std::abs(strain) + share * full_strain_;
-      double out = strain;
-      for (std::size_t k = 0; k < 3; ++k) {
-        const double r = c.hysteresis.width * (k == 0 ? 0.5 : k == 1 ? 1.0 : 2.0) * band;
-        plays[k] = std::clamp(plays[k], strain - r, strain + r);
-        out += pi_weights_[k] * (plays[k] - strain);
-      }
-      strain = out;
-    } else if (c.hysteresis.enabled) {
-      // Play operator(s): output moves only once the input leaves a band around it.
-      auto& plays = play_[i];
-      double out = 0.0;
-      for (std::size_t k = 0; k < plays.size(); ++k) {
-        // Band proportional to the strain, so the loop closes at zero and at the peak.
-        const double w = plays.size() == 1 ? c.hysteresis.width
-                                           : c.hysteresis.width * 2.0 * static_cast<double>(k + 1) /
-                                                 static_cast<double>(plays.size() + 1);
-        const double r = w * std::abs(strain);
-        plays[k] = std::clamp(plays[k], strain - r, strain + r);
-        out += plays[k];
-      }
-      strain = out / static_cast<double>(plays.size());
+// A chamber's strain through its play operators, when hysteresis is on.
+double Actuator::hysteresisStrain(std::size_t chamber, double strain) {
+  const SimConfig::Hysteresis& h = config_.hysteresis;
+  auto& plays = play_[chamber];
+  if (weighted_pi_) {
+    const double share = h.fixed_band_share;
+    const double band = (1.0 - share) * std::abs(strain) + share * full_strain_;
+    double out = strain;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double r = h.width * (k == 0 ? 0.5 : k == 1 ? 1.0 : 2.0) * band;
+      plays[k] = std::clamp(plays[k], strain - r, strain + r);
+      out += pi_weights_[k] * (plays[k] - strain);
     }
-    if (c.creep.enabled) {
-      if (two_rate_creep_) {
-        creep_[i] += (0.5 * c.creep.fraction * strain - creep_[i]) / (0.2 * c.creep.time_constant_s) * dt_;
-        creep_slow_[i] += (0.5 * c.creep.fraction * strain - creep_slow_[i]) / (2.0 * c.creep.time_constant_s) * dt_;
-        strain += creep_[i] + creep_slow_[i];
-      } else {
-        creep_[i] += (c.creep.fraction * strain - creep_[i]) / c.creep.time_constant_s * dt_;
-        strain += creep_[i];
-      }
-    }
-    // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
-    target += lever * strain * Eigen::Vector2d(bend_direction_[i][0], bend_direction_[i][1]);
+    return out;
   }
+  // Play operator(s): output moves only once the input leaves a band around it.
+  double out = 0.0;
+  for (std::size_t k = 0; k < plays.size(); ++k) {
+    // Band proportional to the strain, so the loop closes at zero and at the peak.
+    const double w = plays.size() == 1
+                         ? h.width
+                         : h.width * 2.0 * static_cast<double>(k + 1) / static_cast<double>(plays.size() + 1);
+    const double r = w * std::abs(strain);
+    plays[k] = std::clamp(plays[k], strain - r, strain + r);
+    out += plays[k];
+  }
+  return out / static_cast<double>(plays.size());
+}
 
+// A chamber's strain with its creep (one or two first-order lags) added.
+double Actuator::creepStrain(std::size_t i, double strain) {
+  const SimConfig::Creep& c = config_.creep;
+  if (two_rate_creep_) {
+    creep_[i] += (0.5 * c.fraction * strain - creep_[i]) / (0.2 * c.time_constant_s) * dt_;
+    creep_slow_[i] += (0.5 * c.fraction * strain - creep_slow_[i]) / (2.0 * c.time_constant_s) * dt_;
+    return strain + creep_[i] + creep_slow_[i];
+  }
+  creep_[i] += (c.fraction * strain - creep_[i]) / c.time_constant_s * dt_;
+  return strain + creep_[i];
+}
+
+// The bending mode one step toward `target`, stiffened by the summed pressure.
+void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
+  const SimConfig& c = config_;
   double omega = 2.0 * kPi * c.bending.natural_freq_hz;
   if (c.stiffening.enabled) {
     // Every law is written against a 0.2 bar reference: per_bar means the same growth there.
@@ -196,6 +200,25 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     spring *= 1.0 + c.stiffening.per_rad2 * bend_.squaredNorm();
   bend_rate_ += (omega * omega * (target - spring) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
   bend_ += bend_rate_ * dt_;
+}
+
+void Actuator::substep(const std::array<double, 3>& cmd) {
+  const SimConfig& c = config_;
+  const std::array<double, 3> p_eff = fillChambers(delayedCommand(cmd));
+  const double sum_p = p_eff[0] + p_eff[1] + p_eff[2];
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();
+  const double lever = 2.0 * c.geometry.length_m / (3.0 * c.geometry.chamber_radius_m);
+  for (std::size_t i = 0; i < 3; ++i) {
+    double strain = c.elongation.strain_per_bar * p_eff[i] + c.elongation.quadratic * p_eff[i] * p_eff[i];
+    if (c.coupling.enabled)
+      strain *= saturating_coupling_ ? 1.0 / (1.0 + c.coupling.per_bar * (sum_p - p_eff[i]))
+                                     : std::max(0.0, 1.0 - c.coupling.per_bar * (sum_p - p_eff[i]));
+    if (c.hysteresis.enabled) strain = hysteresisStrain(i, strain);
+    if (c.creep.enabled) strain = creepStrain(i, strain);
+    // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
+    target += lever * strain * Eigen::Vector2d(bend_direction_[i][0], bend_direction_[i][1]);
+  }
+  bendToward(target, sum_p);
 }
 
 ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {

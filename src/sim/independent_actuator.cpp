@@ -220,18 +220,20 @@ double IndependentActuator::creepOf(std::size_t i, double s, double dt) {
   return 0.0;
 }
 
-void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
-  const IndependentPhysics& ph = ph_;
-  std::array<double, 3> drive = cmd;
-  if (ph.pneumatic_lag == "quantised_valve") {
-    if (t_ >= next_valve_update_) {
-      for (std::size_t i = 0; i < 3; ++i) held_cmd_[i] = 0.02 * std::round(cmd[i] / 0.02);
-      next_valve_update_ += 1.0 / 25.0;
-    }
-    drive = held_cmd_;
+// The command the chambers see: a quantised valve holds a 0.02 bar step for 40 ms.
+std::array<double, 3> IndependentActuator::valveDrive(const std::array<double, 3>& cmd) {
+  if (ph_.pneumatic_lag != "quantised_valve") return cmd;
+  if (t_ >= next_valve_update_) {
+    for (std::size_t i = 0; i < 3; ++i) held_cmd_[i] = 0.02 * std::round(cmd[i] / 0.02);
+    next_valve_update_ += 1.0 / 25.0;
   }
-  std::array<double, 3> strain{};
-  double sum_p = 0.0;
+  return held_cmd_;
+}
+
+// Each chamber's pressure one exact first-order step toward its drive,
+// flow-limited; returns the pressures past the deadzone.
+std::array<double, 3> IndependentActuator::fillChambers(const std::array<double, 3>& drive, double dt) {
+  const IndependentPhysics& ph = ph_;
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {
     double source = drive[i];
@@ -241,12 +243,18 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
     }
     double tau = ph.time_constant_s;
     if (ph.pneumatic_lag == "pressure_dependent") tau *= 1.0 + ph.pneumatic_strength * p_[i] / 0.2;
-    // Exact first-order step, then the flow limit.
     const double step = (source - p_[i]) * (1.0 - std::exp(-dt / tau));
     p_[i] += std::clamp(step, -ph.max_rate_bar_per_s * dt, ph.max_rate_bar_per_s * dt);
     p_eff[i] = effectivePressure(i, p_[i]);
-    sum_p += p_eff[i];
   }
+  return p_eff;
+}
+
+// Each chamber's strain from its pressure, with the neighbours' coupling and
+// a saturating strain.
+std::array<double, 3> IndependentActuator::chamberStrains(const std::array<double, 3>& p_eff, double sum_p) const {
+  const IndependentPhysics& ph = ph_;
+  std::array<double, 3> strain{};
   for (std::size_t i = 0; i < 3; ++i) {
     double s = ph.strain_per_bar * p_eff[i] + ph.strain_quadratic * p_eff[i] * p_eff[i];
     const double others = sum_p - p_eff[i];
@@ -264,18 +272,17 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
     for (std::size_t i = 0; i < 3; ++i)
       strain[i] = own[i] + ph.coupling_strength * 0.5 * (own[(i + 1) % 3] + own[(i + 2) % 3]);
   }
-  Eigen::Vector2d target = Eigen::Vector2d::Zero();
-  const double lever = 2.0 * ph.length_m / (3.0 * ph.chamber_radius_m);
-  for (std::size_t i = 0; i < 3; ++i) {
-    double s = hysteretic(i, strain[i], dt);
-    s += creepOf(i, s, dt);
-    const double dir = ph.bend_direction_deg[i] * kDeg;
-    target += lever * s * Eigen::Vector2d(std::cos(dir), std::sin(dir));
-  }
+  return strain;
+}
+
+// The bending mode one velocity-Verlet step toward `target`, stiffened by
+// the summed pressure or by the bend itself.
+void IndependentActuator::bendToward(const Eigen::Vector2d& target, double sum_p, double dt) {
+  const IndependentPhysics& ph = ph_;
   double omega = 2.0 * kPi * ph.natural_freq_hz;
   if (ph.stiffening == "saturating_exp")
     omega *= std::sqrt(1.0 + ph.stiffening_strength * (1.0 - std::exp(-sum_p / 0.15)));
-  // Velocity Verlet on theta'' = w^2 (target - spring(theta)) - 2 zeta w theta'.
+  // theta'' = w^2 (target - spring(theta)) - 2 zeta w theta'.
   auto accel = [&](const Eigen::Vector2d& x, const Eigen::Vector2d& v) {
     Eigen::Vector2d spring = x;
     if (ph.stiffening == "duffing") {
@@ -294,6 +301,22 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
   const Eigen::Vector2d half = rate_ + 0.5 * dt * a0;
   bend_ += dt * half;
   rate_ = half + 0.5 * dt * accel(bend_, half);
+}
+
+void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
+  const std::array<double, 3> p_eff = fillChambers(valveDrive(cmd), dt);
+  double sum_p = 0.0;
+  for (double p : p_eff) sum_p += p;
+  const std::array<double, 3> strain = chamberStrains(p_eff, sum_p);
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();
+  const double lever = 2.0 * ph_.length_m / (3.0 * ph_.chamber_radius_m);
+  for (std::size_t i = 0; i < 3; ++i) {
+    double s = hysteretic(i, strain[i], dt);
+    s += creepOf(i, s, dt);
+    const double dir = ph_.bend_direction_deg[i] * kDeg;
+    target += lever * s * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+  }
+  bendToward(target, sum_p, dt);
   t_ += dt;
 }
 

@@ -58,6 +58,12 @@ class Actuator {
 
  private:
   void substep(const std::array<double, 3>& cmd);
+  // substep's stages, in order.
+  std::array<double, 3> delayedCommand(const std::array<double, 3>& cmd);
+  std::array<double, 3> fillChambers(const std::array<double, 3>& delayed);  ///< effective pressures
+  double hysteresisStrain(std::size_t chamber, double strain);
+  double creepStrain(std::size_t chamber, double strain);
+  void bendToward(Eigen::Vector2d target, double sum_p);
   double effectivePressure(double p) const;
   ActuatorSample measure(const std::array<double, 3>& cmd);
   void addBendingOffset(ActuatorSample& s) const;  ///< sensor_bias offsets and drifts of the reported angles

@@ -123,6 +123,11 @@ class IndependentActuator {
 
  private:
   void substep(const std::array<double, 3>& cmd, double dt);
+  // substep's stages, in order.
+  std::array<double, 3> valveDrive(const std::array<double, 3>& cmd);
+  std::array<double, 3> fillChambers(const std::array<double, 3>& drive, double dt);  ///< effective pressures
+  std::array<double, 3> chamberStrains(const std::array<double, 3>& p_eff, double sum_p) const;
+  void bendToward(const Eigen::Vector2d& target, double sum_p, double dt);
   double effectivePressure(std::size_t i, double p);
   double hysteretic(std::size_t i, double strain, double dt);
   double creepOf(std::size_t i, double strain, double dt);

@@ -100,6 +100,13 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
   return starts;
 }
 
+// An effect switched on, in its flexible law where it has one and `flexible` asks.
+void enableEffect(sim::SimConfig& c, const std::string& effect, bool flexible) {
+  c.setEffectEnabled(effect, true);
+  const std::string law = sim::flexibleFormulationOf(effect);
+  if (flexible && !law.empty()) c.formulationOf(effect) = law;
+}
+
 }  // namespace
 
 // Spread points for an effect: the simulator's own values and two points
@@ -167,9 +174,7 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
 
 // A candidate switched on, with its flexible law unless told otherwise.
 void enableCandidate(sim::SimConfig& c, const std::string& effect, const DiagnoseOptions& o) {
-  c.setEffectEnabled(effect, true);
-  const std::string flexible = sim::flexibleFormulationOf(effect);
-  if (o.flexible_laws && !flexible.empty()) c.formulationOf(effect) = flexible;
+  enableEffect(c, effect, o.flexible_laws);
 }
 
 // The baseline: BOBYQA from the simulator as given and from the best
@@ -204,9 +209,7 @@ int candidateBudget(sim::SimConfig c, const std::vector<std::string>& modules,
   std::size_t most = 0;
   for (const auto& e : candidates) {
     sim::SimConfig trial = c;
-    trial.setEffectEnabled(e, true);
-    const std::string flexible = sim::flexibleFormulationOf(e);
-    if (!flexible.empty()) trial.formulationOf(e) = flexible;
+    enableEffect(trial, e, true);  // the flexible law: the most parameters an effect can bring
     most = std::max(most, trial.parameters(e).size());
   }
   return std::max(o.max_evaluations, o.evaluations_per_parameter * static_cast<int>(base + most));

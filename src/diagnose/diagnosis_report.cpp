@@ -171,9 +171,11 @@ std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis
   return {{"trace.csv", trace.str()}, {"gap_map.csv", map.str()}, {"shrink.csv", shrink.str()}};
 }
 
-std::string reportHtml(const Diagnosis& d) {
+namespace {
+
+/// The page's head, its verdict and the gaps it rests on.
+void writeVerdict(std::ostream& h, const Diagnosis& d) {
   using report::escape;
-  std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>plsa diagnosis</title>\n"
     << "<style>body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}"
     << "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}"
@@ -193,7 +195,11 @@ std::string reportHtml(const Diagnosis& d) {
     h << " (margin over re-calibration " << fmt(100 * d.margin_over_recalibration) << "%, over the runner-up, "
       << escape(d.runner_up) << ", " << fmt(100 * d.margin_over_runner_up) << "%)";
   h << ".</p>\n";
+}
 
+/// Where: the places, the gap maps and the residual's shares.
+void writeWhere(std::ostream& h, const Diagnosis& d) {
+  using report::escape;
   h << "<h2>Where</h2>\n<ul id=\"places\">";
   for (const auto& p : d.where.top_places) h << "<li>" << escape(p.words) << "</li>";
   h << "</ul>\n";
@@ -226,7 +232,11 @@ std::string reportHtml(const Diagnosis& d) {
   table("by direction of change", d.where.by_direction);
   table("steady vs transient", d.where.by_state);
   table("by frequency band", d.where.by_band);
+}
 
+/// Which: each candidate effect's shrinkage, fitted law and calibration.
+void writeWhich(std::ostream& h, const Diagnosis& d) {
+  using report::escape;
   h << "<h2>Which</h2>\n";
   std::vector<report::Bar> bars;
   for (const auto& c : d.ranking) {
@@ -259,7 +269,10 @@ std::string reportHtml(const Diagnosis& d) {
         << "%</td><td>" << fmt(c.heldout_after.percent()) << "%</td><td>" << fmt(c.shrink_percent) << "%</td></tr>";
     h << "</table>\n";
   }
+}
 
+/// How far: the held-out traces and the residual per region before and after.
+void writeHowFar(std::ostream& h, const Diagnosis& d) {
   h << "<h2>How far</h2>\n";
   const Eigen::Index n = d.trace_real.rows();
   Eigen::VectorXd t(n);
@@ -285,13 +298,30 @@ std::string reportHtml(const Diagnosis& d) {
         h << "<tr><td>chamber " << b.chamber << ", " << fmt(b.from_bar, "%.2f") << "-" << fmt(b.to_bar, "%.2f")
           << " bar, " << b.direction << "</td><td>" << fmt(b.rms, "%.3g") << "</td><td>" << fmt(a.rms, "%.3g")
           << "</td></tr>";
-  h << "</table>\n<h2>Calibrated nominal parameters</h2><p class=\"note\">" << d.nominal_evaluations
+  h << "</table>\n";
+}
+
+/// The calibrated nominal parameters and the page's foot.
+void writeNominal(std::ostream& h, const Diagnosis& d) {
+  using report::escape;
+  h << "<h2>Calibrated nominal parameters</h2><p class=\"note\">" << d.nominal_evaluations
     << " simulator runs: the gain regression, a 27-point grid of frequency, damping and time constant, BOBYQA from "
        "the simulator as given and the best two grid points, then a restart from the best.</p>"
        "<table><tr><th>parameter</th><th>value</th></tr>";
   for (const auto& [k, v] : d.nominal_params)
     h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
   h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n</body></html>\n";
+}
+
+}  // namespace
+
+std::string reportHtml(const Diagnosis& d) {
+  std::ostringstream h;
+  writeVerdict(h, d);
+  writeWhere(h, d);
+  writeWhich(h, d);
+  writeHowFar(h, d);
+  writeNominal(h, d);
   return h.str();
 }
 

@@ -9,15 +9,6 @@
 #include "plsa/eval/fit.hpp"
 
 namespace plsa {
-namespace {
-
-Eigen::VectorXd placed(const AlignedPrediction& p, Eigen::Index T) {
-  Eigen::VectorXd v = Eigen::VectorXd::Constant(T, std::numeric_limits<double>::quiet_NaN());
-  v.segment(p.first, p.values.size()) = p.values;
-  return v;
-}
-
-}  // namespace
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons, const SimulationStart& start) {
@@ -25,7 +16,7 @@ ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, co
   ModelPredictions out{name, {}};
   for (const auto& by_horizon : pred) {
     std::map<int, Eigen::VectorXd> byh;
-    for (const auto& [k, p] : by_horizon) byh[k] = placed(p, y.rows());
+    for (const auto& [k, p] : by_horizon) byh[k] = placedOver(p, y.rows());
     out.by_output.push_back(std::move(byh));
   }
   return out;
@@ -40,8 +31,8 @@ ModelPredictions predictArx(const std::string& name, const ArxModel& m, const Ei
   ModelPredictions out{name, {}};
   for (Eigen::Index o = 0; o < y.cols(); ++o) {
     std::map<int, Eigen::VectorXd> byh;
-    for (int k : horizons) byh[k] = placed(m.kStepAhead(u, y.col(o), static_cast<int>(o), k), y.rows());
-    byh[0] = placed(m.simulate(u, y.col(o), static_cast<int>(o)), y.rows());
+    for (int k : horizons) byh[k] = placedOver(m.kStepAhead(u, y.col(o), static_cast<int>(o), k), y.rows());
+    byh[0] = placedOver(m.simulate(u, y.col(o), static_cast<int>(o)), y.rows());
     if (!sim_drift_per_s.empty())
       byh[0] += sim_drift_per_s[static_cast<std::size_t>(o)] * sample_time_s *
                 Eigen::VectorXd::LinSpaced(y.rows(), 0.0, static_cast<double>(y.rows() - 1));

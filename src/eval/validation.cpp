@@ -249,12 +249,6 @@ AlignedPrediction scoredPart(const AlignedPrediction& p, Eigen::Index from) {
   return {from, p.values.tail(p.values.size() - skip)};
 }
 
-Eigen::VectorXd placedOver(const AlignedPrediction& p, Eigen::Index rows, double fill) {
-  Eigen::VectorXd full = Eigen::VectorXd::Constant(rows, fill);
-  full.segment(p.first, p.values.size()) = p.values;
-  return full;
-}
-
 }  // namespace
 
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
@@ -287,7 +281,6 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
                                 std::to_string(std::max<Eigen::Index>(0, u.rows() - res.scored_from)) +
                                 " to score after the longest horizon and the simulation's start (sample " +
                                 std::to_string(res.scored_from) + "); a fit needs 2: give a longer log");
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;
     ov.name = model.outputs[static_cast<std::size_t>(o)];
@@ -298,7 +291,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
       ov.rms_k[k] = rmsErrorOf(ov.measured, p);
       requireFiniteScore(ov.fit_k[k], std::to_string(k) + "-step fit", ov.name, p, log.source);
       requireFiniteScore(ov.rms_k[k], std::to_string(k) + "-step rms error", ov.name, p, log.source);
-      ov.predicted_k[k] = placedOver(pred[static_cast<std::size_t>(o)].at(k), y.rows(), nan);
+      ov.predicted_k[k] = placedOver(pred[static_cast<std::size_t>(o)].at(k), y.rows());
     }
     const AlignedPrediction s = scoredPart(pred[static_cast<std::size_t>(o)].at(0), res.scored_from);
     ov.fit_sim = fitOf(ov.measured, s);
@@ -306,7 +299,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     requireFiniteScore(ov.fit_sim, "simulation fit", ov.name, s, log.source);
     requireFiniteScore(ov.rms_sim, "simulation rms error", ov.name, s, log.source);
     ov.spread = spreadOf(ov.measured.segment(s.first, s.values.size()));
-    ov.simulated = placedOver(pred[static_cast<std::size_t>(o)].at(0), y.rows(), nan);
+    ov.simulated = placedOver(pred[static_cast<std::size_t>(o)].at(0), y.rows());
     res.outputs.push_back(std::move(ov));
   }
   return res;

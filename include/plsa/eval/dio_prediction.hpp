@@ -3,6 +3,7 @@
 // and simulation yhat(t) = y(0) + sum_{m=1..t} dyhat(m). Shared by every tool.
 #pragma once
 
+#include <limits>
 #include <string>
 
 #include <Eigen/Dense>
@@ -17,6 +18,15 @@ struct AlignedPrediction {
   Eigen::Index first = 0;
   Eigen::VectorXd values;  ///< values(i) predicts y(first + i)
 };
+
+/// The prediction over all `rows` samples of its log, NaN where it has none.
+inline Eigen::VectorXd placedOver(const AlignedPrediction& p, Eigen::Index rows) {
+  PLSA_CHECK(p.first >= 0 && p.first + p.values.size() <= rows,
+             "placedOver: the prediction runs past the log's " + std::to_string(rows) + " rows");
+  Eigen::VectorXd v = Eigen::VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN());
+  v.segment(p.first, p.values.size()) = p.values;
+  return v;
+}
 
 /// k-step-ahead predictions, k >= 1, for every t >= k. dyhat(m) is the
 /// model's increment for sample m (it may use inputs up to m, never y after m-1).

@@ -37,16 +37,21 @@ struct CrossvalArgs {
 // they are); "labels" maps them to the names printed.
 const char* const kKeys[] = {"plsa", "arx"};
 
-void runCrossval(CrossvalArgs& a) {
-  std::vector<std::string> files = logPaths(a.logs, "crossval", true);
-  std::sort(files.begin(), files.end());
-  if (files.size() < 2) throw std::invalid_argument("crossval: need at least two logs (or a folder of them)");
-  requireHorizons(a.horizons, "crossval");
-  // Folds are named by file stem; two files of one stem would share a row and a JSON entry.
-  std::vector<std::string> fold_names;
-  for (const auto& f : files) fold_names.push_back(fs::path(f).stem().string());
+using FitSums = std::vector<std::vector<std::map<int, double>>>;  // [model][output][horizon, 0: sim]
+
+/// Folds are named by file stem; two files of one stem would share a row and
+/// a JSON entry, so those keep their paths.
+std::vector<std::string> foldNames(const std::vector<std::string>& files) {
+  std::vector<std::string> names;
+  for (const auto& f : files) names.push_back(fs::path(f).stem().string());
   for (std::size_t i = 0; i < files.size(); ++i)
-    if (std::count(fold_names.begin(), fold_names.end(), fold_names[i]) > 1) fold_names[i] = files[i];
+    if (std::count(names.begin(), names.end(), names[i]) > 1) names[i] = files[i];
+  return names;
+}
+
+/// The logs, each long enough to score the longest horizon after ARX's lags
+/// when held out.
+std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::string>& files) {
   io::CsvReadOptions ro;
   ro.required = a.inputs;
   ro.required.insert(ro.required.end(), a.outputs.begin(), a.outputs.end());
@@ -55,7 +60,6 @@ void runCrossval(CrossvalArgs& a) {
   std::vector<io::Log> logs;
   refuseOverwritingInputs(a.json, "--json", files, "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
-  // Every log is held out once; its longest horizon after ARX's lags must leave two samples to score.
   const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
   const int lags = std::max(a.arx_na, a.arx_nb);
   for (std::size_t i = 0; i < logs.size(); ++i)
@@ -63,6 +67,95 @@ void runCrossval(CrossvalArgs& a) {
       throw std::invalid_argument("crossval: " + files[i] + ": " + std::to_string(logs[i].samples()) +
                                   " samples are too few to score horizon " + std::to_string(longest) + " after ARX's " +
                                   std::to_string(lags) + " lags (a fit needs 2 samples); give a shorter horizon");
+  return logs;
+}
+
+/// One fold: both models fitted on every log but `hold`, scored on it.
+struct FoldResult {
+  IdentifyReport report;
+  std::vector<ModelPredictions> predictions;
+  std::vector<std::vector<std::map<int, CommonScore>>> scores;
+};
+
+FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std::vector<io::Log>& logs,
+                     std::size_t hold) {
+  std::vector<io::Log> train;
+  std::vector<Eigen::MatrixXd> U, Y;
+  std::vector<Eigen::VectorXd> T;
+  for (std::size_t r = 0; r < logs.size(); ++r)
+    if (r != hold) {
+      train.push_back(logs[r]);
+      U.push_back(logs[r].columnsOf(a.inputs));
+      Y.push_back(logs[r].columnsOf(a.outputs));
+      T.push_back(logs[r].column(io::standard_columns::kTime));
+    }
+  FoldResult f;
+  const DioPwlObfModel model = identifyModel(train, o, &f.report);
+  // ARX is fitted to the same outputs as the model: less any drift it took out.
+  if (f.report.drift_taken_out) Y = removeOutputDrift(Y, T, f.report.output_drift);
+  const ArxModel arx = ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
+  const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
+  f.predictions = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons), predictArx("ARX", arx, uv, yv, a.horizons)};
+  f.scores = commonScores(f.predictions, yv);
+  return f;
+}
+
+/// The fold's rows (and its drift line), added to the sums and the JSON.
+void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult& f, FitSums& sums, nlohmann::json& j) {
+  if (f.report.drift_taken_out) {
+    std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
+    for (std::size_t out = 0; out < a.outputs.size(); ++out) {
+      std::printf(" %s %.4g", a.outputs[out].c_str(), f.report.output_drift.rate[out]);
+      j["folds"][name]["output_drift_per_s"][a.outputs[out]] = f.report.output_drift.rate[out];
+    }
+    std::printf("\n");
+  }
+  for (std::size_t m = 0; m < f.predictions.size(); ++m)
+    for (std::size_t out = 0; out < a.outputs.size(); ++out) {
+      std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), f.predictions[m].name.c_str());
+      auto& jf = j["folds"][name][kKeys[m]][a.outputs[out]];
+      for (int k : a.horizons) {
+        const CommonScore& sc = f.scores[m][out].at(k);
+        std::printf(" %8.1f", sc.fit);
+        sums[m][out][k] += sc.fit;
+        jf["fit_k" + std::to_string(k)] = sc.fit;
+        jf["rms_k" + std::to_string(k)] = sc.rms;
+      }
+      const CommonScore& sim = f.scores[m][out].at(0);
+      std::printf(" %8.1f\n", sim.fit);
+      sums[m][out][0] += sim.fit;
+      jf["fit_sim"] = sim.fit;
+      jf["rms_sim"] = sim.rms;
+      jf["std"] = sim.spread;
+    }
+  std::fflush(stdout);
+}
+
+/// The mean rows over the folds, also into the JSON with the models' labels.
+void printMeans(const CrossvalArgs& a, const FitSums& sums, std::size_t folds, nlohmann::json& j) {
+  const char* names[] = {"DIO-PWL-OBF", "ARX"};
+  for (std::size_t m = 0; m < 2; ++m) j["labels"][kKeys[m]] = names[m];
+  for (std::size_t m = 0; m < 2; ++m)
+    for (std::size_t out = 0; out < a.outputs.size(); ++out) {
+      std::printf("%-12s %-8s %-14s", "mean", a.outputs[out].c_str(), names[m]);
+      for (int k : a.horizons) {
+        const double v = sums[m][out].at(k) / static_cast<double>(folds);
+        std::printf(" %8.1f", v);
+        j["mean"][kKeys[m]][a.outputs[out]]["fit_k" + std::to_string(k)] = v;
+      }
+      const double v = sums[m][out].at(0) / static_cast<double>(folds);
+      std::printf(" %8.1f\n", v);
+      j["mean"][kKeys[m]][a.outputs[out]]["fit_sim"] = v;
+    }
+}
+
+void runCrossval(CrossvalArgs& a) {
+  std::vector<std::string> files = logPaths(a.logs, "crossval", true);
+  std::sort(files.begin(), files.end());
+  if (files.size() < 2) throw std::invalid_argument("crossval: need at least two logs (or a folder of them)");
+  requireHorizons(a.horizons, "crossval");
+  const std::vector<std::string> fold_names = foldNames(files);
+  const std::vector<io::Log> logs = readFoldLogs(a, files);
   IdentifyOptions o = a.options;
   o.inputs = a.inputs;
   o.outputs = a.outputs;
@@ -72,71 +165,11 @@ void runCrossval(CrossvalArgs& a) {
   std::printf("%-12s %-8s %-14s", "held out", "output", "model");
   for (int k : a.horizons) std::printf(" %8s", (std::to_string(k) + "-step").c_str());
   std::printf(" %8s\n", "sim");
-  std::vector<std::vector<std::map<int, double>>> sums(2, std::vector<std::map<int, double>>(a.outputs.size()));
+  FitSums sums(2, std::vector<std::map<int, double>>(a.outputs.size()));
   nlohmann::json j;
-  for (std::size_t hold = 0; hold < logs.size(); ++hold) {
-    std::vector<io::Log> train;
-    std::vector<Eigen::MatrixXd> U, Y;
-    std::vector<Eigen::VectorXd> T;
-    for (std::size_t r = 0; r < logs.size(); ++r)
-      if (r != hold) {
-        train.push_back(logs[r]);
-        U.push_back(logs[r].columnsOf(a.inputs));
-        Y.push_back(logs[r].columnsOf(a.outputs));
-        T.push_back(logs[r].column(io::standard_columns::kTime));
-      }
-    IdentifyReport report;
-    const DioPwlObfModel model = identifyModel(train, o, &report);
-    // ARX is fitted to the same outputs as the model: less any drift it took out.
-    if (report.drift_taken_out) Y = removeOutputDrift(Y, T, report.output_drift);
-    const ArxModel arx = ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
-    const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
-    const std::vector<ModelPredictions> preds = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
-                                                 predictArx("ARX", arx, uv, yv, a.horizons)};
-    const auto scores = commonScores(preds, yv);
-    const std::string& name = fold_names[hold];
-    if (report.drift_taken_out) {
-      std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
-      for (std::size_t out = 0; out < a.outputs.size(); ++out) {
-        std::printf(" %s %.4g", a.outputs[out].c_str(), report.output_drift.rate[out]);
-        j["folds"][name]["output_drift_per_s"][a.outputs[out]] = report.output_drift.rate[out];
-      }
-      std::printf("\n");
-    }
-    for (std::size_t m = 0; m < preds.size(); ++m)
-      for (std::size_t out = 0; out < a.outputs.size(); ++out) {
-        std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), preds[m].name.c_str());
-        auto& jf = j["folds"][name][kKeys[m]][a.outputs[out]];
-        for (int k : a.horizons) {
-          const CommonScore& sc = scores[m][out].at(k);
-          std::printf(" %8.1f", sc.fit);
-          sums[m][out][k] += sc.fit;
-          jf["fit_k" + std::to_string(k)] = sc.fit;
-          jf["rms_k" + std::to_string(k)] = sc.rms;
-        }
-        const CommonScore& sim = scores[m][out].at(0);
-        std::printf(" %8.1f\n", sim.fit);
-        sums[m][out][0] += sim.fit;
-        jf["fit_sim"] = sim.fit;
-        jf["rms_sim"] = sim.rms;
-        jf["std"] = sim.spread;
-      }
-    std::fflush(stdout);
-  }
-  const char* names[] = {"DIO-PWL-OBF", "ARX"};
-  for (std::size_t m = 0; m < 2; ++m) j["labels"][kKeys[m]] = names[m];
-  for (std::size_t m = 0; m < 2; ++m)
-    for (std::size_t out = 0; out < a.outputs.size(); ++out) {
-      std::printf("%-12s %-8s %-14s", "mean", a.outputs[out].c_str(), names[m]);
-      for (int k : a.horizons) {
-        const double v = sums[m][out][k] / static_cast<double>(logs.size());
-        std::printf(" %8.1f", v);
-        j["mean"][kKeys[m]][a.outputs[out]]["fit_k" + std::to_string(k)] = v;
-      }
-      const double v = sums[m][out][0] / static_cast<double>(logs.size());
-      std::printf(" %8.1f\n", v);
-      j["mean"][kKeys[m]][a.outputs[out]]["fit_sim"] = v;
-    }
+  for (std::size_t hold = 0; hold < logs.size(); ++hold)
+    printFold(a, fold_names[hold], scoreFold(a, o, logs, hold), sums, j);
+  printMeans(a, sums, logs.size(), j);
   if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
 }
 

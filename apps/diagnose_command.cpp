@@ -136,9 +136,7 @@ void addCalibrationBudget(CLI::App* app, diagnose::DiagnoseOptions& o) {
       ->check(CLI::Range(0, 10000));
 }
 
-}  // namespace
-
-void addDiagnoseCommands(CLI::App& app) {
+void addDiagnoseCommand(CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
   CLI::App* c =
       app.add_subcommand("diagnose", "Where and why a simulator disagrees with real runs, and what fixing it buys");
@@ -172,7 +170,9 @@ void addDiagnoseCommands(CLI::App& app) {
       ->check(CLI::Range(0.05, 0.95));
   c->add_option("--threads", a->options.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
   c->callback([a] { runDiagnose(*a); });
+}
 
+void addSelfcheckCommand(CLI::App& app) {
   auto s = std::make_shared<SelfcheckArgs>();
   CLI::App* sc = app.add_subcommand("diagnose-selfcheck", "Score the diagnosis blind on data with withheld effects");
   sc->add_option_function<std::string>(
@@ -209,6 +209,13 @@ void addDiagnoseCommands(CLI::App& app) {
                  "Write every case's training and held-out runs to this directory as CSV logs (for plsa diagnose)")
       ->check(CLI::ExistingDirectory);
   sc->callback([s] { runSelfcheckCommand(*s); });
+}
+
+}  // namespace
+
+void addDiagnoseCommands(CLI::App& app) {
+  addDiagnoseCommand(app);
+  addSelfcheckCommand(app);
 }
 
 }  // namespace plsa::app

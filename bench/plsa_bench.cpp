@@ -132,84 +132,83 @@ double disagreement(const plsa::DioPwlObfModel& m, const Drive& d) {
   return worst;
 }
 
-void measureModel(const BenchModel& bm, const Drive& d, long calls) {
-  const plsa::DioPwlObfModel& m = bm.model;
-  const std::string tag = bm.name;
-  std::printf("%s: %s\n", tag.c_str(), bm.structure.c_str());
-  const double agree = disagreement(m, d);
-  g_figures[tag + ": largest difference to the straightforward implementation"] = agree;
-  std::printf("  predictions agree with the straightforward implementation to %.2g (output units)\n", agree);
-  plsa::PredictorOptions po;
-  po.max_horizon = 400;
-  plsa::Predictor<> p(m, po);
-  std::printf("  form: %s\n", p.heldPathIsModal() ? "modal" : "state-space banks");
-  Eigen::MatrixXd out(400, m.outputCount()), plan(79, m.inputCount());
-  const Eigen::MatrixXd hold(0, m.inputCount());
-  const Eigen::Index T = d.rows() - 80;
-  long tick = 0;
-  auto feed = [&] {
+// One predictor fed the driving run, looped, sample by sample.
+struct FedPredictor {
+  FedPredictor(const plsa::DioPwlObfModel& m, const Drive& drive, const plsa::PredictorOptions& po)
+      : p(m, po),
+        d(drive),
+        T(drive.rows() - 80),
+        out(po.max_horizon, m.outputCount()),
+        plan(79, m.inputCount()),
+        hold(0, m.inputCount()) {}
+  /// The next sample; returns its row.
+  Eigen::Index feed() {
     const Eigen::Index t = tick % T;
     p.update(static_cast<double>(tick++) * d.dt, d.u.row(t), d.y.row(t));
     return t;
-  };
-  for (int k = 0; k < 2000; ++k) feed();
-  report(tag + ": update", timeCalls(calls, [&](long) { feed(); }));
-  const long predicts = std::max(1000L, calls / 2);
+  }
   // Every fourth call a new sample (and plan) first, untimed: the schedule moves between calls.
-  auto moveOn = [&](long i) {
+  void moveOn(long i) {
     if ((i & 3) == 0) feed();
-  };
-  auto moveOnWithPlan = [&](long i) {
+  }
+  void moveOnWithPlan(long i) {
     if ((i & 3) == 0) plan = d.u.middleRows(feed() + 1, 79);
-  };
-  report(tag + ": predict 80, input held, moving", timeCalls(predicts, moveOn, [&](long) {
-           p.predict(80, hold, out);
-           benchmark::DoNotOptimize(out.data());
-         }));
-  report(tag + ": predict 80, planned input", timeCalls(predicts, moveOnWithPlan, [&](long) {
-           p.predict(80, plan, out);
-           benchmark::DoNotOptimize(out.data());
-         }));
-  // Both fills on the same states and plans, call by call, taking turns to go
-  // first (the cost depends on which channels the plan moves).
-  Eigen::MatrixXd jacobian(80 * m.outputCount(), 79 * m.inputCount());
+  }
+
+  plsa::Predictor<> p;
+  const Drive& d;
+  Eigen::Index T;
+  long tick = 0;
+  Eigen::MatrixXd out, plan;
+  const Eigen::MatrixXd hold;
+};
+
+// Both fills on the same states and plans, call by call, taking turns to go
+// first (the cost depends on which channels the plan moves).
+void measureSensitivity(const std::string& tag, FedPredictor& f, long predicts) {
+  const int n_y = f.p.outputCount(), n_u = f.p.inputCount();
+  Eigen::MatrixXd jacobian(80 * n_y, 79 * n_u);
   Eigen::MatrixXd moving_rows = Eigen::MatrixXd::Zero(jacobian.rows(), jacobian.cols());
   std::vector<double> whole_ns, moving_ns;
   for (long i = 0; i < predicts / 4; ++i) {
-    moveOnWithPlan(i);
+    f.moveOnWithPlan(i);
     const auto whole = std::tuple{plsa::JacobianFill::kWhole, &jacobian, &whole_ns};
     const auto moving = std::tuple{plsa::JacobianFill::kMovingRows, &moving_rows, &moving_ns};
     for (auto [fill, target, ns] : {(i & 1) ? moving : whole, (i & 1) ? whole : moving}) {
       const auto t0 = Clock::now();
-      p.sensitivity(80, plan, *target, fill);
+      f.p.sensitivity(80, f.plan, *target, fill);
       benchmark::DoNotOptimize(target->data());
       ns->push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count());
     }
   }
   report(tag + ": sensitivity 80 (jacobian to the plan)", stats(whole_ns));
   report(tag + ": sensitivity 80, moving rows only", stats(moving_ns));
-  report(tag + ": predict 400, input held, moving", timeCalls(predicts / 4, moveOn, [&](long) {
-           p.predict(400, hold, out);
-           benchmark::DoNotOptimize(out.data());
-         }));
-  // A robot at rest for 125 s: the held input's schedule settles, its modes decay.
-  const Eigen::VectorXd rest_u = d.u.row(tick % T).transpose(), rest_y = d.y.row(tick % T).transpose();
-  for (int k = 0; k < 10000; ++k) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
-  g_figures[tag + ": subnormal states after a 125 s hold"] = p.subnormalStates();
+}
+
+// A robot at rest for 125 s: the held input's schedule settles, its modes decay.
+void measureAfterHold(const std::string& tag, FedPredictor& f, long predicts) {
+  const Eigen::VectorXd rest_u = f.d.u.row(f.tick % f.T).transpose(), rest_y = f.d.y.row(f.tick % f.T).transpose();
+  for (int k = 0; k < 10000; ++k) f.p.update(static_cast<double>(f.tick++) * f.d.dt, rest_u, rest_y);
+  g_figures[tag + ": subnormal states after a 125 s hold"] = f.p.subnormalStates();
   for (int h : {80, 400}) {
     const Stats s = timeCalls(
         predicts / (h / 80),
         [&](long i) {
-          if ((i & 3) == 0) p.update(static_cast<double>(tick++) * d.dt, rest_u, rest_y);
+          if ((i & 3) == 0) f.p.update(static_cast<double>(f.tick++) * f.d.dt, rest_u, rest_y);
         },
         [&](long) {
-          p.predict(h, hold, out);
-          benchmark::DoNotOptimize(out.data());
+          f.p.predict(h, f.hold, f.out);
+          benchmark::DoNotOptimize(f.out.data());
         });
     report(tag + ": predict " + std::to_string(h) + ", after a 125 s hold", s);
     g_figures[tag + ": predict " + std::to_string(h) + " after a hold, p99.9/p50"] = s.p999 / s.p50;
   }
-  // The straightforward implementation of the same model, same run.
+}
+
+// The straightforward implementation of the same model, same run, and the
+// speed-up over it.
+void measureStraightforward(const std::string& tag, const plsa::DioPwlObfModel& m, const Drive& d, long calls) {
+  const Eigen::Index T = d.rows() - 80;
   plsa::bench::StraightforwardPredictor slow(m);
   for (Eigen::Index t = 0; t < 2000; ++t) slow.update(d.u.row(t % T).transpose(), d.y.row(t % T).transpose());
   const long slow_calls = std::max(200L, calls / 100);
@@ -237,6 +236,43 @@ void measureModel(const BenchModel& bm, const Drive& d, long calls) {
       "  speed-up over the straightforward implementation (update + predict 80, p50): planned %.0fx, held %.0fx\n",
       g_figures[tag + ": speed-up over straightforward, planned (p50)"],
       g_figures[tag + ": speed-up over straightforward, held (p50)"]);
+}
+
+void measureModel(const BenchModel& bm, const Drive& d, long calls) {
+  const plsa::DioPwlObfModel& m = bm.model;
+  const std::string tag = bm.name;
+  std::printf("%s: %s\n", tag.c_str(), bm.structure.c_str());
+  const double agree = disagreement(m, d);
+  g_figures[tag + ": largest difference to the straightforward implementation"] = agree;
+  std::printf("  predictions agree with the straightforward implementation to %.2g (output units)\n", agree);
+  plsa::PredictorOptions po;
+  po.max_horizon = 400;
+  FedPredictor f(m, d, po);
+  std::printf("  form: %s\n", f.p.heldPathIsModal() ? "modal" : "state-space banks");
+  for (int k = 0; k < 2000; ++k) f.feed();
+  report(tag + ": update", timeCalls(calls, [&](long) { f.feed(); }));
+  const long predicts = std::max(1000L, calls / 2);
+  report(tag + ": predict 80, input held, moving", timeCalls(
+                                                       predicts, [&](long i) { f.moveOn(i); },
+                                                       [&](long) {
+                                                         f.p.predict(80, f.hold, f.out);
+                                                         benchmark::DoNotOptimize(f.out.data());
+                                                       }));
+  report(tag + ": predict 80, planned input", timeCalls(
+                                                  predicts, [&](long i) { f.moveOnWithPlan(i); },
+                                                  [&](long) {
+                                                    f.p.predict(80, f.plan, f.out);
+                                                    benchmark::DoNotOptimize(f.out.data());
+                                                  }));
+  measureSensitivity(tag, f, predicts);
+  report(tag + ": predict 400, input held, moving", timeCalls(
+                                                        predicts / 4, [&](long i) { f.moveOn(i); },
+                                                        [&](long) {
+                                                          f.p.predict(400, f.hold, f.out);
+                                                          benchmark::DoNotOptimize(f.out.data());
+                                                        }));
+  measureAfterHold(tag, f, predicts);
+  measureStraightforward(tag, m, d, calls);
 }
 
 // N segments, each its own compiled copy of the demo's model: update and

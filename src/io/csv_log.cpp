@@ -107,6 +107,52 @@ class LineReader {
   bool unterminated_ = false;
 };
 
+// A '#' line: "# key: value" (no blank before the colon) is metadata, any
+// other a comment.
+void readCommentLine(const std::string& t, Log& log) {
+  const std::string body = trim(t.substr(1));
+  const auto colon = body.find(':');
+  if (colon != std::string::npos && colon > 0 && body.find_first_of(" \t") > colon)
+    log.metadata[trim(body.substr(0, colon))] = trim(body.substr(colon + 1));
+  else
+    log.comments.push_back(body);
+}
+
+// The header: every column named once, the required ones present; returns
+// the time column's index, or -1 when none is checked.
+int readHeader(const std::vector<std::string>& fields, const std::string& path, std::size_t lineno,
+               const CsvReadOptions& options, Log& log) {
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (fields[i].empty()) fail(path, lineno, "header column " + std::to_string(i + 1) + " has no name");
+    if (std::find(fields.begin(), fields.begin() + static_cast<long>(i), fields[i]) !=
+        fields.begin() + static_cast<long>(i))
+      fail(path, lineno, "header names column '" + fields[i] + "' twice");
+  }
+  log.columns = fields;
+  for (const auto& r : options.required)
+    if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "'");
+  if (!options.time_column.empty() && log.hasColumn(options.time_column)) return log.columnIndex(options.time_column);
+  return -1;
+}
+
+// A data row: as many finite numbers as the header has columns, appended to `values`.
+void readRow(const std::vector<std::string>& fields, const std::string& path, std::size_t lineno, const Log& log,
+             std::vector<double>& values) {
+  if (fields.size() != log.columns.size())
+    fail(path, lineno,
+         "row has " + std::to_string(fields.size()) + " fields, header has " + std::to_string(log.columns.size()));
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const std::string& f = fields[i];
+    char* end = nullptr;
+    errno = 0;
+    const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
+    if (f.empty() || end != f.c_str() + f.size())
+      fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
+    if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
+    values.push_back(v);
+  }
+}
+
 }  // namespace
 
 Log readCsvLog(const std::string& path, const CsvReadOptions& options) {
@@ -132,51 +178,22 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
     const std::string t = trim(line);
     if (t.empty()) continue;
     if (t[0] == '#') {
-      const std::string body = trim(t.substr(1));
-      const auto colon = body.find(':');
-      if (colon != std::string::npos && colon > 0 && body.find_first_of(" \t") > colon) {
-        log.metadata[trim(body.substr(0, colon))] = trim(body.substr(colon + 1));
-      } else {
-        log.comments.push_back(body);
-      }
+      readCommentLine(t, log);
       continue;
     }
     const std::vector<std::string> fields = splitFields(t);
     if (!have_header) {
-      for (std::size_t i = 0; i < fields.size(); ++i) {
-        if (fields[i].empty()) fail(path, lineno, "header column " + std::to_string(i + 1) + " has no name");
-        if (std::find(fields.begin(), fields.begin() + static_cast<long>(i), fields[i]) !=
-            fields.begin() + static_cast<long>(i))
-          fail(path, lineno, "header names column '" + fields[i] + "' twice");
-      }
-      log.columns = fields;
+      time_col = readHeader(fields, path, lineno, options, log);
       have_header = true;
-      for (const auto& r : options.required)
-        if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "'");
-      if (!options.time_column.empty() && log.hasColumn(options.time_column))
-        time_col = log.columnIndex(options.time_column);
       continue;
     }
-    if (fields.size() != log.columns.size())
-      fail(path, lineno,
-           "row has " + std::to_string(fields.size()) + " fields, header has " + std::to_string(log.columns.size()));
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-      const std::string& f = fields[i];
-      char* end = nullptr;
-      errno = 0;
-      const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
-      if (f.empty() || end != f.c_str() + f.size())
-        fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
-      if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
-      values.push_back(v);
-    }
+    readRow(fields, path, lineno, log, values);
     if (time_col >= 0) {
       const double tt = values[values.size() - fields.size() + static_cast<std::size_t>(time_col)];
-      if (!(tt > last_time)) {
+      if (!(tt > last_time))
         fail(path, lineno,
              "time " + shortest(tt) + " is not after the previous sample's " + shortest(last_time) +
                  " (time must increase strictly)");
-      }
       last_time = tt;
     }
     ++rows;

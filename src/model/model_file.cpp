@@ -25,6 +25,62 @@ json limit(double v) {
   return v;
 }
 
+json polesJson(const DioPwlObfModel& m) {
+  json poles = json::array();
+  for (const auto& row : m.poles) {
+    json r = json::array();
+    for (const auto& ps : row) {
+      json list = json::array();
+      for (const auto& p : ps.poles()) list.push_back({p.real(), p.imag()});
+      r.push_back(list);
+    }
+    poles.push_back(r);
+  }
+  return poles;
+}
+
+// A fixed band is a plain number (as in files written before slopes existed).
+json playJson(const InputShaping& shaping) {
+  json play = json::array();
+  for (const auto& list : shaping.play) {
+    json l = json::array();
+    for (const PlayChannel& c : list) {
+      if (c.slope == 0.0)
+        l.push_back(c.width);
+      else
+        l.push_back({{"width", c.width}, {"slope", c.slope}});
+    }
+    play.push_back(l);
+  }
+  return play;
+}
+
+json partitionJson(const PwlPartition& p) {
+  json part;
+  part["inputs"] = p.inputs();
+  const bool interp = p.scheduling() == Scheduling::kInterpolated;
+  part["scheduling"] = interp ? "interpolated" : "switched";
+  part[interp ? "levels" : "breakpoints"] = p.breakpoints();
+  part["direction_split"] = p.directionSplit();
+  part["direction_threshold"] = p.directionThreshold();
+  return part;
+}
+
+json regionsJson(const DioPwlObfModel& m) {
+  json regions = json::array();
+  for (std::size_t r = 0; r < m.coefficients.size(); ++r) {
+    json reg;
+    reg["samples"] = m.region_fits[r].samples;
+    reg["fallback_from"] = m.region_fits[r].fallback_from;
+    reg["note"] = m.region_fits[r].note;
+    json coefs = json::array();
+    for (const auto& c : m.coefficients[r]) coefs.push_back(std::vector<double>(c.data(), c.data() + c.size()));
+    reg["coefficients"] = coefs;
+    regions.push_back(reg);
+  }
+  return regions;
+}
+
 }  // namespace
 
 std::string modelToJson(const DioPwlObfModel& m) {
@@ -42,30 +98,8 @@ std::string modelToJson(const DioPwlObfModel& m) {
     for (const auto& r : m.input_ranges) ranges.push_back({r[0], r[1]});
     j["input_ranges"] = ranges;
   }
-  json poles = json::array();
-  for (const auto& row : m.poles) {
-    json r = json::array();
-    for (const auto& ps : row) {
-      json list = json::array();
-      for (const auto& p : ps.poles()) list.push_back({p.real(), p.imag()});
-      r.push_back(list);
-    }
-    poles.push_back(r);
-  }
-  j["poles"] = poles;
-  // A fixed band is a plain number (as in files written before slopes existed).
-  json play = json::array();
-  for (const auto& list : m.shaping.play) {
-    json l = json::array();
-    for (const PlayChannel& c : list) {
-      if (c.slope == 0.0)
-        l.push_back(c.width);
-      else
-        l.push_back({{"width", c.width}, {"slope", c.slope}});
-    }
-    play.push_back(l);
-  }
-  j["input_play"] = play;
+  j["poles"] = polesJson(m);
+  j["input_play"] = playJson(m.shaping);
   j["play_start"] = m.shaping.start == PlayStart::kRising ? "rising" : "centred";
   j["play_coupling"] = m.shaping.coupling;
   j["play_threshold"] = m.shaping.threshold;
@@ -77,26 +111,8 @@ std::string modelToJson(const DioPwlObfModel& m) {
     j["training_output_drift"] = {{"rate_per_s", m.training_drift_per_s},
                                   {"reference_time_s", m.training_drift_reference_s}};
   j["output_frame"] = toString(m.output_frame);
-  json part;
-  part["inputs"] = m.partition.inputs();
-  const bool interp = m.partition.scheduling() == Scheduling::kInterpolated;
-  part["scheduling"] = interp ? "interpolated" : "switched";
-  part[interp ? "levels" : "breakpoints"] = m.partition.breakpoints();
-  part["direction_split"] = m.partition.directionSplit();
-  part["direction_threshold"] = m.partition.directionThreshold();
-  j["partition"] = part;
-  json regions = json::array();
-  for (std::size_t r = 0; r < m.coefficients.size(); ++r) {
-    json reg;
-    reg["samples"] = m.region_fits[r].samples;
-    reg["fallback_from"] = m.region_fits[r].fallback_from;
-    reg["note"] = m.region_fits[r].note;
-    json coefs = json::array();
-    for (const auto& c : m.coefficients[r]) coefs.push_back(std::vector<double>(c.data(), c.data() + c.size()));
-    reg["coefficients"] = coefs;
-    regions.push_back(reg);
-  }
-  j["regions"] = regions;
+  j["partition"] = partitionJson(m.partition);
+  j["regions"] = regionsJson(m);
   return j.dump(1);
 }
 

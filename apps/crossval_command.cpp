@@ -73,8 +73,8 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
 /// One fold: both models fitted on every log but `hold`, scored on it.
 struct FoldResult {
   IdentifyReport report;
-  std::vector<ModelPredictions> predictions;
-  std::vector<std::vector<std::map<int, CommonScore>>> scores;
+  std::vector<eval::ModelPredictions> predictions;
+  std::vector<std::vector<std::map<int, eval::CommonScore>>> scores;
 };
 
 FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std::vector<io::Log>& logs,
@@ -93,10 +93,11 @@ FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std:
   const DioPwlObfModel model = identifyModel(train, o, &f.report);
   // ARX is fitted to the same outputs as the model: less any drift it took out.
   if (f.report.drift_taken_out) Y = removeOutputDrift(Y, T, f.report.output_drift);
-  const ArxModel arx = ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
+  const eval::ArxModel arx = eval::ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
   const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
-  f.predictions = {predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons), predictArx("ARX", arx, uv, yv, a.horizons)};
-  f.scores = commonScores(f.predictions, yv);
+  f.predictions = {eval::predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
+                   eval::predictArx("ARX", arx, uv, yv, a.horizons)};
+  f.scores = eval::commonScores(f.predictions, yv);
   return f;
 }
 
@@ -115,13 +116,13 @@ void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult&
       std::printf("%-12s %-8s %-14s", name.c_str(), a.outputs[out].c_str(), f.predictions[m].name.c_str());
       auto& jf = j["folds"][name][kKeys[m]][a.outputs[out]];
       for (int k : a.horizons) {
-        const CommonScore& sc = f.scores[m][out].at(k);
+        const eval::CommonScore& sc = f.scores[m][out].at(k);
         std::printf(" %8.1f", sc.fit);
         sums[m][out][k] += sc.fit;
         jf["fit_k" + std::to_string(k)] = sc.fit;
         jf["rms_k" + std::to_string(k)] = sc.rms;
       }
-      const CommonScore& sim = f.scores[m][out].at(0);
+      const eval::CommonScore& sim = f.scores[m][out].at(0);
       std::printf(" %8.1f\n", sim.fit);
       sums[m][out][0] += sim.fit;
       jf["fit_sim"] = sim.fit;

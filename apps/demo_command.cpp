@@ -74,7 +74,7 @@ DemoRuns recordRuns(const sim::SimConfig& config, std::uint64_t seed, const Outp
 struct DemoModels {
   IdentifyReport report;
   DioPwlObfModel model, paper, linear;
-  ArxModel arx;
+  eval::ArxModel arx;
 };
 
 DemoModels identifyModels(const io::Log& train, const OutputFolder& path) {
@@ -92,7 +92,7 @@ DemoModels identifyModels(const io::Log& train, const OutputFolder& path) {
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
   const BaselineData training = baselineData(m.model, m.report, {train});
   m.linear = globalLinearOf(m.model, training.U, training.Y);
-  m.arx = ArxModel::fit(training.U, training.Y, 4, 4);
+  m.arx = eval::ArxModel::fit(training.U, training.Y, 4, 4);
   saveModel(path("model.json"), m.model);
   // The baselines that are DIO models too, so that `plsa validate` can re-score them.
   saveModel(path("baseline_paper.json"), m.paper);
@@ -103,49 +103,49 @@ DemoModels identifyModels(const io::Log& train, const OutputFolder& path) {
 // 3. Validation on the joystick run: every model, horizon and simulation
 // start scored over the same samples.
 struct DemoScores {
-  std::vector<ModelPredictions> preds;                       ///< the four models, simulations as validate starts them
-  std::vector<std::vector<std::map<int, CommonScore>>> all;  ///< preds, then the two other starts
+  std::vector<eval::ModelPredictions> preds;  ///< the four models, simulations as validate starts them
+  std::vector<std::vector<std::map<int, eval::CommonScore>>> all;  ///< preds, then the two other starts
   Eigen::Index scored_from = 0;
   Eigen::VectorXd t;  ///< the run's time from its start
   std::string window, reg_s;
   double fit(std::size_t start, std::size_t m, std::size_t o, int key) const {
     return all[start * preds.size() + m][o].at(key).fit;
   }
-  const std::map<int, CommonScore>& at(std::size_t m, std::size_t o) const { return all[m][o]; }
+  const std::map<int, eval::CommonScore>& at(std::size_t m, std::size_t o) const { return all[m][o]; }
 };
 
 DemoScores scoreOnJoystick(const DemoModels& m, const io::Log& val) {
   const std::vector<int> horizons = {40, 80};
   const Eigen::MatrixXd Uv = val.columnsOf(m.model.inputs), Yv = val.columnsOf(m.model.outputs);
-  const InputsOutsideTraining coverage = inputsOutsideTraining(m.model, Uv);
+  const eval::InputsOutsideTraining coverage = eval::inputsOutsideTraining(m.model, Uv);
   std::printf(
       "  the joystick run has an input outside its training range on %.1f%% of its samples and beyond the "
       "training grid's outer nodes on %.1f%%\n",
       100 * coverage.any, 100 * coverage.any_beyond_grid);
-  for (const std::string& w : inputCoverageWarnings(m.model, coverage)) std::printf("    %s\n", w.c_str());
+  for (const std::string& w : eval::inputCoverageWarnings(m.model, coverage)) std::printf("    %s\n", w.c_str());
   // ARX was fitted to the same drift-free outputs: its simulation gets the same drift back.
   const std::vector<double> arx_drift = m.report.drift_taken_out ? m.report.output_drift.rate : std::vector<double>{};
   DemoScores s;
-  s.preds = {predictDio("DIO-PWL-OBF (plsa)", m.model, Uv, Yv, horizons),
-             predictDio("DIO-PWL-OBF as in the paper", m.paper, Uv, Yv, horizons),
-             predictDio("global linear OBF (same poles, play)", m.linear, Uv, Yv, horizons),
-             predictArx("linear ARX(4,4)", m.arx, Uv, Yv, horizons, arx_drift, m.model.sample_time_s)};
+  s.preds = {eval::predictDio("DIO-PWL-OBF (plsa)", m.model, Uv, Yv, horizons),
+             eval::predictDio("DIO-PWL-OBF as in the paper", m.paper, Uv, Yv, horizons),
+             eval::predictDio("global linear OBF (same poles, play)", m.linear, Uv, Yv, horizons),
+             eval::predictArx("linear ARX(4,4)", m.arx, Uv, Yv, horizons, arx_drift, m.model.sample_time_s)};
   // The simulations again without the training drift; then, for the
   // tip-frame models, carrying the grid run's sensor yaw instead of
   // registering the joystick run's on its first 5 s, with no drift either.
   // The paper's model starts from the measured sample either way. All scored
   // on one window: after the registration.
-  const SimulationStart no_drift{SimulationStart{}.yaw_registration_s, false}, training_yaw{0, false};
-  s.reg_s = fmt(SimulationStart{}.yaw_registration_s, "%g");
-  std::vector<ModelPredictions> all = s.preds;
-  for (const SimulationStart& st : {no_drift, training_yaw}) {
+  const eval::SimulationStart no_drift{eval::SimulationStart{}.yaw_registration_s, false}, training_yaw{0, false};
+  s.reg_s = fmt(eval::SimulationStart{}.yaw_registration_s, "%g");
+  std::vector<eval::ModelPredictions> all = s.preds;
+  for (const eval::SimulationStart& st : {no_drift, training_yaw}) {
     all.push_back(predictDio("", m.model, Uv, Yv, horizons, st));
     all.push_back(s.preds[1]);
     all.push_back(predictDio("", m.linear, Uv, Yv, horizons, st));
     all.push_back(predictArx("", m.arx, Uv, Yv, horizons));
   }
-  s.all = commonScores(all, Yv);
-  s.scored_from = commonScoringStart(all);
+  s.all = eval::commonScores(all, Yv);
+  s.scored_from = eval::commonScoringStart(all);
   s.t = val.column(io::standard_columns::kTime).array() - val.column(io::standard_columns::kTime)(0);
   s.window = "samples " + std::to_string(s.scored_from) + " to " + std::to_string(Yv.rows() - 1) +
              ", t = " + fmt(s.t(s.scored_from), "%g") + " to " + fmt(s.t(s.t.size() - 1), "%g") + " s";

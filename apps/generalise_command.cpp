@@ -125,17 +125,17 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, double& bey
   const DioPwlObfModel paper = identify::identifyModel({train}, identify::paperConfiguration(o));
   const identify::BaselineData training = identify::baselineData(model, report, {train});
   const DioPwlObfModel linear = identify::globalLinearOf(model, training.U, training.Y);
-  const ArxModel arx = ArxModel::fit(training.U, training.Y, 4, 4);
+  const eval::ArxModel arx = eval::ArxModel::fit(training.U, training.Y, 4, 4);
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
-  beyond_grid = inputsOutsideTraining(model, Uv).any_beyond_grid;
+  beyond_grid = eval::inputsOutsideTraining(model, Uv).any_beyond_grid;
   const std::vector<double> arx_drift = report.drift_taken_out ? report.output_drift.rate : std::vector<double>{};
-  const std::vector<ModelPredictions> preds = {
-      predictDio("plsa", model, Uv, Yv, kHorizons), predictDio("paper", paper, Uv, Yv, kHorizons),
-      predictDio("global_linear", linear, Uv, Yv, kHorizons),
-      predictArx("arx", arx, Uv, Yv, kHorizons, arx_drift, model.sample_time_s)};
-  const auto scores = commonScores(preds, Yv);
+  const std::vector<eval::ModelPredictions> preds = {
+      eval::predictDio("plsa", model, Uv, Yv, kHorizons), eval::predictDio("paper", paper, Uv, Yv, kHorizons),
+      eval::predictDio("global_linear", linear, Uv, Yv, kHorizons),
+      eval::predictArx("arx", arx, Uv, Yv, kHorizons, arx_drift, model.sample_time_s)};
+  const auto scores = eval::commonScores(preds, Yv);
   nlohmann::json j;
-  j["scored_from_sample"] = commonScoringStart(preds);
+  j["scored_from_sample"] = eval::commonScoringStart(preds);
   for (std::size_t m = 0; m < preds.size(); ++m)
     for (std::size_t out = 0; out < model.outputs.size(); ++out)
       for (const int h : {40, 80, 0})

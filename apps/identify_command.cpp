@@ -38,7 +38,7 @@ struct ValidateArgs {
   std::vector<int> horizons{40, 80};
   std::string json;
   std::string csv;
-  SimulationStart start;
+  eval::SimulationStart start;
   std::string channel = "PLSA_STATE";
   std::string can_profile;
 };
@@ -116,7 +116,7 @@ std::string rateText(double r) {
 }
 
 // The fits and rms errors as a table a person reads, and into `j`.
-void printFits(FILE* table, const ValidationResult& v, const std::vector<int>& horizons, nlohmann::json& j) {
+void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<int>& horizons, nlohmann::json& j) {
   std::fprintf(table, "%-12s", "output");
   for (int k : horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
   std::fprintf(table, " %9s\n", "sim");
@@ -155,19 +155,19 @@ void printFits(FILE* table, const ValidationResult& v, const std::vector<int>& h
 
 // How the simulation started, in words (the ways differ when the log starts
 // unsettled), into `j` with the yaw drift it carried and where it departed.
-std::string describeSimulation(const DioPwlObfModel& model, const SimulationStart& s,
-                               const std::vector<SimulationDeparture>& departures, nlohmann::json& j) {
-  const bool registered = yawRegistrationSamples(model, s) > 0;
+std::string describeSimulation(const DioPwlObfModel& model, const eval::SimulationStart& s,
+                               const std::vector<eval::SimulationDeparture>& departures, nlohmann::json& j) {
+  const bool registered = eval::yawRegistrationSamples(model, s) > 0;
   std::string start = model.output_level.empty() ? "first measured sample"
                       : registered               ? "model output level, sensor yaw registered on the first " +
                                          seconds(s.yaw_registration_s) + " s (not scored)"
                                    : "model output level";
-  const double yaw_rate = carriedYawRate(model, s);
+  const double yaw_rate = eval::carriedYawRate(model, s);
   if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
   j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
   j["simulation_departures"] = nlohmann::json::array();
-  for (const SimulationDeparture& d : departures)
+  for (const eval::SimulationDeparture& d : departures)
     j["simulation_departures"].push_back({{"output", d.output},
                                           {"measured_low", d.measured_low},
                                           {"measured_high", d.measured_high},
@@ -190,11 +190,11 @@ void runValidate(const ValidateArgs& a) {
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   required.push_back(io::standard_columns::kTime);  // the sample rate and gaps are checked against the model's
   const io::Log log = readLogs({a.log}, required, "validate", a.channel, a.can_profile).front();
-  const ValidationResult v = validateModel(model, log, a.horizons, a.start);
-  for (const std::string& w : inputCoverageWarnings(model, v.outside_training))
+  const eval::ValidationResult v = validateModel(model, log, a.horizons, a.start);
+  for (const std::string& w : eval::inputCoverageWarnings(model, v.outside_training))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
-  const std::vector<SimulationDeparture> departures = simulationDepartures(v);
-  for (const std::string& w : simulationWarnings(departures))
+  const std::vector<eval::SimulationDeparture> departures = eval::simulationDepartures(v);
+  for (const std::string& w : eval::simulationWarnings(departures))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
   nlohmann::json j;
   printFits(table, v, a.horizons, j);
@@ -207,7 +207,7 @@ void runValidate(const ValidateArgs& a) {
   const std::string start = describeSimulation(model, a.start, departures, j);
   std::fprintf(table, "(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
-  if (!a.csv.empty()) io::writeCsvLog(a.csv, predictionLog(v));
+  if (!a.csv.empty()) io::writeCsvLog(a.csv, eval::predictionLog(v));
 }
 
 // The whole of `text` as a finite number >= 0, else false.

@@ -62,17 +62,17 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
 }
 
 py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {
-  const plsa::ValidationResult v = plsa::validateModel(model, plsa::io::readLog(log), horizons);
-  const std::vector<plsa::SimulationDeparture> departures = plsa::simulationDepartures(v);
+  const plsa::eval::ValidationResult v = plsa::eval::validateModel(model, plsa::io::readLog(log), horizons);
+  const std::vector<plsa::eval::SimulationDeparture> departures = plsa::eval::simulationDepartures(v);
   py::dict result;
-  for (const plsa::OutputValidation& o : v.outputs) {
+  for (const plsa::eval::OutputValidation& o : v.outputs) {
     py::dict entry;
     entry["fit"] = o.fit_k;
     entry["fit_sim"] = o.fit_sim;
     entry["rms"] = o.rms_k;
     entry["rms_sim"] = o.rms_sim;
     entry["sim_departure"] = py::none();
-    for (const plsa::SimulationDeparture& d : departures)
+    for (const plsa::eval::SimulationDeparture& d : departures)
       if (d.output == o.name)
         entry["sim_departure"] = py::dict(py::arg("farthest") = d.farthest, py::arg("share_of_width") = d.share,
                                           py::arg("first_time_s") = d.first_time_s);

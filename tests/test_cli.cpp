@@ -106,8 +106,8 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
                   1e-6)
           << out << " " << h;
       // ...and the same fit recomputed from the written predictions.
-      EXPECT_NEAR(o["fit_" + h].get<double>(), plsa::nrmseFit(pred_log.column(out), pred_log.column(out + "_" + h)),
-                  1e-6)
+      EXPECT_NEAR(o["fit_" + h].get<double>(),
+                  plsa::eval::nrmseFit(pred_log.column(out), pred_log.column(out + "_" + h)), 1e-6)
           << out << " " << h;
     }
   }

@@ -11,7 +11,7 @@ TEST(CoefficientFit, RecoversKnownCoefficientsAndReportsEmptyRegions) {
   std::uniform_real_distribution<double> level(0.0, 1.0);
   Eigen::MatrixXd u(4000, 1);
   for (int k = 0; k < 4000; ++k) u(k, 0) = k % 50 == 0 ? level(rng) : u(std::max(0, k - 1), 0);
-  const Eigen::MatrixXd dy = modelIncrements(truth, u);
+  const Eigen::MatrixXd dy = eval::modelIncrements(truth, u);
   Eigen::MatrixXd y = dioIntegrate(dy);
   // Without regularisation, exact data give the exact coefficients.
   DioPwlObfModel fit = truth;
@@ -27,7 +27,7 @@ TEST(CoefficientFit, RecoversKnownCoefficientsAndReportsEmptyRegions) {
   EXPECT_LT((pulled.coefficients[1][0] - truth.coefficients[1][0]).norm(), 0.02 * truth.coefficients[1][0].norm());
   // Inputs confined below 0.5: the upper region has no data and must say so.
   Eigen::MatrixXd u_low = u * 0.45;
-  Eigen::MatrixXd y_low = dioIntegrate(modelIncrements(truth, u_low));
+  Eigen::MatrixXd y_low = dioIntegrate(eval::modelIncrements(truth, u_low));
   DioPwlObfModel partial = truth;
   const auto rep = fitCoefficients(partial, {u_low}, {y_low});
   EXPECT_EQ(rep.regions_fallback, 1);
@@ -48,7 +48,7 @@ TEST(CoefficientFit, WeightsAndFoldSumsAgreeWithTheSamplesTheyStandFor) {
   Eigen::MatrixXd u(T, 1);
   for (int k = 0; k < T; ++k) u(k, 0) = k % 40 == 0 ? level(rng) : u(std::max(0, k - 1), 0);
   Eigen::MatrixXd y(T, 2);
-  y.col(0) = dioIntegrate(modelIncrements(truth, u)).col(0);
+  y.col(0) = dioIntegrate(eval::modelIncrements(truth, u)).col(0);
   y.col(1) = 0.5 * y.col(0).array().square();
   for (int k = 0; k < T; ++k) y.row(k) += Eigen::RowVector2d(noise(rng), noise(rng));
   Eigen::VectorXi fold(T);
@@ -72,7 +72,7 @@ TEST(CoefficientFit, WeightsAndFoldSumsAgreeWithTheSamplesTheyStandFor) {
     // Leaving a fold out of the sums is weighting it 0, and it changes the fit.
     DioPwlObfModel all = m;
     fitCoefficients(all, {u}, {y});
-    const CoefficientSums sums = coefficientSums(m, {modelRegressors(m, u)}, {y}, {fold}, 3);
+    const CoefficientSums sums = coefficientSums(m, {eval::modelRegressors(m, u)}, {y}, {fold}, 3);
     DioPwlObfModel from_sums = m;
     solveCoefficients(from_sums, sums, -1);
     EXPECT_LT((stacked(from_sums) - stacked(all)).norm(), 1e-9 * stacked(all).norm());
@@ -88,7 +88,7 @@ TEST(CoefficientFit, WeightsAndFoldSumsAgreeWithTheSamplesTheyStandFor) {
     // Bad groups, folds and weights are named.
     Eigen::VectorXi bad = fold;
     bad(7) = 3;
-    EXPECT_THROW(coefficientSums(m, {modelRegressors(m, u)}, {y}, {bad}, 3), std::invalid_argument);
+    EXPECT_THROW(coefficientSums(m, {eval::modelRegressors(m, u)}, {y}, {bad}, 3), std::invalid_argument);
     DioPwlObfModel x = m;
     EXPECT_THROW(solveCoefficients(x, sums, 3), std::invalid_argument);
     Eigen::VectorXd negative = Eigen::VectorXd::Ones(T);

@@ -18,7 +18,7 @@ TEST(DioPrediction, KStepAheadMatchesDirectSum) {
     dyhat(t) = n01(rng);
   }
   for (int k : {1, 7, 40}) {
-    const auto p = plsa::kStepAhead(y, dyhat, k);
+    const auto p = plsa::eval::kStepAhead(y, dyhat, k);
     ASSERT_EQ(p.first, k);
     ASSERT_EQ(p.values.size(), T - k);
     for (int t = k; t < T; ++t) {
@@ -34,15 +34,15 @@ TEST(DioPrediction, PerfectIncrementsGivePerfectFits) {
   Eigen::VectorXd y(T);
   for (int t = 0; t < T; ++t) y(t) = std::sin(0.05 * t) + 0.1 * t;
   Eigen::VectorXd dy = plsa::dioDifference(y);
-  EXPECT_NEAR(plsa::fitOf(y, plsa::simulate(y, dy)), 100.0, 1e-9);
-  EXPECT_NEAR(plsa::fitOf(y, plsa::kStepAhead(y, dy, 40)), 100.0, 1e-9);
+  EXPECT_NEAR(plsa::eval::fitOf(y, plsa::eval::simulate(y, dy)), 100.0, 1e-9);
+  EXPECT_NEAR(plsa::eval::fitOf(y, plsa::eval::kStepAhead(y, dy, 40)), 100.0, 1e-9);
   // A biased model drifts in simulation but is reset in k-step prediction.
   dy.array() += 0.01;
-  EXPECT_GT(plsa::fitOf(y, plsa::kStepAhead(y, dy, 1)), plsa::fitOf(y, plsa::simulate(y, dy)));
+  EXPECT_GT(plsa::eval::fitOf(y, plsa::eval::kStepAhead(y, dy, 1)), plsa::eval::fitOf(y, plsa::eval::simulate(y, dy)));
 }
 
 TEST(DioPrediction, RejectsHorizonLongerThanLog) {
   Eigen::VectorXd y = Eigen::VectorXd::LinSpaced(10, 0, 1);
-  EXPECT_THROW(plsa::kStepAhead(y, y, 10), std::invalid_argument);
-  EXPECT_THROW(plsa::kStepAhead(y, y, 0), std::invalid_argument);
+  EXPECT_THROW(plsa::eval::kStepAhead(y, y, 10), std::invalid_argument);
+  EXPECT_THROW(plsa::eval::kStepAhead(y, y, 0), std::invalid_argument);
 }

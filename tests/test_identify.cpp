@@ -77,7 +77,7 @@ TEST(Pipeline, SimulatedActuatorWithoutEffects) {
       EXPECT_GT(p.real(), 0.7);
       EXPECT_LT(std::abs(p), 1.0);
     }
-  const ValidationResult v = validateModel(m, val, {40, 80});
+  const eval::ValidationResult v = eval::validateModel(m, val, {40, 80});
   for (const auto& o : v.outputs) {
     EXPECT_GT(o.fit_k.at(40), 93.0) << o.name;
     EXPECT_GT(o.fit_k.at(80), 90.0) << o.name;
@@ -175,8 +175,8 @@ TEST(Pipeline, ScheduleLagStopsTheSimulationDriftOfAStateSideNonlinearity) {
   EXPECT_EQ(lagged.schedule_lag_s, 0.4) << "cross-validation should keep the lag";
   ASSERT_EQ(rep.schedule_lag_scores.size(), 2u);
   EXPECT_GT(rep.schedule_lag_scores[1].second, rep.schedule_lag_scores[0].second);
-  const ValidationResult v = validateModel(lagged, val, {40});
-  const ValidationResult w = validateModel(raw, val, {40});
+  const eval::ValidationResult v = eval::validateModel(lagged, val, {40});
+  const eval::ValidationResult w = eval::validateModel(raw, val, {40});
   for (std::size_t i = 0; i < v.outputs.size(); ++i) {
     EXPECT_GT(v.outputs[i].fit_sim, 88.0) << v.outputs[i].name;
     EXPECT_GT(v.outputs[i].fit_sim, w.outputs[i].fit_sim + 10.0) << v.outputs[i].name;
@@ -215,7 +215,7 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   for (int k = 1; k < wander; ++k)
     for (int j = 0; j < 2; ++j) u(k, j) = std::clamp(u(k - 1, j) + step(rng), 0.2, 0.35);
   for (int k = wander; k < wander + hold; ++k) u.row(k) = u.row(0);
-  const Eigen::MatrixXd di = modelIncrements(input_side, u), dout = modelIncrements(output_side, u);
+  const Eigen::MatrixXd di = eval::modelIncrements(input_side, u), dout = eval::modelIncrements(output_side, u);
   for (int out = 0; out < 2; ++out) {
     const double travel = di.col(out).cwiseAbs().sum();
     EXPECT_GT(travel, 5.0) << "the output should move along the way";
@@ -229,13 +229,13 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   // model's increments, and level plus output_level is the settled output.
   ASSERT_EQ(input_side.output_level.size(), 2u);
   EXPECT_TRUE(output_side.output_level.empty());
-  const Eigen::MatrixXd level = modelLevels(input_side, u);
+  const Eigen::MatrixXd level = eval::modelLevels(input_side, u);
   EXPECT_LT(((level.bottomRows(u.rows() - 1) - level.topRows(u.rows() - 1)) - di.bottomRows(u.rows() - 1))
                 .cwiseAbs()
                 .maxCoeff(),
             1e-9);
   // The settled start depends on the first sample alone: the same as from the whole record's regressors.
-  const ModelRegressors whole = modelRegressors(input_side, u);
+  const eval::ModelRegressors whole = eval::modelRegressors(input_side, u);
   for (int out = 0; out < 2; ++out)
     EXPECT_NEAR(level(0, out), whole.level0[static_cast<std::size_t>(out)].dot(input_side.stackedCoefficients(out)),
                 1e-9);
@@ -275,7 +275,7 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
   // The creep's own time constant wins (held-out simulation 85.0 none, 89.9
   // at 2 s, 90.2 at 8 s, 75.0 at 30 s when written).
   EXPECT_NEAR(with.poles[0][0].poles().back().real(), std::exp(-with.sample_time_s / 8.0), 1e-12);
-  const ValidationResult v0 = validateModel(without, val, {40}), v1 = validateModel(with, val, {40});
+  const eval::ValidationResult v0 = eval::validateModel(without, val, {40}), v1 = eval::validateModel(with, val, {40});
   for (std::size_t out = 0; out < v0.outputs.size(); ++out) {
     // 91.8 -> 94.7 and 92.5 -> 96.0 when written; 40 steps barely move.
     EXPECT_GT(v1.outputs[out].fit_sim, v0.outputs[out].fit_sim + 1.5) << v0.outputs[out].name;
@@ -311,9 +311,9 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_TRUE(left.training_drift_per_s.empty());
     // Simulated carrying the training run's yaw, so that steering shows what
     // the drift did to the model's level.
-    const SimulationStart carry{0};
-    const ValidationResult v = validateModel(taken, runs.val, {40}, carry),
-                           w = validateModel(left, runs.val, {40}, carry);
+    const eval::SimulationStart carry{0};
+    const eval::ValidationResult v = validateModel(taken, runs.val, {40}, carry),
+                                 w = validateModel(left, runs.val, {40}, carry);
     // When written, simulation as bending / steering: 95.6 / 76.4 taken out
     // against 93.5 / 75.3 left in. Steering stays low: the validation run's
     // own yaw drifts on.
@@ -324,9 +324,9 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     // Registering the validation run's yaw without carrying the drift takes
     // the standing part of steering's error out of both, so the two are close
     // there (83.94 taken out, 83.73 left in, when written); bending cannot move.
-    const SimulationStart registered_only{5.0, false};
-    const ValidationResult vr = validateModel(taken, runs.val, {40}, registered_only),
-                           wr = validateModel(left, runs.val, {40}, registered_only);
+    const eval::SimulationStart registered_only{5.0, false};
+    const eval::ValidationResult vr = validateModel(taken, runs.val, {40}, registered_only),
+                                 wr = validateModel(left, runs.val, {40}, registered_only);
     EXPECT_GT(vr.outputs[1].fit_sim, v.outputs[1].fit_sim + 5.0);
     EXPECT_GT(wr.outputs[1].fit_sim, w.outputs[1].fit_sim + 5.0);
     EXPECT_NEAR(vr.outputs[1].fit_sim, wr.outputs[1].fit_sim, 1.0);
@@ -334,7 +334,8 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_LT((vr.outputs[0].simulated.tail(scored) - v.outputs[0].simulated.tail(scored)).cwiseAbs().maxCoeff(), 1e-9);
     // By default the model that took the drift out turns at it over the new
     // run, whose sensor drifts on; the one that left it in has none to carry.
-    const ValidationResult vd = validateModel(taken, runs.val, {40}), wd = validateModel(left, runs.val, {40});
+    const eval::ValidationResult vd = eval::validateModel(taken, runs.val, {40}),
+                                 wd = eval::validateModel(left, runs.val, {40});
     EXPECT_GT(vd.outputs[1].fit_sim, vr.outputs[1].fit_sim + 5.0);
     EXPECT_EQ(wd.outputs[1].fit_sim, wr.outputs[1].fit_sim);
   }
@@ -382,8 +383,8 @@ TEST(Pipeline, TipFrameLiftsTheKStepFits) {
   const DioPwlObfModel tip = identifyModel({train}, o);
   EXPECT_EQ(tip.output_frame, OutputFrame::kTipCartesian);
   EXPECT_EQ(tip.outputs, logged.outputs);  // still named, and answered, as logged
-  const ValidationResult v = validateModel(tip, val, {40, 80});
-  const ValidationResult w = validateModel(logged, val, {40, 80});
+  const eval::ValidationResult v = eval::validateModel(tip, val, {40, 80});
+  const eval::ValidationResult w = eval::validateModel(logged, val, {40, 80});
   // When written: bending 94.1 / 92.3 / 86.9 against 92.2 / 88.5 / 87.4 as
   // logged; steering 95.7 / 94.2 / 87.9 against 95.0 / 93.0 / 87.5.
   // Simulation hardly moves (docs/identification.md).
@@ -413,8 +414,8 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
   EXPECT_NEAR(counted.shaping.threshold, 0.06, 0.015);
   ASSERT_FALSE(rep.threshold_scores.empty());
   EXPECT_EQ(rep.threshold_scores.front().threshold, 0.0);  // the model without, scored first
-  const ValidationResult v = validateModel(counted, val, {40, 80});
-  const ValidationResult w = validateModel(from_zero, val, {40, 80});
+  const eval::ValidationResult v = eval::validateModel(counted, val, {40, 80});
+  const eval::ValidationResult w = eval::validateModel(from_zero, val, {40, 80});
   // When written: bending 95.9 / 94.5 / 91.2 against 94.1 / 92.3 / 86.9 from
   // zero; steering 97.4 / 96.4 / 89.0 against 95.7 / 94.2 / 87.9.
   expectLifted(v, w, {94.5, 93.0, 85.0}, {0.8, 1.2});
@@ -533,12 +534,12 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
   ASSERT_EQ(ours.shaping.play[0].size(), 1u);
   EXPECT_GT(ours.shaping.play[0][0].slope, 0.0);
   EXPECT_GT(ours.shaping.coupling, 0.0);
-  const ValidationResult v = validateModel(ours, val, {40, 80});
-  const ValidationResult w = validateModel(paper, val, {40, 80});
+  const eval::ValidationResult v = eval::validateModel(ours, val, {40, 80});
+  const eval::ValidationResult w = eval::validateModel(paper, val, {40, 80});
   // A run that starts before the creep has settled.
   eo.joystick_preroll_s = 5.0;
   sim::Actuator c(sim::SimConfig{}, 101);
-  const ValidationResult s = validateModel(ours, sim::runExperiment(c, sim::joystickExperiment(eo)), {40});
+  const eval::ValidationResult s = eval::validateModel(ours, sim::runExperiment(c, sim::joystickExperiment(eo)), {40});
   for (std::size_t o = 0; o < v.outputs.size(); ++o) {
     EXPECT_GT(v.outputs[o].fit_k.at(40), 90.0) << v.outputs[o].name;
     EXPECT_GT(v.outputs[o].fit_k.at(80), 86.0) << v.outputs[o].name;

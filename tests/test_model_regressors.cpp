@@ -34,16 +34,16 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
   const int hold = 400, T = 16 * hold;
   Eigen::MatrixXd u(T, 2);
   for (int k = 0; k < T; ++k) u.row(k) << 0.2 + 0.2 * ((k / hold) % 4), 0.2 + 0.2 * (k / (4 * hold));
-  Eigen::MatrixXd y = dioIntegrate(modelIncrements(m, u));
+  Eigen::MatrixXd y = dioIntegrate(eval::modelIncrements(m, u));
   for (Eigen::Index k = 0; k < y.size(); ++k) y.data()[k] += 0.01 * gauss(rng);
 
-  const ModelRegressors sparse = modelRegressors(m, u);
-  ModelRegressors dense = sparse;
+  const eval::ModelRegressors sparse = eval::modelRegressors(m, u);
+  eval::ModelRegressors dense = sparse;
   dense.live.clear();  // every node live: the plain dense sums and products
   ASSERT_EQ(sparse.live.size(), 2u);
   for (int out = 0; out < 2; ++out) {
     const auto& live = sparse.live[static_cast<std::size_t>(out)];
-    EXPECT_EQ(live.rows(), (T + ModelRegressors::kTileRows - 1) / ModelRegressors::kTileRows);
+    EXPECT_EQ(live.rows(), (T + eval::ModelRegressors::kTileRows - 1) / eval::ModelRegressors::kTileRows);
     EXPECT_EQ(live.cols(), R);
     EXPECT_LT(live.cast<double>().mean(), 0.5) << "a grid experiment leaves most tiles' nodes negligible";
     EXPECT_TRUE(live.col(R - 1).head(3).isConstant(false)) << "the last node is not visited before the end";
@@ -76,8 +76,8 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
               1e-9 * b.stackedCoefficients(out).norm());
 
   // A used ModelRegressors, first filled from another record, refills to the fresh one.
-  ModelRegressors reused = modelRegressors(m, Eigen::MatrixXd(u.topRows(T / 2).reverse()));
-  modelRegressors(m, u, reused);
+  eval::ModelRegressors reused = eval::modelRegressors(m, Eigen::MatrixXd(u.topRows(T / 2).reverse()));
+  eval::modelRegressors(m, u, reused);
   for (std::size_t out = 0; out < 2; ++out) {
     EXPECT_EQ(reused.phi[out], sparse.phi[out]);
     EXPECT_TRUE((reused.live[out] == sparse.live[out]).all());
@@ -90,7 +90,7 @@ TEST(Regressors, SkippedNegligibleTilesChangeNoSumBeyondRounding) {
       EXPECT_EQ(reused.schedule[k].weight[static_cast<std::size_t>(c)],
                 sparse.schedule[k].weight[static_cast<std::size_t>(c)]);
   }
-  const ModelRegressors empty = modelRegressors(m, Eigen::MatrixXd(0, 2));
+  const eval::ModelRegressors empty = eval::modelRegressors(m, Eigen::MatrixXd(0, 2));
   modelRegressors(m, Eigen::MatrixXd(0, 2), reused);
   EXPECT_EQ(reused.live[0].rows(), 0);
   EXPECT_EQ(empty.phi[0].rows(), 0);

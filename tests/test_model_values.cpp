@@ -39,12 +39,12 @@ TEST(PlayChannel, RisingStartFollowsTheFirstRiseAndSlopeGrowsTheBand) {
   Eigen::VectorXd u(4);
   u << 0.2, 0.25, 0.3, 0.28;
   const PlayChannel fixed(0.03), growing(0.0, 0.1);
-  const Eigen::VectorXd rising = playedInput(u, fixed, PlayStart::kRising);
-  const Eigen::VectorXd centred = playedInput(u, fixed, PlayStart::kCentred);
+  const Eigen::VectorXd rising = eval::playedInput(u, fixed, PlayStart::kRising);
+  const Eigen::VectorXd centred = eval::playedInput(u, fixed, PlayStart::kCentred);
   EXPECT_NEAR(rising(1) - rising(0), 0.05, 1e-12);
   EXPECT_NEAR(centred(1) - centred(0), 0.02, 1e-12);
   EXPECT_NEAR(rising(3), rising(2), 1e-12);  // a reversal smaller than the band does not move it
-  const Eigen::VectorXd g = playedInput(u, growing, PlayStart::kRising);
+  const Eigen::VectorXd g = eval::playedInput(u, growing, PlayStart::kRising);
   EXPECT_NEAR(g(0), 0.2 - 0.02, 1e-12);
   EXPECT_NEAR(g(2), 0.3 - 0.03, 1e-12);  // the band is 10% of the level
   EXPECT_NEAR(g(3), g(2), 1e-12);        // dropping 0.02 stays inside a 0.028 band

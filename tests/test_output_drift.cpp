@@ -47,7 +47,7 @@ TEST(OutputDrift, EstimateFindsAKnownTrendAndToleratesUninformativeData) {
   Eigen::MatrixXd u(2000, 1);
   for (Eigen::Index k = 0; k < u.rows(); k += 100) u.middleRows(k, 100).setConstant(level(rng));
   const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(u.rows(), 0.0, 199.9);
-  const Eigen::MatrixXd clean = modelLevels(truth, u, modelIncrements(truth, u));
+  const Eigen::MatrixXd clean = eval::modelLevels(truth, u, eval::modelIncrements(truth, u));
   const double rate = 0.004;
   const Eigen::MatrixXd y = clean.array() + rate * (t.array() - t.mean());
   const std::vector<Eigen::MatrixXd> U{u, Eigen::MatrixXd(0, 1)}, Y{y, Eigen::MatrixXd(0, 1)};

@@ -95,7 +95,7 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   const int H = 40;
   // In the log's frame, whatever the model's.
   Predictor<NP> p(m);
-  const test::Agreement planned = test::plannedAgainstOffline(p, u, y, dt, predictOutputs(m, u, y, {H}), {H}, 7);
+  const test::Agreement planned = test::plannedAgainstOffline(p, u, y, dt, eval::predictOutputs(m, u, y, {H}), {H}, 7);
   EXPECT_GT(planned.compared, 100);
   EXPECT_LT(planned.worst, 1e-9) << "predictor and offline 40-step predictions differ";
   // Holding the input (no plan) takes a faster path (modal when the bases
@@ -115,7 +115,7 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
   ASSERT_EQ(s.predict(1, u.middleRows(last + 1, 0), out), PredictorStatus::kOk);
   DioPwlObfModel from_first_sample = m;  // the predictor's simulation starts from the measured sample
   from_first_sample.output_level.clear();
-  const auto sims = predictOutputs(from_first_sample, u, y, {}, true);
+  const auto sims = eval::predictOutputs(from_first_sample, u, y, {}, true);
   for (int o = 0; o < m.outputCount(); ++o)
     EXPECT_NEAR(out(0, o), sims[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
 }

@@ -396,7 +396,7 @@ TYPED_TEST(PredictorSizes, PredictionsEqualTheOfflineOnes) {
     const DioPwlObfModel m = variant(v, TestFixture::kPoles);
     const Eigen::MatrixXd u = inputsFor(m), y = outputsFor(m);
     const int H = 40;
-    const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, H});
+    const std::vector<std::map<int, eval::AlignedPrediction>> offline = eval::predictOutputs(m, u, y, {1, 10, H});
     P p(m);
     EXPECT_EQ(p.heldPathIsModal(), TestFixture::modal(v));
     const test::Agreement a = test::plannedAgainstOffline(p, u, y, kDt, offline, {1, 10, H}, 5);
@@ -521,7 +521,7 @@ TEST(PredictorHandBuilt, PlannedPathAgreesOnEveryGridAndBlockShape) {
       for (int j = 0; j < shape.inputs; ++j) u(k, j) = j < 2 ? run().u(k, j) : 0.3 + 0.25 * std::sin(0.05 * k);
       for (int o = 0; o < shape.outputs; ++o) y(k, o) = run().y(k, o % 2) + 0.5 * o;
     }
-    const std::vector<std::map<int, AlignedPrediction>> offline = predictOutputs(m, u, y, {1, 10, 40});
+    const std::vector<std::map<int, eval::AlignedPrediction>> offline = eval::predictOutputs(m, u, y, {1, 10, 40});
     Predictor<> p(m);
     ASSERT_TRUE(p.heldPathIsModal()) << "the modal form (and so the merged path) is not taken";
     const test::Agreement a = test::plannedAgainstOffline(p, u, y, kDt, offline, {1, 10, 40}, 5);

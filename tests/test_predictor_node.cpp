@@ -207,8 +207,8 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
     }
   }
   const double fit =
-      plsa::nrmseFit(Eigen::Map<Eigen::VectorXd>(actual.data(), static_cast<Eigen::Index>(actual.size())),
-                     Eigen::Map<Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
+      plsa::eval::nrmseFit(Eigen::Map<Eigen::VectorXd>(actual.data(), static_cast<Eigen::Index>(actual.size())),
+                           Eigen::Map<Eigen::VectorXd>(predicted.data(), static_cast<Eigen::Index>(predicted.size())));
   std::printf("40-step bend fit of the LCM predictor node against the simulator, held inputs: %.1f%%\n", fit);
   EXPECT_GT(fit, 50.0);
   // Its status names latency figures and no rejected samples.

@@ -30,7 +30,7 @@ TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
     below += u(k, 0) < 0.2 - 1e-9 || u(k, 1) < 0.2 - 1e-9;
   }
   ASSERT_GT(below, 0) << "the joystick run never goes below the grid";
-  const ValidationResult v = validateModel(m, runs.val, {40});
+  const eval::ValidationResult v = eval::validateModel(m, runs.val, {40});
   EXPECT_DOUBLE_EQ(v.outside_training.any, static_cast<double>(any) / static_cast<double>(u.rows()));
   ASSERT_EQ(v.outside_training.each.size(), 3u);
   EXPECT_GT(v.outside_training.each[0], 0.0);
@@ -40,7 +40,7 @@ TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
   // zero), the excursions below the grid go uncounted: what files from
   // before input_ranges still get.
   m.input_ranges.clear();
-  const ValidationResult old = validateModel(m, runs.val, {40});
+  const eval::ValidationResult old = eval::validateModel(m, runs.val, {40});
   EXPECT_LT(old.outside_training.any, v.outside_training.any);
   // A malformed range is rejected by name.
   nlohmann::json j = nlohmann::json::parse(modelToJson(m));
@@ -59,26 +59,26 @@ TEST(Validation, CountsEachInputAgainstItsOwnTrainingRange) {
 TEST(Validation, RejectsAnotherSampleRateAGapAndARepeatedHorizon) {
   const DriftRuns runs = yawDriftRuns(0.0);
   const DioPwlObfModel m = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
-  ASSERT_NO_THROW(validateModel(m, runs.val, {40}));
+  ASSERT_NO_THROW(eval::validateModel(m, runs.val, {40}));
   const int time = runs.val.columnIndex("time_s");
   io::Log faster = runs.val;
   faster.data.col(time) *= 0.8;  // 100 Hz
-  expectThrowContaining([&] { validateModel(m, faster, {40}); }, "differs from the model's 0.0125");
+  expectThrowContaining([&] { eval::validateModel(m, faster, {40}); }, "differs from the model's 0.0125");
   io::Log nearly = runs.val;
   nearly.data.col(time) *= 1.01;  // within the 2% a clock may be off
-  EXPECT_NO_THROW(validateModel(m, nearly, {40}));
+  EXPECT_NO_THROW(eval::validateModel(m, nearly, {40}));
   io::Log gap = runs.val;
   gap.data.col(time).tail(gap.samples() - 1000).array() += 3 * m.sample_time_s;  // three samples lost
   try {
-    validateModel(m, gap, {40});
+    eval::validateModel(m, gap, {40});
     ADD_FAILURE() << "accepted a log with three samples lost";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("time gap of 0.05 s before data row 1001"), std::string::npos) << e.what();
   }
   io::Log dropped = runs.val;
   dropped.data.col(time).tail(dropped.samples() - 1000).array() += m.sample_time_s;  // one, as the real arm's logs have
-  EXPECT_NO_THROW(validateModel(m, dropped, {40}));
-  expectThrowContaining([&] { validateModel(m, runs.val, {40, 80, 40}); }, "horizon 40 is given twice");
+  EXPECT_NO_THROW(eval::validateModel(m, dropped, {40}));
+  expectThrowContaining([&] { eval::validateModel(m, runs.val, {40, 80, 40}); }, "horizon 40 is given twice");
 }
 
 TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
@@ -90,12 +90,12 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const int steer = turned.columnIndex("steer_deg"), bend = turned.columnIndex("bend_deg");
   turned.data.col(steer).array() += yaw;
   // The registration alone: without the training drift (tiny here, but a turn along the run).
-  const SimulationStart none{0}, first{tip.sample_time_s, false}, window{0.5, false};  // 0.5 s: 40 samples
-  const ValidationResult base = validateModel(tip, runs.val, {40}, none);
-  const ValidationResult carried = validateModel(tip, turned, {40}, none);
-  const ValidationResult registered = validateModel(tip, turned, {40}, first);
-  const ValidationResult windowed = validateModel(tip, turned, {40}, window);
-  const ValidationResult by_default = validateModel(tip, turned, {40});  // 5 s
+  const eval::SimulationStart none{0}, first{tip.sample_time_s, false}, window{0.5, false};  // 0.5 s: 40 samples
+  const eval::ValidationResult base = validateModel(tip, runs.val, {40}, none);
+  const eval::ValidationResult carried = validateModel(tip, turned, {40}, none);
+  const eval::ValidationResult registered = validateModel(tip, turned, {40}, first);
+  const eval::ValidationResult windowed = validateModel(tip, turned, {40}, window);
+  const eval::ValidationResult by_default = eval::validateModel(tip, turned, {40});  // 5 s
   // Carried, the 3 deg are a standing error; registered, the fit is the
   // unturned run's (within what the first sample's own error turns).
   EXPECT_LT(carried.outputs[1].fit_sim, base.outputs[1].fit_sim - 5.0);
@@ -119,21 +119,21 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   // A tip on the axis at the start has no direction to register: the training yaw stays.
   io::Log on_axis = turned;
   on_axis.data(0, bend) = 0.0;
-  const ValidationResult kept = validateModel(tip, on_axis, {40}, first);
+  const eval::ValidationResult kept = validateModel(tip, on_axis, {40}, first);
   EXPECT_LT((kept.outputs[1].simulated.tail(T - 1) - carried.outputs[1].simulated.tail(T - 1)).cwiseAbs().maxCoeff(),
             1e-9);
   // As logged there is no yaw to tell from the outputs: nothing changes.
   const DioPwlObfModel logged = identifyModel({runs.train}, fixedInputSide(OutputFrame::kAsLogged));
-  EXPECT_EQ(validateModel(logged, turned, {40}, first).outputs[1].fit_sim,
+  EXPECT_EQ(eval::validateModel(logged, turned, {40}, first).outputs[1].fit_sim,
             validateModel(logged, turned, {40}, none).outputs[1].fit_sim);
   try {
-    validateModel(tip, turned, {40}, SimulationStart{static_cast<double>(T) * tip.sample_time_s});
+    eval::validateModel(tip, turned, {40}, eval::SimulationStart{static_cast<double>(T) * tip.sample_time_s});
     ADD_FAILURE() << "accepted a registration window as long as the log";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("yaw registration window"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{-1.0}), std::invalid_argument);
-  EXPECT_THROW(validateModel(tip, turned, {40}, SimulationStart{std::nan("")}), std::invalid_argument);
+  EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{-1.0}), std::invalid_argument);
+  EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{std::nan("")}), std::invalid_argument);
 }
 
 // A model fitted with the sensor's yaw drift taken out simulates a new run
@@ -145,13 +145,14 @@ TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
   const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
   ASSERT_EQ(tip.training_drift_per_s.size(), 2u);
   ASSERT_NEAR(tip.training_drift_per_s[1], rate, 0.1 * rate);
-  const SimulationStart plain{5.0, false};
-  EXPECT_EQ(carriedYawRate(tip, SimulationStart{}), tip.training_drift_per_s[1]);
-  EXPECT_EQ(carriedYawRate(tip, plain), 0.0);
-  EXPECT_EQ(carriedYawRate(tip, SimulationStart{0}), 0.0);  // nothing to anchor the turn on
-  const ValidationResult carried = validateModel(tip, runs.val, {40}), left = validateModel(tip, runs.val, {40}, plain);
+  const eval::SimulationStart plain{5.0, false};
+  EXPECT_EQ(eval::carriedYawRate(tip, eval::SimulationStart{}), tip.training_drift_per_s[1]);
+  EXPECT_EQ(eval::carriedYawRate(tip, plain), 0.0);
+  EXPECT_EQ(eval::carriedYawRate(tip, eval::SimulationStart{0}), 0.0);  // nothing to anchor the turn on
+  const eval::ValidationResult carried = eval::validateModel(tip, runs.val, {40}),
+                               left = eval::validateModel(tip, runs.val, {40}, plain);
   // The same model on a run whose sensor does not drift: what steering can reach.
-  const ValidationResult reach = validateModel(tip, still.val, {40}, plain);
+  const eval::ValidationResult reach = validateModel(tip, still.val, {40}, plain);
   EXPECT_GT(carried.outputs[1].fit_sim, left.outputs[1].fit_sim + 5.0);
   EXPECT_NEAR(carried.outputs[1].fit_sim, reach.outputs[1].fit_sim, 2.0);
   const Eigen::Index T = runs.val.samples(), n = T - 400;  // scored after the 5 s registration
@@ -169,8 +170,8 @@ TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
   o.output_drift = OutputDriftChoice::kOn;
   const DioPwlObfModel logged = identifyModel({runs.train}, o);
   ASSERT_FALSE(logged.training_drift_per_s.empty());
-  EXPECT_EQ(carriedYawRate(logged, SimulationStart{}), 0.0);
-  EXPECT_EQ(validateModel(logged, runs.val, {40}).outputs[1].fit_sim,
+  EXPECT_EQ(eval::carriedYawRate(logged, eval::SimulationStart{}), 0.0);
+  EXPECT_EQ(eval::validateModel(logged, runs.val, {40}).outputs[1].fit_sim,
             validateModel(logged, runs.val, {40}, plain).outputs[1].fit_sim);
 }
 
@@ -185,20 +186,20 @@ TEST(Validation, ReportsSamplesBeyondTheGridPerInput) {
   Eigen::MatrixXd u(10, 2);
   u.col(0) << 0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45;
   u.col(1).setConstant(0.1);
-  const InputsOutsideTraining c = inputsOutsideTraining(m, u);
+  const eval::InputsOutsideTraining c = eval::inputsOutsideTraining(m, u);
   EXPECT_DOUBLE_EQ(c.each[0], 0.1);  // 0.45 alone is beyond the range
   ASSERT_TRUE(c.on_grid[0]);
   EXPECT_FALSE(c.on_grid[1]);
   EXPECT_DOUBLE_EQ(c.below_grid[0], 0.4);
   EXPECT_DOUBLE_EQ(c.above_grid[0], 0.1);
   EXPECT_DOUBLE_EQ(c.any_beyond_grid, 0.5);
-  const std::vector<std::string> w = inputCoverageWarnings(m, c);
+  const std::vector<std::string> w = eval::inputCoverageWarnings(m, c);
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("p_1 is below the training grid's lowest node 0.2 on 40.0%"), std::string::npos) << w[0];
   EXPECT_NE(w[0].find("above its highest node 0.4 on 10.0%"), std::string::npos) << w[0];
   // A switched partition has no nodes: only the range is reported.
   m.partition = PwlPartition({0}, {{0.25, 0.35}});
-  const InputsOutsideTraining s = inputsOutsideTraining(m, u);
+  const eval::InputsOutsideTraining s = eval::inputsOutsideTraining(m, u);
   EXPECT_FALSE(s.on_grid[0]);
   EXPECT_DOUBLE_EQ(s.any_beyond_grid, 0.0);
   EXPECT_NE(inputCoverageWarnings(m, s).at(0).find("outside its training range [0, 0.4] on 10.0%"), std::string::npos);
@@ -208,10 +209,10 @@ TEST(Validation, ReportsSamplesBeyondTheGridPerInput) {
 // named with how far and when; one that follows the run, error and all, is not.
 TEST(Validation, NamesASimulationThatLeavesTheMeasuredRange) {
   const Eigen::Index n = 200;
-  ValidationResult v;
+  eval::ValidationResult v;
   v.time = Eigen::VectorXd::LinSpaced(n, 0.0, 0.0125 * static_cast<double>(n - 1));
   v.scored_from = 10;
-  OutputValidation follows, departs;
+  eval::OutputValidation follows, departs;
   follows.name = "steering";
   departs.name = "bending";
   follows.measured = (v.time.array() * 2.0).sin().matrix() * 10.0;  // spans [-10, 10]
@@ -221,7 +222,7 @@ TEST(Validation, NamesASimulationThatLeavesTheMeasuredRange) {
   // From t = 1.25 s on it runs away: 11 beyond the range's top at sample 110 (0.55 of 20).
   for (Eigen::Index k = 100; k < n; ++k) departs.simulated(k) = 10.0 + static_cast<double>(k - 99) * 1.0;
   v.outputs = {follows, departs};
-  const std::vector<SimulationDeparture> d = simulationDepartures(v);
+  const std::vector<eval::SimulationDeparture> d = eval::simulationDepartures(v);
   ASSERT_EQ(d.size(), 1u);
   EXPECT_EQ(d[0].output, "bending");
   EXPECT_NEAR(d[0].measured_low, follows.measured.segment(10, n - 10).minCoeff(), 1e-12);
@@ -232,7 +233,7 @@ TEST(Validation, NamesASimulationThatLeavesTheMeasuredRange) {
   Eigen::Index first = 100;
   while (departs.simulated(first) - d[0].measured_high <= half) ++first;
   EXPECT_DOUBLE_EQ(d[0].first_time_s, v.time(first));
-  const std::vector<std::string> w = simulationWarnings(d);
+  const std::vector<std::string> w = eval::simulationWarnings(d);
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("the free simulation of bending leaves the measured range"), std::string::npos) << w[0];
   // A tighter tolerance names the 20% overshoot too; a departure before the

@@ -60,9 +60,9 @@ IdentifiedReference identifiedReference(const std::vector<RunData>& train, const
     Eigen::RowVector2d sum = Eigen::RowVector2d::Zero();
     for (const auto& r : held) {
       const Eigen::MatrixXd u = pressures ? r.pressures : r.commands;
-      const auto predictions = predictOutputs(model, u, r.outputs, {1}, true);
+      const auto predictions = eval::predictOutputs(model, u, r.outputs, {1}, true);
       for (Eigen::Index j = 0; j < 2; ++j) {
-        const AlignedPrediction& sim = predictions[static_cast<std::size_t>(j)].at(0);
+        const eval::AlignedPrediction& sim = predictions[static_cast<std::size_t>(j)].at(0);
         const Eigen::Index len = std::min<Eigen::Index>(sim.values.size(), r.samples() - sim.first);
         residual += (r.outputs.col(j).segment(sim.first, len) - sim.values.head(len)).squaredNorm();
       }

@@ -4,7 +4,7 @@
 
 #include "plsa/core/check.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 namespace {
 
 int lag(const ArxModel& m) { return std::max(m.na, m.nb); }
@@ -86,4 +86,4 @@ AlignedPrediction ArxModel::simulate(const Eigen::MatrixXd& u, const Eigen::Vect
   return out;
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -8,7 +8,7 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/eval/fit.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 ModelPredictions predictDio(const std::string& name, const DioPwlObfModel& m, const Eigen::MatrixXd& u,
                             const Eigen::MatrixXd& y, const std::vector<int>& horizons, const SimulationStart& start) {
@@ -75,4 +75,4 @@ std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vec
   return scores;
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

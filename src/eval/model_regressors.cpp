@@ -10,7 +10,7 @@
 #include "plsa/core/parallel_for.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 namespace {
 
@@ -257,4 +257,4 @@ Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& 
   return modelLevels(model, u, modelIncrements(model, u));
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -14,7 +14,7 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/io/standard_columns.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
   PLSA_CHECK(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
@@ -381,4 +381,4 @@ io::Log predictionLog(const ValidationResult& v) {
   return log;
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -66,7 +66,7 @@ struct RecordWeights {
 };
 
 // Each group's weighted sample count per region.
-void countRegions(const ModelRegressors& reg, Eigen::Index T, const RecordWeights& rw, CoefficientSums& sums) {
+void countRegions(const eval::ModelRegressors& reg, Eigen::Index T, const RecordWeights& rw, CoefficientSums& sums) {
   for (Eigen::Index k = 1; k < T; ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
     std::vector<double>& count = sums.groups[static_cast<std::size_t>(rw.groupOf(k))].count;
@@ -82,9 +82,9 @@ void countRegions(const ModelRegressors& reg, Eigen::Index T, const RecordWeight
 // each run of samples in one tile and group adds the Gram matrix of its live
 // nodes' blocks, which changes no sum beyond rounding and cuts the work about
 // twentyfold on a grid experiment.
-void accumulateInputSide(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                          const RecordWeights& rw, int out, CoefficientSums& sums) {
-  const Eigen::Index T = Y.rows(), tile = ModelRegressors::kTileRows;
+  const Eigen::Index T = Y.rows(), tile = eval::ModelRegressors::kTileRows;
   const auto oo = static_cast<std::size_t>(out);
   const Eigen::MatrixXd& phi = reg.phi[oo];
   const Eigen::Index width = model.regressorSize(out);
@@ -129,7 +129,7 @@ void accumulateInputSide(const DioPwlObfModel& model, const ModelRegressors& reg
 
 // Output side: each sample's outer product into the regions its schedule
 // blends (and, interpolated, the joint problem's blocks).
-void accumulateOutputSide(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+void accumulateOutputSide(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                           const RecordWeights& rw, CoefficientSums& sums) {
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated;
   for (Eigen::Index k = 1; k < Y.rows(); ++k) {
@@ -162,7 +162,7 @@ void accumulateOutputSide(const DioPwlObfModel& model, const ModelRegressors& re
 
 // One record's terms into the sums: sample k joins group(k) (group 0 when
 // `group` is null), times its weight (1 when `w` is null).
-void accumulate(const DioPwlObfModel& model, const ModelRegressors& reg, const Eigen::MatrixXd& Y,
+void accumulate(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                 const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
   const RecordWeights rw{w, group};
   countRegions(reg, Y.rows(), rw, sums);
@@ -183,7 +183,7 @@ void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::I
 
 }  // namespace
 
-CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<eval::ModelRegressors>& regressors,
                                 const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
                                 int groups) {
   PLSA_CHECK(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
@@ -214,7 +214,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     PLSA_CHECK(U[r].cols() == model.inputCount(),
                "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
-    const ModelRegressors reg = modelRegressors(model, U[r]);  // one record at a time: they are large
+    const eval::ModelRegressors reg = eval::modelRegressors(model, U[r]);  // one record at a time: they are large
     accumulate(model, reg, Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
   }
   return solveCoefficients(model, sums, -1, o);
@@ -416,7 +416,7 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
                "fitOutputLevel: record " + std::to_string(r) + " does not match the model's outputs or has NaN");
     if (U[r].rows() == 0) continue;
     const Eigen::MatrixXd residual =
-        Y[r] - (increments.empty() ? modelLevels(model, U[r]) : modelLevels(model, U[r], increments[r]));
+        Y[r] - (increments.empty() ? eval::modelLevels(model, U[r]) : eval::modelLevels(model, U[r], increments[r]));
     if (weights.empty()) {
       sum += residual.colwise().sum().transpose();
       n += static_cast<double>(U[r].rows());

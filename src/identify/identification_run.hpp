@@ -105,7 +105,7 @@ struct IdentificationRun {
   std::vector<Eigen::VectorXi> fold_rows;
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
-  std::vector<ModelRegressors> regs;
+  std::vector<eval::ModelRegressors> regs;
   Scoring scoring;
 
   // The best choice so far.

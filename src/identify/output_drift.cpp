@@ -58,7 +58,7 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
     for (std::size_t r = 0; r < U.size(); ++r) {
       if (U[r].rows() == 0) continue;
       const Eigen::MatrixXd ym = toModelFrame(model.output_frame, Yc[r]);
-      const Eigen::MatrixXd level = modelLevels(model, U[r], modelIncrements(model, U[r]));
+      const Eigen::MatrixXd level = eval::modelLevels(model, U[r], eval::modelIncrements(model, U[r]));
       const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
       for (Eigen::Index k = 0; k < ym.rows(); ++k) {
         const double w = weights.empty() ? 1.0 : weights[r](k);

@@ -17,7 +17,7 @@ namespace {
 // Cross-validation scores rows of the training logs themselves, whose sensor
 // the model's level is referenced to: no yaw to register, and the drift is
 // taken out of the rows about that run's own mean time.
-constexpr SimulationStart kSameSession{0, false};
+constexpr eval::SimulationStart kSameSession{0, false};
 
 }  // namespace
 
@@ -119,7 +119,7 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
   const int key = sim ? 0 : o.play_selection_horizon;
   // The regressors run over whole logs and do not depend on the fold: built
   // once, summed once per fold, and each fold's fit is a solve.
-  for (std::size_t r = 0; r < U.size(); ++r) modelRegressors(model, U[r], regs[r]);
+  for (std::size_t r = 0; r < U.size(); ++r) eval::modelRegressors(model, U[r], regs[r]);
   CoefficientSums sums;
   if (!drift_per_fold) sums = coefficientSums(model, regs, FYlog, fold_rows, o.play_selection_folds);
   double score = 0.0;
@@ -135,16 +135,16 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
       solveCoefficients(model, sums, f, o.coefficients);
     }
     std::vector<Eigen::MatrixXd> dys;
-    for (const ModelRegressors& reg : regs) dys.push_back(modelIncrements(model, reg));
+    for (const eval::ModelRegressors& reg : regs) dys.push_back(modelIncrements(model, reg));
     if (sim) fitOutputLevel(model, U, TY, W, dys);
     // One fit per output over every held-out row of the fold, all logs together.
     std::vector<std::vector<double>> meas(static_cast<std::size_t>(no)), pred(static_cast<std::size_t>(no));
     for (std::size_t r = 0; r < U.size(); ++r) {
       if (U[r].rows() <= o.play_selection_horizon) continue;
-      const std::vector<std::map<int, AlignedPrediction>> p = predictOutputs(
+      const std::vector<std::map<int, eval::AlignedPrediction>> p = eval::predictOutputs(
           model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
       for (int out_i = 0; out_i < no; ++out_i) {
-        const AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
+        const eval::AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
         for (Eigen::Index i = 0; i < a.values.size(); ++i)
           if (fold_rows[r](a.first + i) == f) {
             meas[static_cast<std::size_t>(out_i)].push_back(Y[r](a.first + i, out_i));
@@ -155,9 +155,9 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
     for (int out_i = 0; out_i < no; ++out_i) {
       const auto& m = meas[static_cast<std::size_t>(out_i)];
       if (m.size() < 2) continue;
-      score += nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
-                        Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
-                                                          static_cast<Eigen::Index>(m.size())));
+      score += eval::nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
+                              Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
+                                                                static_cast<Eigen::Index>(m.size())));
       ++n;
     }
   }
@@ -182,11 +182,12 @@ double IdentificationRun::crossValidatedContiguous(Score what) {
     for (std::size_t b = 0; b < BU.size(); ++b) {
       if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
       const bool sim = what == Score::kSimulation;
-      const std::vector<std::map<int, AlignedPrediction>> pred =
-          predictOutputs(model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon},
-                         sim, kSameSession);
+      const std::vector<std::map<int, eval::AlignedPrediction>> pred = eval::predictOutputs(
+          model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim,
+          kSameSession);
       for (int out_i = 0; out_i < no; ++out_i, ++n)
-        score += fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
+        score +=
+            eval::fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
     }
   }
   return score / std::max(1, n);

@@ -107,11 +107,11 @@ inline const AllEffectsRuns& allEffectsRuns() {
 
 // Every output of `v` above the floors (40-step, 80-step, simulation) and
 // above `w` at 40 and 80 steps by the gains.
-inline void expectLifted(const ValidationResult& v, const ValidationResult& w, const std::array<double, 3>& floor,
-                         const std::array<double, 2>& gain) {
+inline void expectLifted(const eval::ValidationResult& v, const eval::ValidationResult& w,
+                         const std::array<double, 3>& floor, const std::array<double, 2>& gain) {
   ASSERT_EQ(v.outputs.size(), w.outputs.size());
   for (std::size_t i = 0; i < v.outputs.size(); ++i) {
-    const OutputValidation &t = v.outputs[i], &b = w.outputs[i];
+    const eval::OutputValidation &t = v.outputs[i], &b = w.outputs[i];
     EXPECT_GT(t.fit_k.at(40), floor[0]) << t.name;
     EXPECT_GT(t.fit_k.at(80), floor[1]) << t.name;
     EXPECT_GT(t.fit_sim, floor[2]) << t.name;

@@ -32,7 +32,7 @@ struct Agreement {
 /// each horizon k with `offline[o].at(k)` (predictOutputs of the same model).
 template <class P>
 Agreement plannedAgainstOffline(P& p, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double dt,
-                                const std::vector<std::map<int, AlignedPrediction>>& offline,
+                                const std::vector<std::map<int, eval::AlignedPrediction>>& offline,
                                 const std::vector<int>& horizons, int stride) {
   const int H = *std::max_element(horizons.begin(), horizons.end());
   Eigen::MatrixXd out(H, y.cols());

@@ -9,7 +9,7 @@
 
 #include "plsa/eval/dio_prediction.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 struct ArxModel {
   int na = 4;
@@ -25,4 +25,4 @@ struct ArxModel {
   AlignedPrediction simulate(const Eigen::MatrixXd& u, const Eigen::VectorXd& y, int o) const;
 };
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -13,7 +13,7 @@
 #include "plsa/eval/validation.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 /// Full-length predictions (NaN where a model predicts nothing) per horizon
 /// (0 = free simulation), per output.
@@ -46,4 +46,4 @@ Eigen::Index commonScoringStart(const std::vector<ModelPredictions>& models);
 std::vector<std::vector<std::map<int, CommonScore>>> commonScores(const std::vector<ModelPredictions>& models,
                                                                   const Eigen::MatrixXd& y);
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -11,7 +11,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/eval/fit.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 /// A predicted trajectory aligned with the measurement: samples [first, T).
 struct AlignedPrediction {
@@ -75,4 +75,4 @@ inline double rmsErrorOf(const Eigen::Ref<const Eigen::VectorXd>& y, const Align
   return rmsError(y.segment(p.first, p.values.size()), p.values);
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -10,7 +10,7 @@
 
 #include "plsa/core/check.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 namespace detail {
 // What every error measure needs of a measured and a predicted signal.
@@ -48,4 +48,4 @@ inline double spreadOf(const Eigen::Ref<const Eigen::VectorXd>& y) {
   return (y.array() - y.mean()).matrix().norm() / std::sqrt(static_cast<double>(y.size()));
 }
 
-}  // namespace plsa
+}  // namespace plsa::eval

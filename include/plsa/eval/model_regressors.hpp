@@ -10,7 +10,7 @@
 
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 /// OBF regressors of every output and the region of every sample, for an
 /// input record u (T x n_u) starting at rest. At sample k the filters have
@@ -68,4 +68,4 @@ Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& 
 /// The same, the increments computed here.
 Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u);
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -11,7 +11,7 @@
 #include "plsa/eval/model_regressors.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
-namespace plsa {
+namespace plsa::eval {
 
 struct OutputValidation {
   std::string name;
@@ -155,4 +155,4 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
 /// over the scored samples (from scored_from): the fits recomputed from it are the ones printed.
 io::Log predictionLog(const ValidationResult& v);
 
-}  // namespace plsa
+}  // namespace plsa::eval

@@ -57,7 +57,7 @@ struct CoefficientSums {
 /// Sums over records whose regressors are given (modelRegressors(model, U[r])
 /// of the model's current structure); sample k of record r joins group
 /// group[r](k) in [0, groups). Y in the log's frame.
-CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<ModelRegressors>& regressors,
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<eval::ModelRegressors>& regressors,
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
                                 int groups);
 

@@ -71,6 +71,10 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
     entry["fit_sim"] = o.fit_sim;
     entry["rms"] = o.rms_k;
     entry["rms_sim"] = o.rms_sim;
+    entry["measured"] = o.measured;
+    entry["predicted"] = o.predicted_k;  // {horizon: array}, NaN before the first predicted sample
+    entry["simulated"] = o.simulated;
+    entry["scored_from"] = v.scored_from;
     entry["sim_departure"] = py::none();
     for (const plsa::eval::SimulationDeparture& d : departures)
       if (d.output == o.name)
@@ -229,9 +233,11 @@ PYBIND11_MODULE(_plsa, m) {
         py::arg("progress") = py::none(),
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
-        "Fits (%) and rms errors of a model on a CSV log: {output: {fit: {horizon: %}, fit_sim, rms, rms_sim, "
-        "sim_departure}}; sim_departure is None, or how far the free simulation leaves the measured range "
-        "(farthest, share_of_width, first_time_s) when it does by more than half its width");
+        "Fits (%) and rms errors of a model on a CSV log, with what was scored: {output: {fit: {horizon: %}, "
+        "fit_sim, rms, rms_sim, measured, predicted: {horizon: array}, simulated, scored_from, sim_departure}}; "
+        "the arrays span the log (NaN where a horizon has no prediction), fits count samples from scored_from on; "
+        "sim_departure is None, or how far the free simulation leaves the measured range (farthest, "
+        "share_of_width, first_time_s) when it does by more than half its width");
   m.def("read_log", &readLog, py::arg("path"),
         "A log (CSV, or a candump bus log decoded with plsa's CAN profile) as {column: array}, read (and "
         "checked) as the library reads it");

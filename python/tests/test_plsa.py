@@ -1,5 +1,8 @@
 """The Python module end to end on the built-in simulated actuator."""
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -36,7 +39,32 @@ def test_identified_model_predicts_the_validation_run(model, runs, tmp_path):
     path = tmp_path / "model.json"
     model.save(str(path))
     again = plsa.Model.load(str(path))
-    assert plsa.validate(again, str(runs[1]), horizons=[40]) == plsa.validate(model, str(runs[1]), horizons=[40])
+    a, b = plsa.validate(again, str(runs[1]), horizons=[40]), plsa.validate(model, str(runs[1]), horizons=[40])
+    for name in model.outputs:
+        assert a[name]["fit"] == b[name]["fit"] and a[name]["fit_sim"] == b[name]["fit_sim"]
+        assert np.array_equal(a[name]["predicted"][40], b[name]["predicted"][40], equal_nan=True)
+
+
+def nrmse_fit(y, yhat):
+    return 100.0 * (1.0 - np.linalg.norm(y - yhat) / np.linalg.norm(y - y.mean()))
+
+
+def test_validate_returns_the_arrays_it_scored(model, runs):
+    data = plsa.read_log(str(runs[1]))
+    v = plsa.validate(model, str(runs[1]), horizons=[40, 80])
+    for name in model.outputs:
+        o = v[name]
+        n = len(data[name])
+        np.testing.assert_array_equal(o["measured"], data[name])
+        assert o["simulated"].shape == (n,) and set(o["predicted"]) == {40, 80}
+        k80 = o["predicted"][80]
+        assert np.isnan(k80[:80]).all() and np.isfinite(k80[80:]).all(), "80 steps ahead starts at sample 80"
+        s = o["scored_from"]
+        assert 80 <= s < n
+        # The fits are the NRMSE fits of these arrays over the scored samples.
+        for k in (40, 80):
+            assert o["fit"][k] == pytest.approx(nrmse_fit(o["measured"][s:], o["predicted"][k][s:]), abs=1e-9)
+        assert o["fit_sim"] == pytest.approx(nrmse_fit(o["measured"][s:], o["simulated"][s:]), abs=1e-9)
 
 
 def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model, runs):
@@ -198,3 +226,22 @@ def test_version_is_the_tools():
     if exe:
         out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True).stdout
         assert plsa.__version__ in out, out
+
+
+def test_the_plotting_example_plots_what_validate_scores(model, runs, tmp_path):
+    pytest.importorskip("matplotlib", reason="python3-matplotlib is not installed (scripts/plsa-dev test installs it)")
+    example = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "validate_and_plot.py")
+    model_path, out = tmp_path / "model.json", tmp_path / "plot.png"
+    model.save(str(model_path))
+    r = subprocess.run([sys.executable, example, str(model_path), str(runs[1]), str(out), "--horizon", "40"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    with open(out, "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    fits = plsa.validate(model, str(runs[1]), horizons=[40])
+    for name in model.outputs:
+        assert f"{name}: 40-step fit {fits[name]['fit'][40]:.1f}%, simulation {fits[name]['fit_sim']:.1f}%" in r.stdout
+    # The plot is never written over an input.
+    r = subprocess.run([sys.executable, example, str(model_path), str(runs[1]), str(runs[1])],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "would overwrite an input" in r.stderr

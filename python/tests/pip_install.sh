@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# `pip install .` as the README gives it, into a fresh virtual environment
+# (Debian's packages visible, as its numpy and pytest), then the Python tests
+# against the installed package. Exit 77 (skipped, reason printed) when PyPI
+# cannot be reached for the build backend.
+#   pip_install.sh <source dir> <python3>
+set -euo pipefail
+src=$1
+python=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+"$python" -m venv --system-site-packages "$work/venv"
+pip=("$work/venv/bin/pip" --disable-pip-version-check --no-input --quiet)
+# The build backend from PyPI first, so a network failure reads as one.
+if ! "${pip[@]}" install "scikit-build-core>=0.10" "pybind11>=2.10" > "$work/backend.log" 2>&1; then
+  echo "skipped: pip cannot install the build backend (scikit-build-core, pybind11) from PyPI:"
+  tail -n 3 "$work/backend.log"
+  exit 77
+fi
+"${pip[@]}" install --no-build-isolation "$src"
+cd "$work"  # away from the source tree, so `import plsa` finds the installed package
+unset PYTHONPATH
+"$work/venv/bin/python" -c 'import plsa, plsa_lcm, sys; print("installed", plsa.__version__, "at", plsa.__file__)'
+"$work/venv/bin/python" -m pytest -q -p no:cacheprovider "$src/python/tests"

@@ -1,0 +1,123 @@
+// plsa diagnose and diagnose-selfcheck as a user runs them.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "plsa/eval/fit.hpp"
+#include "plsa/io/csv_log.hpp"
+#include "plsa/model/model_file.hpp"
+#include "support/cli_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+using Cli = plsa::test::CliTest;
+}  // namespace
+
+TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
+  // Data from an actuator with hysteresis; a simulator with every effect off,
+  // asked about two candidates.
+  ASSERT_EQ(run("sim-config --out " + file("full.json")), 0) << err_;
+  auto j = nlohmann::json::parse(slurp(file("full.json")));
+  for (const char* e : {"deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"})
+    j[e]["enabled"] = false;
+  std::ofstream(file("truth.json")) << j.dump();
+  j["hysteresis"]["enabled"] = false;
+  std::ofstream(file("sim.json")) << j.dump();
+  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment staircase1 --seed 3 --out " + file("a.csv")),
+            0)
+      << err_;
+  ASSERT_EQ(run("simulate --config " + file("truth.json") + " --experiment joystick --duration 30 --seed 4 --out " +
+                file("b.csv")),
+            0)
+      << err_;
+  ASSERT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
+                " --candidates hysteresis,creep --evaluations 60 --out " + file("diag")),
+            0)
+      << err_;
+  const auto d = nlohmann::json::parse(slurp(file("diag/diagnosis.json")));
+  ASSERT_EQ(d["ranking"].size(), 2u);
+  EXPECT_EQ(d["ranking"][0]["effect"], "hysteresis");
+  EXPECT_TRUE(fs::exists(file("diag/report.html")));
+  EXPECT_TRUE(fs::exists(file("diag/calibrated_sim.json")));
+  EXPECT_NE(err_.find("nominal calibration"), std::string::npos) << "no progress shown: " << err_;
+  // Bad input: a command column far outside the simulator's range names the fix.
+  std::ofstream(file("psi.csv")) << "time_s,cmd_1,cmd_2,cmd_3,bend_deg,steer_deg\n";
+  {
+    std::ofstream f(file("psi.csv"), std::ios::app);
+    for (int i = 0; i < 100; ++i) f << 0.0125 * i << ",5,0,0,1,0\n";
+  }
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("psi.csv") + " --out " + file("d2")), 1);
+  EXPECT_NE(err_.find("check --input-scale"), std::string::npos) << err_;
+  // One run twice would be both trained and held out on.
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
+                " --real " + file("a.csv") + " --out " + file("d3")),
+            1);
+  EXPECT_NE(err_.find("diagnose: " + file("a.csv") + " is given twice"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("d3")));
+}
+
+TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {
+  // Hysteresis withheld as the play operator and as Prandtl-Ishlinskii, with
+  // perturbed nominal physics, and a null case; the full set is in docs/diagnosis.md.
+  ASSERT_EQ(run("diagnose-selfcheck --truth own --settled --effects hysteresis --seeds 2 --no-pairs --null 1 "
+                "--train-s 40 --heldout-s 30 "
+                "--out " +
+                file("sc.json")),
+            0)
+      << err_ << slurp(file("stdout.txt"));
+  const auto j = nlohmann::json::parse(slurp(file("sc.json")));
+  ASSERT_EQ(j["cases"].size(), 3u);
+  EXPECT_TRUE(j["targets_met"].get<bool>());
+  EXPECT_EQ(j["cases"][1]["formulation"], "hysteresis prandtl_ishlinskii");
+  EXPECT_TRUE(j["cases"][2]["selected"].empty()) << "the null case claimed an effect";
+  EXPECT_NE(slurp(file("stdout.txt")).find("confusion matrix"), std::string::npos);
+}
+
+TEST_F(Cli, IndependentSelfcheckCasesAreSavedForDiagnoseAndScored) {
+  // The default truth: an independently written actuator, recorded from rest.
+  // A withheld deadzone (logistic law) and a null case; the whole 40-case
+  // matrix is in docs/diagnosis.md. Its runs go to CSV and diagnose reads them.
+  fs::create_directories(file("runs"));
+  // Exit 1 when a target is missed (here, on two cases, the shrink target
+  // may be), after the results are written.
+  const int rc =
+      run("diagnose-selfcheck --effects deadzone --seeds 1 --no-pairs --null 1 --train-s 40 --heldout-s 30 "
+          "--save-runs " +
+          file("runs") + " --out " + file("sc.json"));
+  ASSERT_TRUE(rc == 0 || rc == 1) << err_;
+  const auto j = nlohmann::json::parse(slurp(file("sc.json")));
+  EXPECT_EQ(rc == 0, j["targets_met"].get<bool>());
+  EXPECT_NE(slurp(file("stdout.txt")).find("confusion matrix"), std::string::npos);
+  EXPECT_EQ(j["truth"], "independent");
+  ASSERT_EQ(j["cases"].size(), 2u);
+  EXPECT_EQ(j["cases"][0]["formulation"], "deadzone logistic");
+  EXPECT_EQ(j["cases"][0]["selected"][0], "deadzone");
+  EXPECT_GT(j["cases"][0]["effect_size_percent"].get<double>(), 1.0);
+  EXPECT_EQ(j["cases"][1]["effect_size_percent"].get<double>(), 0.0);
+  EXPECT_TRUE(j["summary"].contains("gap_single_cases"));
+  const std::string train = file("runs") + "/deadzone__logistic___1_train.csv";
+  const std::string held = file("runs") + "/deadzone__logistic___1_heldout.csv";
+  ASSERT_TRUE(fs::exists(train) && fs::exists(held));
+  ASSERT_EQ(run("sim-config --out " + file("sim.json")), 0);
+  auto sim = nlohmann::json::parse(slurp(file("sim.json")));
+  for (const char* e : {"deadzone", "hysteresis", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"})
+    sim[e]["enabled"] = false;
+  std::ofstream(file("off.json")) << sim.dump();
+  ASSERT_EQ(run("diagnose --sim " + file("off.json") + " --real " + train + " " + held +
+                " --candidates deadzone creep --out " + file("dg")),
+            0)
+      << err_;
+  const auto d = nlohmann::json::parse(slurp(file("dg") + "/diagnosis.json"));
+  EXPECT_EQ(d["selected"][0], "deadzone");
+  // The runs were recorded from rest and are replayed so: the gap the self-check saw (up to the
+  // optimiser's path, which rounding in the CSV moves; a case misread as settled gave 18.1% for 11.3%).
+  const double seen = j["cases"][0]["gap_before"].get<double>();
+  EXPECT_NEAR(d["gap_before"].get<double>(), seen, 0.05 * seen);
+  for (const char* f : {"trace.csv", "gap_map.csv", "shrink.csv"}) EXPECT_TRUE(fs::exists(file("dg") + "/" + f)) << f;
+}

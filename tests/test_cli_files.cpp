@@ -1,0 +1,206 @@
+// The tools against hostile files, the CAN tools and bus logs: named errors, nothing overwritten.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "plsa/eval/fit.hpp"
+#include "plsa/io/csv_log.hpp"
+#include "plsa/model/model_file.hpp"
+#include "support/cli_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+using Cli = plsa::test::CliTest;
+}  // namespace
+
+TEST_F(Cli, CanBridgeRefusesOptionsTheBusCannotCarryBeforeOpeningIt) {
+  // memq:// keeps LCM in-process should a check ever let the bridge run.
+  const std::string base = "can-bridge --iface udp:7390:7391 --url memq:// --duration 0.2 ";
+  EXPECT_EQ(run(base + "--max-pressure 5"), 1);
+  EXPECT_NE(err_.find("signal 'setpoint_1' carries 0 to 0.65535 bar; the vent (0) and the set-point clamp (5 bar)"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(err_.find("clamp 5.000 bar"), std::string::npos) << "the bridge started: " << err_;
+  for (const std::string rate : {"1e6", "0", "-3", "nan"}) {
+    EXPECT_EQ(run(base + "--rate " + rate), 1) << rate;
+    EXPECT_NE(err_.find("--rate"), std::string::npos) << rate << ": " << err_;
+    EXPECT_NE(err_.find("is outside (0, 1000] Hz"), std::string::npos) << rate << ": " << err_;
+  }
+  // The watchdogs act at ticks: fewer than two per timeout would stretch it.
+  EXPECT_EQ(run(base + "--rate 5"), 1);
+  EXPECT_NE(err_.find("--rate 5 Hz ticks every 0.2 s, but the --sensor-timeout of 0.1 s needs a tick at least every "
+                      "0.05 s (--rate 20 or more)"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(run(base + "--rate 5 --sensor-timeout 1 --command-timeout 0.3"), 1);
+  EXPECT_NE(err_.find("the --command-timeout of 0.3 s"), std::string::npos) << err_;
+  EXPECT_EQ(run(base + "--rate 5 --sensor-timeout 0.4 --command-timeout 0.4"), 0) << err_;
+  // The same clamp on a profile with 1e-4 bar counts (0 to 6.5535 bar) is accepted and the bridge runs.
+  std::ofstream(file("wide.json")) << R"({"profile": "wide", "messages": [
+    {"name": "valve_command", "id": 256, "dlc": 8, "counter_byte": 6, "checksum_byte": 7, "signals": [
+      {"name": "s1", "byte": 0, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "s2", "byte": 2, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "s3", "byte": 4, "bits": 16, "endian": "little", "scale": 1e-4}]},
+    {"name": "pressure_sensor", "id": 512, "dlc": 8, "counter_byte": 6, "checksum_byte": 7, "signals": [
+      {"name": "p1", "byte": 0, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "p2", "byte": 2, "bits": 16, "endian": "little", "scale": 1e-4},
+      {"name": "p3", "byte": 4, "bits": 16, "endian": "little", "scale": 1e-4}]}]})";
+  EXPECT_EQ(run(base + "--max-pressure 5 --profile " + file("wide.json")), 0) << err_;
+  EXPECT_NE(err_.find("(profile wide)"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("clamp 5.000 bar"), std::string::npos) << err_;
+}
+
+namespace {
+
+// A small valid model of p_1, p_2 -> bend_deg (schema version 2), as text.
+std::string smallModelJson(double first_coefficient) {
+  nlohmann::json j = nlohmann::json::parse(R"({"schema": "plsa.dio_pwl_obf", "version": 2, "sample_time_s": 0.0125,
+    "inputs": ["p_1", "p_2"], "outputs": ["bend_deg"], "units": {"inputs": "bar", "outputs": "deg"},
+    "input_range": [0.0, 0.4], "poles": [[[[0.5, 0.0], [0.8, 0.0]], [[0.6, 0.1], [0.6, -0.1]]]],
+    "input_play": [[0.0], [0.0]], "play_start": "rising", "play_coupling": 0.0, "play_threshold": 0.0,
+    "play_softening": 0.0, "schedule_lag_s": 0.0, "schedule_side": "output", "output_frame": "as_logged",
+    "partition": {"inputs": [], "scheduling": "switched", "breakpoints": [], "direction_split": false,
+                  "direction_threshold": 0.001},
+    "regions": [{"samples": 100, "fallback_from": -1, "note": "", "coefficients": [[0.1, 0.2, 0.3, 0.4]]}]})");
+  j["regions"][0]["coefficients"][0][0] = first_coefficient;
+  return j.dump(1);
+}
+
+}  // namespace
+
+// Files a careless user or an attacker hands the tools: each ends in an error
+// that names the file and the reason, and no output replaces an input.
+TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.csv")), 0) << err_;
+  std::ofstream(file("m.json")) << smallModelJson(0.1);
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --horizons 40"), 0) << err_;
+  const std::string log_before = slurp(file("j.csv")), model_before = slurp(file("m.json"));
+
+  // Zero samples once ended in SIGSEGV.
+  EXPECT_EQ(run("simulate --experiment joystick --duration 0.006 --out " + file("x.csv")), 1);
+  EXPECT_NE(err_.find("joystick: a duration of 0.006 s is under two samples at 80 Hz"), std::string::npos) << err_;
+  // An endless file as a model grew without bound.
+  EXPECT_EQ(run("validate --model /dev/zero --log " + file("j.csv")), 1);
+  EXPECT_NE(err_.find("/dev/zero: the model file is larger than 64 MiB"), std::string::npos) << err_;
+
+  // Outputs never replace inputs: the training log, the model, the validation log.
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --out " + file("j.csv")), 1);
+  EXPECT_NE(err_.find("--out " + file("j.csv") + " is an input"), std::string::npos) << err_;
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --json " + file("m.json")), 1);
+  EXPECT_NE(err_.find("plsa never writes over what it reads"), std::string::npos) << err_;
+  fs::create_symlink(file("j.csv"), file("link.csv"));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --csv " + file("link.csv")), 1);
+  EXPECT_NE(err_.find("is the input " + file("j.csv")), std::string::npos) << err_;
+  EXPECT_EQ(run("simulate --config " + file("m.json") + " --experiment joystick --out " + file("m.json")), 1);
+  EXPECT_EQ(slurp(file("j.csv")), log_before);
+  EXPECT_EQ(slurp(file("m.json")), model_before);
+
+  // Validation needs the time column: without it no rate or gap could be checked.
+  {
+    std::ifstream in(file("j.csv"));
+    std::ofstream out(file("untimed.csv"));
+    for (std::string line; std::getline(in, line);) {
+      if (line[0] == '#') continue;
+      out << line.substr(line.find(',') + 1) << "\n";
+    }
+  }
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("untimed.csv")), 1);
+  EXPECT_NE(err_.find("untimed.csv:1: header has no column 'time_s'"), std::string::npos) << err_;
+
+  // A score that is no number is an error, not a table of -inf.
+  std::ofstream(file("huge.json")) << smallModelJson(1e300);
+  EXPECT_EQ(run("validate --model " + file("huge.json") + " --log " + file("j.csv") + " --horizons 40"), 1);
+  EXPECT_NE(err_.find("is -inf: the model's predictions reach"), std::string::npos) << err_;
+
+  // One glitch of 1e6 deg in the training data: refused by row and column.
+  {
+    std::ifstream in(file("j.csv"));
+    std::ofstream out(file("spike.csv"));
+    int data_row = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line[0] != '#' && line[0] != 't' && ++data_row == 500)
+        line = line.substr(0, line.rfind(',', line.rfind(',') - 1)) + ",1e6," + line.substr(line.rfind(',') + 1);
+      out << line << "\n";
+    }
+  }
+  EXPECT_EQ(run("identify --log " + file("spike.csv") + " --out " + file("spike.json")), 1);
+  EXPECT_NE(err_.find("spike.csv: data row 500, column 'bend_deg': 1e+06 lies"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("--keep-outliers"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("spike.json")));
+
+  // lcm-logger's own file names have no extension: the magic number tells.
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.lcmlog")), 0) << err_;
+  fs::rename(file("j.lcmlog"), file("lcmlog-2026-11-25.00"));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("lcmlog-2026-11-25.00") + " --horizons 40"), 0)
+      << err_;
+}
+
+// A bus recording as users make one (candump -l) feeds the tools like any
+// log: a simulated run written as CAN frames, read back to the signals'
+// resolution, and validated on directly; a log the bus could not carry and
+// an unknown profile are named.
+TEST_F(Cli, CandumpBusLogsConvertBothWaysAndFeedValidate) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.csv")), 0) << err_;
+  ASSERT_EQ(run("convert --in " + file("j.csv") + " --out " + file("j.candump")), 0) << err_;
+  const std::string bus = slurp(file("j.candump"));
+  ASSERT_EQ(bus.find("(40.012500) can0 200#"), 0u) << bus.substr(0, 200);  // the run's own times
+  // By content, under candump's own file name.
+  fs::copy_file(file("j.candump"), file("candump-2026-11-26_120000.log"));
+  ASSERT_EQ(run("convert --in " + file("candump-2026-11-26_120000.log") + " --out " + file("back.csv")), 0) << err_;
+  const plsa::io::Log before = plsa::io::readCsvLog(file("j.csv")), after = plsa::io::readCsvLog(file("back.csv"));
+  ASSERT_EQ(after.samples(), before.samples());
+  for (const char* c : {"p_1", "p_2", "p_3", "cmd_1", "cmd_3"})
+    EXPECT_LT((after.column(c) - before.column(c)).cwiseAbs().maxCoeff(), 0.6e-5) << c;  // 1e-5 bar per count
+  for (const char* c : {"bend_deg", "steer_deg"})
+    EXPECT_LT((after.column(c) - before.column(c)).cwiseAbs().maxCoeff(), 0.6e-2) << c;  // 0.01 deg per count
+  std::ofstream(file("m.json")) << smallModelJson(0.1);
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.candump") + " --horizons 40 --json " +
+                file("fits.json")),
+            0)
+      << err_;
+  EXPECT_TRUE(nlohmann::json::parse(slurp(file("fits.json"))).dump().find("bend_deg") != std::string::npos);
+  // A pressure beyond what the 16-bit signal carries (0.65535 bar) is named, not wrapped.
+  {
+    std::string text = slurp(file("j.csv"));
+    const auto row = text.find('\n', text.find("\ntime_s,") + 1) + 1;  // the first row after the header
+    const auto p1 = text.find(',', text.find(',', text.find(',', text.find(',', row) + 1) + 1) + 1) + 1;
+    text.replace(p1, text.find(',', p1) - p1, "0.9");
+    std::ofstream(file("high.csv")) << text;
+  }
+  EXPECT_EQ(run("convert --in " + file("high.csv") + " --out " + file("high.candump")), 1);
+  EXPECT_NE(err_.find("row 1 of " + file("high.csv") + ": pressure_sensor cannot carry its values"), std::string::npos)
+      << err_;
+  EXPECT_FALSE(fs::exists(file("high.candump")));
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.candump") + " --can-profile " +
+                file("nothing.json")),
+            2);
+}
+
+// CAN profiles as the bus's own DBC file: plsa's written as DBC, read back
+// (as JSON it is the documented profile file), and taken by --can-profile.
+TEST_F(Cli, CanProfilesGoBetweenJsonAndDbc) {
+  ASSERT_EQ(run("can-profile --out " + file("plsa.dbc")), 0) << err_;
+  EXPECT_NE(slurp(file("plsa.dbc")).find("BO_ 512 pressure_sensor: 8 plsa"), std::string::npos);
+  ASSERT_EQ(run("can-profile --in " + file("plsa.dbc") + " --out " + file("back.json")), 0) << err_;
+  std::string documented = slurp(std::string(PLSA_SOURCE_DIR) + "/docs/can-default-profile.json");
+  documented.replace(documented.find("plsa-default"), 12, "plsa");  // a DBC's profile is its file's name
+  EXPECT_EQ(slurp(file("back.json")), documented);
+  ASSERT_EQ(run("simulate --experiment joystick --duration 5 --seed 2 --out " + file("j.csv")), 0) << err_;
+  ASSERT_EQ(run("convert --in " + file("j.csv") + " --out " + file("j.candump") + " --can-profile " + file("plsa.dbc")),
+            0)
+      << err_;
+  ASSERT_EQ(
+      run("convert --in " + file("j.candump") + " --out " + file("j2.csv") + " --can-profile " + file("plsa.dbc")), 0)
+      << err_;
+  std::ofstream(file("bad.dbc")) << "BO_ 512 pressure_sensor: 8 A\n SG_ p : 3|16@1+ (1,0) [0|0] \"\" A\n";
+  EXPECT_EQ(run("convert --in " + file("j.candump") + " --out " + file("j3.csv") + " --can-profile " + file("bad.dbc")),
+            1);
+  EXPECT_NE(err_.find("bad.dbc:2: message 'pressure_sensor', signal 'p': starts at bit 3"), std::string::npos) << err_;
+  EXPECT_EQ(run("can-profile --in " + file("plsa.dbc") + " --out " + file("plsa.dbc")), 1);  // never over an input
+}

@@ -20,6 +20,7 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/lcm/lcm_log.hpp"
+#include "plsa/lcm/state_codec.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_bytes.hpp"
@@ -68,6 +69,12 @@ TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop
     EXPECT_EQ(inbox_.states[k].vented, 0);
   }
   EXPECT_EQ(max_diff, 0.0);
+  // One time base: states are stamped on the epoch time line, from the node's
+  // start plus simulated time (5 s for 400 samples), as its statuses are.
+  const std::int64_t now_us = plsa::lcm::epochMicroseconds();
+  EXPECT_EQ(inbox_.states[399].utime - inbox_.states[0].utime, 399 * 12'500);
+  EXPECT_LT(std::llabs(inbox_.states[0].utime - now_us), 60'000'000) << "state utime is not epoch microseconds";
+  EXPECT_LT(std::llabs(inbox_.statuses.front().utime - now_us), 60'000'000) << "status utime is not epoch time";
   EXPECT_LT(inbox_.states[79].bend_deg, 2.5);    // at rest: sensor tilt and noise only
   EXPECT_GT(inbox_.states[399].bend_deg, 45.0);  // settled step response
   EXPECT_GT(inbox_.states[399].pressure_bar[0], 0.29);
@@ -96,12 +103,21 @@ TEST_F(LcmSimTest, LockstepStepResponseMatchesSimulatorThenVentsWhenCommandsStop
   const Eigen::VectorXd time = rec.column("time_s"), bend = rec.column("bend_deg"), p1 = rec.column("p_1");
   int matched = 0;
   std::set<std::int64_t> recorded;
-  for (Eigen::Index r = 0; r < rec.samples(); ++r) recorded.insert(std::llround(time(r) * 1e6));
+  // Epoch microseconds (~1.8e15) make a round trip through seconds as a
+  // double to within 1 us: rows match the state nearest their time.
+  auto nearest = [&](double t) {
+    const std::int64_t us = std::llround(t * 1e6);
+    for (std::int64_t d : {0, -1, 1})
+      if (const auto it = by_time.find(us + d); it != by_time.end()) return it;
+    return by_time.end();
+  };
+  for (Eigen::Index r = 0; r < rec.samples(); ++r)
+    if (const auto it = nearest(time(r)); it != by_time.end()) recorded.insert(it->first);
   std::string missing;
   for (const auto& st : inbox_.states)
     if (st.seq < 400 && !recorded.count(st.utime)) missing += " " + std::to_string(st.seq);
   for (Eigen::Index r = 0; r < rec.samples(); ++r) {
-    const auto it = by_time.find(std::llround(time(r) * 1e6));
+    const auto it = nearest(time(r));
     ASSERT_NE(it, by_time.end()) << "recorded row " << r << " at " << time(r) << " s was never published";
     EXPECT_EQ(bend(r), it->second->bend_deg) << "row " << r;
     EXPECT_EQ(p1(r), it->second->pressure_bar[0]) << "row " << r;

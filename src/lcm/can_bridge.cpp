@@ -16,16 +16,12 @@
 #include <plsa_lcm/status_t.hpp>
 
 #include "plsa/lcm/message_codec.hpp"
+#include "plsa/lcm/state_codec.hpp"
 
 namespace plsa::lcm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::int64_t wallUs() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 class CanBridge {
  public:
@@ -157,7 +153,7 @@ class CanBridge {
 
   void publishState() {
     plsa_lcm::actuator_state_t m;
-    m.utime = wallUs();
+    m.utime = epochMicroseconds();
     m.seq = stats_.states++;
     m.n_chambers = 3;
     m.command_bar.assign(driver_.output().begin(), driver_.output().end());
@@ -176,7 +172,7 @@ class CanBridge {
     const can::DriverCounters& c = driver_.counters();
     const can::TransportStats t = transport_.stats();
     plsa_lcm::status_t s;
-    s.utime = wallUs();
+    s.utime = epochMicroseconds();
     s.source = "plsa can-bridge";
     s.state = state;
     s.message = message;

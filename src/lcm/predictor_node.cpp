@@ -16,6 +16,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/io/standard_columns.hpp"
 #include "plsa/lcm/message_codec.hpp"
+#include "plsa/lcm/state_codec.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/predict/realtime_thread.hpp"
 
@@ -168,8 +169,7 @@ class PredictorNode {
       return n ? sorted_[std::min(n - 1, static_cast<std::size_t>(f * static_cast<double>(n)))] : 0.0;
     };
     plsa_lcm::status_t s;
-    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-                  .count();
+    s.utime = epochMicroseconds();
     s.source = "plsa predict";
     // Rates over the time since the last status: what a monitor alarms on.
     const auto now = Clock::now();

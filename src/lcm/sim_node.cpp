@@ -24,7 +24,7 @@ using Clock = std::chrono::steady_clock;
 class SimNode {
  public:
   SimNode(const SimNodeOptions& o, const std::atomic<bool>& stop)
-      : o_(o), stop_(stop), lcm_(o.url), actuator_(o.config, o.seed) {
+      : o_(o), stop_(stop), lcm_(o.url), actuator_(o.config, o.seed), origin_us_(epochMicroseconds()) {
     if (!lcm_.good())
       throw std::runtime_error("plsa sim: cannot open LCM at '" + (o.url.empty() ? "default" : o.url) + "'");
     lcm_.subscribe(o.command_channel, &SimNode::onCommand, this);
@@ -146,7 +146,7 @@ class SimNode {
   }
 
   void publishState(const sim::ActuatorSample& s, bool vented) {
-    const plsa_lcm::actuator_state_t m = toMessage(s, stats_.states_published, vented);
+    const plsa_lcm::actuator_state_t m = toMessage(s, stats_.states_published, vented, origin_us_);
     lcm_.publish(o_.state_channel, &m);
     ++stats_.states_published;
   }
@@ -158,8 +158,7 @@ class SimNode {
 
   void publishStatus(int8_t state, const std::string& message) {
     plsa_lcm::status_t s;
-    s.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-                  .count();
+    s.utime = epochMicroseconds();
     s.source = "plsa sim";
     s.state = state;
     s.message = message;
@@ -176,6 +175,7 @@ class SimNode {
   const std::atomic<bool>& stop_;
   ::lcm::LCM lcm_;
   sim::Actuator actuator_;
+  std::int64_t origin_us_;  ///< epoch time at simulated time 0: states' utime = origin_us_ + simulated time
   Clock::duration period_{};
   Clock::duration timeout_{};
   std::array<double, 3> command_{0, 0, 0};
@@ -204,10 +204,11 @@ SimNodeStats runSimCanNode(const SimNodeOptions& o, can::CanTransport& transport
   can::SimulatedValveDevice device(transport, map, o.config, o.seed);
   device.setCommandTimeout(o.command_timeout_s);
   SimNodeStats stats;
+  const std::int64_t origin_us = epochMicroseconds();
   const can::SimulatedDeviceStats d =
       can::runSimulatedDevice(device, stop, o.duration_s, [&](const sim::ActuatorSample& s) {
         const bool vented = device.setpoint() == std::array<double, 3>{0, 0, 0};
-        const plsa_lcm::actuator_state_t m = toMessage(s, stats.states_published++, vented);
+        const plsa_lcm::actuator_state_t m = toMessage(s, stats.states_published++, vented, origin_us);
         lcm.publish(o.state_channel, &m);
       });
   stats.commands_accepted = d.valve_frames;

@@ -1,14 +1,21 @@
 #include "plsa/lcm/state_codec.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace plsa::lcm {
 
-plsa_lcm::actuator_state_t toMessage(const sim::ActuatorSample& s, std::int64_t seq, bool vented) {
+std::int64_t epochMicroseconds() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+plsa_lcm::actuator_state_t toMessage(const sim::ActuatorSample& s, std::int64_t seq, bool vented,
+                                     std::int64_t origin_us) {
   plsa_lcm::actuator_state_t m;
-  m.utime = static_cast<std::int64_t>(std::llround(s.time_s * 1e6));
+  m.utime = origin_us + static_cast<std::int64_t>(std::llround(s.time_s * 1e6));
   m.seq = seq;
   m.n_chambers = 3;
   m.command_bar.assign(s.command_bar.begin(), s.command_bar.end());

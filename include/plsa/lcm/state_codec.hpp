@@ -9,7 +9,16 @@
 
 namespace plsa::lcm {
 
-plsa_lcm::actuator_state_t toMessage(const sim::ActuatorSample& s, std::int64_t seq, bool vented);
+/// Microseconds since the Unix epoch, now, on the system clock: the time base
+/// of every plsa message's utime.
+std::int64_t epochMicroseconds();
+
+/// A simulator sample as a state message stamped utime = `origin_us` + its
+/// simulated time: with the epoch time at which the simulation started, the
+/// state sits on the same time line as every other message (a log converted
+/// from CSV keeps its own origin, 0 by default).
+plsa_lcm::actuator_state_t toMessage(const sim::ActuatorSample& s, std::int64_t seq, bool vented,
+                                     std::int64_t origin_us = 0);
 
 /// The standard log columns of a state message, in order:
 /// time_s, cmd_1..3, p_1..3, bend_deg, steer_deg. Throws if it has not 3 chambers.

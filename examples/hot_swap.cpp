@@ -39,9 +39,7 @@ int main(int argc, char** argv) {
     const plsa::sim::ActuatorSample s = arm.step({plan.commands(t, 0), plan.commands(t, 1), plan.commands(t, 2)});
     const Eigen::Vector3d p(s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2]);
     if (static_cast<int>(predictor.update(s.time_s, p, Eigen::Vector2d(s.bend_deg, s.steer_deg))) < 0) ++bad;
-    if (predictor.predict(80, hold, predicted) != plsa::PredictorStatus::kOk ||
-        !predicted.allFinite())
-      ++bad;
+    if (predictor.predict(80, hold, predicted) != plsa::PredictorStatus::kOk || !predicted.allFinite()) ++bad;
     (predictor.modelId() == first_id ? ticks_before : ticks_after) += 1;
     if (t == plan.commands.rows() / 2) swap_now.store(true);
     // This loop runs faster than the 80 Hz it stands for; while the install is

@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: predict_loop model.json (identify_model writes one)\n");
     return 2;
   }
-  constexpr int kHorizon = 80;  // 1 s at 80 Hz
+  constexpr int kHorizon = 80;                            // 1 s at 80 Hz
   plsa::Predictor<> predictor(plsa::loadModel(argv[1]));  // set-up: may throw
   plsa::sim::ExperimentOptions plan_options;
   plan_options.seed = 3;

@@ -32,8 +32,7 @@ struct DiagnoseArgs {
 void runDiagnose(DiagnoseArgs& a) {
   std::vector<std::string> inputs = a.real;
   inputs.push_back(a.sim);
-  for (const char* name :
-       {"diagnosis.json", "report.html", "calibrated_sim.json", "trace.csv", "gap_map.csv", "shrink.csv"})
+  for (const char* name : diagnose::kDiagnosisFiles)
     refuseOverwritingInputs((std::filesystem::path(a.out) / name).string(), "--out", inputs, "plsa diagnose");
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
@@ -50,14 +49,7 @@ void runDiagnose(DiagnoseArgs& a) {
   }
   a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);
-  std::filesystem::create_directories(a.out);
-  const auto dir = std::filesystem::path(a.out);
-  writeTextFile((dir / "diagnosis.json").string(), diagnose::toJson(d), "diagnosis");
-  writeTextFile((dir / "report.html").string(), diagnose::reportHtml(d), "HTML report");
-  for (const auto& [name, text] : diagnose::reportSeriesCsv(d))
-    writeTextFile((dir / name).string(), text, "report data " + name);
-  writeTextFile((dir / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config),
-                "calibrated simulator configuration");
+  diagnose::writeDiagnosisFolder(d, a.out);
   std::printf("%s\n", d.verdict.c_str());
   std::printf("where (held out, after nominal calibration):\n");
   for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());

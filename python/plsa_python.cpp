@@ -11,12 +11,14 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/eval/validation.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/io/log_readers.hpp"
@@ -25,6 +27,7 @@
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
+#include "plsa/sim/sim_config.hpp"
 
 namespace py = pybind11;
 
@@ -85,14 +88,68 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
   return result;
 }
 
-py::dict readLog(const std::string& path) {
-  const plsa::io::Log log = plsa::io::readLog(path);
+plsa::diagnose::RunColumns runColumns(std::optional<std::vector<std::string>> inputs,
+                                      std::optional<std::vector<std::string>> outputs,
+                                      std::optional<std::vector<std::string>> pressures, double input_scale,
+                                      const std::string& output_map) {
+  if (output_map != "angles" && output_map != "affine")
+    throw std::invalid_argument("diagnose: output_map '" + output_map + "': expected angles or affine");
+  plsa::diagnose::RunColumns c;
+  if (inputs) c.inputs = *inputs;
+  if (outputs) c.outputs = *outputs;
+  if (pressures) c.pressures = *pressures;  // []: none measured
+  c.input_scale = input_scale;
+  c.map = output_map == "affine" ? plsa::diagnose::OutputMap::kAffine : plsa::diagnose::OutputMap::kAngles;
+  return c;
+}
+
+// `plsa diagnose` from Python: the diagnosis as the dict its diagnosis.json
+// holds, and the folder (report, CSVs, calibrated configuration) when `out`
+// names one.
+py::object diagnose(const std::string& sim, const std::vector<std::string>& real, const plsa::diagnose::RunColumns& c,
+                    std::optional<std::vector<std::string>> candidates, std::optional<int> evaluations, int threads,
+                    std::function<void(const std::string&)> progress, std::optional<std::string> out) {
+  if (real.empty()) throw std::invalid_argument("diagnose: no real runs given");
+  if (out)
+    for (const std::string& input : real)
+      for (const char* name : plsa::diagnose::kDiagnosisFiles)
+        if (std::filesystem::weakly_canonical(std::filesystem::path(*out) / name) ==
+            std::filesystem::weakly_canonical(input))
+          throw std::invalid_argument("diagnose: out '" + *out + "' would write " + name + " over the input " + input);
+  const plsa::sim::SimConfig config = plsa::sim::loadSimConfig(sim);
+  plsa::diagnose::DiagnoseOptions o;
+  o.calibration.gap.map = c.map;
+  if (candidates) o.candidates = *candidates;
+  if (evaluations) o.calibration.max_evaluations = *evaluations;
+  o.threads = threads;
+  if (progress)
+    o.log = [progress](const std::string& line) {
+      py::gil_scoped_acquire gil;
+      progress(line);
+    };
+  std::vector<plsa::diagnose::RunData> runs;
+  for (const std::string& path : real)
+    runs.push_back(plsa::diagnose::runFromLog(plsa::io::readLog(path), c, config.max_pressure_bar));
+  plsa::diagnose::Diagnosis d;
+  {
+    py::gil_scoped_release unlocked;  // minutes of simulator runs: other Python threads run meanwhile
+    d = plsa::diagnose::runDiagnosis(config, runs, o);
+  }
+  if (out) plsa::diagnose::writeDiagnosisFolder(d, *out);
+  return py::module_::import("json").attr("loads")(plsa::diagnose::toJson(d));
+}
+
+// The log as {column: array}.
+py::dict columnsOf(const plsa::io::Log& log) {
   py::dict columns;
   for (const std::string& name : log.columns) columns[py::str(name)] = Eigen::VectorXd(log.column(name));
   return columns;
 }
 
-void simulate(const std::string& experiment, const std::string& path, std::uint64_t seed, double duration_s) {
+py::dict readLog(const std::string& path) { return columnsOf(plsa::io::readLog(path)); }
+
+py::dict simulate(const std::string& experiment, const std::optional<std::string>& path, std::uint64_t seed,
+                  double duration_s) {
   plsa::sim::ExperimentOptions eo;
   eo.seed = seed;
   if (duration_s > 0) eo.joystick_duration_s = duration_s;
@@ -104,7 +161,9 @@ void simulate(const std::string& experiment, const std::string& path, std::uint6
   else
     throw std::invalid_argument("simulate: experiment '" + experiment + "': expected grid2 or joystick");
   plsa::sim::Actuator actuator(plsa::sim::SimConfig{}, seed);
-  plsa::io::writeCsvLog(path, plsa::sim::runExperiment(actuator, e));
+  const plsa::io::Log log = plsa::sim::runExperiment(actuator, e);
+  if (path) plsa::io::writeCsvLog(*path, log);
+  return columnsOf(log);
 }
 
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -164,6 +223,13 @@ class PyPredictor {
     check("sensitivity", p_.sensitivity(horizon, plan, jacobian));
     return jacobian;
   }
+
+  // A re-identified model of the same structure, adopted at the next update.
+  void install(const plsa::DioPwlObfModel& model) {
+    py::gil_scoped_release unlocked;  // compiling may take a while: other Python threads run meanwhile
+    p_.install(model);
+  }
+  std::uint64_t modelId() const { return p_.modelId(); }
 
   int inputs() const { return p_.inputCount(); }
   int outputs() const { return p_.outputCount(); }
@@ -238,12 +304,31 @@ PYBIND11_MODULE(_plsa, m) {
         "the arrays span the log (NaN where a horizon has no prediction), fits count samples from scored_from on; "
         "sim_departure is None, or how far the free simulation leaves the measured range (farthest, "
         "share_of_width, first_time_s) when it does by more than half its width");
+  m.def(
+      "diagnose",
+      [](const std::string& sim, const std::vector<std::string>& real, std::optional<std::vector<std::string>> inputs,
+         std::optional<std::vector<std::string>> outputs, std::optional<std::vector<std::string>> pressures,
+         double input_scale, const std::string& output_map, std::optional<std::vector<std::string>> candidates,
+         std::optional<int> evaluations, int threads, std::function<void(const std::string&)> progress,
+         std::optional<std::string> out) {
+        return diagnose(sim, real, runColumns(inputs, outputs, pressures, input_scale, output_map), candidates,
+                        evaluations, threads, progress, out);
+      },
+      py::arg("sim"), py::arg("real"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
+      py::arg("pressures") = py::none(), py::arg("input_scale") = 1.0, py::arg("output_map") = "angles",
+      py::arg("candidates") = py::none(), py::arg("evaluations") = py::none(), py::arg("threads") = 2,
+      py::arg("progress") = py::none(), py::arg("out") = py::none(),
+      "Where and why a simulator (its configuration file) disagrees with real runs (logs), as `plsa diagnose`: "
+      "returns what diagnosis.json holds (verdict, ranking, gaps, where), and writes the report folder to out "
+      "when given; pressures=[] when none were measured");
   m.def("read_log", &readLog, py::arg("path"),
         "A log (CSV, or a candump bus log decoded with plsa's CAN profile) as {column: array}, read (and "
         "checked) as the library reads it");
-  m.def("simulate", &simulate, py::arg("experiment"), py::arg("path"), py::arg("seed") = 1, py::arg("duration_s") = 0.0,
+  m.def("simulate", &simulate, py::arg("experiment"), py::arg("path") = py::none(), py::arg("seed") = 1,
+        py::arg("duration_s") = 0.0,
         "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
-        "joystick run's length, default 60 s) into a CSV log");
+        "joystick run's length, default 60 s); returns the log as {column: array}, and writes it as a CSV log "
+        "to path when one is given");
 
   py::class_<PyPredictor>(m, "Predictor", "The real-time n-step predictor (plsa::Predictor<>)")
       .def(py::init<const plsa::DioPwlObfModel&, int>(), py::arg("model"), py::arg("max_horizon") = 400)
@@ -255,6 +340,11 @@ PYBIND11_MODULE(_plsa, m) {
            "For the bench: the p50 (ns) of `calls` C++ predict() calls on the current state, each timed alone")
       .def("sensitivity", &PyPredictor::sensitivity, py::arg("horizon"), py::arg("plan"),
            "(horizon * outputs) x ((horizon - 1) * inputs): d prediction / d plan")
+      .def("install", &PyPredictor::install, py::arg("model"),
+           "A model of the same structure (e.g. re-identified), adopted whole at the next update; raises "
+           "ValueError for another structure")
+      .def_property_readonly("model_id", &PyPredictor::modelId,
+                             "Which installed model the predictor runs: 0 the first, then one more per install")
       .def_property_readonly("inputs", &PyPredictor::inputs)
       .def_property_readonly("outputs", &PyPredictor::outputs);
 }

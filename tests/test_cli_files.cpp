@@ -58,16 +58,11 @@ TEST_F(Cli, CanBridgeRefusesOptionsTheBusCannotCarryBeforeOpeningIt) {
 
 namespace {
 
-// A small valid model of p_1, p_2 -> bend_deg (schema version 2), as text.
+// A small valid model of p_1, p_2 -> bend_deg (schema version 2, tests/data),
+// as text with its first coefficient set.
 std::string smallModelJson(double first_coefficient) {
-  nlohmann::json j = nlohmann::json::parse(R"({"schema": "plsa.dio_pwl_obf", "version": 2, "sample_time_s": 0.0125,
-    "inputs": ["p_1", "p_2"], "outputs": ["bend_deg"], "units": {"inputs": "bar", "outputs": "deg"},
-    "input_range": [0.0, 0.4], "poles": [[[[0.5, 0.0], [0.8, 0.0]], [[0.6, 0.1], [0.6, -0.1]]]],
-    "input_play": [[0.0], [0.0]], "play_start": "rising", "play_coupling": 0.0, "play_threshold": 0.0,
-    "play_softening": 0.0, "schedule_lag_s": 0.0, "schedule_side": "output", "output_frame": "as_logged",
-    "partition": {"inputs": [], "scheduling": "switched", "breakpoints": [], "direction_split": false,
-                  "direction_threshold": 0.001},
-    "regions": [{"samples": 100, "fallback_from": -1, "note": "", "coefficients": [[0.1, 0.2, 0.3, 0.4]]}]})");
+  std::ifstream in(std::string(PLSA_SOURCE_DIR) + "/tests/data/small_model.json");
+  nlohmann::json j = nlohmann::json::parse(in);
   j["regions"][0]["coefficients"][0][0] = first_coefficient;
   return j.dump(1);
 }

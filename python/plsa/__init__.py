@@ -7,6 +7,8 @@
     data = plsa.read_log("val.csv")              # {column: numpy array}
     p = plsa.Predictor(model)
     p.update(t, u, y); p.predict(80)            # the next 80 samples, input held
+    p.install(plsa.Model.load("model-v2.json"))  # adopted at the next update
+    plsa.diagnose("sim.json", ["run1.csv", "run2.csv"], out="diag")   # what diagnosis.json holds
 
 Errors in the inputs raise ValueError with the library's message.
 """
@@ -42,6 +44,6 @@ def _refuse_another_runtime():
 
 _refuse_another_runtime()
 
-from ._plsa import Model, Predictor, identify, read_log, simulate, validate  # noqa: E402
+from ._plsa import Model, Predictor, diagnose, identify, read_log, simulate, validate  # noqa: E402
 
-__all__ = ["__version__", "Model", "Predictor", "identify", "read_log", "simulate", "validate"]
+__all__ = ["__version__", "Model", "Predictor", "diagnose", "identify", "read_log", "simulate", "validate"]

@@ -67,13 +67,26 @@ def test_validate_returns_the_arrays_it_scored(model, runs):
         assert o["fit_sim"] == pytest.approx(nrmse_fit(o["measured"][s:], o["simulated"][s:]), abs=1e-9)
 
 
-def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model, runs):
-    data = plsa.read_log(str(runs[1]))
+def run_arrays(path):
+    """The log's columns, its inputs (p_1..p_3) and outputs (bend, steer) as rows."""
+    data = plsa.read_log(str(path))
     u = np.column_stack([data["p_1"], data["p_2"], data["p_3"]])
     y = np.column_stack([data["bend_deg"], data["steer_deg"]])
+    return data, u, y
+
+
+def fed_predictor(model, run, samples):
+    """A predictor fed the run's first samples, each accepted."""
+    data, u, y = run
     p = plsa.Predictor(model)
-    for k in range(800):
+    for k in range(samples):
         assert p.update(data["time_s"][k], u[k], y[k]) == "ok"
+    return p
+
+
+def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model, runs):
+    data, u, y = run = run_arrays(runs[1])
+    p = fed_predictor(model, run, 800)
     held = p.predict(80)
     assert held.shape == (80, 2) and np.all(np.isfinite(held))
     # 40 steps ahead the held prediction is within a few degrees of the run
@@ -245,3 +258,70 @@ def test_the_plotting_example_plots_what_validate_scores(model, runs, tmp_path):
     r = subprocess.run([sys.executable, example, str(model_path), str(runs[1]), str(runs[1])],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "would overwrite an input" in r.stderr
+
+
+def test_simulate_returns_the_run_it_writes(tmp_path):
+    path = tmp_path / "run.csv"
+    run = plsa.simulate("joystick", str(path), seed=3, duration_s=5)
+    again = plsa.simulate("joystick", seed=3, duration_s=5)  # no path: arrays only
+    read = plsa.read_log(str(path))
+    assert set(run) == set(read) and {"time_s", "p_1", "bend_deg"} <= set(run)
+    for name in read:
+        np.testing.assert_array_equal(run[name], again[name])
+        np.testing.assert_allclose(run[name], read[name], rtol=1e-15, atol=0)  # the CSV keeps every digit
+
+
+def test_a_predictor_adopts_an_installed_model_at_its_next_update(model, runs):
+    data, u, y = run = run_arrays(runs[1])
+    p = fed_predictor(model, run, 200)
+    before = p.predict(80)
+    assert p.model_id == 0
+    p.install(model)  # the same model again, as a re-identification might give
+    assert p.model_id == 0, "adopted only at the next update"
+    assert p.update(data["time_s"][200], u[200], y[200]) == "ok"
+    assert p.model_id == 1
+    fresh = fed_predictor(model, run, 201)
+    np.testing.assert_allclose(p.predict(80), fresh.predict(80), atol=1e-9)
+    assert not np.array_equal(before, p.predict(80)), "the state moved on with the sample"
+    # A model of another structure (two inputs, one output) is refused by name.
+    small = os.path.join(os.path.dirname(__file__), "..", "..", "tests", "data", "small_model.json")
+    with pytest.raises(ValueError, match="structure"):
+        p.install(plsa.Model.load(small))
+    assert p.update(data["time_s"][201], u[201], y[201]) == "ok" and p.model_id == 1
+
+
+
+def test_diagnose_names_the_withheld_effect_and_writes_its_report(tmp_path):
+    exe = os.environ.get("PLSA_EXE")
+    if not exe:
+        pytest.skip("PLSA_EXE is not set (ctest sets it to the built plsa tool, which writes the configurations)")
+    import json
+
+    # "Real" runs from an actuator with hysteresis; a simulator without it.
+    subprocess.run([exe, "sim-config", "--out", str(tmp_path / "full.json")], check=True, capture_output=True)
+    config = json.loads((tmp_path / "full.json").read_text())
+    for effect in ("deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"):
+        config[effect]["enabled"] = False
+    (tmp_path / "truth.json").write_text(json.dumps(config))
+    config["hysteresis"]["enabled"] = False
+    (tmp_path / "sim.json").write_text(json.dumps(config))
+    runs = []
+    for experiment, seed, extra in (("staircase1", "3", []), ("joystick", "4", ["--duration", "30"])):
+        runs.append(str(tmp_path / f"{experiment}.csv"))
+        subprocess.run([exe, "simulate", "--config", str(tmp_path / "truth.json"), "--experiment", experiment,
+                        "--seed", seed, "--out", runs[-1]] + extra, check=True, capture_output=True)
+    lines = []
+    d = plsa.diagnose(str(tmp_path / "sim.json"), runs, candidates=["hysteresis", "creep"], evaluations=60,
+                      progress=lines.append, out=str(tmp_path / "diag"))
+    assert [c["effect"] for c in d["ranking"]][0] == "hysteresis", d["ranking"]
+    assert any("nominal calibration" in l for l in lines), lines[:5]
+    assert d == json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
+    assert (tmp_path / "diag" / "report.html").read_text().startswith("<!DOCTYPE html>")
+    # A run named as one of the report's files, in the report's folder, is never written over.
+    trace = tmp_path / "trace.csv"
+    trace.write_bytes((tmp_path / "joystick.csv").read_bytes())
+    with pytest.raises(ValueError, match="would write trace.csv over the input"):
+        plsa.diagnose(str(tmp_path / "sim.json"), [runs[0], str(trace)], out=str(tmp_path))
+    assert trace.read_bytes() == (tmp_path / "joystick.csv").read_bytes()
+    with pytest.raises(ValueError, match="output_map"):
+        plsa.diagnose(str(tmp_path / "sim.json"), runs, output_map="polar")

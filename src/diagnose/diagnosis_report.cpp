@@ -2,11 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "plsa/diagnose/diagnosis.hpp"
+#include "plsa/core/text_file.hpp"
+#include "plsa/sim/sim_config.hpp"
 #include "plsa/report/svg_chart.hpp"
 
 namespace plsa::diagnose {
@@ -323,6 +326,17 @@ std::string reportHtml(const Diagnosis& d) {
   writeHowFar(h, d);
   writeNominal(h, d);
   return h.str();
+}
+
+void writeDiagnosisFolder(const Diagnosis& d, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path folder(dir);
+  writeTextFile((folder / "diagnosis.json").string(), toJson(d), "diagnosis");
+  writeTextFile((folder / "report.html").string(), reportHtml(d), "HTML report");
+  for (const auto& [name, text] : reportSeriesCsv(d))
+    writeTextFile((folder / name).string(), text, "report data " + name);
+  writeTextFile((folder / "calibrated_sim.json").string(), sim::simConfigToJson(d.final_config),
+                "calibrated simulator configuration");
 }
 
 }  // namespace plsa::diagnose

@@ -121,4 +121,11 @@ std::string reportHtml(const Diagnosis& d);
 /// shrink.csv (round-1 candidates). The report links to them by these names.
 std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis& d);
 
+/// The files a diagnosis writes into `dir` (made if missing), each
+/// atomically: diagnosis.json, report.html with the CSVs it plots, and
+/// calibrated_sim.json.
+inline const char* const kDiagnosisFiles[] = {"diagnosis.json", "report.html", "calibrated_sim.json",
+                                              "trace.csv",      "gap_map.csv", "shrink.csv"};
+void writeDiagnosisFolder(const Diagnosis& d, const std::string& dir);
+
 }  // namespace plsa::diagnose

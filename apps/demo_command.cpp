@@ -259,6 +259,31 @@ std::string demoPoleMap(const DemoModels& m) {
 }
 
 // 4. The self-contained HTML report.
+// What the report plots, as a CSV log beside it: the run's time and, per
+// output, the measured value and plsa's 40-step, 80-step and simulated
+// predictions (nan where a horizon has none yet, as validate --csv writes).
+void writePredictionsCsv(const DemoModels& m, const DemoScores& s, const Eigen::MatrixXd& Yv, const std::string& file) {
+  io::Log log;
+  log.source = file;
+  log.comments = {"plsa demo: the validation run and plsa's predictions of it, as report.html plots them"};
+  log.columns = {"time_s"};
+  std::vector<Eigen::VectorXd> columns{s.t};
+  for (std::size_t o = 0; o < m.model.outputs.size(); ++o) {
+    const auto& p = s.preds[0].by_output[o];
+    const std::string& name = m.model.outputs[o];
+    for (const auto& [suffix, v] : {std::pair<std::string, Eigen::VectorXd>{"", Yv.col(static_cast<Eigen::Index>(o))},
+                                    {"_k40", p.at(40)},
+                                    {"_k80", p.at(80)},
+                                    {"_sim", p.at(0)}}) {
+      log.columns.push_back(name + suffix);
+      columns.push_back(v);
+    }
+  }
+  log.data.resize(s.t.size(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t c = 0; c < columns.size(); ++c) log.data.col(static_cast<Eigen::Index>(c)) = columns[c];
+  io::writeCsvLog(file, log);
+}
+
 void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, const std::string& effects,
                  const OutputFolder& path) {
   const std::string drift_text =
@@ -282,20 +307,28 @@ void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, c
        << "coupling, schedule lag, play threshold, sensor drift and slow pole chosen by cross-validation on the grid. "
        << drift_text << "Every model is scored on the logged angles.</p>";
   reportTables(html, m, s);
+  html << "<p>Every plotted series: <a href=\"predictions.csv\">predictions.csv</a>.</p>";
   for (std::size_t o = 0; o < m.model.outputs.size(); ++o) {
     const auto& p = s.preds[0].by_output[o];
-    html << report::lineChart(m.model.outputs[o] + ": measured vs predicted (DIO-PWL-OBF, plsa)", s.t,
-                              {{"measured", Yv.col(static_cast<Eigen::Index>(o)), "#222", false},
+    const Eigen::VectorXd y = Yv.col(static_cast<Eigen::Index>(o));
+    const std::string& name = m.model.outputs[o];
+    html << report::lineChart(name + ": measured vs predicted (DIO-PWL-OBF, plsa)", s.t,
+                              {{"measured", y, "#222", false},
                                {"40-step", p.at(40), "#1f77b4", false},
                                {"80-step", p.at(80), "#2ca02c", true},
                                {"simulation", p.at(0), "#d62728", false}},
-                              "time (s)", m.model.outputs[o]);
+                              "time (s)", name);
+    html << report::lineChart(
+        name + ": residual, measured minus predicted", s.t,
+        {{"80-step", y - p.at(80), "#2ca02c", false}, {"simulation", y - p.at(0), "#d62728", false}}, "time (s)",
+        name + " residual", 900, 220);
   }
   html << demoPoleMap(m);
   html << "<h2>Identification log</h2><pre>";
   for (const auto& l : m.report.lines) html << report::escape(l) << "\n";
   html << "</pre></body></html>\n";
   writeTextFile(path("report.html"), html.str(), "HTML report");
+  writePredictionsCsv(m, s, Yv, path("predictions.csv"));
 }
 
 void runDemo(const DemoOptions& opt) {
@@ -318,8 +351,8 @@ void runDemo(const DemoOptions& opt) {
   writeReport(models, scores, runs.val, effects, path);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
-      "\n  wrote %s/{model.json, fits.json, report.html, train_grid2.csv, validate_joystick.csv,\n"
-      "    baseline_paper.json, baseline_global_linear.json} in %.1f s\n",
+      "\n  wrote %s/{model.json, fits.json, report.html, predictions.csv, train_grid2.csv,\n"
+      "    validate_joystick.csv, baseline_paper.json, baseline_global_linear.json} in %.1f s\n",
       opt.out_dir.c_str(), secs);
 }
 

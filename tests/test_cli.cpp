@@ -185,7 +185,7 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   ASSERT_EQ(run("demo --out " + file("demo")), 0) << err_;
   const std::string printed = slurp(file("stdout.txt"));
   for (const std::string f : {"model.json", "fits.json", "report.html", "train_grid2.csv", "validate_joystick.csv",
-                              "baseline_paper.json", "baseline_global_linear.json"}) {
+                              "baseline_paper.json", "baseline_global_linear.json", "predictions.csv"}) {
     ASSERT_TRUE(fs::exists(file("demo/" + f))) << f << " missing; stdout:\n" << printed;
     EXPECT_GT(fs::file_size(file("demo/" + f)), 100u) << f;
   }
@@ -217,6 +217,22 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   const std::string html = slurp(file("demo/report.html"));
   EXPECT_EQ(html.rfind("<!doctype html>", 0), 0u);
   EXPECT_NE(html.find("<svg"), std::string::npos) << "no plots in the report";
+  for (const std::string out : {"bend_deg", "steer_deg"})
+    EXPECT_NE(html.find(out + ": residual, measured minus predicted"), std::string::npos) << out;
+  // Every plotted series beside the page, linked from it: the measured run and plsa's predictions.
+  EXPECT_NE(html.find("href=\"predictions.csv\""), std::string::npos);
+  {
+    std::ifstream csv(file("demo/predictions.csv"));
+    std::string line;
+    while (std::getline(csv, line) && line.rfind("#", 0) == 0) {}
+    EXPECT_EQ(line,
+              "time_s,bend_deg,bend_deg_k40,bend_deg_k80,bend_deg_sim,steer_deg,steer_deg_k40,steer_deg_k80,"
+              "steer_deg_sim");
+    const plsa::io::Log run = plsa::io::readCsvLog(file("demo/validate_joystick.csv"));
+    std::size_t rows = 0;
+    while (std::getline(csv, line)) ++rows;
+    EXPECT_EQ(static_cast<Eigen::Index>(rows), run.samples());
+  }
   for (const std::string external : {"src=\"http", "href=\"http", "<script src", "<link"})
     EXPECT_EQ(html.find(external), std::string::npos) << "the report loads " << external;
   // plsa's model and the global linear baseline, re-scored by validate with

@@ -261,21 +261,7 @@ class PyPredictor {
   Eigen::MatrixXd plan_, out_;  // max_horizon rows: the plan as the predictor reads it, the rows it writes
 };
 
-}  // namespace
-
-PYBIND11_MODULE(_plsa, m) {
-  m.doc() = "plsa: identification and prediction of pneumatic soft actuators (DIO-PWL-OBF)";
-  plsa::can::registerLogFormats();  // candump bus logs, as the tools read them
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const std::invalid_argument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    } catch (const std::runtime_error& e) {
-      PyErr_SetString(PyExc_RuntimeError, e.what());
-    }
-  });
-
+void bindModel(py::module_& m) {
   py::class_<plsa::DioPwlObfModel>(m, "Model", "An identified DIO-PWL-OBF model")
       .def_static("load", &plsa::loadModel, py::arg("path"), "Read a model file (JSON)")
       .def(
@@ -292,7 +278,9 @@ PYBIND11_MODULE(_plsa, m) {
                " outputs, " + std::to_string(self.partition.regionCount()) + " regions, " +
                plsa::toString(self.output_frame) + ">";
       });
+}
 
+void bindTools(py::module_& m) {
   m.def("identify", &identify, py::arg("logs"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
         py::arg("poles") = 5, py::arg("scheduling") = "auto", py::arg("cv_layout") = "interleaved",
         py::arg("output_drift") = "auto", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
@@ -329,7 +317,9 @@ PYBIND11_MODULE(_plsa, m) {
         "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
         "joystick run's length, default 60 s); returns the log as {column: array}, and writes it as a CSV log "
         "to path when one is given");
+}
 
+void bindPredictor(py::module_& m) {
   py::class_<PyPredictor>(m, "Predictor", "The real-time n-step predictor (plsa::Predictor<>)")
       .def(py::init<const plsa::DioPwlObfModel&, int>(), py::arg("model"), py::arg("max_horizon") = 400)
       .def("update", &PyPredictor::update, py::arg("time_s"), py::arg("u"), py::arg("y"),
@@ -347,4 +337,24 @@ PYBIND11_MODULE(_plsa, m) {
                              "Which installed model the predictor runs: 0 the first, then one more per install")
       .def_property_readonly("inputs", &PyPredictor::inputs)
       .def_property_readonly("outputs", &PyPredictor::outputs);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_plsa, m) {
+  m.doc() = "plsa: identification and prediction of pneumatic soft actuators (DIO-PWL-OBF)";
+  plsa::can::registerLogFormats();  // candump bus logs, as the tools read them
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const std::invalid_argument& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const std::runtime_error& e) {
+      PyErr_SetString(PyExc_RuntimeError, e.what());
+    }
+  });
+
+  bindModel(m);
+  bindTools(m);
+  bindPredictor(m);
 }

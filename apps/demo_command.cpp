@@ -307,7 +307,7 @@ void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, c
        << "coupling, schedule lag, play threshold, sensor drift and slow pole chosen by cross-validation on the grid. "
        << drift_text << "Every model is scored on the logged angles.</p>";
   reportTables(html, m, s);
-  html << "<p>Every plotted series: <a href=\"predictions.csv\">predictions.csv</a>.</p>";
+  html << "<p>Every plotted series: <a href=\"predictions.csv\">predictions.csv</a>. " << report::kChartHint << "</p>";
   for (std::size_t o = 0; o < m.model.outputs.size(); ++o) {
     const auto& p = s.preds[0].by_output[o];
     const Eigen::VectorXd y = Yv.col(static_cast<Eigen::Index>(o));
@@ -326,7 +326,7 @@ void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, c
   html << demoPoleMap(m);
   html << "<h2>Identification log</h2><pre>";
   for (const auto& l : m.report.lines) html << report::escape(l) << "\n";
-  html << "</pre></body></html>\n";
+  html << "</pre>" << report::chartScript() << "</body></html>\n";
   writeTextFile(path("report.html"), html.str(), "HTML report");
   writePredictionsCsv(m, s, Yv, path("predictions.csv"));
 }

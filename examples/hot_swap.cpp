@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
     if (swap_now.load() && !swapped.load()) std::this_thread::sleep_for(std::chrono::microseconds(12500));
   }
   installer.join();
-  predictor.collectRetired();  // frees the old model, off the real-time thread
+  predictor.collectRetired();  // frees the old model: once the loop is done, or from any non-real-time thread
   std::printf("model %llu for %ld ticks, then model %llu for %ld ticks; %ld failed calls\n",
               static_cast<unsigned long long>(first_id), ticks_before,
               static_cast<unsigned long long>(predictor.modelId()), ticks_after, bad);

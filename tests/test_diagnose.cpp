@@ -15,6 +15,7 @@
 
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
+#include "support/headless_chromium.hpp"
 #include "support/sim_probes.hpp"
 
 using namespace plsa;
@@ -199,36 +200,33 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_EQ(lines(series[0].second), static_cast<std::size_t>(d.trace_real.rows()) + 1);
   EXPECT_EQ(lines(series[1].second), static_cast<std::size_t>(d.where.gap_map.size()) + 1);
   EXPECT_EQ(lines(series[2].second), d.ranking.size() + 1);
+  // The residual columns are real minus each simulation, as the residual charts plot them.
+  std::istringstream rows(series[0].second);
+  std::string header, row;
+  std::getline(rows, header);
+  std::getline(rows, row);
+  EXPECT_NE(header.find("residual_calibrated_sim_1,residual_calibrated_sim_2,residual_with_effects_1"),
+            std::string::npos);
+  std::vector<double> v;
+  for (std::istringstream cells(row); std::getline(cells, header, ',');) v.push_back(std::stod(header));
+  ASSERT_EQ(v.size(), 11u);
+  EXPECT_DOUBLE_EQ(v[7], v[1] - v[3]);
+  EXPECT_DOUBLE_EQ(v[10], v[2] - v[6]);
 
   // The report renders its charts in a real browser.
-  const char* chromium = "/usr/bin/chromium";
-  if (!fs::exists(chromium)) GTEST_SKIP() << "chromium not installed: the report was not opened in a browser";
-  const fs::path dir = fs::temp_directory_path() / ("plsa_diag_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  std::ofstream(dir / "report.html") << reportHtml(d);
-  const std::string cmd = std::string(chromium) +
-                          " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
-                          " --disable-background-networking --disable-component-update --disable-sync"
-                          " --user-data-dir=" +
-                          (dir / "profile").string() + " --dump-dom file://" + (dir / "report.html").string() + " > " +
-                          (dir / "dom.html").string() + " 2>/dev/null";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::stringstream dom;
-  dom << std::ifstream(dir / "dom.html").rdbuf();
-  const std::string html = dom.str();
-  auto count = [&](const std::string& what) {
-    std::size_t n = 0;
-    for (std::size_t at = html.find(what); at != std::string::npos; at = html.find(what, at + 1)) ++n;
-    return n;
-  };
+  const test::RenderedPage page = test::renderInChromium(reportHtml(d));
+  if (!page.browser_found) GTEST_SKIP() << "chromium not installed: the report was not opened in a browser";
+  ASSERT_EQ(page.status, 0);
+  const std::string& html = page.dom;
+  auto count = [&](const std::string& what) { return test::occurrences(html, what); };
   EXPECT_NE(html.find("id=\"verdict\""), std::string::npos) << "the page did not load";
   EXPECT_EQ(count("<rect class=\"cell\""), 32u) << "two 4x4 gap maps";
   EXPECT_EQ(count("<g class=\"colour-bar\""), 2u) << "a colour bar per map";
   EXPECT_EQ(count("RMS residual (deg, bending vector)"), 2u) << "the maps' unit";
   EXPECT_NE(html.find("href=\"trace.csv\""), std::string::npos);
   EXPECT_EQ(count("<rect class=\"bar\""), d.ranking.size()) << "one bar per candidate";
-  EXPECT_EQ(count("<path class=\"series\""), 6u) << "real, sim and sim+effect traces for two outputs";
-  fs::remove_all(dir);
+  EXPECT_EQ(count("<path class=\"series\""), 10u) << "real, sim and sim+effect traces and two residuals, two outputs";
+  EXPECT_EQ(count("<g class=\"readout\""), 4u) << "the page's script made every trace chart interactive";
 }
 
 TEST(Diagnose, NullCaseClaimsNothing) {

@@ -145,11 +145,14 @@ std::string csvNumber(double v) {
 
 std::vector<std::pair<std::string, std::string>> reportSeriesCsv(const Diagnosis& d) {
   std::ostringstream trace, map, shrink;
-  trace << "time_s,real_1,real_2,calibrated_sim_1,calibrated_sim_2,with_effects_1,with_effects_2\n";
+  trace << "time_s,real_1,real_2,calibrated_sim_1,calibrated_sim_2,with_effects_1,with_effects_2,"
+           "residual_calibrated_sim_1,residual_calibrated_sim_2,residual_with_effects_1,residual_with_effects_2\n";
   for (Eigen::Index i = 0; i < d.trace_real.rows(); ++i) {
     trace << csvNumber(static_cast<double>(i) * d.trace_dt);
     for (const Eigen::MatrixXd* m : {&d.trace_real, &d.trace_before, &d.trace_after})
       for (Eigen::Index c = 0; c < 2; ++c) trace << ',' << csvNumber((*m)(i, c));
+    for (const Eigen::MatrixXd* m : {&d.trace_before, &d.trace_after})
+      for (Eigen::Index c = 0; c < 2; ++c) trace << ',' << csvNumber(d.trace_real(i, c) - (*m)(i, c));
     trace << '\n';
   }
   map << "chamber_1_from_bar,chamber_1_to_bar,chamber_2_from_bar,chamber_2_to_bar,rms_before,rms_after\n";
@@ -285,13 +288,20 @@ void writeHowFar(std::ostream& h, const Diagnosis& d) {
                                   : std::array<std::string, 2>{"output 1", "output 2"};
   const std::string with =
       d.selected.empty() ? "sim (no effect kept)" : "sim + " + d.selected[0] + (d.selected.size() > 1 ? " + ..." : "");
+  h << "<p class=\"note\">" << report::kChartHint << "</p>\n";
   for (int c = 0; c < 2; ++c) {
+    const auto& name = names[static_cast<std::size_t>(c)];
+    const Eigen::VectorXd real = d.trace_real.col(c);
     h << "<div class=\"trace\" id=\"trace-" << c + 1 << "\">"
-      << report::lineChart("Held-out run: " + names[static_cast<std::size_t>(c)], t,
-                           {{"real", d.trace_real.col(c), "#222222", false},
+      << report::lineChart("Held-out run: " + name, t,
+                           {{"real", real, "#222222", false},
                             {"calibrated sim", d.trace_before.col(c), "#4060c0", true},
                             {with, d.trace_after.col(c), "#c04040", false}},
-                           "time (s)", names[static_cast<std::size_t>(c)])
+                           "time (s)", name)
+      << report::lineChart("Held-out residual: real minus simulated, " + name, t,
+                           {{"calibrated sim", real - d.trace_before.col(c), "#4060c0", true},
+                            {with, real - d.trace_after.col(c), "#c04040", false}},
+                           "time (s)", "residual, " + name, 900, 220)
       << "</div>\n";
   }
   h << "<table><tr><th>region (chamber, band, direction)</th><th>RMS before</th><th>RMS after</th></tr>";
@@ -313,7 +323,8 @@ void writeNominal(std::ostream& h, const Diagnosis& d) {
        "<table><tr><th>parameter</th><th>value</th></tr>";
   for (const auto& [k, v] : d.nominal_params)
     h << "<tr><td>" << escape(k) << "</td><td>" << fmt(v, "%.4g") << "</td></tr>";
-  h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n</body></html>\n";
+  h << "</table>\n<p class=\"note\">Made by plsa diagnose in " << fmt(d.elapsed_s) << " s.</p>\n"
+    << report::chartScript() << "</body></html>\n";
 }
 
 }  // namespace

@@ -49,10 +49,21 @@ std::string escape(const std::string& s) {
   return o;
 }
 
-std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const std::vector<Series>& series,
-                      const std::string& x_label, const std::string& y_label, int width, int height) {
-  const double ml = 60, mr = 150, mt = 30, mb = 40;
-  const double pw = width - ml - mr, ph = height - mt - mb;
+namespace {
+
+// Where a line chart's plot area sits and which values its edges show.
+struct LineFrame {
+  double ml = 60, mr = 150, mt = 30, mb = 40;
+  double pw = 0, ph = 0;
+  double xmin = 0, xmax = 1, ymin = 0, ymax = 1;
+  double X(double v) const { return ml + (v - xmin) / std::max(1e-12, xmax - xmin) * pw; }
+  double Y(double v) const { return mt + (ymax - v) / (ymax - ymin) * ph; }
+};
+
+LineFrame lineFrame(const Eigen::VectorXd& x, const std::vector<Series>& series, int width, int height) {
+  LineFrame f;
+  f.pw = width - f.ml - f.mr;
+  f.ph = height - f.mt - f.mb;
   double ymin = INFINITY, ymax = -INFINITY;
   for (const auto& s : series)
     for (Eigen::Index i = 0; i < s.y.size(); ++i)
@@ -63,33 +74,41 @@ std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const 
   if (!std::isfinite(ymin)) ymin = 0, ymax = 1;
   if (ymax - ymin < 1e-12) ymin -= 1, ymax += 1;
   const double pad = 0.05 * (ymax - ymin);
-  ymin -= pad;
-  ymax += pad;
-  const double xmin = x.size() ? x.minCoeff() : 0, xmax = x.size() ? x.maxCoeff() : 1;
-  auto X = [&](double v) { return ml + (v - xmin) / std::max(1e-12, xmax - xmin) * pw; };
-  auto Y = [&](double v) { return mt + (ymax - v) / (ymax - ymin) * ph; };
-  std::ostringstream o;
-  o << "<svg class=\"chart\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
-    << "\" viewBox=\"0 0 " << width << " " << height << "\" role=\"img\" aria-label=\"" << escape(title) << "\">\n";
-  o << "<text x=\"" << ml << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
-  o << "<rect x=\"" << ml << "\" y=\"" << mt << "\" width=\"" << pw << "\" height=\"" << ph
-    << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
-  const double ys = niceStep(ymax - ymin, 5);
-  for (double v = std::ceil(ymin / ys) * ys; v <= ymax; v += ys)
-    o << "<line x1=\"" << ml << "\" x2=\"" << ml + pw << "\" y1=\"" << num(Y(v)) << "\" y2=\"" << num(Y(v))
-      << "\" stroke=\"#e3e3e3\"/><text x=\"" << ml - 6 << "\" y=\"" << num(Y(v) + 4)
+  f.ymin = ymin - pad;
+  f.ymax = ymax + pad;
+  if (x.size()) f.xmin = x.minCoeff(), f.xmax = x.maxCoeff();
+  return f;
+}
+
+// Title, plot area, grid lines with their tick labels, and the axis labels.
+// The ticks sit in their own groups, which the page's script redraws on zoom.
+void writeLineAxes(std::ostream& o, const LineFrame& f, const std::string& title, const std::string& x_label,
+                   const std::string& y_label, int height) {
+  o << "<text x=\"" << f.ml << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\">" << escape(title) << "</text>\n";
+  o << "<rect class=\"plot-area\" x=\"" << f.ml << "\" y=\"" << f.mt << "\" width=\"" << f.pw << "\" height=\"" << f.ph
+    << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n<g class=\"y-ticks\">";
+  const double ys = niceStep(f.ymax - f.ymin, 5);
+  for (double v = std::ceil(f.ymin / ys) * ys; v <= f.ymax; v += ys)
+    o << "<line x1=\"" << f.ml << "\" x2=\"" << f.ml + f.pw << "\" y1=\"" << num(f.Y(v)) << "\" y2=\"" << num(f.Y(v))
+      << "\" stroke=\"#e3e3e3\"/><text x=\"" << f.ml - 6 << "\" y=\"" << num(f.Y(v) + 4)
       << "\" font-size=\"11\" text-anchor=\"end\">" << tick(v) << "</text>\n";
-  const double xs = niceStep(xmax - xmin, 8);
-  for (double v = std::ceil(xmin / xs) * xs; v <= xmax; v += xs)
-    o << "<text x=\"" << num(X(v)) << "\" y=\"" << mt + ph + 15 << "\" font-size=\"11\" text-anchor=\"middle\">"
+  o << "</g><g class=\"x-ticks\">";
+  const double xs = niceStep(f.xmax - f.xmin, 8);
+  for (double v = std::ceil(f.xmin / xs) * xs; v <= f.xmax; v += xs)
+    o << "<text x=\"" << num(f.X(v)) << "\" y=\"" << f.mt + f.ph + 15 << "\" font-size=\"11\" text-anchor=\"middle\">"
       << tick(v) << "</text>\n";
-  o << "<text x=\"" << ml + pw / 2 << "\" y=\"" << height - 6 << "\" font-size=\"12\" text-anchor=\"middle\">"
+  o << "</g>\n<text x=\"" << f.ml + f.pw / 2 << "\" y=\"" << height - 6 << "\" font-size=\"12\" text-anchor=\"middle\">"
     << escape(x_label) << "</text>\n";
-  o << "<text x=\"14\" y=\"" << mt + ph / 2 << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
-    << mt + ph / 2 << ")\">" << escape(y_label) << "</text>\n";
+  o << "<text x=\"14\" y=\"" << f.mt + f.ph / 2
+    << "\" font-size=\"12\" text-anchor=\"middle\" transform=\"rotate(-90 14 " << f.mt + f.ph / 2 << ")\">"
+    << escape(y_label) << "</text>\n";
+}
+
+// Each series as one path (about 1500 points; NaN breaks the line), then its legend entry.
+void writeLineSeries(std::ostream& o, const LineFrame& f, const Eigen::VectorXd& x, const std::vector<Series>& series) {
   const Eigen::Index n = x.size();
   const Eigen::Index stride = std::max<Eigen::Index>(1, n / 1500);
-  int li = 0;
+  o << "<g class=\"traces\">\n";
   for (const auto& s : series) {
     o << "<path class=\"series\" fill=\"none\" stroke=\"" << s.color << "\" stroke-width=\"1.3\""
       << (s.dashed ? " stroke-dasharray=\"5,3\"" : "") << " d=\"";
@@ -99,17 +118,70 @@ std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const 
         pen = false;
         continue;
       }
-      o << (pen ? "L" : "M") << num(X(x(i))) << "," << num(Y(s.y(i))) << " ";
+      o << (pen ? "L" : "M") << num(f.X(x(i))) << "," << num(f.Y(s.y(i))) << " ";
       pen = true;
     }
     o << "\"/>\n";
-    const double ly = mt + 14 + 18 * li++;
-    o << "<line x1=\"" << ml + pw + 10 << "\" x2=\"" << ml + pw + 30 << "\" y1=\"" << ly << "\" y2=\"" << ly
+  }
+  o << "</g>\n";
+  int li = 0;
+  for (const auto& s : series) {
+    const double ly = f.mt + 14 + 18 * li++;
+    o << "<line x1=\"" << f.ml + f.pw + 10 << "\" x2=\"" << f.ml + f.pw + 30 << "\" y1=\"" << ly << "\" y2=\"" << ly
       << "\" stroke=\"" << s.color << "\" stroke-width=\"2\"" << (s.dashed ? " stroke-dasharray=\"5,3\"" : "")
-      << "/><text x=\"" << ml + pw + 34 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(s.label)
+      << "/><text x=\"" << f.ml + f.pw + 34 << "\" y=\"" << ly + 4 << "\" font-size=\"11\">" << escape(s.label)
       << "</text>\n";
   }
+}
+
+std::string jsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.7g", v);
+  return b;
+}
+
+// The chart's samples as JSON for the page's zoom and hover (every k-th above
+// kMaxEmbeddedSamples). '<' never occurs in it, so it cannot end its script element.
+void writeLineData(std::ostream& o, const Eigen::VectorXd& x, const std::vector<Series>& series) {
+  const Eigen::Index n = x.size();
+  const Eigen::Index stride = std::max<Eigen::Index>(1, (n + kMaxEmbeddedSamples - 1) / kMaxEmbeddedSamples);
+  auto column = [&](const Eigen::VectorXd& v) {
+    o << '[';
+    for (Eigen::Index i = 0; i < n; i += stride) o << (i ? "," : "") << jsonNumber(i < v.size() ? v(i) : NAN);
+    o << ']';
+  };
+  o << "<script type=\"application/json\" class=\"plot-data\">{\"x\":";
+  column(x);
+  o << ",\"labels\":[";
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    o << (s ? "," : "") << '"';
+    for (char c : series[s].label) o << (c == '"' || c == '\\' || c == '<' || (c >= 0 && c < 0x20) ? ' ' : c);
+    o << '"';
+  }
+  o << "],\"series\":[";
+  for (std::size_t s = 0; s < series.size(); ++s) {
+    if (s) o << ',';
+    column(series[s].y);
+  }
+  o << "]}</script>\n";
+}
+
+}  // namespace
+
+std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const std::vector<Series>& series,
+                      const std::string& x_label, const std::string& y_label, int width, int height) {
+  const LineFrame f = lineFrame(x, series, width, height);
+  std::ostringstream o;
+  o << "<div class=\"plot\" data-x-label=\"" << escape(x_label) << "\">\n";
+  o << "<svg class=\"chart zoomable\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\""
+    << height << "\" viewBox=\"0 0 " << width << " " << height << "\" role=\"img\" aria-label=\"" << escape(title)
+    << "\" data-plot=\"" << f.ml << ' ' << f.mt << ' ' << f.pw << ' ' << f.ph << "\">\n";
+  writeLineAxes(o, f, title, x_label, y_label, height);
+  writeLineSeries(o, f, x, series);
   o << "</svg>\n";
+  writeLineData(o, x, series);
+  o << "</div>\n";
   return o.str();
 }
 

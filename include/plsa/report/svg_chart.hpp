@@ -1,5 +1,7 @@
-// Self-contained SVG charts for HTML reports (no scripts, no external files):
-// line charts of time series, a pole map on the unit disk, bar charts.
+// Self-contained SVG charts for HTML reports (no external files): line charts
+// of time series, a pole map on the unit disk, bar charts, heat maps. Every
+// chart is drawn in full without scripts; a page that includes chartScript()
+// also zooms and reads out its line charts.
 #pragma once
 
 #include <complex>
@@ -17,7 +19,13 @@ struct Series {
   bool dashed = false;
 };
 
-/// Line chart of series over x; long series are thinned to about 1500 points.
+/// A line chart holds at most this many samples per series for zoom and hover
+/// (every k-th beyond it); its drawn lines hold about 1500 points.
+inline constexpr Eigen::Index kMaxEmbeddedSamples = 20000;
+
+/// Line chart of series over x (increasing), as a `div.plot` holding the SVG
+/// and its samples (JSON). Long series are drawn thinned to about 1500 points;
+/// with chartScript() on the page, zooming redraws them from the samples.
 std::string lineChart(const std::string& title, const Eigen::VectorXd& x, const std::vector<Series>& series,
                       const std::string& x_label, const std::string& y_label, int width = 900, int height = 280);
 
@@ -50,6 +58,19 @@ double heatScale(const Eigen::MatrixXd& values);
 std::string heatMap(const std::string& title, const Eigen::MatrixXd& values, const std::vector<std::string>& row_labels,
                     const std::vector<std::string>& col_labels, const std::string& row_axis,
                     const std::string& col_axis, int cell = 64, double scale_max = 0.0, const std::string& unit = "");
+
+/// An inline script (no external files) that makes every line chart on the
+/// page interactive: hover shows the time and each series' value at the
+/// nearest sample; dragging across the plot zooms every chart with the same
+/// x label to that span (y rescaled to what is visible, lines redrawn from
+/// the samples, min and max kept per pixel); double-click zooms back out.
+/// Put it once, after the last chart.
+std::string chartScript();
+
+/// How to use the charts chartScript() makes interactive, for the page's text.
+inline constexpr const char* kChartHint =
+    "Drag across a trace to zoom in (the page's traces zoom together), double-click to zoom out, and hover to "
+    "read values.";
 
 /// HTML escaping for text nodes.
 std::string escape(const std::string& s);

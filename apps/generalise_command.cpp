@@ -9,6 +9,7 @@
 // and written as JSON; nothing is averaged away.
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -23,6 +24,7 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/io/csv_log.hpp"
 #include "plsa/io/standard_columns.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/sim/independent_actuator.hpp"
@@ -37,6 +39,7 @@ struct GeneraliseArgs {
   std::vector<std::string> cases;  // "effect.law", "nominal", "all"; empty: every law of every effect, both extremes
   bool quick = false;
   std::string json;
+  std::string save_runs;  // folder for every case's runs as CSV logs; empty: none
 };
 
 /// One physics: the effects switched on, each with its law.
@@ -201,6 +204,15 @@ void printSummary(const nlohmann::json& s) {
               s.at("plsa_rows_meeting_90_90_85").get<int>(), s.at("rows").get<std::size_t>());
 }
 
+/// A case's training (grid) and validation (joystick) runs as CSV logs that
+/// identify and validate read: DIR/CASE_sSEED_{grid2,joystick}.csv.
+void saveRuns(const std::string& dir, const std::string& case_name, std::uint64_t seed, const io::Log& train,
+              const io::Log& val) {
+  const std::string stem = (std::filesystem::path(dir) / (case_name + "_s" + std::to_string(seed))).string();
+  io::writeCsvLog(stem + "_grid2.csv", train);
+  io::writeCsvLog(stem + "_joystick.csv", val);
+}
+
 void runGeneralise(const GeneraliseArgs& a) {
   const std::vector<PhysicsCase> cases = listCases(a);
   const int seeds = a.quick ? 1 : a.seeds;
@@ -222,6 +234,7 @@ void runGeneralise(const GeneraliseArgs& a) {
       eo.seed = seed + 1;
       const io::Log train = recordFromRest(physics, sim::gridExperiment(eo), seed);
       const io::Log val = recordFromRest(physics, sim::joystickExperiment(eo), seed + 100);
+      if (!a.save_runs.empty()) saveRuns(a.save_runs, c.name, seed, train, val);
       double beyond = 0.0;
       row["fits"] = scoreModels(train, val, beyond);
       row["beyond_grid"] = beyond;
@@ -249,6 +262,10 @@ void addGeneraliseCommand(CLI::App& app) {
   cmd->add_option("--case", a->cases, "Cases to run (effect.law, nominal or all; default every one)");
   cmd->add_flag("--quick", a->quick, "Three cases (nominal, hysteresis.bouc_wen, all), one seed");
   cmd->add_option("--json", a->json, "Write every row and the summary here");
+  cmd->add_option("--save-runs", a->save_runs,
+                  "Write every case's training and validation runs to this directory as CSV logs "
+                  "(CASE_sSEED_grid2.csv, CASE_sSEED_joystick.csv; for plsa identify and validate)")
+      ->check(CLI::ExistingDirectory);
   cmd->callback([a] { runGeneralise(*a); });
 }
 

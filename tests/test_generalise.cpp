@@ -1,7 +1,9 @@
 // The generalisation benchmark's small version (ctest label
 // "generalisation"): `plsa generalise --quick` on the independently written
 // actuator, identify's defaults, every model scored on the same samples.
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include <nlohmann/json.hpp>
 
@@ -14,7 +16,9 @@ using Generalise = plsa::test::CliTest;
 TEST_F(Generalise, ScoresEveryModelOnTheIndependentActuator) {
   // Three physics (nominal, Bouc-Wen hysteresis, every effect), one seed;
   // the full matrix is `plsa generalise` (docs/identification.md).
-  ASSERT_EQ(run("generalise --quick --json " + file("gen.json")), 0) << err_ << slurp(file("stdout.txt"));
+  std::filesystem::create_directories(file("runs"));
+  ASSERT_EQ(run("generalise --quick --json " + file("gen.json") + " --save-runs " + file("runs")), 0)
+      << err_ << slurp(file("stdout.txt"));
   const auto j = nlohmann::json::parse(slurp(file("gen.json")));
   ASSERT_EQ(j["rows"].size(), 3u);
   for (const auto& row : j["rows"])
@@ -31,4 +35,27 @@ TEST_F(Generalise, ScoresEveryModelOnTheIndependentActuator) {
         EXPECT_GT(s["plsa"][out][h]["mean"].get<double>(), s[peer][out][h]["mean"].get<double>())
             << out << " " << h << "-step against " << peer;
   EXPECT_NE(slurp(file("stdout.txt")).find("plsa meets 90 / 90 / 85 on both outputs in"), std::string::npos);
+
+  // --save-runs: each row's two runs as logs identify and validate read, named by case and seed.
+  for (const char* c : {"nominal", "hysteresis.bouc_wen", "all"})
+    for (const char* part : {"grid2", "joystick"}) {
+      const std::string log = file("runs") + "/" + c + "_s1_" + part + ".csv";
+      ASSERT_TRUE(std::filesystem::exists(log)) << log;
+      const std::string text = slurp(log);
+      EXPECT_NE(text.find("time_s,cmd_1,cmd_2,cmd_3,p_1,p_2,p_3,bend_deg,steer_deg"), std::string::npos) << log;
+      EXPECT_GT(std::count(text.begin(), text.end(), '\n'), 1000) << log;
+    }
+  // A user who identifies and validates on the saved nominal runs gets the row's plsa fits.
+  const std::string runs = file("runs") + "/nominal_s1_";
+  ASSERT_EQ(run("identify --log " + runs + "grid2.csv --out " + file("model.json")), 0) << err_;
+  ASSERT_EQ(run("validate --model " + file("model.json") + " --log " + runs + "joystick.csv --json " + file("v.json")),
+            0)
+      << err_;
+  const auto v = nlohmann::json::parse(slurp(file("v.json")));
+  const auto& row = j["rows"][0];
+  ASSERT_EQ(row["case"], "nominal");
+  for (const char* out : {"bend_deg", "steer_deg"})
+    for (const auto& [h, key] : {std::pair{"40", "fit_k40"}, {"80", "fit_k80"}, {"sim", "fit_sim"}})
+      EXPECT_NEAR(v["outputs"][out][key].get<double>(), row["fits"]["plsa"][out][h].get<double>(), 0.05)
+          << out << " " << h;
 }

@@ -143,6 +143,22 @@ void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<i
     j["outputs"][o.name]["rms_sim"] = o.rms_sim;
     j["outputs"][o.name]["std"] = o.spread;
   }
+  // Why a k-step fit can fall below the simulation's: the error it restarts with.
+  std::fprintf(table, "%-12s", "error kept");
+  for (int k : horizons) std::fprintf(table, " %9s", ("k=" + std::to_string(k)).c_str());
+  std::fprintf(table, "\n");
+  for (const auto& o : v.outputs) {
+    std::fprintf(table, "%-12s", o.name.c_str());
+    for (int k : horizons) {
+      std::fprintf(table, " %9.2f", o.sim_error_kept.at(k));
+      j["outputs"][o.name]["sim_error_kept_k" + std::to_string(k)] = o.sim_error_kept.at(k);
+    }
+    std::fprintf(table, "\n");
+  }
+  std::fprintf(table,
+               "(error kept: the share of the simulation's error k samples back still there; a k-step prediction "
+               "restarts from the measured output and carries that error, so below 0.5 its fit falls below the "
+               "simulation's)\n");
   const Eigen::Index scored = v.time.size() - v.scored_from;
   std::fprintf(table, "(every column scored on the same %lld samples: %lld to the log's end, t = %s to %s s)\n",
                static_cast<long long>(scored), static_cast<long long>(v.scored_from),

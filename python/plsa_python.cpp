@@ -74,6 +74,7 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
     entry["fit_sim"] = o.fit_sim;
     entry["rms"] = o.rms_k;
     entry["rms_sim"] = o.rms_sim;
+    entry["sim_error_kept"] = o.sim_error_kept;  // {horizon: share}: below 0.5 the k-step fit loses to the simulation
     entry["measured"] = o.measured;
     entry["predicted"] = o.predicted_k;  // {horizon: array}, NaN before the first predicted sample
     entry["simulated"] = o.simulated;
@@ -288,7 +289,8 @@ void bindTools(py::module_& m) {
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
         "Fits (%) and rms errors of a model on a CSV log, with what was scored: {output: {fit: {horizon: %}, "
-        "fit_sim, rms, rms_sim, measured, predicted: {horizon: array}, simulated, scored_from, sim_departure}}; "
+        "fit_sim, rms, rms_sim, sim_error_kept: {horizon: share}, measured, predicted: {horizon: array}, simulated, "
+        "scored_from, sim_departure}}; "
         "the arrays span the log (NaN where a horizon has no prediction), fits count samples from scored_from on; "
         "sim_departure is None, or how far the free simulation leaves the measured range (farthest, "
         "share_of_width, first_time_s) when it does by more than half its width");

@@ -36,8 +36,7 @@ struct Traces {
 TEST(ReportCharts, LineChartHoldsItsSamplesWithGapsAsNull) {
   Traces tr;
   tr.sine(5) = NAN;
-  const std::string html =
-      report::lineChart("t", tr.t, {{"sine \"s\"", tr.sine, "#000", false}}, "time (s)", "y");
+  const std::string html = report::lineChart("t", tr.t, {{"sine \"s\"", tr.sine, "#000", false}}, "time (s)", "y");
   const json data = chartData(html);
   ASSERT_EQ(data["x"].size(), 10001u);
   EXPECT_DOUBLE_EQ(data["x"][10000].get<double>(), 100.0);
@@ -114,11 +113,11 @@ TEST(ReportCharts, DragZoomsLinkedChartsAndHoverReadsTheNearestSample) {
   Traces tr;
   const std::string page_html =
       "<!doctype html><html><body>" +
-      report::lineChart("a", tr.t, {{"sine", tr.sine, "#000", false}, {"spike", tr.spike, "#c00", false}},
-                        "time (s)", "y") +
+      report::lineChart("a", tr.t, {{"sine", tr.sine, "#000", false}, {"spike", tr.spike, "#c00", false}}, "time (s)",
+                        "y") +
       report::lineChart("b", tr.t, {{"sine", tr.sine, "#000", false}}, "time (s)", "y", 900, 220) +
-      report::lineChart("c", tr.t, {{"sine", tr.sine, "#000", false}}, "pressure (bar)", "y") +
-      report::chartScript() + kReader + "</body></html>";
+      report::lineChart("c", tr.t, {{"sine", tr.sine, "#000", false}}, "pressure (bar)", "y") + report::chartScript() +
+      kReader + "</body></html>";
   const test::RenderedPage page = test::renderInChromium(page_html);
   if (!page.browser_found) GTEST_SKIP() << "chromium not installed: the charts were not opened in a browser";
   ASSERT_EQ(page.status, 0);

@@ -1,4 +1,8 @@
 // Validation of a model on a log: input coverage, sample rate, the tip frame's yaw, departures.
+#include <cmath>
+#include <random>
+
+#include "plsa/eval/dio_prediction.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -245,4 +249,45 @@ TEST(Validation, NamesASimulationThatLeavesTheMeasuredRange) {
   EXPECT_TRUE(simulationDepartures(v).empty());
   expectThrowContaining([&] { simulationDepartures(v, 0.0); }, "tolerance");
   expectThrowContaining([&] { simulationDepartures(v, std::nan("")); }, "tolerance");
+}
+
+// Why a k-step fit can fall below the simulation's: restarted from the
+// measured output, its error is e(t) - e(t-h) of the simulation's error e.
+// An error that persists cancels; one that changes within the horizon counts
+// twice. The k-step error is the smaller exactly when simulationErrorKept > 1/2.
+TEST(Validation, TheSimulationErrorKeptSaysWhenAKStepPredictionLosesToTheSimulation) {
+  const Eigen::Index T = 4000;
+  const int h = 80;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const Eigen::VectorXd truth = Eigen::VectorXd::LinSpaced(T, 0.0, 60.0).array().sin() * 10.0;
+  for (const double slow_share : {0.1, 0.5, 0.9}) {
+    // The model's error: a slow wander (persists over h) and a fast part (does not), in that proportion.
+    Eigen::VectorXd e(T);
+    double wander = 0.0;
+    for (Eigen::Index t = 0; t < T; ++t) {
+      wander = 0.999 * wander + 0.045 * noise(rng);
+      e(t) = slow_share * wander + (1.0 - slow_share) * 0.5 * noise(rng);
+    }
+    const Eigen::VectorXd y = truth + e;
+    Eigen::VectorXd dyhat = Eigen::VectorXd::Zero(T);  // the model's increments: the truth's
+    dyhat.tail(T - 1) = truth.tail(T - 1) - truth.head(T - 1);
+    const eval::AlignedPrediction k = eval::kStepAhead(y, dyhat, h), sim = eval::simulate(y, dyhat);
+    const Eigen::VectorXd k_full = eval::placedOver(k, T), sim_full = eval::placedOver(sim, T);
+    const Eigen::Index from = h + 1;
+    const double kept = eval::simulationErrorKept(y, sim_full, from, h);
+    const double sse_k = (y - k_full).tail(T - from).squaredNorm(),
+                 sse_sim = (y - sim_full).tail(T - from).squaredNorm();
+    EXPECT_EQ(sse_k<sse_sim, kept> 0.5) << "slow share " << slow_share << ": kept " << kept;
+    // Exactly: sse_k - sse_sim = (1 - 2 kept) * sum e(t-h)^2.
+    const Eigen::VectorXd es = y - sim_full;
+    EXPECT_NEAR(sse_k - sse_sim, (1.0 - 2.0 * kept) * es.segment(from - h, T - from).squaredNorm(), 1e-9 * sse_sim);
+    if (slow_share == 0.1) {
+      EXPECT_LT(kept, 0.5) << "a fast error: the k-step prediction loses";
+    }
+    if (slow_share == 0.9) {
+      EXPECT_GT(kept, 0.5) << "a slow error: the k-step prediction wins";
+    }
+  }
+  EXPECT_TRUE(std::isnan(eval::simulationErrorKept(truth, truth, 0, h))) << "no error: nothing to keep";
 }

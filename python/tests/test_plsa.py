@@ -65,6 +65,13 @@ def test_validate_returns_the_arrays_it_scored(model, runs):
         for k in (40, 80):
             assert o["fit"][k] == pytest.approx(nrmse_fit(o["measured"][s:], o["predicted"][k][s:]), abs=1e-9)
         assert o["fit_sim"] == pytest.approx(nrmse_fit(o["measured"][s:], o["simulated"][s:]), abs=1e-9)
+        # The simulation error kept over k: sum e(t) e(t-k) / sum e(t-k)^2 over the same samples.
+        e = o["measured"] - o["simulated"]
+        for k in (40, 80):
+            now, back = e[s:], e[s - k : len(e) - k]
+            both = np.isfinite(now) & np.isfinite(back)  # no simulation before its start
+            kept = np.dot(now[both], back[both]) / np.dot(back[both], back[both])
+            assert o["sim_error_kept"][k] == pytest.approx(kept, rel=1e-9)
 
 
 def run_arrays(path):

@@ -300,9 +300,24 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     requireFiniteScore(ov.rms_sim, "simulation rms error", ov.name, s, log.source);
     ov.spread = spreadOf(ov.measured.segment(s.first, s.values.size()));
     ov.simulated = placedOver(pred[static_cast<std::size_t>(o)].at(0), y.rows());
+    for (int k : horizons) ov.sim_error_kept[k] = simulationErrorKept(ov.measured, ov.simulated, res.scored_from, k);
     res.outputs.push_back(std::move(ov));
   }
   return res;
+}
+
+double simulationErrorKept(const Eigen::VectorXd& measured, const Eigen::VectorXd& simulated, Eigen::Index from,
+                           int h) {
+  PLSA_CHECK(measured.size() == simulated.size(), "simulationErrorKept: measured and simulated lengths differ");
+  PLSA_CHECK(h >= 1 && from >= 0, "simulationErrorKept: need a horizon >= 1 and a start >= 0");
+  double carried = 0.0, before = 0.0;
+  for (Eigen::Index t = std::max<Eigen::Index>(from, h); t < measured.size(); ++t) {
+    const double now = measured(t) - simulated(t), back = measured(t - h) - simulated(t - h);
+    if (!std::isfinite(now) || !std::isfinite(back)) continue;
+    carried += now * back;
+    before += back * back;
+  }
+  return before > 0.0 ? carried / before : std::numeric_limits<double>::quiet_NaN();
 }
 
 namespace {

@@ -20,6 +20,9 @@ struct OutputValidation {
   std::map<int, double> rms_k;  ///< horizon -> rms error, output units
   double rms_sim = 0.0;
   double spread = 0.0;  ///< standard deviation of the measured output over the scored samples
+  /// horizon -> simulationErrorKept(measured, simulated, scored_from, horizon):
+  /// the k-step prediction beats the simulation where this is above 1/2.
+  std::map<int, double> sim_error_kept;
   Eigen::VectorXd measured;
   std::map<int, Eigen::VectorXd> predicted_k;  ///< aligned with measured, NaN where undefined
   Eigen::VectorXd simulated;
@@ -62,6 +65,19 @@ InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const E
 /// outside its training range, and below / above its grid's outer nodes.
 /// Empty when every sample is inside both.
 std::vector<std::string> inputCoverageWarnings(const DioPwlObfModel& model, const InputsOutsideTraining& c);
+
+/// How much of the simulation's error h samples back is still there now:
+/// with e = measured - simulated, sum e(t) e(t-h) / sum e(t-h)^2 over the
+/// scored samples t >= from (the least-squares gain from e(t-h) to e(t); NaN
+/// when e(t-h) is nowhere finite and non-zero). A k-step prediction restarts
+/// from the measured output, so it carries the model's error of h samples
+/// back into its prediction in full: in the model's frame its error is
+/// e(t) - e(t-h) exactly. What persists (an offset, a slow drift, a
+/// hysteresis branch) cancels; what changes within the horizon (a transient
+/// the model mistimes) counts twice. So its squared error is below the
+/// simulation's exactly when this is above 1/2 (approximately, for the angles
+/// a tip_cartesian model is scored in).
+double simulationErrorKept(const Eigen::VectorXd& measured, const Eigen::VectorXd& simulated, Eigen::Index from, int h);
 
 /// How a free simulation takes up a run. A model with an output_level
 /// simulates from the inputs alone and so carries its training run's sensor

@@ -8,6 +8,7 @@
 // model, output and horizon on the same samples. The whole matrix is printed
 // and written as JSON; nothing is averaged away.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <cmath>
@@ -51,6 +52,8 @@ struct PhysicsCase {
 const char* kModels[] = {"plsa", "paper", "global_linear", "arx"};
 const std::vector<int> kHorizons = {40, 80};
 constexpr double kStraightDeg = 1.0;  ///< below this bend the recorded steering holds
+/// The run beyond the grid: a joystick over 0.10-0.45 bar (the grid spans 0.20-0.35).
+constexpr double kBeyondMinBar = 0.10, kBeyondMaxBar = 0.45;
 
 std::vector<PhysicsCase> listCases(const GeneraliseArgs& a) {
   std::vector<PhysicsCase> all = {{"nominal", {}}};
@@ -119,9 +122,23 @@ io::Log recordFromRest(const sim::IndependentPhysics& physics, const sim::Experi
   return log;
 }
 
+/// plsa's model on a run beyond its grid: the share of its samples beyond,
+/// and each output's fits (every horizon and the simulation on the same samples).
+nlohmann::json scoreBeyond(const DioPwlObfModel& model, const io::Log& run) {
+  const Eigen::MatrixXd U = run.columnsOf(model.inputs), Y = run.columnsOf(model.outputs);
+  const std::vector<eval::ModelPredictions> preds = {eval::predictDio("plsa", model, U, Y, kHorizons)};
+  const auto scores = eval::commonScores(preds, Y);
+  nlohmann::json j = {{"beyond_grid", eval::inputsOutsideTraining(model, U).any_beyond_grid}};
+  for (std::size_t out = 0; out < model.outputs.size(); ++out)
+    for (const int h : {40, 80, 0})
+      j["plsa"][model.outputs[out]][h == 0 ? "sim" : std::to_string(h)] = scores[0][out].at(h).fit;
+  return j;
+}
+
 /// Every model fitted on `train` and scored on `val` over the same samples:
-/// [model][output] -> {horizon (0: simulation): fit %}, as JSON.
-nlohmann::json scoreModels(const io::Log& train, const io::Log& val, double& beyond_grid) {
+/// [model][output] -> {horizon (0: simulation): fit %}, as JSON; plsa also on
+/// `wide`, a run beyond its grid, under "beyond".
+nlohmann::json scoreModels(const io::Log& train, const io::Log& val, const io::Log& wide, double& beyond_grid) {
   identify::IdentifyOptions o;
   identify::IdentifyReport report;
   const DioPwlObfModel model = identify::identifyModel({train}, o, &report);
@@ -147,6 +164,7 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, double& bey
   for (std::size_t out = 0; out < model.outputs.size(); ++out)
     j["plsa_sim_error_kept_80"][model.outputs[out]] =
         eval::simulationErrorKept(Yv.col(static_cast<Eigen::Index>(out)), preds[0].by_output[out].at(0), from, 80);
+  j["beyond"] = scoreBeyond(model, wide);
   return j;
 }
 
@@ -191,6 +209,41 @@ nlohmann::json anchoringCounts(const nlohmann::json& rows) {
           {"other_with_error_kept_over_half", above_kept_over_half}};
 }
 
+/// plsa on the runs beyond the grid: the mean share of samples beyond, and
+/// per output and horizon the mean and worst fit, beside the same rows' means inside.
+nlohmann::json beyondSummary(const nlohmann::json& rows) {
+  nlohmann::json s;
+  double share = 0.0;
+  for (const auto& r : rows) share += r.at("fits").at("beyond").at("beyond_grid").get<double>();
+  s["beyond_grid_mean"] = share / static_cast<double>(rows.size());
+  for (const char* out : {io::standard_columns::kBend, io::standard_columns::kSteer})
+    for (const char* h : {"40", "80", "sim"}) {
+      double sum = 0.0, worst = 1e300, inside = 0.0;
+      for (const auto& r : rows) {
+        const double f = r.at("fits").at("beyond").at("plsa").at(out).at(h).get<double>();
+        sum += f;
+        worst = std::min(worst, f);
+        inside += r.at("fits").at("plsa").at(out).at(h).get<double>();
+      }
+      const double n = static_cast<double>(rows.size());
+      s[out][h] = {{"mean", sum / n}, {"worst", worst}, {"mean_inside", inside / n}};
+    }
+  return s;
+}
+
+void printBeyondRows(const nlohmann::json& rows) {
+  std::printf("\n  the same models on a joystick run beyond the grid (%.2f-%.2f bar; the grid: 0.20-0.35)\n",
+              kBeyondMinBar, kBeyondMaxBar);
+  std::printf("  %-32s %4s %6s | %-39s\n", "case", "seed", "beyond", "plsa (bend 40 80 sim, steer)");
+  for (const auto& r : rows) {
+    const nlohmann::json& b = r.at("fits").at("beyond");
+    const nlohmann::json wrapped = {{"fits", b}};
+    std::printf("  %-32s %4d %5.1f%% | %s  %s\n", r.at("case").get<std::string>().c_str(), r.at("seed").get<int>(),
+                100 * b.at("beyond_grid").get<double>(), cell(wrapped, "plsa", io::standard_columns::kBend).c_str(),
+                cell(wrapped, "plsa", io::standard_columns::kSteer).c_str());
+  }
+}
+
 /// Per model and output: the mean and the worst of each horizon's fit over every row.
 nlohmann::json summarise(const nlohmann::json& rows) {
   nlohmann::json s;
@@ -217,6 +270,7 @@ nlohmann::json summarise(const nlohmann::json& rows) {
   s["plsa_rows_meeting_90_90_85"] = meets;
   s["rows"] = rows.size();
   s["plsa_80_below_sim"] = anchoringCounts(rows);
+  s["plsa_beyond"] = beyondSummary(rows);
   return s;
 }
 
@@ -231,6 +285,18 @@ void printSummary(const nlohmann::json& s) {
     }
   std::printf("  plsa meets 90 / 90 / 85 on both outputs in %d of %zu rows\n",
               s.at("plsa_rows_meeting_90_90_85").get<int>(), s.at("rows").get<std::size_t>());
+  const nlohmann::json& b = s.at("plsa_beyond");
+  std::printf(
+      "  beyond the grid (%.0f%% of the run's samples beyond it, mean), plsa's mean (worst) 40-step / 80-step / sim,\n"
+      "  and its mean inside:\n",
+      100 * b.at("beyond_grid_mean").get<double>());
+  for (const char* out : {io::standard_columns::kBend, io::standard_columns::kSteer}) {
+    std::printf("  %-14s %-10s", "plsa beyond", out);
+    for (const char* h : {"40", "80", "sim"})
+      std::printf("  %6.1f (%6.1f)", b[out][h]["mean"].get<double>(), b[out][h]["worst"].get<double>());
+    std::printf("   inside %.1f / %.1f / %.1f\n", b[out]["40"]["mean_inside"].get<double>(),
+                b[out]["80"]["mean_inside"].get<double>(), b[out]["sim"]["mean_inside"].get<double>());
+  }
   const nlohmann::json& a = s.at("plsa_80_below_sim");
   std::printf(
       "  plsa's 80-step fit is below its simulation's on %d row outputs; the simulation error kept over 80 samples\n"
@@ -240,13 +306,14 @@ void printSummary(const nlohmann::json& s) {
       a.at("other_with_error_kept_over_half").get<int>(), a.at("other_outputs").get<int>());
 }
 
-/// A case's training (grid) and validation (joystick) runs as CSV logs that
-/// identify and validate read: DIR/CASE_sSEED_{grid2,joystick}.csv.
-void saveRuns(const std::string& dir, const std::string& case_name, std::uint64_t seed, const io::Log& train,
-              const io::Log& val) {
+/// A case's training (grid) and validation (joystick, and joystick beyond the
+/// grid) runs as CSV logs that identify and validate read:
+/// DIR/CASE_sSEED_{grid2,joystick,joystick_beyond}.csv.
+void saveRuns(const std::string& dir, const std::string& case_name, std::uint64_t seed,
+              const std::array<io::Log, 3>& runs) {
   const std::string stem = (std::filesystem::path(dir) / (case_name + "_s" + std::to_string(seed))).string();
-  io::writeCsvLog(stem + "_grid2.csv", train);
-  io::writeCsvLog(stem + "_joystick.csv", val);
+  const char* names[] = {"_grid2.csv", "_joystick.csv", "_joystick_beyond.csv"};
+  for (std::size_t r = 0; r < runs.size(); ++r) io::writeCsvLog(stem + names[r], runs[r]);
 }
 
 void runGeneralise(const GeneraliseArgs& a) {
@@ -270,14 +337,19 @@ void runGeneralise(const GeneraliseArgs& a) {
       eo.seed = seed + 1;
       const io::Log train = recordFromRest(physics, sim::gridExperiment(eo), seed);
       const io::Log val = recordFromRest(physics, sim::joystickExperiment(eo), seed + 100);
-      if (!a.save_runs.empty()) saveRuns(a.save_runs, c.name, seed, train, val);
+      sim::ExperimentOptions wide_eo = eo;  // a joystick run well beyond the grid's 0.20-0.35 bar
+      wide_eo.joystick_min_bar = kBeyondMinBar;
+      wide_eo.joystick_max_bar = kBeyondMaxBar;
+      const io::Log wide = recordFromRest(physics, sim::joystickExperiment(wide_eo), seed + 200);
+      if (!a.save_runs.empty()) saveRuns(a.save_runs, c.name, seed, {train, val, wide});
       double beyond = 0.0;
-      row["fits"] = scoreModels(train, val, beyond);
+      row["fits"] = scoreModels(train, val, wide, beyond);
       row["beyond_grid"] = beyond;
       printRow(row);
       rows.push_back(row);
     }
   const nlohmann::json summary = summarise(rows);
+  printBeyondRows(rows);
   printSummary(summary);
   std::printf("  %.0f s\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   if (!a.json.empty())
@@ -292,7 +364,8 @@ void addGeneraliseCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "generalise",
       "Identification scored on an independently written actuator: every law of every effect, "
-      "nominal physics randomised, recorded from rest; plsa against the paper, global linear OBF and ARX");
+      "nominal physics randomised, recorded from rest; plsa against the paper, global linear OBF and ARX, "
+      "and plsa on a run beyond its grid");
   cmd->add_option("--seeds", a->seeds, "Physics drawn per case")->check(CLI::Range(1, 100));
   cmd->add_option("--seed", a->seed, "First seed")->check(kSeed);
   cmd->add_option("--case", a->cases, "Cases to run (effect.law, nominal or all; default every one)");
@@ -300,7 +373,8 @@ void addGeneraliseCommand(CLI::App& app) {
   cmd->add_option("--json", a->json, "Write every row and the summary here");
   cmd->add_option("--save-runs", a->save_runs,
                   "Write every case's training and validation runs to this directory as CSV logs "
-                  "(CASE_sSEED_grid2.csv, CASE_sSEED_joystick.csv; for plsa identify and validate)")
+                  "(CASE_sSEED_grid2.csv, CASE_sSEED_joystick.csv, CASE_sSEED_joystick_beyond.csv; for plsa identify "
+                  "and validate)")
       ->check(CLI::ExistingDirectory);
   cmd->callback([a] { runGeneralise(*a); });
 }

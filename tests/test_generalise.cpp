@@ -26,6 +26,14 @@ TEST_F(Generalise, ScoresEveryModelOnTheIndependentActuator) {
       for (const char* out : {"bend_deg", "steer_deg"})
         for (const char* h : {"40", "80", "sim"})
           EXPECT_TRUE(std::isfinite(row["fits"][m][out][h].get<double>())) << row["case"] << " " << m << " " << out;
+  // Each row also scores plsa on a joystick run beyond the grid: more of its samples beyond, every fit finite.
+  for (const auto& row : j["rows"]) {
+    const auto& b = row["fits"]["beyond"];
+    EXPECT_GT(b["beyond_grid"].get<double>(), 2 * row["beyond_grid"].get<double>()) << row["case"];
+    for (const char* out : {"bend_deg", "steer_deg"})
+      for (const char* h : {"40", "80", "sim"}) EXPECT_TRUE(std::isfinite(b["plsa"][out][h].get<double>()));
+  }
+  EXPECT_NE(slurp(file("stdout.txt")).find("the same models on a joystick run beyond the grid"), std::string::npos);
   // plsa leads the paper's configuration and ARX(4,4) at 40 and 80 steps on
   // the mean over the rows, on both outputs.
   const auto& s = j["summary"];
@@ -38,7 +46,7 @@ TEST_F(Generalise, ScoresEveryModelOnTheIndependentActuator) {
 
   // --save-runs: each row's two runs as logs identify and validate read, named by case and seed.
   for (const char* c : {"nominal", "hysteresis.bouc_wen", "all"})
-    for (const char* part : {"grid2", "joystick"}) {
+    for (const char* part : {"grid2", "joystick", "joystick_beyond"}) {
       const std::string log = file("runs") + "/" + c + "_s1_" + part + ".csv";
       ASSERT_TRUE(std::filesystem::exists(log)) << log;
       const std::string text = slurp(log);

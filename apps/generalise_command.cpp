@@ -168,8 +168,8 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, const io::L
   return j;
 }
 
-std::string cell(const nlohmann::json& row, const char* model, const char* output) {
-  const nlohmann::json& s = row.at("fits").at(model).at(output);
+/// One model's fits on one output ({"40", "80", "sim"}) as table text.
+std::string cell(const nlohmann::json& s) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%5.1f %5.1f %6.1f", s.at("40").get<double>(), s.at("80").get<double>(),
                 s.at("sim").get<double>());
@@ -180,8 +180,8 @@ void printRow(const nlohmann::json& row) {
   std::printf("  %-32s %4d %5.1f%%", row.at("case").get<std::string>().c_str(), row.at("seed").get<int>(),
               100 * row.at("beyond_grid").get<double>());
   for (const char* m : kModels)
-    std::printf(" | %s  %s", cell(row, m, io::standard_columns::kBend).c_str(),
-                cell(row, m, io::standard_columns::kSteer).c_str());
+    std::printf(" | %s  %s", cell(row.at("fits").at(m).at(io::standard_columns::kBend)).c_str(),
+                cell(row.at("fits").at(m).at(io::standard_columns::kSteer)).c_str());
   std::printf("\n");
 }
 
@@ -237,10 +237,9 @@ void printBeyondRows(const nlohmann::json& rows) {
   std::printf("  %-32s %4s %6s | %-39s\n", "case", "seed", "beyond", "plsa (bend 40 80 sim, steer)");
   for (const auto& r : rows) {
     const nlohmann::json& b = r.at("fits").at("beyond");
-    const nlohmann::json wrapped = {{"fits", b}};
     std::printf("  %-32s %4d %5.1f%% | %s  %s\n", r.at("case").get<std::string>().c_str(), r.at("seed").get<int>(),
-                100 * b.at("beyond_grid").get<double>(), cell(wrapped, "plsa", io::standard_columns::kBend).c_str(),
-                cell(wrapped, "plsa", io::standard_columns::kSteer).c_str());
+                100 * b.at("beyond_grid").get<double>(), cell(b.at("plsa").at(io::standard_columns::kBend)).c_str(),
+                cell(b.at("plsa").at(io::standard_columns::kSteer)).c_str());
   }
 }
 

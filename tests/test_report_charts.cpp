@@ -51,6 +51,12 @@ TEST(ReportCharts, LineChartHoldsItsSamplesWithGapsAsNull) {
   EXPECT_LE(thinned["x"].size(), static_cast<std::size_t>(report::kMaxEmbeddedSamples));
   EXPECT_EQ(thinned["x"].size(), 16667u);
   EXPECT_DOUBLE_EQ(thinned["x"][1].get<double>(), 0.03);
+
+  // A time axis in epoch seconds keeps its samples apart.
+  const Eigen::VectorXd epoch = Eigen::VectorXd::LinSpaced(81, 0.0, 1.0).array() + 1764201600.0;
+  const json stamped =
+      chartData(report::lineChart("t", epoch, {{"x", tr.sine.head(81), "#000", false}}, "time (s)", "y"));
+  EXPECT_NEAR(stamped["x"][1].get<double>() - stamped["x"][0].get<double>(), 0.0125, 1e-6);
 }
 
 namespace {

@@ -134,10 +134,12 @@ void writeLineSeries(std::ostream& o, const LineFrame& f, const Eigen::VectorXd&
   }
 }
 
-std::string jsonNumber(double v) {
+// x keeps 15 significant digits: a time axis in epoch seconds still resolves
+// a sample; values keep 7, beyond what a readout shows.
+std::string jsonNumber(double v, int digits) {
   if (!std::isfinite(v)) return "null";
   char b[32];
-  std::snprintf(b, sizeof b, "%.7g", v);
+  std::snprintf(b, sizeof b, "%.*g", digits, v);
   return b;
 }
 
@@ -146,13 +148,13 @@ std::string jsonNumber(double v) {
 void writeLineData(std::ostream& o, const Eigen::VectorXd& x, const std::vector<Series>& series) {
   const Eigen::Index n = x.size();
   const Eigen::Index stride = std::max<Eigen::Index>(1, (n + kMaxEmbeddedSamples - 1) / kMaxEmbeddedSamples);
-  auto column = [&](const Eigen::VectorXd& v) {
+  auto column = [&](const Eigen::VectorXd& v, int digits) {
     o << '[';
-    for (Eigen::Index i = 0; i < n; i += stride) o << (i ? "," : "") << jsonNumber(i < v.size() ? v(i) : NAN);
+    for (Eigen::Index i = 0; i < n; i += stride) o << (i ? "," : "") << jsonNumber(i < v.size() ? v(i) : NAN, digits);
     o << ']';
   };
   o << "<script type=\"application/json\" class=\"plot-data\">{\"x\":";
-  column(x);
+  column(x, 15);
   o << ",\"labels\":[";
   for (std::size_t s = 0; s < series.size(); ++s) {
     o << (s ? "," : "") << '"';
@@ -162,7 +164,7 @@ void writeLineData(std::ostream& o, const Eigen::VectorXd& x, const std::vector<
   o << "],\"series\":[";
   for (std::size_t s = 0; s < series.size(); ++s) {
     if (s) o << ',';
-    column(series[s].y);
+    column(series[s].y, 7);
   }
   o << "]}</script>\n";
 }

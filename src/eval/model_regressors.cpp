@@ -17,13 +17,12 @@ namespace {
 // Each sample's schedule: the blend of the inputs up to k-1 through the lag
 // (which starts settled at the first input), with the directions of change.
 // Input side: each sample's own lagged input instead (the output side's
-// schedule of sample k+1), and the node weights it gives, one column per
-// region (empty on the output side).
-Eigen::MatrixXd scheduleSamples(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+// schedule of sample k+1).
+std::vector<ScheduleBlend> scheduleSamples(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   const PwlPartition& partition = model.partition;
   const double schedule_pole = model.schedulePole();
   const Eigen::Index T = u.rows();
-  out.schedule.resize(static_cast<std::size_t>(T));
+  std::vector<ScheduleBlend> schedule(static_cast<std::size_t>(T));
   DirectionState dir;
   Eigen::RowVectorXd du = Eigen::RowVectorXd::Zero(u.cols());
   Eigen::RowVectorXd lagged = T > 0 ? u.row(0) : Eigen::RowVectorXd();
@@ -32,23 +31,28 @@ Eigen::MatrixXd scheduleSamples(ModelRegressors& out, const DioPwlObfModel& mode
     if (k >= 2) du = u.row(k - 1) - u.row(k - 2);
     if (k >= 2) partition.updateDirections(du, dir);
     if (k >= 2) lagged = schedule_pole * lagged + (1.0 - schedule_pole) * u.row(prev);
-    partition.blend(lagged, dir, out.schedule[static_cast<std::size_t>(k)]);
+    partition.blend(lagged, dir, schedule[static_cast<std::size_t>(k)]);
   }
-  if (model.schedule_side != ScheduleSide::kInput) return {};
-  Eigen::MatrixXd node_weight = Eigen::MatrixXd::Zero(T, partition.regionCount());
+  if (model.schedule_side != ScheduleSide::kInput) return schedule;
   for (Eigen::Index k = 0; k < T; ++k) {
-    ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+    ScheduleBlend& b = schedule[static_cast<std::size_t>(k)];
     if (k + 1 < T)
-      b = out.schedule[static_cast<std::size_t>(k + 1)];
+      b = schedule[static_cast<std::size_t>(k + 1)];
     else if (k > 0)
       partition.blend((schedule_pole * lagged + (1.0 - schedule_pole) * u.row(k)).eval(), dir, b);
   }
-  for (Eigen::Index k = 0; k < T; ++k) {
-    const ScheduleBlend& b = out.schedule[static_cast<std::size_t>(k)];
+  return schedule;
+}
+
+// Input side: the weight each node gives rows from .. to - 1, one column per node.
+Eigen::MatrixXd nodeWeights(const std::vector<ScheduleBlend>& schedule, Eigen::Index from, Eigen::Index to, int nodes) {
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(to - from, nodes);
+  for (Eigen::Index k = from; k < to; ++k) {
+    const ScheduleBlend& b = schedule[static_cast<std::size_t>(k)];
     for (int m = 0; m < b.count; ++m)
-      node_weight(k, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
+      w(k - from, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
   }
-  return node_weight;
+  return w;
 }
 
 // Channel inputs: input j's shaped level through each of its play channels.
@@ -75,76 +79,67 @@ std::vector<std::vector<Eigen::VectorXd>> channelInputs(const InputShaping& shap
   return channels;
 }
 
-// One output's regressors: every input's bank on each of its channels, a
-// column block per copy (input side: per node, the channel weighted by the
-// node; output side: one copy).
-struct OutputFill {
-  const std::vector<std::vector<Eigen::VectorXd>>& channels;
-  const Eigen::MatrixXd& node_weight;  ///< empty on the output side
-  int copies = 1;
-  Eigen::Index T = 0;
+// One input channel's bank for one output, its states carried from chunk to
+// chunk: a state row per copy (input side: per node), so the loop over the
+// copies' independent recursions vectorises. Raw loops: at five or six states
+// Eigen's dynamic expressions cost more than the arithmetic.
+struct ChannelFilter {
+  ObfBank<> bank;
+  const Eigen::VectorXd* channel = nullptr;  ///< the stream's shaped input
+  int offset = 0;                            ///< first column within each copy's block
+  Eigen::MatrixXd x, scratch;                ///< copies x n, before the chunk's first row
 
-  // The filters run on every copy at once, a state row per copy: the copies'
-  // recursions are independent, so the loop over them vectorises. Raw loops:
-  // at five or six states Eigen's dynamic expressions cost more than the
-  // arithmetic. Writes columns offset .. offset + n - 1 of each copy's block.
-  template <typename Drive>
-  void filterChannel(const ObfBank<>& bank, Drive f, double* phi, int width, int offset) const {
+  // Rows a .. a + len - 1 into phi (len x width * copies); `weight` holds
+  // each copy's weight of rows a - 1 .. a + len - 1 (input side) or is empty.
+  void run(Eigen::Index a, Eigen::Index len, const Eigen::MatrixXd& weight, double* phi, int width) {
     const int n = bank.size();
+    const auto copies = static_cast<int>(x.rows());
     const Eigen::MatrixXd& A = bank.A();
     const Eigen::VectorXd& B = bank.B();
-    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(copies, n), next(copies, n);
-    Eigen::VectorXd step_in(copies);  // each copy's input increment
+    const Eigen::VectorXd& v = *channel;
+    auto drive = [&](Eigen::Index k, int r) { return weight.size() == 0 ? v(k) : weight(k - a + 1, r) * v(k); };
+    Eigen::VectorXd step_in(copies);
     double* now = x.data();
-    double* then = next.data();
-    double* const col0 = phi + static_cast<Eigen::Index>(offset) * T;
-    for (Eigen::Index k = 0; k < T; ++k) {
+    double* then = scratch.data();
+    double* const col0 = phi + static_cast<Eigen::Index>(offset) * len;
+    for (Eigen::Index k = a; k < a + len; ++k) {
       for (int i = 0; i < n; ++i)
-        for (int r = 0; r < copies; ++r) col0[(static_cast<Eigen::Index>(r) * width + i) * T + k] = now[i * copies + r];
-      for (int r = 0; r < copies; ++r) step_in(r) = k == 0 ? 0.0 : f(k, r) - f(k - 1, r);
+        for (int r = 0; r < copies; ++r)
+          col0[(static_cast<Eigen::Index>(r) * width + i) * len + k - a] = now[i * copies + r];
+      for (int r = 0; r < copies; ++r) step_in(r) = k == 0 ? 0.0 : drive(k, r) - drive(k - 1, r);
       for (int i = 0; i < n; ++i) {
         double* const to = then + i * copies;
         for (int r = 0; r < copies; ++r) to[r] = B(i) * step_in(r);
         for (int l = 0; l < n; ++l) {
-          const double a = A(i, l);
-          if (a == 0.0) continue;
+          const double c = A(i, l);
+          if (c == 0.0) continue;
           const double* const from = now + l * copies;
-          for (int r = 0; r < copies; ++r) to[r] += a * from[r];
+          for (int r = 0; r < copies; ++r) to[r] += c * from[r];
         }
       }
       std::swap(now, then);
     }
-  }
-
-  void fill(const std::vector<PoleSet>& row, bool input_side, Eigen::MatrixXd& phi, Eigen::RowVectorXd& level0) const {
-    int width = 0;
-    for (std::size_t j = 0; j < row.size(); ++j) width += row[j].size() * static_cast<int>(channels[j].size());
-    phi.resize(T, width * copies);
-    if (input_side) level0.setZero(width * copies);
-    int offset = 0;
-    for (std::size_t j = 0; j < row.size(); ++j) {
-      const ObfBank<> bank(row[j]);
-      const Eigen::RowVectorXd gain = bank.transfer(1.0).real().transpose();
-      for (const Eigen::VectorXd& v : channels[j]) {
-        auto f = [&](Eigen::Index k, int r) { return input_side ? node_weight(k, r) * v(k) : v(k); };
-        filterChannel(bank, f, phi.data(), width, offset);
-        if (input_side && T > 0)
-          for (int r = 0; r < copies; ++r)
-            level0.segment(static_cast<Eigen::Index>(r) * width + offset, bank.size()) = gain * f(0, r);
-        offset += bank.size();
-      }
-    }
+    if (now != x.data()) x.swap(scratch);
   }
 };
 
-// Input side: which tiles of rows move each copy's columns at all (the
-// coefficient fit skips the rest).
-void markLiveTiles(const Eigen::MatrixXd& phi, int copies, Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& live) {
+// One output's filters and the largest value each regressor column has reached.
+struct OutputFilters {
+  std::vector<ChannelFilter> filters;
+  int width = 0;  ///< columns per copy
+  Eigen::RowVectorXd column_max;
+};
+
+// Input side: which tiles of a chunk move each copy's columns at all (the
+// coefficient fit skips the rest), against the columns' largest values so far.
+void markLiveTiles(const Eigen::MatrixXd& phi, int copies, Eigen::RowVectorXd& column_max,
+                   Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic>& live) {
   const Eigen::Index T = phi.rows(), tile = ModelRegressors::kTileRows;
   const Eigen::Index width = copies > 0 ? phi.cols() / copies : 0;
   live.resize((T + tile - 1) / tile, copies);
   if (T == 0) return;
-  const Eigen::RowVectorXd negligible = std::numeric_limits<double>::epsilon() * phi.cwiseAbs().colwise().maxCoeff();
+  column_max = column_max.cwiseMax(phi.cwiseAbs().colwise().maxCoeff());
+  const Eigen::RowVectorXd negligible = std::numeric_limits<double>::epsilon() * column_max;
   for (Eigen::Index t = 0; t < live.rows(); ++t)
     for (int r = 0; r < copies; ++r)
       live(t, r) = (phi.block(t * tile, static_cast<Eigen::Index>(r) * width, std::min(tile, T - t * tile), width)
@@ -155,27 +150,106 @@ void markLiveTiles(const Eigen::MatrixXd& phi, int copies, Eigen::Array<bool, Ei
                        .any();
 }
 
-void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+}  // namespace
+
+struct RegressorStream::State {
+  bool input_side = false;
+  int copies = 1;
+  Eigen::Index T = 0, at = 0;
+  bool empty_given = false;
+  std::vector<ScheduleBlend> schedule;
+  std::vector<std::vector<Eigen::VectorXd>> channels;  ///< [input][play channel]
+  std::vector<OutputFilters> outputs;
+
+  void fillOutput(OutputFilters& of, Eigen::Index a, Eigen::Index len, const Eigen::MatrixXd& weight,
+                  ModelRegressors& chunk, std::size_t o) {
+    Eigen::MatrixXd& phi = chunk.phi[o];
+    phi.resize(len, static_cast<Eigen::Index>(of.width) * copies);
+    for (ChannelFilter& f : of.filters) f.run(a, len, weight, phi.data(), of.width);
+    if (!input_side) return;
+    markLiveTiles(phi, copies, of.column_max, chunk.live[o]);
+    chunk.level0[o].setZero(phi.cols());
+    if (T == 0) return;
+    const Eigen::MatrixXd w0 = nodeWeights(schedule, 0, 1, copies);
+    for (const ChannelFilter& f : of.filters) {  // settled at the record's first sample
+      const Eigen::RowVectorXd gain = f.bank.transfer(1.0).real().transpose();
+      for (int r = 0; r < copies; ++r)
+        chunk.level0[o].segment(static_cast<Eigen::Index>(r) * of.width + f.offset, f.bank.size()) =
+            gain * (w0(0, r) * (*f.channel)(0));
+    }
+  }
+};
+
+RegressorStream::RegressorStream(const DioPwlObfModel& model, const Eigen::MatrixXd& u)
+    : state_(std::make_unique<State>()) {
   PLSA_CHECK(!model.poles.empty(), "modelRegressors: no outputs");
   PLSA_CHECK(u.allFinite(), "modelRegressors: the inputs contain NaN or Inf");
-  const bool input_side = model.schedule_side == ScheduleSide::kInput;
-  const Eigen::MatrixXd node_weight = scheduleSamples(out, model, u);
-  const std::vector<std::vector<Eigen::VectorXd>> channels = channelInputs(model.shaping, u);
   for (const auto& row : model.poles)
     PLSA_CHECK(row.size() == static_cast<std::size_t>(u.cols()), "modelRegressors: need one pole set per input");
-  const OutputFill filler{channels, node_weight, input_side ? model.partition.regionCount() : 1, u.rows()};
-  const std::size_t outputs = model.poles.size();
-  out.phi.resize(outputs);
-  out.level0.resize(input_side ? outputs : 0);
-  out.live.resize(input_side ? outputs : 0);
-  Eigen::RowVectorXd unused;  // the output side has no level0
-  // The outputs' regressors are independent: one thread each, when the
-  // record is long enough to pay for them.
-  const bool threaded = u.rows() >= 2048;
-  parallelFor(outputs, threaded ? static_cast<int>(outputs) : 1, [&](std::size_t o) {
-    filler.fill(model.poles[o], input_side, out.phi[o], input_side ? out.level0[o] : unused);
-    if (input_side) markLiveTiles(out.phi[o], filler.copies, out.live[o]);
-  });
+  State& s = *state_;
+  s.input_side = model.schedule_side == ScheduleSide::kInput;
+  s.copies = s.input_side ? model.partition.regionCount() : 1;
+  s.T = u.rows();
+  s.schedule = scheduleSamples(model, u);
+  s.channels = channelInputs(model.shaping, u);
+  for (const auto& row : model.poles) {
+    OutputFilters of;
+    for (std::size_t j = 0; j < row.size(); ++j)
+      for (const Eigen::VectorXd& v : s.channels[j]) {
+        ChannelFilter f;
+        f.bank = ObfBank<>(row[j]);
+        f.channel = &v;
+        f.offset = of.width;
+        f.x = Eigen::MatrixXd::Zero(s.copies, f.bank.size());
+        f.scratch = f.x;
+        of.width += f.bank.size();
+        of.filters.push_back(std::move(f));
+      }
+    of.column_max = Eigen::RowVectorXd::Zero(static_cast<Eigen::Index>(of.width) * s.copies);
+    s.outputs.push_back(std::move(of));
+  }
+}
+
+RegressorStream::~RegressorStream() = default;
+RegressorStream::RegressorStream(RegressorStream&&) noexcept = default;
+RegressorStream& RegressorStream::operator=(RegressorStream&&) noexcept = default;
+
+Eigen::Index RegressorStream::rows() const { return state_->T; }
+
+bool RegressorStream::next(ModelRegressors& chunk, Eigen::Index max_rows) {
+  State& s = *state_;
+  if (s.at >= s.T && (s.T > 0 || s.empty_given)) return false;  // an empty record gives one empty chunk
+  const Eigen::Index tile = ModelRegressors::kTileRows;
+  const Eigen::Index step = max_rows >= s.T - s.at ? s.T - s.at : std::max(tile, max_rows / tile * tile);
+  const Eigen::Index a = s.at, len = std::min(step, s.T - a);
+  const std::size_t outputs = s.outputs.size();
+  chunk.first_row = a;
+  chunk.schedule.assign(s.schedule.begin() + a, s.schedule.begin() + a + len);
+  chunk.phi.resize(outputs);
+  chunk.level0.resize(s.input_side ? outputs : 0);
+  chunk.live.resize(s.input_side ? outputs : 0);
+  const Eigen::MatrixXd weight =
+      s.input_side ? nodeWeights(s.schedule, std::max<Eigen::Index>(a - 1, 0), a + len, s.copies) : Eigen::MatrixXd();
+  Eigen::MatrixXd padded;  // row 0 is row a - 1's weight; at the record's start nothing precedes it
+  if (s.input_side && a == 0) {
+    padded = Eigen::MatrixXd::Zero(len + 1, s.copies);
+    padded.bottomRows(len) = weight;
+  }
+  const Eigen::MatrixXd& w = a == 0 && s.input_side ? padded : weight;
+  // The outputs' regressors are independent: one thread each, when the chunk is long enough to pay for them.
+  parallelFor(outputs, len >= 2048 ? static_cast<int>(outputs) : 1,
+              [&](std::size_t o) { s.fillOutput(s.outputs[o], a, len, w, chunk, o); });
+  s.at = a + len;
+  s.empty_given = true;
+  return true;
+}
+
+namespace {
+
+void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
+  RegressorStream stream(model, u);
+  out.phi.clear();
+  stream.next(out, std::numeric_limits<Eigen::Index>::max());
 }
 
 }  // namespace
@@ -231,9 +305,22 @@ Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegresso
 }
 
 Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  PLSA_CHECK(u.cols() == model.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
-                                                 " inputs, the model " + std::to_string(model.inputCount()));
-  return modelIncrements(model, modelRegressors(model, u));
+  return std::move(modelIncrements(std::vector<DioPwlObfModel>{model}, u).front());
+}
+
+std::vector<Eigen::MatrixXd> modelIncrements(const std::vector<DioPwlObfModel>& models, const Eigen::MatrixXd& u) {
+  PLSA_CHECK(!models.empty(), "modelIncrements: no model");
+  for (const DioPwlObfModel& m : models)
+    PLSA_CHECK(u.cols() == m.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
+                                               " inputs, the model " + std::to_string(m.inputCount()));
+  std::vector<Eigen::MatrixXd> dy(models.size(), Eigen::MatrixXd(u.rows(), models.front().outputCount()));
+  RegressorStream stream(models.front(), u);
+  ModelRegressors chunk;
+  while (stream.next(chunk))
+    for (std::size_t m = 0; m < models.size(); ++m)
+      dy[m].middleRows(chunk.first_row, static_cast<Eigen::Index>(chunk.schedule.size())) =
+          modelIncrements(models[m], chunk);
+  return dy;
 }
 
 Eigen::MatrixXd modelLevels(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {

@@ -65,10 +65,21 @@ struct RecordWeights {
   int groupOf(Eigen::Index k) const { return group ? (*group)(k) : 0; }
 };
 
+// Rows of the record a chunk of regressors covers, and the first that has an
+// increment (a record's row 0 has none).
+struct ChunkRows {
+  Eigen::Index first, begin, end;
+  explicit ChunkRows(const eval::ModelRegressors& reg)
+      : first(reg.first_row),
+        begin(std::max<Eigen::Index>(reg.first_row, 1)),
+        end(reg.first_row + static_cast<Eigen::Index>(reg.schedule.size())) {}
+};
+
 // Each group's weighted sample count per region.
-void countRegions(const eval::ModelRegressors& reg, Eigen::Index T, const RecordWeights& rw, CoefficientSums& sums) {
-  for (Eigen::Index k = 1; k < T; ++k) {
-    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+void countRegions(const eval::ModelRegressors& reg, const RecordWeights& rw, CoefficientSums& sums) {
+  const ChunkRows rows(reg);
+  for (Eigen::Index k = rows.begin; k < rows.end; ++k) {
+    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k - rows.first)];
     std::vector<double>& count = sums.groups[static_cast<std::size_t>(rw.groupOf(k))].count;
     for (int m = 0; m < b.count; ++m)
       count[static_cast<std::size_t>(b.region[static_cast<std::size_t>(m)])] +=
@@ -81,10 +92,11 @@ void countRegions(const eval::ModelRegressors& reg, Eigen::Index T, const Record
 // samples most nodes' regressors are negligible (ModelRegressors::live):
 // each run of samples in one tile and group adds the Gram matrix of its live
 // nodes' blocks, which changes no sum beyond rounding and cuts the work about
-// twentyfold on a grid experiment.
+// twentyfold on a grid experiment. Y is the whole record; reg a chunk of it.
 void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                          const RecordWeights& rw, int out, CoefficientSums& sums) {
-  const Eigen::Index T = Y.rows(), tile = eval::ModelRegressors::kTileRows;
+  const ChunkRows rows(reg);
+  const Eigen::Index T = rows.end, tile = eval::ModelRegressors::kTileRows;
   const auto oo = static_cast<std::size_t>(out);
   const Eigen::MatrixXd& phi = reg.phi[oo];
   const Eigen::Index width = model.regressorSize(out);
@@ -92,18 +104,19 @@ void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressor
   std::vector<int> active;
   Eigen::MatrixXd P, G;
   Eigen::VectorXd dy, h;
-  for (Eigen::Index a = 1; a < T;) {
+  for (Eigen::Index a = rows.begin; a < T;) {
     Eigen::Index e = a + 1;
-    while (e < T && e % tile != 0 && rw.groupOf(e) == rw.groupOf(a)) ++e;
+    while (e < T && (e - rows.first) % tile != 0 && rw.groupOf(e) == rw.groupOf(a)) ++e;
     const Eigen::Index len = e - a;
     active.clear();
     for (int node = 0; node < nodes; ++node)
-      if (reg.live.empty() || reg.live[oo](a / tile, node)) active.push_back(node);
+      if (reg.live.empty() || reg.live[oo]((a - rows.first) / tile, node)) active.push_back(node);
     if (!active.empty()) {
       const auto m = static_cast<Eigen::Index>(active.size()) * width;
       P.resize(len, m);
       for (std::size_t i = 0; i < active.size(); ++i)
-        P.middleCols(static_cast<Eigen::Index>(i) * width, width) = phi.block(a, active[i] * width, len, width);
+        P.middleCols(static_cast<Eigen::Index>(i) * width, width) =
+            phi.block(a - rows.first, active[i] * width, len, width);
       dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
       if (rw.w) {
         const Eigen::VectorXd root = rw.w->segment(a, len).cwiseSqrt();
@@ -132,14 +145,15 @@ void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressor
 void accumulateOutputSide(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                           const RecordWeights& rw, CoefficientSums& sums) {
   const bool joint = model.partition.scheduling() == Scheduling::kInterpolated;
-  for (Eigen::Index k = 1; k < Y.rows(); ++k) {
+  const ChunkRows rows(reg);
+  for (Eigen::Index k = rows.begin; k < rows.end; ++k) {
     const double wk = rw.weightOf(k);
     if (wk == 0.0) continue;
     CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(rw.groupOf(k))];
-    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
+    const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k - rows.first)];
     for (int out = 0; out < model.outputCount(); ++out) {
       const auto oo = static_cast<std::size_t>(out);
-      const auto phi = reg.phi[oo].row(k).transpose();
+      const auto phi = reg.phi[oo].row(k - rows.first).transpose();
       const double dy = Y(k, out) - Y(k - 1, out);
       const Eigen::MatrixXd outer = wk * phi * phi.transpose();
       const Eigen::Index n = phi.size();
@@ -160,12 +174,13 @@ void accumulateOutputSide(const DioPwlObfModel& model, const eval::ModelRegresso
   }
 }
 
-// One record's terms into the sums: sample k joins group(k) (group 0 when
-// `group` is null), times its weight (1 when `w` is null).
+// The terms of a record's rows that `reg` covers into the sums: sample k
+// joins group(k) (group 0 when `group` is null), times its weight (1 when `w`
+// is null). Y, w and group are the whole record's.
 void accumulate(const DioPwlObfModel& model, const eval::ModelRegressors& reg, const Eigen::MatrixXd& Y,
                 const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
   const RecordWeights rw{w, group};
-  countRegions(reg, Y.rows(), rw, sums);
+  countRegions(reg, rw, sums);
   if (model.schedule_side != ScheduleSide::kInput) return accumulateOutputSide(model, reg, Y, rw, sums);
   // The outputs' problems are independent: one thread each.
   const auto ny = static_cast<std::size_t>(model.outputCount());
@@ -181,25 +196,69 @@ void checkRecord(const DioPwlObfModel& model, const Eigen::MatrixXd& Y, Eigen::I
   PLSA_CHECK(Y.allFinite(), std::string(who) + ": record " + std::to_string(r) + " has NaN or Inf outputs");
 }
 
-}  // namespace
+void checkInputs(const DioPwlObfModel& model, const Eigen::MatrixXd& U, std::size_t r, const char* who) {
+  PLSA_CHECK(U.cols() == model.inputCount(),
+             std::string(who) + ": record " + std::to_string(r) + " does not match the model's inputs and outputs");
+}
 
-CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<eval::ModelRegressors>& regressors,
-                                const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
-                                int groups) {
-  PLSA_CHECK(!regressors.empty() && regressors.size() == Y_logged.size() && group.size() == Y_logged.size(),
-             "coefficientSums: need one regressor set, output record and group vector per record");
+void checkGroups(const Eigen::VectorXi& group, Eigen::Index rows, int groups, std::size_t r) {
+  PLSA_CHECK(group.size() == rows && (group.array() >= 0).all() && (group.array() < groups).all(),
+             "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
+                 ") per sample");
+}
+
+// A record's terms a chunk of regressors at a time (RegressorStream): memory
+// of a chunk, not of the record.
+void accumulateStreamed(const DioPwlObfModel& model, const Eigen::MatrixXd& U, const Eigen::MatrixXd& Y,
+                        const Eigen::VectorXd* w, const Eigen::VectorXi* group, CoefficientSums& sums) {
+  eval::RegressorStream stream(model, U);
+  eval::ModelRegressors chunk;
+  while (stream.next(chunk)) accumulate(model, chunk, Y, w, group, sums);
+}
+
+// Sums per group over records: record(r, Y_r, sums) adds record r's terms,
+// after the checks every record shares.
+template <typename Record>
+CoefficientSums groupedSums(const DioPwlObfModel& model, std::size_t records,
+                            const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
+                            int groups, const Record& record) {
+  PLSA_CHECK(records > 0 && records == Y_logged.size() && group.size() == Y_logged.size(),
+             "coefficientSums: need one input record (or regressor set), output record and group vector per record");
   PLSA_CHECK(groups >= 1, "coefficientSums: need at least one group");
   const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
   CoefficientSums sums;
   sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
   for (std::size_t r = 0; r < Y.size(); ++r) {
-    checkRecord(model, Y[r], static_cast<Eigen::Index>(regressors[r].schedule.size()), r, "coefficientSums");
-    PLSA_CHECK(group[r].size() == Y[r].rows() && (group[r].array() >= 0).all() && (group[r].array() < groups).all(),
-               "coefficientSums: record " + std::to_string(r) + " needs one group in [0, " + std::to_string(groups) +
-                   ") per sample");
-    accumulate(model, regressors[r], Y[r], nullptr, &group[r], sums);
+    checkGroups(group[r], Y[r].rows(), groups, r);
+    record(r, Y[r], sums);
   }
   return sums;
+}
+
+}  // namespace
+
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<eval::ModelRegressors>& regressors,
+                                const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
+                                int groups) {
+  return groupedSums(
+      model, regressors.size(), Y_logged, group, groups,
+      [&](std::size_t r, const Eigen::MatrixXd& Y, CoefficientSums& sums) {
+        PLSA_CHECK(regressors[r].first_row == 0,
+                   "coefficientSums: record " + std::to_string(r) + "'s regressors are a chunk, not the whole record");
+        checkRecord(model, Y, static_cast<Eigen::Index>(regressors[r].schedule.size()), r, "coefficientSums");
+        accumulate(model, regressors[r], Y, nullptr, &group[r], sums);
+      });
+}
+
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
+                                const std::vector<Eigen::MatrixXd>& Y_logged, const std::vector<Eigen::VectorXi>& group,
+                                int groups) {
+  return groupedSums(model, U.size(), Y_logged, group, groups,
+                     [&](std::size_t r, const Eigen::MatrixXd& Y, CoefficientSums& sums) {
+                       checkInputs(model, U[r], r, "coefficientSums");
+                       checkRecord(model, Y, U[r].rows(), r, "coefficientSums");
+                       accumulateStreamed(model, U[r], Y, nullptr, &group[r], sums);
+                     });
 }
 
 CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
@@ -211,11 +270,9 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   sums.groups.assign(1, emptyGroup(model));
   const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
   for (std::size_t r = 0; r < U.size(); ++r) {
-    PLSA_CHECK(U[r].cols() == model.inputCount(),
-               "fitCoefficients: record " + std::to_string(r) + " does not match the model's inputs and outputs");
+    checkInputs(model, U[r], r, "fitCoefficients");
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
-    const eval::ModelRegressors reg = eval::modelRegressors(model, U[r]);  // one record at a time: they are large
-    accumulate(model, reg, Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
+    accumulateStreamed(model, U[r], Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
   }
   return solveCoefficients(model, sums, -1, o);
 }

@@ -67,6 +67,14 @@ struct IdentificationRun {
     return interleaved ? crossValidatedInterleaved(what) : crossValidatedContiguous(what);
   }
   double crossValidatedInterleaved(Score what);
+  /// Interleaved: each fold's fit (the model as configured now, fitted to the
+  /// other folds), the outputs it was fitted to, its weights and increments.
+  struct FoldFits {
+    std::vector<DioPwlObfModel> fit;
+    std::vector<SampleWeights> W;
+    std::vector<std::vector<Eigen::MatrixXd>> TY, dy;  ///< [fold][log]
+  };
+  FoldFits interleavedFoldFits();
   double crossValidatedContiguous(Score what);
   void beginScoring(std::string stage, std::size_t count);
   void applyStructure(const Structure& st);
@@ -97,7 +105,7 @@ struct IdentificationRun {
 
   // Cross-validation: interleaved chunks (fold_rows) or contiguous blocks
   // (BU, BY, BT, fold_of); the outputs fitted per block (FY) and per log
-  // (FYlog); regressors kept between scores.
+  // (FYlog).
   bool interleaved = true;
   std::vector<Eigen::MatrixXd> BU, BY;
   std::vector<Eigen::VectorXd> BT;
@@ -105,7 +113,6 @@ struct IdentificationRun {
   std::vector<Eigen::VectorXi> fold_rows;
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
-  std::vector<eval::ModelRegressors> regs;
   Scoring scoring;
 
   // The best choice so far.

@@ -86,9 +86,8 @@ void IdentificationRun::cutFolds() {
     }
   }
   rep.play_scores.clear();
-  FY = BY;                // per block
-  FYlog = Y;              // per log
-  regs.resize(U.size());  // kept between scores: refilling beats reallocating
+  FY = BY;    // per block
+  FYlog = Y;  // per log
 }
 
 // Held-out fit of the model as configured now, averaged over outputs and
@@ -114,35 +113,52 @@ void IdentificationRun::beginScoring(std::string stage, std::size_t count) {
   scoring.total = static_cast<int>(count);
 }
 
+// The regressors run over whole logs and do not depend on the fold: one pass
+// sums every fold's terms, each fold's fit is a solve, and a second pass gives
+// every fold's increments. Both passes stream the regressors a chunk at a
+// time: a long log's would take gigabytes.
+IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
+  CoefficientSums sums;
+  if (!drift_per_fold) sums = coefficientSums(model, U, FYlog, fold_rows, o.play_selection_folds);
+  const auto folds = static_cast<std::size_t>(o.play_selection_folds);
+  FoldFits ff{std::vector<DioPwlObfModel>(folds, model), std::vector<SampleWeights>(folds),
+              std::vector<std::vector<Eigen::MatrixXd>>(folds, FYlog),
+              std::vector<std::vector<Eigen::MatrixXd>>(folds)};
+  for (std::size_t f = 0; f < folds; ++f) {
+    for (const Eigen::VectorXi& rows : fold_rows)
+      ff.W[f].push_back((rows.array() != static_cast<int>(f)).cast<double>().matrix());
+    if (drift_per_fold) {
+      ff.TY[f] = removeOutputDrift(ff.TY[f], times,
+                                   estimateOutputDrift(model, U, ff.TY[f], times, o.coefficients, 3, ff.W[f]));
+      fitCoefficients(ff.fit[f], U, ff.TY[f], o.coefficients, ff.W[f]);
+    } else {
+      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), o.coefficients);
+    }
+  }
+  for (std::size_t r = 0; r < U.size(); ++r) {
+    std::vector<Eigen::MatrixXd> per_fold = eval::modelIncrements(ff.fit, U[r]);
+    for (std::size_t f = 0; f < folds; ++f) ff.dy[f].push_back(std::move(per_fold[f]));
+  }
+  return ff;
+}
+
 double IdentificationRun::crossValidatedInterleaved(Score what) {
   const bool sim = what == Score::kSimulation;
   const int key = sim ? 0 : o.play_selection_horizon;
-  // The regressors run over whole logs and do not depend on the fold: built
-  // once, summed once per fold, and each fold's fit is a solve.
-  for (std::size_t r = 0; r < U.size(); ++r) eval::modelRegressors(model, U[r], regs[r]);
-  CoefficientSums sums;
-  if (!drift_per_fold) sums = coefficientSums(model, regs, FYlog, fold_rows, o.play_selection_folds);
+  FoldFits folds = interleavedFoldFits();
   double score = 0.0;
   int n = 0;
   for (int f = 0; f < o.play_selection_folds; ++f) {
-    SampleWeights W;
-    for (const Eigen::VectorXi& rows : fold_rows) W.push_back((rows.array() != f).cast<double>().matrix());
-    std::vector<Eigen::MatrixXd> TY = FYlog;
-    if (drift_per_fold) {
-      TY = removeOutputDrift(TY, times, estimateOutputDrift(model, U, TY, times, o.coefficients, 3, W));
-      fitCoefficients(model, U, TY, o.coefficients, W);
-    } else {
-      solveCoefficients(model, sums, f, o.coefficients);
-    }
-    std::vector<Eigen::MatrixXd> dys;
-    for (const eval::ModelRegressors& reg : regs) dys.push_back(modelIncrements(model, reg));
-    if (sim) fitOutputLevel(model, U, TY, W, dys);
+    const auto ff = static_cast<std::size_t>(f);
+    DioPwlObfModel& fit = folds.fit[ff];
+    const std::vector<Eigen::MatrixXd>& dys = folds.dy[ff];
+    if (sim) fitOutputLevel(fit, U, folds.TY[ff], folds.W[ff], dys);
     // One fit per output over every held-out row of the fold, all logs together.
     std::vector<std::vector<double>> meas(static_cast<std::size_t>(no)), pred(static_cast<std::size_t>(no));
     for (std::size_t r = 0; r < U.size(); ++r) {
       if (U[r].rows() <= o.play_selection_horizon) continue;
       const std::vector<std::map<int, eval::AlignedPrediction>> p = eval::predictOutputs(
-          model, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
+          fit, U[r], Y[r], sim ? std::vector<int>{} : std::vector<int>{key}, sim, dys[r], kSameSession);
       for (int out_i = 0; out_i < no; ++out_i) {
         const eval::AlignedPrediction& a = p[static_cast<std::size_t>(out_i)].at(key);
         for (Eigen::Index i = 0; i < a.values.size(); ++i)
@@ -161,6 +177,7 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
       ++n;
     }
   }
+  model = std::move(folds.fit.back());  // as a fold-by-fold refit leaves it: the last fold's fit
   return score / std::max(1, n);
 }
 

@@ -61,6 +61,12 @@ CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<e
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
                                 int groups);
 
+/// The same sums from the input records, their regressors made a chunk at a
+/// time (eval::RegressorStream): memory of a chunk, not of the records.
+CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,
+                                const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
+                                int groups);
+
 /// fitCoefficients from sums made for the model's current structure, leaving
 /// out group `leave_out` (-1: none).
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,

@@ -87,6 +87,16 @@ std::vector<double> quantileBreakpoints(std::vector<double> values, int levels) 
   return b;
 }
 
+namespace {
+
+// The spread of the central 90% of the values (5% to 95% quantiles).
+double centralSpread(const std::vector<double>& values) {
+  const std::vector<double> ventiles = quantileBreakpoints(values, 20);
+  return ventiles.size() < 2 ? 0.0 : ventiles.back() - ventiles.front();
+}
+
+}  // namespace
+
 std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names) {
   for (const auto& name : names) {
     const Eigen::VectorXd x = log.column(name);
@@ -374,8 +384,9 @@ void IdentificationRun::buildPartitions() {
   // A designed staircase holds a few reference levels; measured data that
   // merely pauses holds hundreds: that is no grid, use quantiles instead.
   constexpr std::size_t kMaxDesignedLevels = 8;
-  // One output too weak for its step fits does not make the staircase less designed.
-  bool designed = rep.staircase;
+  // The design is the reference's: outputs too weak for their step fits (a
+  // nearly straight segment, a noisy sensor) do not make it less designed.
+  bool designed = rep.segments > 0;
   for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
   std::vector<bool> schedulings;  // interpolated?
   if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
@@ -389,6 +400,11 @@ void IdentificationRun::buildPartitions() {
 void IdentificationRun::addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed) {
   std::vector<int> sched;
   std::vector<std::vector<double>> bps;
+  double widest_spread = 0.0;
+  for (int in_i = 0; in_i < ni && !designed; ++in_i) {
+    const Eigen::VectorXd col = all_u.col(in_i);
+    widest_spread = std::max(widest_spread, centralSpread(std::vector<double>(col.data(), col.data() + col.size())));
+  }
   for (int in_i = 0; in_i < ni; ++in_i) {
     std::vector<double> lv;
     for (double l : levels[static_cast<std::size_t>(in_i)])
@@ -398,8 +414,11 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
       bps.push_back(interpolated ? lv : midpoints(lv));
     } else if (!designed) {
       const Eigen::VectorXd col = all_u.col(in_i);
-      if (col.maxCoeff() - col.minCoeff() <= o.step_threshold) continue;
       std::vector<double> values(col.data(), col.data() + col.size());
+      // An input whose central 90% spans no more than a step, or a twentieth
+      // of the widest input's, is nothing to schedule on (an unused chamber's
+      // sensor noise).
+      if (centralSpread(values) <= std::max(o.step_threshold, 0.05 * widest_spread)) continue;
       // Switched: cells between quantiles; interpolated: nodes at the cells' medians.
       auto b = quantileBreakpoints(values, interpolated ? 2 * o.quantile_levels : o.quantile_levels);
       if (interpolated) {

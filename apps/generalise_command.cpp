@@ -47,7 +47,13 @@ struct GeneraliseArgs {
 struct PhysicsCase {
   std::string name;
   std::vector<std::pair<std::string, std::string>> effects;  // effect, law
+  double bend_range_deg = 0.0;  ///< the grid run's largest bend, the lever rescaled to it; 0: as drawn
 };
+
+/// Bending ranges beside the drawn ones (about 15-25 deg over the grid): a
+/// nearly straight segment, where the sensor's noise weighs most, and ones
+/// bending far, where the tip direction turns through large angles.
+constexpr double kBendRangesDeg[] = {2.0, 50.0, 100.0};
 
 const char* kModels[] = {"plsa", "paper", "global_linear", "arx"};
 const std::vector<int> kHorizons = {40, 80};
@@ -62,6 +68,13 @@ std::vector<PhysicsCase> listCases(const GeneraliseArgs& a) {
   PhysicsCase every{"all", {}};
   for (const std::string& e : sim::effectNames()) every.effects.push_back({e, sim::independentLawsOf(e).front()});
   all.push_back(every);
+  for (const PhysicsCase& base : {all.front(), every})
+    for (const double range : kBendRangesDeg) {
+      PhysicsCase c = base;
+      c.name = base.name + "@" + std::to_string(static_cast<int>(range)) + "deg";
+      c.bend_range_deg = range;
+      all.push_back(c);
+    }
   std::vector<std::string> wanted = a.cases;
   if (a.quick) wanted = {"nominal", "hysteresis.bouc_wen", "all"};
   if (wanted.empty()) return all;
@@ -232,7 +245,7 @@ nlohmann::json beyondSummary(const nlohmann::json& rows) {
 }
 
 void printBeyondRows(const nlohmann::json& rows) {
-  std::printf("\n  the same models on a joystick run beyond the grid (%.2f-%.2f bar; the grid: 0.20-0.35)\n",
+  std::printf("\n  plsa's model of each row on a joystick run beyond the grid (%.2f-%.2f bar; the grid: 0.20-0.35)\n",
               kBeyondMinBar, kBeyondMaxBar);
   std::printf("  %-32s %4s %6s | %-39s\n", "case", "seed", "beyond", "plsa (bend 40 80 sim, steer)");
   for (const auto& r : rows) {
@@ -331,10 +344,13 @@ void runGeneralise(const GeneraliseArgs& a) {
       const std::uint64_t seed = a.seed + static_cast<std::uint64_t>(s);
       std::mt19937_64 rng(seed * 7919 + std::hash<std::string>{}(c.name));
       nlohmann::json row = {{"case", c.name}, {"seed", seed}};
-      const sim::IndependentPhysics physics = drawPhysics(c, rng, row["physics"]);
+      sim::IndependentPhysics physics = drawPhysics(c, rng, row["physics"]);
       sim::ExperimentOptions eo;
       eo.seed = seed + 1;
-      const io::Log train = recordFromRest(physics, sim::gridExperiment(eo), seed);
+      const sim::Experiment grid = sim::gridExperiment(eo);
+      row["bend_range_deg"] = c.bend_range_deg > 0 ? sim::scaleToBendRange(physics, grid.commands, c.bend_range_deg)
+                                                   : sim::largestBendDeg(physics, grid.commands);
+      const io::Log train = recordFromRest(physics, grid, seed);
       const io::Log val = recordFromRest(physics, sim::joystickExperiment(eo), seed + 100);
       sim::ExperimentOptions wide_eo = eo;  // a joystick run well beyond the grid's 0.20-0.35 bar
       wide_eo.joystick_min_bar = kBeyondMinBar;
@@ -367,7 +383,9 @@ void addGeneraliseCommand(CLI::App& app) {
       "and plsa on a run beyond its grid");
   cmd->add_option("--seeds", a->seeds, "Physics drawn per case")->check(CLI::Range(1, 100));
   cmd->add_option("--seed", a->seed, "First seed")->check(kSeed);
-  cmd->add_option("--case", a->cases, "Cases to run (effect.law, nominal or all; default every one)");
+  cmd->add_option("--case", a->cases,
+                  "Cases to run (effect.law, nominal or all, or nominal@Ndeg / all@Ndeg for N in 2, 50, 100: the "
+                  "segment's lever rescaled so that the grid run bends at most N deg; default every one)");
   cmd->add_flag("--quick", a->quick, "Three cases (nominal, hysteresis.bouc_wen, all), one seed");
   cmd->add_option("--json", a->json, "Write every row and the summary here");
   cmd->add_option("--save-runs", a->save_runs,

@@ -106,3 +106,33 @@ TEST(IndependentActuator, ASensorOffsetsDirectionIsSharedByEveryRunWhenSet) {
   p.sensor_offset_direction_deg = 400.0;
   EXPECT_THROW(IndependentActuator(p, 1), std::invalid_argument);
 }
+
+// The generalisation benchmark's bending ranges: the segment's lever rescaled
+// until a trajectory's largest bend is the target, also when a stiffening law
+// makes the bend grow less than in proportion; the recorded bend agrees.
+TEST(IndependentActuator, ScalesItsLeverToABendingRange) {
+  Eigen::MatrixXd commands = Eigen::MatrixXd::Zero(8 * 80, 3);
+  commands.block(80, 0, 3 * 80, 1).setConstant(0.35);
+  commands.block(4 * 80, 1, 3 * 80, 1).setConstant(0.25);
+  for (const std::string& stiffening : {std::string(), std::string("duffing")}) {
+    IndependentPhysics p = quietIndependent();
+    if (!stiffening.empty())
+      setIndependentEffect(p, "stiffening", stiffening, independentStrengthRange("stiffening", stiffening).second);
+    const double drawn = largestBendDeg(p, commands);
+    ASSERT_GT(drawn, 5.0) << stiffening;
+    for (const double target : {2.0, 100.0}) {
+      IndependentPhysics scaled = p;
+      const double reached = scaleToBendRange(scaled, commands, target);
+      EXPECT_NEAR(reached, target, 0.02 * target) << stiffening;
+      EXPECT_NE(scaled.chamber_radius_m, p.chamber_radius_m);
+      IndependentActuator a(scaled, 3);
+      double largest = 0.0;
+      for (Eigen::Index k = 0; k < commands.rows(); ++k)
+        largest = std::max(largest, a.step({commands(k, 0), commands(k, 1), commands(k, 2)}).bending_deg.norm());
+      EXPECT_NEAR(largest, reached, 1e-9) << stiffening;
+    }
+  }
+  IndependentPhysics p = quietIndependent();
+  EXPECT_THROW(scaleToBendRange(p, commands, 0.0), std::invalid_argument);
+  EXPECT_THROW(scaleToBendRange(p, Eigen::MatrixXd::Zero(80, 3), 10.0), std::invalid_argument);
+}

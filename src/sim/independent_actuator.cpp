@@ -5,6 +5,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "plsa/core/check.hpp"
+
 namespace plsa::sim {
 namespace {
 
@@ -357,6 +359,33 @@ IndependentSample IndependentActuator::step(const std::array<double, 3>& command
   for (std::size_t i = 0; i < 3; ++i) s.pressure_bar[i] = p_[i] + ph_.pressure_noise_bar * normal_(rng_);
   s.bending_deg = measured(bend_);
   return s;
+}
+
+double largestBendDeg(IndependentPhysics physics, const Eigen::MatrixXd& commands) {
+  PLSA_CHECK(commands.cols() == 3, "largestBendDeg: need one command column per chamber");
+  physics.noise_deg = 0.0;
+  physics.pressure_noise_bar = 0.0;
+  IndependentActuator a(physics, 1);
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < commands.rows(); ++k)
+    largest = std::max(largest, a.step({commands(k, 0), commands(k, 1), commands(k, 2)}).bending_deg.norm());
+  return largest;
+}
+
+double scaleToBendRange(IndependentPhysics& physics, const Eigen::MatrixXd& commands, double target_deg) {
+  PLSA_CHECK(std::isfinite(target_deg) && target_deg > 0.0, "scaleToBendRange: the target must be positive");
+  // Secant steps on log(bend) against log(radius), from the proportional law (slope -1).
+  double reached = largestBendDeg(physics, commands), slope = -1.0;
+  for (int pass = 0; pass < 12 && std::abs(reached / target_deg - 1.0) > 0.02; ++pass) {
+    PLSA_CHECK(reached > 1e-6, "scaleToBendRange: the commands do not bend the segment");
+    const double log_r = std::log(physics.chamber_radius_m), log_bend = std::log(reached);
+    physics.chamber_radius_m = std::exp(log_r + (std::log(target_deg) - log_bend) / slope);
+    const double next = largestBendDeg(physics, commands);
+    if (next > 1e-6 && std::abs(std::log(physics.chamber_radius_m) - log_r) > 1e-9)
+      slope = std::clamp((std::log(next) - log_bend) / (std::log(physics.chamber_radius_m) - log_r), -2.0, -0.05);
+    reached = next;
+  }
+  return reached;
 }
 
 }  // namespace plsa::sim

@@ -106,6 +106,18 @@ std::pair<double, double> independentStrengthRange(const std::string& effect, co
 /// "nominal.<name>".
 std::vector<std::pair<std::string, double>> drawNominal(IndependentPhysics& physics, std::mt19937_64& rng);
 
+/// The largest bend (deg) the actuator reaches over a command trajectory
+/// (rows: samples; columns: the three chambers' commands, bar) from rest,
+/// without sensor or pressure noise.
+double largestBendDeg(IndependentPhysics physics, const Eigen::MatrixXd& commands);
+
+/// Rescales the segment's lever (its chamber radius: a thinner segment bends
+/// more at the same strain) so that the largest bend over `commands` comes
+/// within 2% of `target_deg`, in a few passes since stiffening laws bend less
+/// than in proportion; returns the largest bend reached. Throws on a target
+/// that is not positive and finite or a trajectory that does not bend.
+double scaleToBendRange(IndependentPhysics& physics, const Eigen::MatrixXd& commands, double target_deg);
+
 /// Sets the law of `effect` (a name from sim::effectNames()) and its strength.
 void setIndependentEffect(IndependentPhysics& physics, const std::string& effect, const std::string& law,
                           double strength);

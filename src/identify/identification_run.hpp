@@ -45,6 +45,8 @@ struct IdentificationRun {
   void fitLocalModels(const std::vector<io::Log>& logs);
   void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows);
   void selectPoles();
+  [[noreturn]] void noUsablePoles(int out_i) const;
+  std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();
   void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
 

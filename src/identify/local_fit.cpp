@@ -78,6 +78,7 @@ void judgeFit(LocalFit& fit, int order, double max_std_error, double min_snr) {
   }
   fit.poles = kept;
   if (fit.poles.empty() && why.str().empty()) why << "no physical pole left; ";
+  const bool physical = why.str().empty();
   // With order > 1 the AR coefficients are correlated, so their standard
   // errors say little about the poles; the SNR test still applies.
   if (order == 1 && fit.pole_std_error > max_std_error)
@@ -86,6 +87,7 @@ void judgeFit(LocalFit& fit, int order, double max_std_error, double min_snr) {
   fit.reason = why.str();
   if (!fit.reason.empty()) fit.reason.resize(fit.reason.size() - 2);
   fit.usable = fit.reason.empty();
+  fit.uncertain = !fit.usable && physical;
 }
 
 }  // namespace

@@ -241,7 +241,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
 void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
   rep.pairs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
-    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, 0, {}, {}});
+    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, {}, 0, {}, {}});
   rep.segments = 0;
   for (std::size_t r = 0; r < logs.size(); ++r) {
     for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
@@ -255,6 +255,7 @@ void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
         if (f.usable) {
           pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
         } else {
+          if (f.uncertain) pp.uncertain.insert(pp.uncertain.end(), f.poles.begin(), f.poles.end());
           ++pp.rejected;
           pp.rejections.push_back(logs[r].source + " samples " + std::to_string(seg.begin) + "-" +
                                   std::to_string(seg.end) + ": " + f.reason);
@@ -321,7 +322,9 @@ void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const 
           PairPoles& pp = pairAt(in_i, out_i);
           if (f.usable)
             pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
-          else if (in_i == 0) {
+          else if (f.uncertain)
+            pp.uncertain.insert(pp.uncertain.end(), f.poles.begin(), f.poles.end());
+          if (!f.usable && in_i == 0) {
             ++pp.rejected;
             pp.rejections.push_back(logs[r].source + " window at " + std::to_string(b) + ": " + f.reason);
           }
@@ -329,7 +332,34 @@ void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const 
       }
 }
 
-// Steps 5-6: pole selection per pair; a pair without poles borrows its output's.
+// An output's local fits were all rejected: the error, with the first reasons.
+[[noreturn]] void IdentificationRun::noUsablePoles(int out_i) const {
+  std::string why;
+  int shown = 0;
+  for (const auto& p : rep.pairs)
+    for (const auto& r : p.rejections)
+      if (p.output == out_i && shown++ < 3) why += "\n  rejected: " + r;
+  throw std::runtime_error("identify: no usable local poles for output '" + o.outputs[static_cast<std::size_t>(out_i)] +
+                           "' or any other (" + std::to_string(rep.segments) + " step segments, all fits rejected)" +
+                           why);
+}
+
+// No local fit passed its checks: the poles of those rejected only as badly
+// determined or too weak for the noise, the last resort before refusing.
+std::vector<std::complex<double>> IdentificationRun::uncertainPoles() {
+  std::vector<std::complex<double>> poles;
+  for (const PairPoles& pp : rep.pairs) poles.insert(poles.end(), pp.uncertain.begin(), pp.uncertain.end());
+  if (poles.empty()) return poles;
+  rep.uncertain_poles = true;
+  say("[3/5] warning: no local fit passed its checks; the poles come from the " + std::to_string(poles.size()) +
+      " physical ones of fits rejected only as badly determined or too weak for the noise: the outputs are weak "
+      "against their noise, and the model's fits will show it");
+  return poles;
+}
+
+// Steps 5-6: pole selection per pair; a pair without poles borrows its
+// output's, and an output without any borrows every other output's (the
+// same chambers drive them all), saying so.
 void IdentificationRun::selectPoles() {
   model.sample_time_s = dt;
   model.inputs = o.inputs;
@@ -338,32 +368,34 @@ void IdentificationRun::selectPoles() {
   model.poles.assign(static_cast<std::size_t>(no), {});
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
-  for (int out_i = 0; out_i < no; ++out_i) {
-    std::vector<std::complex<double>> output_poles;
+  std::vector<std::vector<std::complex<double>>> output_poles(static_cast<std::size_t>(no));
+  std::vector<std::complex<double>> every_pole;
+  for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) {
       const auto& id = pairAt(in_i, out_i).identified;
-      output_poles.insert(output_poles.end(), id.begin(), id.end());
+      output_poles[static_cast<std::size_t>(out_i)].insert(output_poles[static_cast<std::size_t>(out_i)].end(),
+                                                           id.begin(), id.end());
+      every_pole.insert(every_pole.end(), id.begin(), id.end());
     }
+  if (every_pole.empty()) every_pole = uncertainPoles();
+  for (int out_i = 0; out_i < no; ++out_i) {
+    const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
+    if (every_pole.empty()) noUsablePoles(out_i);
+    if (mine.empty())
+      say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
+          " (every one rejected): it takes the other outputs' poles");
     for (int in_i = 0; in_i < ni; ++in_i) {
       PairPoles& pp = pairAt(in_i, out_i);
       const bool own = pp.identified.size() >= 2;
-      const auto& src = own ? pp.identified : output_poles;
-      if (src.empty()) {
-        std::string why;
-        int shown = 0;
-        for (const auto& p : rep.pairs)
-          for (const auto& r : p.rejections)
-            if (p.output == out_i && shown++ < 3) why += "\n  rejected: " + r;
-        throw std::runtime_error("identify: no usable local poles for output '" +
-                                 o.outputs[static_cast<std::size_t>(out_i)] + "' (" + std::to_string(rep.segments) +
-                                 " step segments, all fits rejected)" + why);
-      }
+      const auto& src = own ? pp.identified : !mine.empty() ? mine : every_pole;
       pp.chosen = cluster(o.pole_method, src, co);
       model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
       say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
           o.outputs[static_cast<std::size_t>(out_i)] + " (" + pp.chosen.method + " over " + std::to_string(src.size()) +
-          (own ? " own" : " output-wide") + " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) +
-          "): " + fmtPoles(pp.chosen.centres));
+          (own             ? " own"
+           : !mine.empty() ? " output-wide"
+                           : " other outputs'") +
+          " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
     }
   }
 }

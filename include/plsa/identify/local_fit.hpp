@@ -18,6 +18,9 @@ struct LocalFit {
   double pole_std_error = 0.0;                ///< largest standard error of the AR coefficients
   double snr = 0.0;                           ///< response amplitude / residual std
   bool usable = false;
+  /// Not usable, but only as badly determined or too small for the noise:
+  /// its poles are physical (stable, not alternating), a last resort.
+  bool uncertain = false;
   std::string reason;  ///< why not usable, in words
 };
 

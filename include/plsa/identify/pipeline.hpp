@@ -209,6 +209,9 @@ struct IdentifyOptions {
 struct PairPoles {
   int input = 0, output = 0;
   std::vector<std::complex<double>> identified;  ///< usable local poles
+  /// Poles of fits rejected only as badly determined or too weak for the
+  /// noise (LocalFit::uncertain): used only when no output has a usable one.
+  std::vector<std::complex<double>> uncertain;
   int rejected = 0;
   std::vector<std::string> rejections;  ///< why, one line each
   ClusteringResult chosen;
@@ -256,6 +259,8 @@ struct IdentifyReport {
   /// The logs hold a staircase: some output's poles came from its steps, so the
   /// partition follows the reference levels (if few) rather than quantiles.
   bool staircase = false;
+  /// No local fit passed its checks: the poles came from PairPoles::uncertain.
+  bool uncertain_poles = false;
   std::vector<PairPoles> pairs;
   CoefficientFitReport coefficients;
   std::vector<std::string> lines;  ///< everything the progress callback saw

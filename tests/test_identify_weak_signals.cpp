@@ -1,5 +1,7 @@
-// Identification's partition: the experiment's design when the reference
-// holds one, else quantiles of the inputs that move.
+// Identification where some signals are weak: outputs too weak for their
+// step fits or for any fit (the partition still follows the design, the
+// poles come from windows or from the other outputs), and an input that
+// only reads noise (left out of a quantile grid).
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -9,10 +11,11 @@ namespace {
 
 constexpr double kDt = 1.0 / 80.0;
 
-// A staircase on p_1 and two outputs with noise 0.02: "weak", slow and weak
-// (a 0.05 bar step moves it 0.25 over 4 s), and "strong", 20 times larger and
-// faster, or (both_weak) another like "weak".
-io::Log staircaseLog(bool both_weak) {
+// A staircase on p_1 and two outputs with noise 0.02: "strong", and "weak",
+// slow and weak (a 0.05 bar step moves it 0.25 over 4 s) or, kWeakIsNoise,
+// noise alone; kBothWeak: "strong" is like "weak".
+enum class Weakness { kOneWeak, kBothWeak, kWeakIsNoise };
+io::Log staircaseLog(Weakness weakness) {
   const std::vector<double> levels = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.3, 0.25, 0.2, 0.15, 0.1, 0.05, 0.0};
   const auto hold = static_cast<Eigen::Index>(4.0 / kDt);
   const Eigen::Index n = hold * static_cast<Eigen::Index>(levels.size() + 1);
@@ -27,8 +30,8 @@ io::Log staircaseLog(bool both_weak) {
     const Eigen::Index step = k / hold;
     const double cmd = step == 0 ? 0.0 : levels[static_cast<std::size_t>(step - 1)];
     p = 0.9 * p + 0.1 * cmd;
-    strong = both_weak ? 0.99 * strong + 0.01 * 5.0 * p : 0.95 * strong + 0.05 * 100.0 * p;
-    weak = 0.99 * weak + 0.01 * 5.0 * p;
+    strong = weakness == Weakness::kBothWeak ? 0.99 * strong + 0.01 * 5.0 * p : 0.95 * strong + 0.05 * 100.0 * p;
+    weak = weakness == Weakness::kWeakIsNoise ? 0.0 : 0.99 * weak + 0.01 * 5.0 * p;
     log.data.row(k) << static_cast<double>(k) * kDt, cmd, p + 0.001 * noise(rng), strong + noise(rng),
         weak + noise(rng);
   }
@@ -67,7 +70,8 @@ void expectStaircaseSplits(const DioPwlObfModel& m, const IdentifyReport& rep) {
 // staircase's levels, not quantiles of the measured pressure.
 TEST(Pipeline, OneWeakOutputKeepsTheStaircasePartition) {
   IdentifyReport rep;
-  const DioPwlObfModel m = identifyModel({staircaseLog(false)}, partitionOnly({"p_1"}, {"strong", "weak"}), &rep);
+  const DioPwlObfModel m =
+      identifyModel({staircaseLog(Weakness::kOneWeak)}, partitionOnly({"p_1"}, {"strong", "weak"}), &rep);
   EXPECT_TRUE(rep.staircase);
   EXPECT_TRUE(rep.used_windows);
   EXPECT_EQ(rep.window_outputs, (std::vector<std::string>{"weak"}));
@@ -83,7 +87,8 @@ TEST(Pipeline, OneWeakOutputKeepsTheStaircasePartition) {
 // and the design is still the reference's staircase.
 TEST(Pipeline, EveryOutputWeakKeepsTheStaircasePartition) {
   IdentifyReport rep;
-  const DioPwlObfModel m = identifyModel({staircaseLog(true)}, partitionOnly({"p_1"}, {"strong", "weak"}), &rep);
+  const DioPwlObfModel m =
+      identifyModel({staircaseLog(Weakness::kBothWeak)}, partitionOnly({"p_1"}, {"strong", "weak"}), &rep);
   EXPECT_FALSE(rep.staircase) << "no output's poles came from its steps";
   EXPECT_EQ(rep.window_outputs, (std::vector<std::string>{"strong", "weak"}));
   expectStaircaseSplits(m, rep);
@@ -112,4 +117,41 @@ TEST(Pipeline, QuantileGridLeavesOutAnInputThatOnlyReadsNoise) {
                                  [](const std::string& l) { return l.find("quantile grid") != std::string::npos; });
   ASSERT_NE(line, rep.lines.end());
   EXPECT_EQ(line->find("p_2"), std::string::npos) << *line;
+}
+
+// An output no local fit can use (it reads noise alone) takes the poles the
+// other outputs found, and says so. Alone, it gets the poles of the fits
+// rejected only as badly determined or too weak for the noise, with a
+// warning; an output whose fits give no physical pole at all is refused.
+TEST(Pipeline, AnOutputWithoutUsableFitsTakesTheOtherOutputsPoles) {
+  IdentifyReport rep;
+  const DioPwlObfModel m =
+      identifyModel({staircaseLog(Weakness::kWeakIsNoise)}, partitionOnly({"p_1"}, {"strong", "weak"}), &rep);
+  ASSERT_EQ(m.poles.size(), 2u);
+  EXPECT_EQ(m.poles[1][0].size(), m.poles[0][0].size());
+  EXPECT_FALSE(rep.uncertain_poles);
+  const auto said = [&](const IdentifyReport& r, const std::string& a, const std::string& b) {
+    return std::any_of(r.lines.begin(), r.lines.end(), [&](const std::string& l) {
+      return l.find(a) != std::string::npos && l.find(b) != std::string::npos;
+    });
+  };
+  EXPECT_TRUE(said(rep, "no usable local fit for weak", "other outputs' poles"));
+  EXPECT_TRUE(said(rep, "p_1 -> weak", "other outputs' poles"));
+
+  IdentifyReport alone;
+  const DioPwlObfModel noise_model =
+      identifyModel({staircaseLog(Weakness::kWeakIsNoise)}, partitionOnly({"p_1"}, {"weak"}), &alone);
+  EXPECT_TRUE(alone.uncertain_poles);
+  EXPECT_TRUE(said(alone, "warning: no local fit passed its checks", "too weak for the noise"));
+  for (const auto& p : noise_model.poles[0][0].poles()) EXPECT_TRUE(std::abs(p) < 1.0 && p.real() >= 0.0) << p;
+
+  io::Log alternating = staircaseLog(Weakness::kWeakIsNoise);  // every fit's pole negative: nothing physical
+  for (Eigen::Index k = 0; k < alternating.data.rows(); ++k) alternating.data(k, 4) = k % 2 == 0 ? 1.0 : -1.0;
+  try {
+    identifyModel({alternating}, partitionOnly({"p_1"}, {"weak"}));
+    ADD_FAILURE() << "an output with no physical pole in any fit must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no usable local poles for output 'weak'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rejected:"), std::string::npos) << e.what();
+  }
 }

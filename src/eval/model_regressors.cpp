@@ -248,8 +248,7 @@ namespace {
 
 void fillRegressors(ModelRegressors& out, const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
   RegressorStream stream(model, u);
-  out.phi.clear();
-  stream.next(out, std::numeric_limits<Eigen::Index>::max());
+  stream.next(out, std::numeric_limits<Eigen::Index>::max());  // one chunk: the whole record
 }
 
 }  // namespace

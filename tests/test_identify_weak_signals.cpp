@@ -143,6 +143,8 @@ TEST(Pipeline, AnOutputWithoutUsableFitsTakesTheOtherOutputsPoles) {
       identifyModel({staircaseLog(Weakness::kWeakIsNoise)}, partitionOnly({"p_1"}, {"weak"}), &alone);
   EXPECT_TRUE(alone.uncertain_poles);
   EXPECT_TRUE(said(alone, "warning: no local fit passed its checks", "too weak for the noise"));
+  EXPECT_TRUE(said(alone, "p_1 -> weak", "uncertain poles"));
+  EXPECT_FALSE(said(alone, "no usable local fit for weak", "other outputs' poles")) << "there are no other outputs";
   for (const auto& p : noise_model.poles[0][0].poles()) EXPECT_TRUE(std::abs(p) < 1.0 && p.real() >= 0.0) << p;
 
   io::Log alternating = staircaseLog(Weakness::kWeakIsNoise);  // every fit's pole negative: nothing physical

@@ -381,7 +381,7 @@ void IdentificationRun::selectPoles() {
   for (int out_i = 0; out_i < no; ++out_i) {
     const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
     if (every_pole.empty()) noUsablePoles(out_i);
-    if (mine.empty())
+    if (mine.empty() && !rep.uncertain_poles)
       say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
           " (every one rejected): it takes the other outputs' poles");
     for (int in_i = 0; in_i < ni; ++in_i) {
@@ -392,9 +392,10 @@ void IdentificationRun::selectPoles() {
       model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
       say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
           o.outputs[static_cast<std::size_t>(out_i)] + " (" + pp.chosen.method + " over " + std::to_string(src.size()) +
-          (own             ? " own"
-           : !mine.empty() ? " output-wide"
-                           : " other outputs'") +
+          (own                   ? " own"
+           : !mine.empty()       ? " output-wide"
+           : rep.uncertain_poles ? " uncertain"
+                                 : " other outputs'") +
           " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
     }
   }

@@ -44,10 +44,11 @@ std::vector<ScheduleBlend> scheduleSamples(const DioPwlObfModel& model, const Ei
   return schedule;
 }
 
-// Input side: the weight each node gives rows from .. to - 1, one column per node.
+// Input side: the weight each node gives rows from .. to - 1, one column per
+// node; row -1, before the record, weighs nothing.
 Eigen::MatrixXd nodeWeights(const std::vector<ScheduleBlend>& schedule, Eigen::Index from, Eigen::Index to, int nodes) {
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(to - from, nodes);
-  for (Eigen::Index k = from; k < to; ++k) {
+  for (Eigen::Index k = std::max<Eigen::Index>(from, 0); k < to; ++k) {
     const ScheduleBlend& b = schedule[static_cast<std::size_t>(k)];
     for (int m = 0; m < b.count; ++m)
       w(k - from, b.region[static_cast<std::size_t>(m)]) += b.weight[static_cast<std::size_t>(m)];
@@ -168,11 +169,13 @@ struct ChannelFilter {
   }
 };
 
-// One output's filters and the largest value each regressor column has reached.
+// One output's filters, the largest value each regressor column has reached,
+// and (input side) the filters' settled states at the record's first sample.
 struct OutputFilters {
   std::vector<ChannelFilter> filters;
   int width = 0;  ///< columns per copy
   Eigen::RowVectorXd column_max;
+  Eigen::RowVectorXd level0;
 };
 
 // Input side: which tiles of a chunk move each copy's columns at all (the
@@ -213,13 +216,18 @@ struct RegressorStream::State {
     for (ChannelFilter& f : of.filters) f.run(a, len, weight, phi.data(), of.width);
     if (!input_side) return;
     markLiveTiles(phi, copies, of.column_max, chunk.live[o]);
-    chunk.level0[o].setZero(phi.cols());
-    if (T == 0) return;
+    chunk.level0[o] = of.level0;
+  }
+
+  // Input side: DC gain times the first sample's weighted input, per filter and copy.
+  void settleAtFirstSample(OutputFilters& of) const {
+    of.level0.setZero(static_cast<Eigen::Index>(of.width) * copies);
+    if (!input_side || T == 0) return;
     const Eigen::MatrixXd w0 = nodeWeights(schedule, 0, 1, copies);
-    for (const ChannelFilter& f : of.filters) {  // settled at the record's first sample
+    for (const ChannelFilter& f : of.filters) {
       const Eigen::RowVectorXd gain = f.bank.transfer(1.0).real().transpose();
       for (int r = 0; r < copies; ++r)
-        chunk.level0[o].segment(static_cast<Eigen::Index>(r) * of.width + f.offset, f.bank.size()) =
+        of.level0.segment(static_cast<Eigen::Index>(r) * of.width + f.offset, f.bank.size()) =
             gain * (w0(0, r) * (*f.channel)(0));
     }
   }
@@ -251,6 +259,7 @@ RegressorStream::RegressorStream(const DioPwlObfModel& model, const Eigen::Matri
         of.filters.push_back(std::move(f));
       }
     of.column_max = Eigen::RowVectorXd::Zero(static_cast<Eigen::Index>(of.width) * s.copies);
+    s.settleAtFirstSample(of);
     s.outputs.push_back(std::move(of));
   }
 }
@@ -273,14 +282,8 @@ bool RegressorStream::next(ModelRegressors& chunk, Eigen::Index max_rows) {
   chunk.phi.resize(outputs);
   chunk.level0.resize(s.input_side ? outputs : 0);
   chunk.live.resize(s.input_side ? outputs : 0);
-  const Eigen::MatrixXd weight =
-      s.input_side ? nodeWeights(s.schedule, std::max<Eigen::Index>(a - 1, 0), a + len, s.copies) : Eigen::MatrixXd();
-  Eigen::MatrixXd padded;  // row 0 is row a - 1's weight; at the record's start nothing precedes it
-  if (s.input_side && a == 0) {
-    padded = Eigen::MatrixXd::Zero(len + 1, s.copies);
-    padded.bottomRows(len) = weight;
-  }
-  const Eigen::MatrixXd& w = a == 0 && s.input_side ? padded : weight;
+  // Row 0 is row a - 1's weight.
+  const Eigen::MatrixXd w = s.input_side ? nodeWeights(s.schedule, a - 1, a + len, s.copies) : Eigen::MatrixXd();
   // The outputs' regressors are independent: one thread each, when the chunk is long enough to pay for them.
   parallelFor(outputs, len >= 2048 ? static_cast<int>(outputs) : 1,
               [&](std::size_t o) { s.fillOutput(s.outputs[o], a, len, w, chunk, o); });

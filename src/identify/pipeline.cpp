@@ -378,9 +378,9 @@ void IdentificationRun::selectPoles() {
       every_pole.insert(every_pole.end(), id.begin(), id.end());
     }
   if (every_pole.empty()) every_pole = uncertainPoles();
+  if (every_pole.empty()) noUsablePoles(0);
   for (int out_i = 0; out_i < no; ++out_i) {
     const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
-    if (every_pole.empty()) noUsablePoles(out_i);
     if (mine.empty() && !rep.uncertain_poles)
       say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
           " (every one rejected): it takes the other outputs' poles");

@@ -3,10 +3,13 @@
 
 Records a joystick run of the built-in simulator (default an hour at 80 Hz,
 from rest, every effect on), then runs `plsa identify` with the demo's
-options (input-side scheduling) and `plsa validate` of that model on the same
-log, each as its own process, and reads each one's peak resident memory and
-CPU time (user + system, every thread) from the kernel (wait4's rusage).
-Prints them per sample and per hour of data; --json FILE writes them.
+options (input-side scheduling), the same with the structure search on every
+sample (--search-samples 0) instead of its default sample, and `plsa
+validate` of the first model on the same log, each as its own process, and
+reads each one's peak resident memory and CPU time (user + system, every
+thread) from the kernel (wait4's rusage). Prints them per sample and per
+hour of data, then both models' fits on a new 10 min joystick run (another
+seed); --json FILE writes them.
 
 Usage: python3 bench/offline_cost.py [--build build] [--minutes 60] [--json FILE]
 """
@@ -30,6 +33,20 @@ def measured(cmd):
     return usage.ru_maxrss, usage.ru_utime + usage.ru_stime, time.monotonic() - start
 
 
+def new_run_fits(exe, tmp, models):
+    """Each model's validate fits (per output: fit_k40, fit_k80, fit_sim) on a new 10 min joystick run."""
+    log = os.path.join(tmp, "new_run.csv")
+    subprocess.run([exe, "simulate", "--experiment", "joystick", "--duration", "600", "--seed", "7", "--out", log],
+                   check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    fits = {}
+    for name, model in models.items():
+        out = subprocess.run([exe, "validate", "--model", model, "--log", log, "--json", "-"], check=True,
+                             capture_output=True, text=True).stdout
+        fits[name] = {o: {k: f[k] for k in ("fit_k40", "fit_k80", "fit_sim")}
+                      for o, f in json.loads(out)["outputs"].items()}
+    return fits
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build", default=os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
@@ -49,16 +66,24 @@ def main():
             samples = sum(1 for _ in f) - 1
         figures["samples"] = samples
         hours = samples / 80.0 / 3600.0
-        steps = {"identify": [exe, "identify", "--log", log, "--scheduling", "input", "--out", model],
+        every = os.path.join(tmp, "model_every_sample.json")
+        identify = [exe, "identify", "--log", log, "--scheduling", "input", "--out"]
+        steps = {"identify": identify + [model],
+                 "identify, search on every sample": identify + [every, "--search-samples", "0"],
                  "validate": [exe, "validate", "--model", model, "--log", log]}
         for name, cmd in steps.items():
             kb, cpu, wall = measured(cmd)
             figures["steps"][name] = {"peak_kb": kb, "kb_per_sample": kb / samples, "cpu_s": cpu,
                                       "cpu_s_per_hour": cpu / hours, "wall_s": wall}
+        figures["new_run_fits"] = new_run_fits(exe, tmp, {"identify": model,
+                                                          "identify, search on every sample": every})
     print(f"{samples} samples ({a.minutes:g} min at 80 Hz)")
     for name, s in figures["steps"].items():
         print(f"{name}: peak {s['peak_kb'] / 1024:.0f} MB ({s['kb_per_sample']:.2f} KB per sample), "
               f"CPU {s['cpu_s']:.1f} s ({s['cpu_s_per_hour']:.0f} CPU-s per hour of data), wall {s['wall_s']:.1f} s")
+    for name, outs in figures["new_run_fits"].items():
+        print(f"{name}, on a new 10 min run: " + ", ".join(
+            f"{o} k=40 {f['fit_k40']:.1f} sim {f['fit_sim']:.1f}" for o, f in outs.items()))
     if a.json:
         with open(a.json, "w") as f:
             json.dump(figures, f, indent=1)

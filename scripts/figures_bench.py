@@ -148,6 +148,11 @@ def bench_offline(build, dry_run):
         cpu_verdict = "" if name != "identify" else (" (met)" if s["cpu_s_per_hour"] <= 20 else " (not met)")
         rows.append(f"| {name} | {s['peak_kb'] / 1024:.0f} MB | {s['kb_per_sample']:.2f} KB ({verdict}) | "
                     f"{s['cpu_s']:.1f} s | {s['cpu_s_per_hour']:.0f} s{cpu_verdict} |")
+    rows += ["", "The two models on a new 10 min joystick run (seed 7), fit % (`plsa validate`):", "",
+             "| model | output | k=40 | k=80 | simulation |", "| --- | --- | --- | --- | --- |"]
+    for name, outs in data["new_run_fits"].items():
+        rows += [f"| {name} | {o} | {f['fit_k40']:.1f} | {f['fit_k80']:.1f} | {f['fit_sim']:.1f} |"
+                 for o, f in outs.items()]
     replace_block(os.path.join(HERE, "bench", "README.md"), "bench-offline",
                   stamp("bench/offline_cost.py") + f" {data['samples']} samples ({data['minutes']:g} min at 80 Hz)."
                   "\n\n" + "\n".join(rows) + "\n", dry_run)

@@ -52,6 +52,7 @@ struct IdentificationRun {
 
   // The structure search (structure_search.cpp).
   void listStructures();
+  void sampleForSearch();  // search_sample.cpp
   void cutFolds();
   void searchPlayAndScheduling();
   void searchCoupling();
@@ -61,6 +62,7 @@ struct IdentificationRun {
   void refineJointly();  // joint_refinement.cpp
   void searchOutputDrift();
   void searchSlowPole();
+  void restoreAllData();  // search_sample.cpp
   DioPwlObfModel fitFinal();
 
   // Scoring and the model's configuration.
@@ -97,6 +99,12 @@ struct IdentificationRun {
   Eigen::Index total = 0, min_len = 0;
   int ni = 0, no = 0;
   Eigen::MatrixXd all_ref, all_u;
+  // Every log's inputs, outputs and times while the search runs on windows
+  // of them (sampleForSearch; empty: it runs on every sample), and per
+  // window the count of its first rows fitted but never scored.
+  std::vector<Eigen::MatrixXd> all_U, all_Y;
+  std::vector<Eigen::VectorXd> all_times;
+  std::vector<Eigen::Index> warmup_rows;
 
   // The model being built and the structures it may take.
   DioPwlObfModel model;
@@ -112,7 +120,8 @@ struct IdentificationRun {
   std::vector<Eigen::MatrixXd> BU, BY;
   std::vector<Eigen::VectorXd> BT;
   std::vector<int> fold_of;
-  std::vector<Eigen::VectorXi> fold_rows;
+  std::vector<Eigen::VectorXi> fold_rows;  ///< per row its fold, or fold_groups - 1 for a warm-up row
+  int fold_groups = 0;                     ///< the folds, and one more when some rows are warm-up
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
   Scoring scoring;

@@ -144,6 +144,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   selectPoles();
   buildPartitions();
   listStructures();
+  sampleForSearch();
   cutFolds();
   searchPlayAndScheduling();
   searchCoupling();
@@ -152,6 +153,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   refineJointly();
   searchOutputDrift();
   searchSlowPole();
+  restoreAllData();
   return fitFinal();
 }
 
@@ -174,6 +176,9 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
       "identify: play refinement evaluations must be in 0..10000, got " + std::to_string(o.play_refine_evaluations));
   PLSA_CHECK(std::isfinite(o.progress_interval_s) && o.progress_interval_s >= 0,
              "identify: the progress interval must be a finite number of seconds >= 0");
+  PLSA_CHECK(o.search_max_samples >= 0, "identify: the search's sample size must be >= 0 (0: every sample)");
+  PLSA_CHECK(std::isfinite(o.search_window_s) && o.search_window_s > 0 && o.search_window_s < 1e9,
+             "identify: the search's windows must last a positive, finite number of seconds");
   checkOption(o.pole_method);
   checkOption(o.scheduling);
   checkOption(o.output_drift);
@@ -379,6 +384,15 @@ void IdentificationRun::selectPoles() {
     }
   if (every_pole.empty()) every_pole = uncertainPoles();
   if (every_pole.empty()) noUsablePoles(0);
+  // Window fits give every input of an output the same poles: each distinct
+  // set is clustered once (on an hour of data, seconds per set).
+  std::vector<std::pair<std::vector<std::complex<double>>, ClusteringResult>> clustered;
+  auto clusterOnce = [&](const std::vector<std::complex<double>>& src) {
+    for (const auto& [poles, result] : clustered)
+      if (poles == src) return result;
+    clustered.emplace_back(src, cluster(o.pole_method, src, co));
+    return clustered.back().second;
+  };
   for (int out_i = 0; out_i < no; ++out_i) {
     const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
     if (mine.empty() && !rep.uncertain_poles)
@@ -388,7 +402,7 @@ void IdentificationRun::selectPoles() {
       PairPoles& pp = pairAt(in_i, out_i);
       const bool own = pp.identified.size() >= 2;
       const auto& src = own ? pp.identified : !mine.empty() ? mine : every_pole;
-      pp.chosen = cluster(o.pole_method, src, co);
+      pp.chosen = clusterOnce(src);
       model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
       say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
           o.outputs[static_cast<std::size_t>(out_i)] + " (" + pp.chosen.method + " over " + std::to_string(src.size()) +

@@ -57,10 +57,13 @@ void IdentificationRun::applyPlay(const std::vector<PlayChannel>& set) {
 
 // Cross-validation folds (IdentifyOptions::cv_layout). Contiguous: every
 // log cut into time blocks, each scored by a model fitted on the others.
-// Interleaved: chunks dealt to the folds in turn, held-out rows weighted out.
+// Interleaved: chunks dealt to the folds in turn, held-out rows weighted out;
+// a search window's warm-up rows (sampleForSearch) in every fold's fit, scored
+// in none.
 void IdentificationRun::cutFolds() {
   PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
   interleaved = o.cv_layout == CvLayout::kInterleaved;
+  fold_groups = o.play_selection_folds;
   PLSA_CHECK(!interleaved || (std::isfinite(o.cv_chunk_s) && o.cv_chunk_s > 0),
              "identify: cross-validation chunks must last a positive, finite number of seconds");
   // Contiguous blocks hold out a stretch of the experiment, often a part of
@@ -72,6 +75,10 @@ void IdentificationRun::cutFolds() {
     for (std::size_t r = 0; r < U.size(); ++r) {
       Eigen::VectorXi f(U[r].rows());
       for (Eigen::Index k = 0; k < f.size(); ++k) f(k) = static_cast<int>((k / chunk) % o.play_selection_folds);
+      if (r < warmup_rows.size() && warmup_rows[r] > 0) {
+        f.head(warmup_rows[r]).setConstant(o.play_selection_folds);
+        fold_groups = o.play_selection_folds + 1;
+      }
       fold_rows.push_back(f);
     }
   }
@@ -119,7 +126,7 @@ void IdentificationRun::beginScoring(std::string stage, std::size_t count) {
 // time: a long log's would take gigabytes.
 IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
   CoefficientSums sums;
-  if (!drift_per_fold) sums = coefficientSums(model, U, FYlog, fold_rows, o.play_selection_folds);
+  if (!drift_per_fold) sums = coefficientSums(model, U, FYlog, fold_rows, fold_groups);
   const auto folds = static_cast<std::size_t>(o.play_selection_folds);
   FoldFits ff{std::vector<DioPwlObfModel>(folds, model), std::vector<SampleWeights>(folds),
               std::vector<std::vector<Eigen::MatrixXd>>(folds, FYlog),

@@ -199,6 +199,14 @@ struct IdentifyOptions {
   /// (a part of the grid) that the fit has not seen.
   CvLayout cv_layout = CvLayout::kInterleaved;
   double cv_chunk_s = 8.0;
+  /// The structure search scores its candidates on at most this many
+  /// samples (search_sample.hpp): on longer logs, windows of about
+  /// search_window_s spread evenly over them, each one's first 10 s fitted
+  /// but not scored unless it starts its log (interleaved layout). The
+  /// stages before the search and the final fit use every sample. About
+  /// six and a half minutes at 80 Hz (four windows); 0: the search uses every sample.
+  Eigen::Index search_max_samples = 32000;
+  double search_window_s = 100.0;
   std::function<void(const std::string&)> progress;  ///< one line per stage
   /// Stage 5's held-out scores: after this long (s) without a line, one on
   /// how far the stage is (long logs, where a stage takes minutes). 0: after
@@ -252,8 +260,9 @@ struct IdentifyReport {
   std::vector<std::pair<double, double>>
       slow_pole_scores;                              ///< (time constant s, held-out simulation fit), 0 (none) first
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
-  OutputDrift output_drift;                 ///< the drift estimated on all training logs (empty rates: stage not run)
-  bool drift_taken_out = false;             ///< whether the model was fitted to the outputs less output_drift
+  OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
+  bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
+  Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)
   bool used_windows = false;                ///< some output's poles came from local windows (see window_outputs)
   std::vector<std::string> window_outputs;  ///< outputs without a usable step response, fitted on windows
   /// The logs hold a staircase: some output's poles came from its steps, so the

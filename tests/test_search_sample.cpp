@@ -1,0 +1,100 @@
+// The structure search on a sample of long logs (search_sample.hpp): where
+// the windows fall, and that the chosen structure is still fitted on every
+// sample.
+#include "plsa/identify/search_sample.hpp"
+#include "support/identify_fixtures.hpp"
+
+using namespace plsa;
+using namespace plsa::identify;
+using namespace plsa::test_fixtures;
+
+namespace {
+
+void expectWindow(const SearchWindow& w, std::size_t log, Eigen::Index begin, Eigen::Index length) {
+  EXPECT_EQ(w.log, log);
+  EXPECT_EQ(w.begin, begin);
+  EXPECT_EQ(w.length, length);
+}
+
+}  // namespace
+
+TEST(SearchSample, WindowsSpreadOverLongLogsWithinTheBudget) {
+  // Within the budget (or none): every log whole.
+  std::vector<SearchWindow> w = searchWindows({300, 200}, 500, 100);
+  ASSERT_EQ(w.size(), 2u);
+  expectWindow(w[0], 0, 0, 300);
+  expectWindow(w[1], 1, 0, 200);
+  EXPECT_EQ(searchWindows({300, 200}, 0, 100).size(), 2u);
+  // One long log: four windows centred at 1/8, 3/8, 5/8 and 7/8 of it.
+  w = searchWindows({100000}, 32000, 8000);
+  ASSERT_EQ(w.size(), 4u);
+  for (std::size_t j = 0; j < 4; ++j) expectWindow(w[j], 0, 12500 + 25000 * static_cast<Eigen::Index>(j) - 4000, 8000);
+  // Short logs: a window moves inside the log its centre falls in; a log no
+  // longer than a window is taken whole.
+  w = searchWindows({3000, 3000, 3000, 3000, 3000, 3000, 3000, 3000, 3000, 3000}, 12000, 2000);
+  ASSERT_EQ(w.size(), 6u);
+  const std::array<std::size_t, 6> logs{0, 2, 4, 5, 7, 9};
+  const std::array<Eigen::Index, 6> begins{1000, 500, 0, 1000, 500, 0};
+  for (std::size_t j = 0; j < 6; ++j) expectWindow(w[j], logs[j], begins[j], 2000);
+  w = searchWindows({1000, 1000}, 1500, 10000);
+  ASSERT_EQ(w.size(), 1u);
+  expectWindow(w[0], 1, 0, 1000);
+  // Two windows pushed against a log's end overlap: merged, within the budget.
+  w = searchWindows({50, 10}, 50, 20);
+  ASSERT_EQ(w.size(), 1u);
+  expectWindow(w[0], 0, 3, 47);
+  expectThrowContaining([] { searchWindows({100}, 50, 0); }, "at least one row");
+  expectThrowContaining([] { searchWindows({100, -1}, 50, 10); }, "negative");
+}
+
+// A search on windows chooses a structure; the model returned is that
+// structure fitted on every sample, not on the windows.
+TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
+  const io::Log train = yawDriftRuns(0.0).train;  // no effect on
+  IdentifyOptions o;
+  o.scheduling = SchedulingChoice::kInputSide;
+  o.play_candidates = {{0.0}, {0.1}};
+  o.play_coupling_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.play_threshold_candidates = {};
+  o.slow_pole_candidates = {};
+  o.play_refine_evaluations = 0;
+  o.output_drift = OutputDriftChoice::kOff;
+  o.search_max_samples = 6000;
+  o.search_window_s = 25.0;  // 2000 rows at 80 Hz: three windows
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({train}, o, &rep);
+  const Eigen::MatrixXd U = train.columnsOf(o.inputs), Y = train.columnsOf(o.outputs);
+  ASSERT_GT(U.rows(), 2 * o.search_max_samples);
+  EXPECT_EQ(rep.search_samples, 6000);
+  EXPECT_TRUE(std::any_of(rep.lines.begin(), rep.lines.end(), [](const std::string& l) {
+    return l.find("structure search on 75 s of the") != std::string::npos && l.find("3 windows") != std::string::npos;
+  }));
+  DioPwlObfModel all = m, windows = m;
+  fitCoefficients(all, {U}, {Y}, o.coefficients);
+  fitOutputLevel(all, {U}, {Y});
+  for (int out = 0; out < m.outputCount(); ++out)
+    EXPECT_EQ(m.stackedCoefficients(out), all.stackedCoefficients(out)) << out;
+  EXPECT_EQ(m.output_level, all.output_level);
+  // The windows alone would have given other coefficients.
+  std::vector<Eigen::MatrixXd> WU, WY;
+  for (const SearchWindow& s : searchWindows({U.rows()}, o.search_max_samples, 2000)) {
+    WU.push_back(U.middleRows(s.begin, s.length));
+    WY.push_back(Y.middleRows(s.begin, s.length));
+  }
+  fitCoefficients(windows, WU, WY, o.coefficients);
+  EXPECT_NE(m.stackedCoefficients(0), windows.stackedCoefficients(0));
+  IdentifyOptions bad = o;
+  bad.search_window_s = 0.0;
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "the search's windows must last");
+  bad = o;
+  bad.search_max_samples = -1;
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "sample size must be >= 0");
+  // No budget: the search runs on every sample and says nothing about windows.
+  o.search_max_samples = 0;
+  IdentifyReport whole;
+  identifyModel({train}, o, &whole);
+  EXPECT_EQ(whole.search_samples, U.rows());
+  EXPECT_TRUE(std::none_of(whole.lines.begin(), whole.lines.end(),
+                           [](const std::string& l) { return l.find("structure search on") != std::string::npos; }));
+}

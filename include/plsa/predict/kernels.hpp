@@ -89,25 +89,44 @@ inline void accumulateMovingGroups(const double* a, Eigen::Index ld, int rows, i
   }
 }
 
-/// y[0, n) = a x[0, n), or += with `add`, in a generic and an AVX2 build.
-PLSA_ALWAYS_INLINE void addScaledBody(const double* __restrict x, double a, Eigen::Index n, double* __restrict y,
-                                      bool add) noexcept {
-  if (add)
-    for (Eigen::Index i = 0; i < n; ++i) y[i] += a * x[i];
-  else
-    for (Eigen::Index i = 0; i < n; ++i) y[i] = a * x[i];
+/// y[0, n) = sum over c < k of a[c] x[c][0, n), summed in c's order (k >= 1),
+/// each y stored once: a Jacobian column from the channels that drive it
+/// (generic and AVX2).
+PLSA_ALWAYS_INLINE void combineScaledBody(const double* const* x, const double* a, int k, Eigen::Index n,
+                                          double* __restrict y) noexcept {
+  const double* __restrict x0 = x[0];
+  const double a0 = a[0];
+  if (k == 1) {
+    for (Eigen::Index i = 0; i < n; ++i) y[i] = a0 * x0[i];
+    return;
+  }
+  const double* __restrict x1 = x[1];
+  const double a1 = a[1];
+  if (k == 2) {
+    for (Eigen::Index i = 0; i < n; ++i) y[i] = a0 * x0[i] + a1 * x1[i];
+    return;
+  }
+  const double* __restrict x2 = x[2];
+  const double a2 = a[2];
+  for (Eigen::Index i = 0; i < n; ++i) y[i] = a0 * x0[i] + a1 * x1[i] + a2 * x2[i];
+  for (int c = 3; c < k; ++c) {
+    const double* __restrict xc = x[c];
+    const double ac = a[c];
+    for (Eigen::Index i = 0; i < n; ++i) y[i] += ac * xc[i];
+  }
 }
-inline void addScaledGeneric(const double* x, double a, Eigen::Index n, double* y, bool add) noexcept {
-  addScaledBody(x, a, n, y, add);
+inline void combineScaledGeneric(const double* const* x, const double* a, int k, Eigen::Index n, double* y) noexcept {
+  combineScaledBody(x, a, k, n, y);
 }
-PLSA_TARGET_AVX2 inline void addScaledAvx2(const double* x, double a, Eigen::Index n, double* y, bool add) noexcept {
-  addScaledBody(x, a, n, y, add);
+PLSA_TARGET_AVX2 inline void combineScaledAvx2(const double* const* x, const double* a, int k, Eigen::Index n,
+                                               double* y) noexcept {
+  combineScaledBody(x, a, k, n, y);
 }
-inline void addScaled(const double* x, double a, Eigen::Index n, double* y, bool add) noexcept {
+inline void combineScaled(const double* const* x, const double* a, int k, Eigen::Index n, double* y) noexcept {
   if (predictorUsesAvx2())
-    addScaledAvx2(x, a, n, y, add);
+    combineScaledAvx2(x, a, k, n, y);
   else
-    addScaledGeneric(x, a, n, y, add);
+    combineScaledGeneric(x, a, k, n, y);
 }
 
 /// out[q] = a[offset[q], offset[q + 1]) . x[the same] for q < count: each

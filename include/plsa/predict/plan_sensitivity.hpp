@@ -20,8 +20,9 @@
 namespace plsa {
 
 /// Inputs a sensitivity is computed for at most (their drive per step is kept
-/// in fixed arrays).
+/// in fixed arrays), and play channels.
 inline constexpr int kMaxSensitivityInputs = 16;
+inline constexpr int kMaxSensitivityChannels = 64;
 
 class PlanSensitivity {
  public:
@@ -32,7 +33,8 @@ class PlanSensitivity {
     next_.setZero(static_cast<Eigen::Index>(max_horizon) * channels);
     pushed_.setZero(next_.size());
     turn_.setZero(max_horizon, 4);
-    rows_.setZero(max_horizon, m.n_y);
+    responses_.setZero(static_cast<Eigen::Index>(max_horizon) * m.n_y, channels);
+    moving_.setZero(channels);
     weight_.setZero(m.poles);
     vc_.setZero(channels);
   }
@@ -164,26 +166,35 @@ class PlanSensitivity {
         turn_(h, 2) = y * inv_r;
         turn_(h, 3) = x * inv_r2;
       }
-    double* __restrict rows_by_output = rows_.data();  // [(h - s - 1) * ny + o]: a column's order
+    std::array<const double*, kMaxSensitivityChannels> response{};
+    std::array<double, kMaxSensitivityChannels> scale{};
     for (Eigen::Index s = 0; s + 1 < horizon; ++s) {
       const Eigen::Index rows = horizon - 1 - s;  // rows h = s + 1 .. horizon - 1 move with step s
-      std::array<bool, kMaxSensitivityInputs> written{};
       if (whole)
         for (int j = 0; j < nu; ++j) jacobian.col(s * nu + j).head((s + 1) * ny).setZero();
+      // Each channel the step pushes: its rows once, as a column orders them.
+      int moving = 0;
       for (Eigen::Index c = 0; c < channels; ++c) {
-        const auto d = drive_.row(s * channels + c);
-        if (d.isZero(0.0)) continue;
-        const Eigen::Index tail = next_(s * channels + c) - s;  // the channel holds for this many steps
-        channelResponse(ny, c, s, rows, tail, tip, rows_by_output);
-        for (int j = 0; j < nu; ++j) {
-          if (d(j) == 0.0) continue;
-          addScaled(rows_by_output, d(j), rows * ny, jacobian.col(s * nu + j).data() + (s + 1) * ny,
-                    written[static_cast<std::size_t>(j)]);
-          written[static_cast<std::size_t>(j)] = true;
-        }
+        if (drive_.row(s * channels + c).isZero(0.0)) continue;
+        double* out = responses_.col(moving).data();  // [(h - s - 1) * ny + o]
+        channelResponse(ny, c, s, rows, next_(s * channels + c) - s, tip, out);
+        moving_[moving++] = static_cast<int>(c);
       }
-      for (int j = 0; j < nu; ++j)
-        if (!written[static_cast<std::size_t>(j)]) jacobian.col(s * nu + j).tail(rows * ny).setZero();
+      // Each input's column: the pushed channels' rows by their drive on it, stored once.
+      for (int j = 0; j < nu; ++j) {
+        int k = 0;
+        for (int i = 0; i < moving; ++i) {
+          const double d = drive_(s * channels + moving_[i], j);
+          if (d == 0.0) continue;
+          response[static_cast<std::size_t>(k)] = responses_.col(i).data();
+          scale[static_cast<std::size_t>(k++)] = d;
+        }
+        double* column = jacobian.col(s * nu + j).data() + (s + 1) * ny;
+        if (k == 0)
+          std::fill(column, column + rows * ny, 0.0);
+        else
+          combineScaled(response.data(), scale.data(), k, rows * ny, column);
+      }
     }
   }
 
@@ -223,9 +234,10 @@ class PlanSensitivity {
   RowMajorMatrix drive_;    // [step * channels + channel] x inputs
   Eigen::VectorXi next_, pushed_;
   Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> turn_;  // [h]: two pairs (turnedPair)
-  Eigen::MatrixXd rows_;
-  Eigen::VectorXd weight_;  // one kernel's beta a per pole
-  Eigen::VectorXd vc_;      // the channels along the plan
+  Eigen::MatrixXd responses_;  // a step's pushed channels' rows, one column each (channelResponse)
+  Eigen::VectorXi moving_;     // their channels
+  Eigen::VectorXd weight_;     // one kernel's beta a per pole
+  Eigen::VectorXd vc_;         // the channels along the plan
 };
 
 }  // namespace plsa

@@ -157,8 +157,8 @@ class NStepPredictor {
   /// when the input sits on an edge, as a held input does). `plan` needs
   /// horizon - 1 rows, `jacobian` horizon * n_y rows and (horizon - 1) * n_u
   /// columns. A tip_cartesian model answers in bending and steering (through
-  /// the angles at the predicted trajectory). Modal form only (kUnsupported
-  /// otherwise); no allocation. `fill`: every entry, or only the rows each
+  /// the angles at the predicted trajectory). Modal form, at most 8 outputs,
+  /// 16 inputs and 64 play channels (kUnsupported otherwise); no allocation. `fill`: every entry, or only the rows each
   /// plan step moves (JacobianFill::kMovingRows, for a matrix zeroed once and
   /// passed every tick).
   PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
@@ -166,7 +166,9 @@ class NStepPredictor {
     const SubnormalsFlushed flushed;
     const CompiledModel& m = model();
     if (samples_ == 0) return PredictorStatus::kNotReady;
-    if (!m.modal || m.n_y > 8 || m.n_u > kMaxSensitivityInputs) return PredictorStatus::kUnsupported;
+    if (!m.modal || m.n_y > 8 || m.n_u > kMaxSensitivityInputs ||
+        m.play.size() > static_cast<std::size_t>(kMaxSensitivityChannels))
+      return PredictorStatus::kUnsupported;
     if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
     const Eigen::Index steps = horizon - 1;
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||

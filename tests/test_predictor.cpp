@@ -454,6 +454,27 @@ TEST(Predictor, SensitivityWritesOnlyTheMovingRowsWhenAsked) {
   EXPECT_GT(lower, 100) << "the plan moves nothing: the check shows nothing";
 }
 
+// The sensitivity keeps each step's pushed channels in fixed arrays: a model
+// with more play channels than they hold is refused, not overrun.
+TEST(Predictor, SensitivityRefusesMorePlayChannelsThanItHolds) {
+  const Data& d = data();
+  DioPwlObfModel many = d.switched;
+  many.partition = PwlPartition::single();
+  for (auto& channels : many.shaping.play) {
+    channels.clear();
+    for (int c = 0; c < 22; ++c) channels.emplace_back(0.01 * c, 0.0);  // 3 x 22 = 66 > 64
+  }
+  fitCoefficients(many, {d.u}, {d.y});
+  Predictor<> p(many);
+  ASSERT_TRUE(p.heldPathIsModal()) << "refused for its form, not its channels: the check shows nothing";
+  for (int t = 0; t < 50; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+  const int H = 10;
+  const Eigen::MatrixXd plan = d.u.middleRows(50, H - 1);
+  Eigen::MatrixXd jac(H * 2, (H - 1) * 3), out(H, 2);
+  EXPECT_EQ(p.sensitivity(H, plan, jac), PredictorStatus::kUnsupported);
+  EXPECT_EQ(p.predict(H, plan, out), PredictorStatus::kOk);  // prediction itself is not limited
+}
+
 // A robot at rest for 125 s: every filter state decays toward zero. None may
 // end as a subnormal number (they slow arithmetic down by orders of
 // magnitude), and predictions stay those of a fresh predictor at rest.

@@ -265,7 +265,9 @@ void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option("--poles", a->options.poles_per_pair, "OBF poles per input-output pair")->check(CLI::Range(1, 20));
   id->add_option("--local-order", a->options.local_order, "Order of the local LTI fits (paper: 1)")
       ->check(CLI::Range(1, 6));
-  addChoice(id, "--pole-method", a->options.pole_method, "fkcm, fcm, kmeans or global");
+  addChoice(id, "--pole-method", a->options.pole_method,
+            "auto (default: FKcM and fuzzy c-means both, the one whose model scores higher on held-out data kept), "
+            "fkcm (the paper's), fcm, kmeans or global");
   id->add_option("--rho-refinement", a->options.clustering.refine_on_rho,
                  "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
                  "off: the paper's FKcM alone");

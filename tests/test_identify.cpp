@@ -68,7 +68,11 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   std::vector<std::string> ticks;
   for (const std::string& l : rep.lines)
     if (l.rfind("[5/5] scoring ", 0) == 0) ticks.push_back(l.substr(14, l.find(" held-out") - 14));
-  const std::vector<std::string> expected{"play channels and scheduling: 1 of 2",
+  const std::vector<std::string> expected{"pole methods: 1 of 4",  // two each: 40 steps ahead, simulated
+                                          "pole methods: 2 of 4",
+                                          "pole methods: 3 of 4",
+                                          "pole methods: 4 of 4",
+                                          "play channels and scheduling: 1 of 2",
                                           "play channels and scheduling: 2 of 2",
                                           "coupled play channels: 1 of 2",
                                           "coupled play channels: 2 of 2",

@@ -69,3 +69,16 @@ TEST(PoleClustering, ComplexPairsAndBadInput) {
     EXPECT_THROW(fkcmClustering(poles, o), std::invalid_argument) << m;
   }
 }
+
+// Local poles that all coincide put every centre on them: fuzzy c-means
+// gives them to one centre, and the others, with no pole of their own, must
+// stay where they are rather than become 0 / 0.
+TEST(PoleClustering, FuzzyCMeansCentresWithoutPolesStayFinite) {
+  ClusteringOptions o;
+  o.centres = 5;
+  const std::vector<C> same(6, C(0.9, 0.0));
+  const ClusteringResult r = fuzzyCMeansClustering(same, o);
+  ASSERT_EQ(r.centres.size(), 5u);
+  for (const C& c : r.centres) EXPECT_EQ(c, C(0.9, 0.0));
+  EXPECT_TRUE(std::isfinite(r.rho));
+}

@@ -1,6 +1,6 @@
 // The structure search on a sample of long logs (search_sample.hpp): where
 // the windows fall, and that the chosen structure is still fitted on every
-// sample.
+// sample; and the pole method the search keeps (pole_selection.cpp).
 #include "plsa/identify/search_sample.hpp"
 #include "support/identify_fixtures.hpp"
 
@@ -9,6 +9,18 @@ using namespace plsa::identify;
 using namespace plsa::test_fixtures;
 
 namespace {
+
+IdentifyOptions quickInputSide() {
+  IdentifyOptions o;
+  o.scheduling = SchedulingChoice::kInputSide;
+  o.play_candidates = {{0.0}, {0.1}};
+  o.play_coupling_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.play_threshold_candidates = {};
+  o.slow_pole_candidates = {};
+  o.play_refine_evaluations = 0;
+  return o;
+}
 
 void expectWindow(const SearchWindow& w, std::size_t log, Eigen::Index begin, Eigen::Index length) {
   EXPECT_EQ(w.log, log);
@@ -51,14 +63,7 @@ TEST(SearchSample, WindowsSpreadOverLongLogsWithinTheBudget) {
 // structure fitted on every sample, not on the windows.
 TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
   const io::Log train = yawDriftRuns(0.0).train;  // no effect on
-  IdentifyOptions o;
-  o.scheduling = SchedulingChoice::kInputSide;
-  o.play_candidates = {{0.0}, {0.1}};
-  o.play_coupling_candidates = {};
-  o.schedule_lag_candidates = {};
-  o.play_threshold_candidates = {};
-  o.slow_pole_candidates = {};
-  o.play_refine_evaluations = 0;
+  IdentifyOptions o = quickInputSide();
   o.output_drift = OutputDriftChoice::kOff;
   o.search_max_samples = 6000;
   o.search_window_s = 25.0;  // 2000 rows at 80 Hz: three windows
@@ -97,4 +102,44 @@ TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
   EXPECT_EQ(whole.search_samples, U.rows());
   EXPECT_TRUE(std::none_of(whole.lines.begin(), whole.lines.end(),
                            [](const std::string& l) { return l.find("structure search on") != std::string::npos; }));
+}
+
+// pole_method "auto": on a joystick run (local windows: hundreds of local
+// poles) fuzzy c-means' basis scores higher held out and is kept; on a
+// staircase both methods find nearly the same poles, and the tie keeps the
+// paper's FKcM, the model identical to asking for FKcM.
+TEST(PoleMethod, AutoKeepsTheBasisThatScoresHigherHeldOut) {
+  sim::ExperimentOptions eo;
+  eo.seed = 9;
+  eo.joystick_duration_s = 180;
+  sim::Actuator a(sim::SimConfig{}, 9);
+  const io::Log joystick = sim::runExperiment(a, sim::joystickExperiment(eo));
+  IdentifyOptions o = quickInputSide();
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({joystick}, o, &rep);
+  ASSERT_EQ(rep.pole_method_scores.size(), 2u);
+  EXPECT_EQ(rep.pole_method_scores[0].method, "fkcm");
+  EXPECT_EQ(rep.pole_method_scores[1].method, "fcm");
+  const auto mean = [](const PoleMethodScore& s) { return 0.5 * (s.step_ahead + s.simulation); };
+  EXPECT_GT(mean(rep.pole_method_scores[1]), mean(rep.pole_method_scores[0]) + 0.1);
+  EXPECT_EQ(rep.pairs[0].chosen.method, "fuzzy c-means");
+  o.pole_method = PoleMethod::kFuzzyCMeans;
+  const DioPwlObfModel fcm = identifyModel({joystick}, o);
+  EXPECT_EQ(m.stackedCoefficients(0), fcm.stackedCoefficients(0));
+  EXPECT_TRUE(rep.used_windows);
+
+  const io::Log staircase = yawDriftRuns(0.0).train;
+  o.pole_method = PoleMethod::kAuto;
+  IdentifyReport tie;
+  const DioPwlObfModel m_auto = identifyModel({staircase}, o, &tie);
+  ASSERT_EQ(tie.pole_method_scores.size(), 2u);
+  EXPECT_NEAR(tie.pole_method_scores[0].step_ahead, tie.pole_method_scores[1].step_ahead, 0.1);
+  EXPECT_EQ(tie.pairs[0].chosen.method.rfind("FKcM", 0), 0u) << tie.pairs[0].chosen.method;
+  o.pole_method = PoleMethod::kFkcm;
+  IdentifyReport paper;
+  const DioPwlObfModel m_fkcm = identifyModel({staircase}, o, &paper);
+  EXPECT_TRUE(paper.pole_method_scores.empty());
+  for (int out = 0; out < m_auto.outputCount(); ++out)
+    EXPECT_EQ(m_auto.stackedCoefficients(out), m_fkcm.stackedCoefficients(out));
+  EXPECT_EQ(parseOption<PoleMethod>("auto"), PoleMethod::kAuto);
 }

@@ -8,6 +8,7 @@ namespace plsa::identify {
 
 IdentifyOptions paperConfiguration(IdentifyOptions o) {
   o.progress = nullptr;
+  o.pole_method = PoleMethod::kFkcm;
   o.scheduling = SchedulingChoice::kSwitched;
   o.output_frame = OutputFrame::kAsLogged;
   o.play_candidates = {{0.0}};

@@ -44,10 +44,28 @@ struct IdentificationRun {
   void readData(const std::vector<io::Log>& logs);
   void fitLocalModels(const std::vector<io::Log>& logs);
   void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows);
-  void selectPoles();
   [[noreturn]] void noUsablePoles(int out_i) const;
   std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();
+
+  // Pole selection (pole_selection.cpp): the local poles a pair clusters
+  // (and how the progress line names them), and one method's basis poles for
+  // every pair (model.poles' shape, and each pair's result in rep.pairs' order).
+  struct PoleSource {
+    std::vector<std::complex<double>> poles;
+    const char* label;
+  };
+  struct PoleCandidate {
+    PoleMethod method;
+    std::vector<std::vector<PoleSet>> poles;
+    std::vector<ClusteringResult> chosen;
+  };
+  std::vector<PoleSource> poleSources();
+  PoleCandidate clusterPairs(PoleMethod method, const std::vector<PoleSource>& sources);
+  void selectPoles();
+  void adoptPoles(const PoleCandidate& c);
+  void choosePoleMethod();  // the first stage of the structure search
+  double poleMethodScore(PoleMethodScore& into);
   void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
 
   // The structure search (structure_search.cpp).
@@ -106,8 +124,9 @@ struct IdentificationRun {
   std::vector<Eigen::VectorXd> all_times;
   std::vector<Eigen::Index> warmup_rows;
 
-  // The model being built and the structures it may take.
+  // The model being built, its pole sets to choose from and the structures it may take.
   DioPwlObfModel model;
+  std::vector<PoleCandidate> pole_candidates;
   std::vector<PwlPartition> partitions;
   std::vector<Structure> structures;
   std::vector<double> range;  ///< per input: its training range (play widths are fractions of it)

@@ -17,35 +17,6 @@
 namespace plsa::identify {
 namespace {
 
-// Printed in ascending order (the clustering returns centres in no particular order).
-std::string fmtPoles(std::vector<std::complex<double>> p) {
-  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) {
-    return a.real() != b.real() ? a.real() < b.real() : a.imag() < b.imag();
-  });
-  std::ostringstream s;
-  s.precision(4);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    s << (i ? " " : "") << p[i].real();
-    if (p[i].imag() != 0) s << (p[i].imag() > 0 ? "+" : "") << p[i].imag() << "i";
-  }
-  return s.str();
-}
-
-ClusteringResult cluster(PoleMethod method, const std::vector<std::complex<double>>& poles,
-                         const ClusteringOptions& o) {
-  switch (method) {
-    case PoleMethod::kFkcm:
-      return fkcmClustering(poles, o);
-    case PoleMethod::kFuzzyCMeans:
-      return fuzzyCMeansClustering(poles, o);
-    case PoleMethod::kKMeans:
-      return kMeansClustering(poles, o);
-    case PoleMethod::kGlobalRho:
-      return globalRhoSearch(poles, o);
-  }
-  throw std::invalid_argument("identify: pole method out of range");
-}
-
 // An option set by a cast from an integer outside its enum is refused by name.
 template <class E>
 void checkOption(E value) {
@@ -146,6 +117,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   listStructures();
   sampleForSearch();
   cutFolds();
+  choosePoleMethod();
   searchPlayAndScheduling();
   searchCoupling();
   searchScheduleLag();
@@ -360,59 +332,6 @@ std::vector<std::complex<double>> IdentificationRun::uncertainPoles() {
       " physical ones of fits rejected only as badly determined or too weak for the noise: the outputs are weak "
       "against their noise, and the model's fits will show it");
   return poles;
-}
-
-// Steps 5-6: pole selection per pair; a pair without poles borrows its
-// output's, and an output without any borrows every other output's (the
-// same chambers drive them all), saying so.
-void IdentificationRun::selectPoles() {
-  model.sample_time_s = dt;
-  model.inputs = o.inputs;
-  model.outputs = o.outputs;
-  model.output_frame = frame;
-  model.poles.assign(static_cast<std::size_t>(no), {});
-  ClusteringOptions co = o.clustering;
-  co.centres = o.poles_per_pair;
-  std::vector<std::vector<std::complex<double>>> output_poles(static_cast<std::size_t>(no));
-  std::vector<std::complex<double>> every_pole;
-  for (int out_i = 0; out_i < no; ++out_i)
-    for (int in_i = 0; in_i < ni; ++in_i) {
-      const auto& id = pairAt(in_i, out_i).identified;
-      output_poles[static_cast<std::size_t>(out_i)].insert(output_poles[static_cast<std::size_t>(out_i)].end(),
-                                                           id.begin(), id.end());
-      every_pole.insert(every_pole.end(), id.begin(), id.end());
-    }
-  if (every_pole.empty()) every_pole = uncertainPoles();
-  if (every_pole.empty()) noUsablePoles(0);
-  // Window fits give every input of an output the same poles: each distinct
-  // set is clustered once (on an hour of data, seconds per set).
-  std::vector<std::pair<std::vector<std::complex<double>>, ClusteringResult>> clustered;
-  auto clusterOnce = [&](const std::vector<std::complex<double>>& src) {
-    for (const auto& [poles, result] : clustered)
-      if (poles == src) return result;
-    clustered.emplace_back(src, cluster(o.pole_method, src, co));
-    return clustered.back().second;
-  };
-  for (int out_i = 0; out_i < no; ++out_i) {
-    const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
-    if (mine.empty() && !rep.uncertain_poles)
-      say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
-          " (every one rejected): it takes the other outputs' poles");
-    for (int in_i = 0; in_i < ni; ++in_i) {
-      PairPoles& pp = pairAt(in_i, out_i);
-      const bool own = pp.identified.size() >= 2;
-      const auto& src = own ? pp.identified : !mine.empty() ? mine : every_pole;
-      pp.chosen = clusterOnce(src);
-      model.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(pp.chosen.centres));
-      say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
-          o.outputs[static_cast<std::size_t>(out_i)] + " (" + pp.chosen.method + " over " + std::to_string(src.size()) +
-          (own                   ? " own"
-           : !mine.empty()       ? " output-wide"
-           : rep.uncertain_poles ? " uncertain"
-                                 : " other outputs'") +
-          " poles, rho " + std::to_string(pp.chosen.rho).substr(0, 8) + "): " + fmtPoles(pp.chosen.centres));
-    }
-  }
 }
 
 // Partition: the experiment's reference levels, else a quantile grid.

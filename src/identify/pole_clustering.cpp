@@ -276,7 +276,9 @@ ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const Cluste
         den += w;
         objective += w * d[static_cast<std::size_t>(i)][k] * d[static_cast<std::size_t>(i)][k];
       }
-      const double next = std::clamp(num / den, -kMaxModulus, kMaxModulus);
+      // A centre no pole belongs to (one that coincides with another, which
+      // took the poles sitting on both) stays where it is.
+      const double next = den > 0.0 ? std::clamp(num / den, -kMaxModulus, kMaxModulus) : x[static_cast<std::size_t>(i)];
       moved = std::max(moved, std::abs(next - x[static_cast<std::size_t>(i)]));
       x[static_cast<std::size_t>(i)] = next;
     }

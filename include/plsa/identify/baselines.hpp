@@ -12,8 +12,9 @@
 
 namespace plsa::identify {
 
-/// `o` with plsa's extensions off: the paper's configuration (switched PWL,
-/// no play, the outputs as logged, no lag, drift or slow pole); no progress.
+/// `o` with plsa's extensions off: the paper's configuration (FKcM poles,
+/// switched PWL, no play, the outputs as logged, no lag, drift or slow pole);
+/// no progress.
 IdentifyOptions paperConfiguration(IdentifyOptions o);
 
 /// The training logs as the baselines are fitted to them: the model's inputs,

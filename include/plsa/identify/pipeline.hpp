@@ -33,7 +33,7 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
 
 /// How each input-output pair's poles are chosen from its local poles
 /// (pole_clustering.hpp).
-enum class PoleMethod { kFkcm, kFuzzyCMeans, kKMeans, kGlobalRho };
+enum class PoleMethod { kFkcm, kFuzzyCMeans, kKMeans, kGlobalRho, kAuto };
 /// Which scheduling structures identification tries (IdentifyOptions::scheduling).
 enum class SchedulingChoice { kAuto, kInterpolated, kSwitched, kInputSide };
 /// Whether a sensor drift linear in time is taken out of the training
@@ -49,10 +49,11 @@ struct OptionSpelling;
 template <>
 struct OptionSpelling<PoleMethod> {
   static constexpr const char* what = "pole method";
-  static constexpr std::array<std::pair<PoleMethod, const char*>, 4> values{{{PoleMethod::kFkcm, "fkcm"},
+  static constexpr std::array<std::pair<PoleMethod, const char*>, 5> values{{{PoleMethod::kFkcm, "fkcm"},
                                                                              {PoleMethod::kFuzzyCMeans, "fcm"},
                                                                              {PoleMethod::kKMeans, "kmeans"},
-                                                                             {PoleMethod::kGlobalRho, "global"}}};
+                                                                             {PoleMethod::kGlobalRho, "global"},
+                                                                             {PoleMethod::kAuto, "auto"}}};
 };
 template <>
 struct OptionSpelling<SchedulingChoice> {
@@ -115,7 +116,11 @@ struct IdentifyOptions {
   std::vector<std::string> reference;
   int poles_per_pair = 5;
   int local_order = 1;
-  PoleMethod pole_method = PoleMethod::kFkcm;
+  /// How each pair's local poles become its basis poles. "auto": FKcM (the
+  /// paper's) and fuzzy c-means both, the structure search's first stage
+  /// keeping the one whose model scores higher on held-out data (FKcM unless
+  /// fuzzy c-means scores higher; FKcM alone with clustering.complex_pairs).
+  PoleMethod pole_method = PoleMethod::kAuto;
   ClusteringOptions clustering;
   /// Levels per scheduling input when the log has no staircase (quantile grid).
   int quantile_levels = 3;
@@ -214,6 +219,14 @@ struct IdentifyOptions {
   double progress_interval_s = 5.0;
 };
 
+/// A pole method's held-out fits (IdentifyOptions::pole_method "auto"):
+/// 40 steps ahead on the first structure, and simulated on the first
+/// input-side structure (0 when no structure schedules on the input side).
+struct PoleMethodScore {
+  std::string method;
+  double step_ahead = 0.0, simulation = 0.0;
+};
+
 struct PairPoles {
   int input = 0, output = 0;
   std::vector<std::complex<double>> identified;  ///< usable local poles
@@ -260,6 +273,9 @@ struct IdentifyReport {
   std::vector<std::pair<double, double>>
       slow_pole_scores;                              ///< (time constant s, held-out simulation fit), 0 (none) first
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
+  /// pole_method "auto": FKcM's and fuzzy c-means' held-out fits on the
+  /// first play set; empty otherwise.
+  std::vector<PoleMethodScore> pole_method_scores;
   OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
   Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)

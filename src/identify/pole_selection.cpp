@@ -3,6 +3,7 @@
 // fuzzy c-means, the structure search's first stage keeping the one whose
 // model scores higher on held-out data.
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "identification_run.hpp"
@@ -159,7 +160,8 @@ void IdentificationRun::choosePoleMethod() {
   for (std::size_t i = 0; i < pole_candidates.size(); ++i) {
     adoptPoles(pole_candidates[i]);
     PoleMethodScore sc{optionName(pole_candidates[i].method)};
-    const double score = poleMethodScore(sc);
+    double score = poleMethodScore(sc);
+    if (!std::isfinite(score)) score = -INFINITY;  // a simulation run off to NaN loses
     rep.pole_method_scores.push_back(sc);
     if (score > best_fit + kPoleMethodMargin) {
       best_fit = score;

@@ -95,6 +95,9 @@ TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
   bad = o;
   bad.search_max_samples = -1;
   expectThrowContaining([&] { identifyModel({train}, bad); }, "sample size must be >= 0");
+  bad = o;
+  bad.play_candidates = {{}, {0.1}};  // refused before any stage scores with it
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "a play channel set is empty");
   // No budget: the search runs on every sample and says nothing about windows.
   o.search_max_samples = 0;
   IdentifyReport whole;

@@ -34,6 +34,7 @@ void IdentificationRun::listStructures() {
   }
   PLSA_CHECK(!structures.empty(), "identify: input-side scheduling cannot split by direction");
   PLSA_CHECK(!o.play_candidates.empty(), "identify: need at least one play channel set ({0} for none)");
+  for (const auto& set : o.play_candidates) PLSA_CHECK(!set.empty(), "identify: a play channel set is empty");
   range.assign(static_cast<std::size_t>(ni), 0.0);
   for (int in_i = 0; in_i < ni; ++in_i)
     range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
@@ -224,7 +225,6 @@ void IdentificationRun::searchPlayAndScheduling() {
   beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size());
   for (std::size_t pi = 0; pi < structures.size(); ++pi)
     for (const auto& set : o.play_candidates) {
-      PLSA_CHECK(!set.empty(), "identify: a play channel set is empty");
       applyStructure(structures[pi]);
       applyPlay(set);
       const double score = crossValidated();

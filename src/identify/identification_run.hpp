@@ -65,7 +65,7 @@ struct IdentificationRun {
   void selectPoles();
   void adoptPoles(const PoleCandidate& c);
   void choosePoleMethod();  // the first stage of the structure search
-  double poleMethodScore(PoleMethodScore& into);
+  double poleMethodScore(const Structure* input_side, PoleMethodScore& into);
   void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
 
   // The structure search (structure_search.cpp).

@@ -137,13 +137,11 @@ void IdentificationRun::adoptPoles(const PoleCandidate& c) {
 // weighted distance to any local pole, so on window fits (hundreds of local
 // poles, some spurious) a few outliers can set its centres, and a simulation
 // on them can run away; the scores decide on the data.
-double IdentificationRun::poleMethodScore(PoleMethodScore& into) {
+double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMethodScore& into) {
   applyPlay(o.play_candidates.front());
   applyStructure(structures.front());
   into.step_ahead = crossValidated();
-  const auto input_side = std::find_if(structures.begin(), structures.end(),
-                                       [](const Structure& st) { return st.side == ScheduleSide::kInput; });
-  if (input_side == structures.end()) return into.step_ahead;
+  if (!input_side) return into.step_ahead;
   applyStructure(*input_side);
   into.simulation = crossValidated(Score::kSimulation);
   return 0.5 * (into.step_ahead + into.simulation);
@@ -151,8 +149,10 @@ double IdentificationRun::poleMethodScore(PoleMethodScore& into) {
 
 void IdentificationRun::choosePoleMethod() {
   if (pole_candidates.size() < 2) return;
-  const bool sim = std::any_of(structures.begin(), structures.end(),
-                               [](const Structure& st) { return st.side == ScheduleSide::kInput; });
+  const auto first_input_side = std::find_if(structures.begin(), structures.end(),
+                                             [](const Structure& st) { return st.side == ScheduleSide::kInput; });
+  const Structure* input_side = first_input_side == structures.end() ? nullptr : &*first_input_side;
+  const bool sim = input_side != nullptr;
   beginScoring("pole methods", pole_candidates.size() * (sim ? 2 : 1));
   rep.pole_method_scores.clear();
   std::size_t best = 0;
@@ -160,7 +160,7 @@ void IdentificationRun::choosePoleMethod() {
   for (std::size_t i = 0; i < pole_candidates.size(); ++i) {
     adoptPoles(pole_candidates[i]);
     PoleMethodScore sc{optionName(pole_candidates[i].method)};
-    double score = poleMethodScore(sc);
+    double score = poleMethodScore(input_side, sc);
     if (!std::isfinite(score)) score = -INFINITY;  // a simulation run off to NaN loses
     rep.pole_method_scores.push_back(sc);
     if (score > best_fit + kPoleMethodMargin) {

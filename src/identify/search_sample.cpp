@@ -63,12 +63,12 @@ std::vector<SearchWindow> searchWindows(const std::vector<Eigen::Index>& log_len
 // become the windows (each its own record) and every log is kept aside for
 // fitFinal. Rows in a window's warm-up are listed for cutFolds.
 void IdentificationRun::sampleForSearch() {
+  rep.search_samples = total;
+  if (o.search_max_samples <= 0 || total <= o.search_max_samples) return;  // searchWindows: every log whole
   const auto window = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(o.search_window_s / dt)));
   std::vector<Eigen::Index> lengths;
   for (const auto& u : U) lengths.push_back(u.rows());
   const std::vector<SearchWindow> windows = searchWindows(lengths, o.search_max_samples, window);
-  rep.search_samples = total;
-  if (o.search_max_samples <= 0 || total <= o.search_max_samples) return;
   all_U = std::move(U);
   all_Y = std::move(Y);
   all_times = std::move(times);

@@ -1,4 +1,6 @@
 // `plsa identify` (logs -> model file) and `plsa validate` (model + log -> fits).
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -26,6 +28,7 @@ struct IdentifyArgs {
   std::vector<std::string> reference;
   std::string out;
   bool compare_poles = false;
+  bool list_rejections = false;
   IdentifyOptions options;
   std::string channel = "PLSA_STATE";
   std::string can_profile;
@@ -54,6 +57,61 @@ std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::
   return logs;
 }
 
+// What a rejection says without its numbers: "unstable pole 1.0011+0i" ->
+// "unstable pole", "pole badly determined (std error 0.03)" -> "pole badly
+// determined"; one key per "; "-separated reason after the location.
+std::vector<std::string> rejectionKinds(const std::string& why) {
+  const std::size_t colon = why.find(": ");
+  std::istringstream reasons(colon == std::string::npos ? why : why.substr(colon + 2));
+  std::vector<std::string> kinds;
+  for (std::string reason; std::getline(reasons, reason, ';');) {
+    std::istringstream words(reason);
+    std::string kind;
+    for (std::string w; words >> w;) {
+      if (std::isdigit(static_cast<unsigned char>(w[0])) || w[0] == '-' || w[0] == '+' || w[0] == '(') break;
+      kind += (kind.empty() ? "" : " ") + w;
+    }
+    if (!kind.empty()) kinds.push_back(kind);
+  }
+  return kinds;
+}
+
+// Each pair's rejected local fits: every one when few (or asked), otherwise
+// a count by kind and the first, so an hour of data prints a line per pair,
+// not hundreds.
+void printRejections(const IdentifyReport& report, const std::vector<std::string>& inputs,
+                     const std::vector<std::string>& outputs, bool list_all) {
+  constexpr std::size_t kListed = 3;
+  for (const auto& pp : report.pairs) {
+    const std::string pair =
+        inputs[static_cast<std::size_t>(pp.input)] + " -> " + outputs[static_cast<std::size_t>(pp.output)];
+    if (list_all || pp.rejections.size() <= kListed) {
+      for (const auto& why : pp.rejections)
+        std::fprintf(stderr, "plsa identify:   rejected local fit %s, %s\n", pair.c_str(), why.c_str());
+      continue;
+    }
+    std::vector<std::pair<std::string, int>> kinds;  // in order of first appearance
+    for (const auto& why : pp.rejections)
+      for (const auto& kind : rejectionKinds(why)) {
+        auto at = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == kind; });
+        if (at == kinds.end())
+          kinds.emplace_back(kind, 1);
+        else
+          ++at->second;
+      }
+    std::string counts;
+    std::size_t reasons = 0;
+    for (const auto& [kind, n] : kinds) {
+      counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + kind;
+      reasons += static_cast<std::size_t>(n);
+    }
+    if (reasons > pp.rejections.size()) counts += "; a fit can have several reasons";
+    std::fprintf(
+        stderr, "plsa identify:   rejected %zu local fits %s (%s); the first: %s (--list-rejections names every one)\n",
+        pp.rejections.size(), pair.c_str(), counts.c_str(), pp.rejections.front().c_str());
+  }
+}
+
 void runIdentify(IdentifyArgs& a) {
   IdentifyOptions o = a.options;
   o.inputs = a.inputs;
@@ -75,11 +133,7 @@ void runIdentify(IdentifyArgs& a) {
     const BaselineData b = baselineData(model, report, logs);
     model = globalLinearOf(model, b.U, b.Y);
   }
-  for (const auto& pp : report.pairs)
-    for (const auto& why : pp.rejections)
-      std::fprintf(stderr, "plsa identify:   rejected local fit %s -> %s, %s\n",
-                   a.inputs[static_cast<std::size_t>(pp.input)].c_str(),
-                   a.outputs[static_cast<std::size_t>(pp.output)].c_str(), why.c_str());
+  printRejections(report, a.inputs, a.outputs, a.list_rejections);
   if (a.compare_poles) {
     // FKcM against fuzzy c-means, k-means and a global search on rho, same poles.
     std::printf("%-22s %6s %12s %12s %12s %12s %12s\n", "pair", "poles", "FKcM", "FKcM+rho", "fuzzy c-m", "k-means",
@@ -391,6 +445,8 @@ void addIdentifyCommand(CLI::App& app) {
   addShapingCandidates(id, a);
   addDriftAndValidationOptions(id, a);
   id->add_flag("--compare-poles", a->compare_poles, "Print rho of FKcM, fuzzy c-means, k-means and a global search");
+  id->add_flag("--list-rejections", a->list_rejections,
+               "Name every rejected local fit (default: each pair's first and a count by reason when over 3)");
   id->add_option("--structure", a->structure,
                  "plsa (the method with its extensions), paper (the paper's configuration: switched PWL, no play, "
                  "outputs as logged) or global-linear (plsa's poles and play, one region: the linear baseline)")

@@ -181,6 +181,33 @@ TEST_F(Cli, IdentifyFitsThePapersConfigurationAndTheGlobalLinearObf) {
   EXPECT_FALSE(std::filesystem::exists(file("x.json")));
 }
 
+// Windowed local fits on joystick data reject many fits (an hour: hundreds):
+// past three for a pair, one line counts them by reason and names the first;
+// --list-rejections names every one.
+TEST_F(Cli, IdentifyCountsEachPairsRejectedLocalFits) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 120 --seed 5 --out " + file("j.csv")), 0) << err_;
+  const std::string identify = "identify --log " + file("j.csv") +
+                               " --scheduling input --play 0 --slow-pole 0 --schedule-lag 0 --play-coupling 0 "
+                               "--play-threshold 0 --out ";
+  const auto lines = [&](const std::string& head) {
+    std::size_t n = 0;
+    for (std::size_t at = err_.find(head); at != std::string::npos; at = err_.find(head, at + 1)) ++n;
+    return n;
+  };
+  ASSERT_EQ(run(identify + file("a.json")), 0) << err_;
+  const std::string head = "rejected ", pair = " local fits p_1 -> bend_deg (";
+  const std::size_t at = err_.find(pair);
+  ASSERT_NE(at, std::string::npos) << "no count for p_1 -> bend_deg: " << err_;
+  const std::size_t from = err_.rfind(head, at) + head.size();
+  const int counted = std::stoi(err_.substr(from, at - from));
+  EXPECT_GT(counted, 3) << err_;
+  EXPECT_NE(err_.find("unstable pole", at), std::string::npos) << err_;  // a count by reason
+  EXPECT_EQ(lines("rejected local fit p_1 -> bend_deg, "), 0u) << err_;
+  ASSERT_EQ(run(identify + file("b.json") + " --list-rejections"), 0) << err_;
+  EXPECT_EQ(lines("rejected local fit p_1 -> bend_deg, "), static_cast<std::size_t>(counted)) << err_;
+  EXPECT_EQ(err_.find(pair), std::string::npos) << err_;
+}
+
 TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   ASSERT_EQ(run("demo --out " + file("demo")), 0) << err_;
   const std::string printed = slurp(file("stdout.txt"));

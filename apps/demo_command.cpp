@@ -160,7 +160,8 @@ void writeFits(const DemoModels& m, const DemoScores& s, const OutputFolder& pat
   std::printf(
       "  sim: the tip-frame models register the run's sensor yaw on its first %s s, as the others start\n"
       "  from its first sample, and the models fitted without the grid run's sensor drift turn at its rate;\n"
-      "  no drift: they do not; training yaw: the tip-frame models carry the grid run's yaw, no drift\n",
+      "  their 40- and 80-step predictions turn with it (as plsa's predictor does);\n"
+      "  no drift: the simulation does not; training yaw: it carries the grid run's yaw, no drift\n",
       s.reg_s.c_str());
   std::printf("  %-36s %-10s %8s %8s %8s %9s %13s\n", "model", "output", "40-step", "80-step", "sim", "no drift",
               "training yaw");
@@ -217,7 +218,8 @@ void reportTables(std::ostringstream& html, const DemoModels& m, const DemoScore
   html << "<h2>Fits (NRMSE %)</h2><p>Every model, horizon and error is scored on the same " << s.window
        << " into the run. sim: the tip-frame models (plsa's and the global linear OBF) register the joystick run's "
        << "sensor yaw on its first " << s.reg_s << " s, as the other two start from its first sample; the models "
-       << "fitted without the grid run's sensor drift turn at its rate. sim, no drift: they do not. sim, training "
+       << "fitted without the grid run's sensor drift turn at its rate; their 40- and 80-step predictions turn with "
+       << "it, as plsa's predictor does. sim, no drift: they do not. sim, training "
        << "yaw: the tip-frame models carry the grid run's yaw instead, with no drift.</p><table><tr><th>model</th>"
        << "<th>output</th><th>40-step</th><th>80-step</th><th>sim</th><th>sim, no drift</th><th>sim, training yaw</th>"
        << "</tr>";

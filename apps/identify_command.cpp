@@ -468,8 +468,10 @@ void addValidateCommand(CLI::App& app) {
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
   addLogFormatOptions(va, v->channel, v->can_profile);
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
-                 "tip_cartesian models: seconds at the log's start on which the sensor's yaw is registered before the "
-                 "simulation, which is scored after them (default 5); 0 carries the training run's yaw")
+                 "tip_cartesian models with an output level: seconds at the log's start on which the sensor's yaw is "
+                 "registered, as the predictor does (the simulation turned by it, the k-step predictions' increments "
+                 "from the window's end on; every column is scored after it) (default 5); 0 carries the training "
+                 "run's yaw")
       ->check(CLI::Validator(
           [](std::string& t) {
             double x = NAN;

@@ -120,6 +120,22 @@ void expectAgreement(const DioPwlObfModel& m, const Eigen::MatrixXd& u, const Ei
     EXPECT_NEAR(out(0, o), sims[static_cast<std::size_t>(o)].at(0).values(last), 1e-9);
 }
 
+// The tip model with an output level and a training yaw drift (0.03 deg/s):
+// one the predictor registers the sensor's yaw for.
+DioPwlObfModel registeredTip(const Data& d) {
+  DioPwlObfModel m = d.tip;
+  fitOutputLevel(m, {d.u}, {d.y});
+  m.training_drift_per_s = {0.0, 0.03};
+  return m;
+}
+
+// The run as a sensor turned by `yaw_deg` logs it.
+Eigen::MatrixXd turnedRun(const Eigen::MatrixXd& y, double yaw_deg) {
+  Eigen::MatrixXd turned = y;
+  turned.col(1).array() += yaw_deg;
+  return turned;
+}
+
 }  // namespace
 
 TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
@@ -147,9 +163,35 @@ TEST(Predictor, AgreesWithOfflineValidationFixedAndDynamic) {
   expectAgreement<5>(d.close_poles, d.u, d.y, d.dt);
 }
 
+// A tip_cartesian model with an output level registers the sensor's yaw on
+// its first 5 s, as validation does, and turns its increments into the
+// sensor's frame: on a run whose steering reads 20 deg more its 40-step
+// predictions equal validation's (and differ from the model's own frame's,
+// which equal validation's without a registration).
+TEST(Predictor, TipFrameFollowsTheSensorsYawAsValidationDoes) {
+  const Data& d = data();
+  const DioPwlObfModel m = registeredTip(d);
+  const Eigen::MatrixXd turned = turnedRun(d.y, 20.0);
+  ASSERT_GT(d.u.rows(), 1000);  // well past the 400 samples of the registration
+  Predictor<5> p(m);
+  const test::Agreement registered =
+      test::plannedAgainstOffline(p, d.u, turned, d.dt, eval::predictOutputs(m, d.u, turned, {40}), {40}, 7);
+  EXPECT_GT(registered.compared, 100);
+  EXPECT_LT(registered.worst, 1e-9) << "predictor and validation turn differently";
+  PredictorOptions unregistered;
+  unregistered.yaw_registration_s = 0.0;
+  const auto in_model_frame = eval::predictOutputs(m, d.u, turned, {40}, false, eval::SimulationStart{0});
+  Predictor<5> q(m, unregistered);
+  EXPECT_LT(test::plannedAgainstOffline(q, d.u, turned, d.dt, in_model_frame, {40}, 7).worst, 1e-9);
+  Predictor<5> r(m);
+  EXPECT_GT(test::plannedAgainstOffline(r, d.u, turned, d.dt, in_model_frame, {40}, 7).worst, 0.1)
+      << "the registration turned nothing";
+}
+
 TEST(Predictor, NoAllocationOverFortyThousandTicksWithRegionSwitching) {
   const Data& d = data();
-  Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side), tip(d.tip);
+  // The tip model registers the sensor's yaw over its first 400 ticks, then turns every prediction.
+  Predictor<5> p(d.interpolated), lagged(d.lagged), input_side(d.input_side), tip(registeredTip(d));
   Predictor<> q(d.switched);
   Eigen::MatrixXd out(80, 2), plan(79, 3), jacobian(160, 237);
   Eigen::Vector3d u;
@@ -375,21 +417,27 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   struct Case {
     const DioPwlObfModel* model;
     bool move_all;  // a one-region model may move every input
+    const Eigen::MatrixXd* y;
   };
   DioPwlObfModel no_lag = d.input_side;
   no_lag.schedule_lag_s = 0.0;
+  const DioPwlObfModel registered = registeredTip(d);  // its rows turned by the sensor's yaw
+  const Eigen::MatrixXd turned = turnedRun(d.y, 20.0);
   int index = 0;
-  for (const Case& c : {Case{&one_region, true}, Case{&d.input_side, false}, Case{&d.tip, false},
-                        Case{&d.interpolated, false}, Case{&no_lag, false}}) {
+  for (const Case& c :
+       {Case{&one_region, true, &d.y}, Case{&d.input_side, false, &d.y}, Case{&d.tip, false, &d.y},
+        Case{&d.interpolated, false, &d.y}, Case{&no_lag, false, &d.y}, Case{&registered, false, &turned}}) {
     SCOPED_TRACE("case " + std::to_string(index++));
     const DioPwlObfModel& m = *c.model;
-    Predictor<> p(m);
+    PredictorOptions options;
+    options.yaw_registration_s = 2.0;  // registered within the 300 moving samples below (a tip with a level)
+    Predictor<> p(m, options);
     const int H = 40;
     int t = 0;
-    for (; t < 300; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+    for (; t < 300; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), c.y->row(t)), PredictorStatus::kOk);
     const Eigen::RowVector3d held = d.u.row(t - 1);
     // Long enough for the schedule's lag to settle on the held inputs (it snaps to them).
-    for (int k = 0; k < 1500; ++k, ++t) ASSERT_EQ(p.update(t * d.dt, held, d.y.row(t % 300)), PredictorStatus::kOk);
+    for (int k = 0; k < 1500; ++k, ++t) ASSERT_EQ(p.update(t * d.dt, held, c.y->row(t % 300)), PredictorStatus::kOk);
     Eigen::MatrixXd plan = held.replicate(H - 1, 1);
     for (int s = 0; s < H - 1; ++s) {
       plan(s, 2) = 0.15 + 0.12 * std::sin(0.2 * s);  // across the channels' threshold: coupled to the others

@@ -13,6 +13,7 @@
 
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/io/standard_columns.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
 
 namespace plsa::eval {
 
@@ -34,6 +35,30 @@ double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start)
   return model.training_drift_per_s[1];
 }
 
+Eigen::MatrixXd modelTip(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy) {
+  Eigen::MatrixXd level = modelLevels(model, u, dy);
+  for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
+  return level;
+}
+
+SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd& level, const Eigen::MatrixXd& ym,
+                              const SimulationStart& start) {
+  PLSA_CHECK(level.rows() == ym.rows() && level.cols() >= 2 && ym.cols() >= 2,
+             "trackSensorYaw: the model's tip does not match the record");
+  SensorYaw yaw;
+  yaw.configure(static_cast<int>(yawRegistrationSamples(model, start)),
+                carriedYawRate(model, start) * kRadPerDeg * model.sample_time_s);
+  yaw.restart();
+  SensorYawTrack track;
+  track.angle.resize(ym.rows());
+  for (Eigen::Index k = 0; k < ym.rows(); ++k) {
+    yaw.add(level(k, 0), level(k, 1), ym(k, 0), ym(k, 1));
+    track.angle(k) = yaw.angle();
+  }
+  track.offset = yaw.offset();
+  return track;
+}
+
 std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                              const SimulationStart& start) {
@@ -47,10 +72,16 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
     return out;
   }
   PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
-  Eigen::MatrixXd level = modelLevels(model, u, dy);
-  for (int o = 0; o < model.outputCount(); ++o) level.col(o).array() += model.output_level[static_cast<std::size_t>(o)];
+  Eigen::MatrixXd level = modelTip(model, u, dy);
+  if (n > 0)
+    PLSA_CHECK(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
+                                 " s, " + std::to_string(n) + " samples) leaves nothing of the " +
+                                 std::to_string(u.rows()) + "-sample record to simulate");
+  // The rotation that best maps the predicted tip components onto the
+  // measured ones over the window (SensorYaw), after the drift's turn.
+  const double offset = n > 0 ? trackSensorYaw(model, level, y, start).offset : 0.0;
   if (const double yaw_rate = carriedYawRate(model, start); yaw_rate != 0.0) {
-    // Turned from the record's start; the registration below takes the turn's offset.
+    // Turned from the record's start; the registration takes the turn's offset.
     const double rate = yaw_rate * kRadPerDeg * model.sample_time_s;
     for (Eigen::Index k = 0; k < level.rows(); ++k) {
       const double c = std::cos(rate * static_cast<double>(k)), s = std::sin(rate * static_cast<double>(k));
@@ -59,28 +90,13 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
       level(k, 1) = s * x + c * level(k, 1);
     }
   }
-  Eigen::Index first = 1;
-  if (n > 0) {
-    PLSA_CHECK(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
-                                 " s, " + std::to_string(n) + " samples) leaves nothing of the " +
-                                 std::to_string(u.rows()) + "-sample record to simulate");
-    // The rotation that best maps the predicted tip components onto the
-    // measured ones: atan2(sum of cross products, sum of dot products),
-    // which weighs each sample by how far the tip is from the axis.
-    double cross = 0.0, dot = 0.0;
-    for (Eigen::Index k = 0; k < n; ++k) {
-      cross += level(k, 0) * y(k, 1) - level(k, 1) * y(k, 0);
-      dot += level(k, 0) * y(k, 0) + level(k, 1) * y(k, 1);
-    }
-    // A tip on the axis in both has no direction to register: keep the training yaw.
-    if (std::hypot(cross, dot) > 1e-12 && std::isfinite(cross) && std::isfinite(dot)) {
-      const double a = std::atan2(cross, dot), c = std::cos(a), s = std::sin(a);
-      const Eigen::VectorXd x = level.col(0);
-      level.col(0) = c * x - s * level.col(1);
-      level.col(1) = s * x + c * level.col(1);
-    }
-    first = n;
+  if (offset != 0.0) {
+    const double c = std::cos(offset), s = std::sin(offset);
+    const Eigen::VectorXd x = level.col(0);
+    level.col(0) = c * x - s * level.col(1);
+    level.col(1) = s * x + c * level.col(1);
   }
+  const Eigen::Index first = n > 0 ? n : 1;
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;
     p.first = first;
@@ -104,6 +120,25 @@ std::pair<AlignedPrediction, AlignedPrediction> toTipAngles(const AlignedPredict
   return out;
 }
 
+// k-step predictions of a tip's two components: the measured tip k samples
+// back plus the model's increments since, turned into the sensor's frame by
+// that sample's angle (what Predictor::predict does).
+std::pair<AlignedPrediction, AlignedPrediction> turnedKStepAhead(const Eigen::MatrixXd& ym, const Eigen::MatrixXd& dy,
+                                                                 const Eigen::VectorXd& angle, int k) {
+  const AlignedPrediction x = kStepAhead(ym.col(0), dy.col(0), k), y = kStepAhead(ym.col(1), dy.col(1), k);
+  std::pair<AlignedPrediction, AlignedPrediction> out{x, y};
+  for (Eigen::Index i = 0; i < x.values.size(); ++i) {
+    const Eigen::Index anchor = x.first + i - k;
+    const double a = angle(anchor);
+    if (a == 0.0) continue;  // the model's frame: as kStepAhead gives it, to the bit
+    const double c = std::cos(a), s = std::sin(a);
+    const double wx = x.values(i) - ym(anchor, 0), wy = y.values(i) - ym(anchor, 1);
+    out.first.values(i) = ym(anchor, 0) + c * wx - s * wy;
+    out.second.values(i) = ym(anchor, 1) + s * wx + c * wy;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
@@ -122,13 +157,21 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
              "predictOutputs: the increments do not match the record");
   const Eigen::MatrixXd ym = toModelFrame(model.output_frame, y);
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
+  const bool tip = model.output_frame == OutputFrame::kTipCartesian;
+  // A tip's k-step predictions turn into the sensor's frame as the predictor's do.
+  const Eigen::VectorXd yaw = tip && yawRegistrationSamples(model, start) > 0
+                                  ? trackSensorYaw(model, modelTip(model, u, dy), ym, start).angle
+                                  : Eigen::VectorXd::Zero(ym.rows());
   for (int k : horizons) {
     PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
-    for (int o = 0; o < model.outputCount(); ++o)
-      out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
-    if (model.output_frame == OutputFrame::kTipCartesian)
+    if (tip) {
+      std::tie(out[0][k], out[1][k]) = turnedKStepAhead(ym, dy, yaw, k);
       std::tie(out[0][k], out[1][k]) =
           toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
+      continue;
+    }
+    for (int o = 0; o < model.outputCount(); ++o)
+      out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
   }
   if (with_simulation) {
     const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy, start);

@@ -5,6 +5,7 @@
 
 #include "plsa/core/check.hpp"
 #include "plsa/obf/obf_bank.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
 
 namespace plsa {
 namespace {
@@ -21,6 +22,8 @@ void checkOptions(const PredictorOptions& o) {
   PLSA_CHECK(std::isfinite(o.input_margin) && o.input_margin >= 0, "Predictor: input_margin must be finite and >= 0");
   PLSA_CHECK(std::isfinite(o.max_gap_factor) && o.max_gap_factor > 1,
              "Predictor: max_gap_factor must be finite and > 1");
+  PLSA_CHECK(std::isfinite(o.yaw_registration_s) && o.yaw_registration_s >= 0,
+             "Predictor: yaw_registration_s must be finite and >= 0");
 }
 
 // Stage 1: what every form shares.
@@ -29,6 +32,13 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
   c.n_y = m.outputCount();
   c.frame = m.output_frame;
   c.sample_time = m.sample_time_s;
+  c.output_level = m.output_level;
+  if (m.output_frame == OutputFrame::kTipCartesian && m.schedule_side == ScheduleSide::kInput &&
+      !m.output_level.empty() && !o.simulate) {
+    c.yaw_window = yawRegistrationWindow(o.yaw_registration_s, m.sample_time_s);
+    if (c.yaw_window > 0 && m.training_drift_per_s.size() == 2)
+      c.yaw_drift_per_sample = m.training_drift_per_s[1] * kRadPerDeg * m.sample_time_s;
+  }
   c.max_horizon = o.max_horizon;
   const double span = m.input_max - m.input_min;
   c.accept_min = std::isfinite(span) ? m.input_min - o.input_margin * span : -INFINITY;
@@ -85,6 +95,7 @@ void compileStateSpace(const DioPwlObfModel& m, CompiledModel& c) {
       all_real = all_real && real;
       s.xi.push_back(xi);
       s.gain.push_back(gain);
+      s.dc_gain.push_back(bank.transfer(1.0).real());
     }
   s.cascade = all_real;
   for (int o = 0; o < c.n_y; ++o) {

@@ -106,6 +106,22 @@ struct SimulationStart {
   bool carry_training_drift = true;
 };
 
+/// The sensor's yaw over a record as the predictor follows it from the
+/// record's start (SensorYaw): each sample's turn from the model's frame into
+/// the sensor's (rad; the registered offset from the window's last sample on,
+/// and the carried drift), and the offset.
+struct SensorYawTrack {
+  Eigen::VectorXd angle;
+  double offset = 0.0;
+};
+/// `level`: the model's tip in its frame (modelTip), `ym` the measured one
+/// (tip components).
+SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd& level, const Eigen::MatrixXd& ym,
+                              const SimulationStart& start);
+/// An input-side model's tip (model frame) over a record: output_level, the
+/// settled response to the first sample and the increments dy since.
+Eigen::MatrixXd modelTip(const DioPwlObfModel& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& dy);
+
 /// How many samples at a run's start simulateModel registers the yaw on:
 /// 0 unless the model is tip_cartesian with an output_level and the window
 /// is > 0, else the window's samples, at least one. Throws for a window that

@@ -98,6 +98,7 @@ struct StateSpaceForm {
   /// sections (about 4 flops a section instead of a dense row).
   bool cascade = false;
   std::vector<Eigen::VectorXd> xi, gain;  ///< [o * inputs + j]
+  std::vector<Eigen::VectorXd> dc_gain;   ///< [o * inputs + j]: each filter's settled output for a unit input
   std::vector<int> bank_output, bank_node, bank_input, bank_channel, coefficient_offset;
   std::vector<std::vector<Eigen::VectorXd>> coefficient;  ///< [region][output]
 };
@@ -118,6 +119,12 @@ struct CompiledModel {
   int banks = 0;  ///< outputs x nodes x channels
   OutputFrame frame = OutputFrame::kAsLogged;
   double sample_time = 0.0;
+  /// tip_cartesian with an output level: samples the sensor's yaw is
+  /// registered on after each start (SensorYaw; 0: none), and the training
+  /// sensor's yaw drift it turns at, rad per sample.
+  int yaw_window = 0;
+  double yaw_drift_per_sample = 0.0;
+  std::vector<double> output_level;  ///< the model's (input side), per output; empty: none
   double accept_min = 0.0, accept_max = 0.0;
   bool input_side = false;
   PwlPartition partition;           ///< the coefficients' schedule (one region on the input side)

@@ -44,11 +44,11 @@ class PlanSensitivity {
   /// (us, dir) with node weights node_w, the channels starting at vc.
   void compute(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                const Eigen::VectorXd& us, const DirectionState& dir, const Eigen::VectorXd& node_w,
-               const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+               const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal, double yaw,
                Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill what) noexcept {
     frozenKernels(m, horizon, us, dir, node_w);
     channelPath(m, plan, vc);
-    fill(m, horizon, nominal, jacobian, what == JacobianFill::kWhole);
+    fill(m, horizon, nominal, yaw, jacobian, what == JacobianFill::kWhole);
   }
 
  private:
@@ -148,24 +148,30 @@ class PlanSensitivity {
 
   // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
   // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
-  // t); a tip_cartesian model's row pairs turned from components into angles
-  // at the nominal prediction on the way (d(bend, steer) / d(x, y)); the
-  // structural zeros (rows h <= s of column (s, j)) only when `whole`.
-  void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+  // t); a tip_cartesian model's row pairs turned by the sensor's yaw (rad,
+  // SensorYaw) and from components into angles at the nominal prediction on
+  // the way (d(bend, steer) / d(x, y)); the structural zeros (rows h <= s of
+  // column (s, j)) only when `whole`.
+  void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal, double yaw,
             Eigen::Ref<Eigen::MatrixXd> jacobian, bool whole) noexcept {
     const int ny = m.n_y, nu = m.n_u;
     const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
     const bool tip = m.frame == OutputFrame::kTipCartesian;
-    if (tip)  // the rows' 2 x 2 turn from components to angles
+    if (tip) {  // the rows' 2 x 2 turn from the model's components to angles
+      const double c = std::cos(yaw), s = std::sin(yaw);
       for (int h = 0; h < horizon; ++h) {
         const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y;
         const double inv_r = r2 == 0.0 ? 0.0 : 1.0 / std::sqrt(r2);  // straight: no direction to move
         const double inv_r2 = inv_r * inv_r / kRadPerDeg;
-        turn_(h, 0) = x * inv_r;  // (d bend, d steer) = (0, 1) * d x + (2, 3) * d y
-        turn_(h, 1) = -y * inv_r2;
-        turn_(h, 2) = y * inv_r;
-        turn_(h, 3) = x * inv_r2;
+        // (d bend, d steer) by the sensor's components: (bx, sx) * d x + (by, sy) * d y ...
+        const double bx = x * inv_r, sx = -y * inv_r2, by = y * inv_r, sy = x * inv_r2;
+        // ... which are the model's turned by the yaw: (0, 1) * d x + (2, 3) * d y in the model's.
+        turn_(h, 0) = c * bx + s * by;
+        turn_(h, 1) = c * sx + s * sy;
+        turn_(h, 2) = c * by - s * bx;
+        turn_(h, 3) = c * sy - s * sx;
       }
+    }
     std::array<const double*, kMaxSensitivityChannels> response{};
     std::array<double, kMaxSensitivityChannels> scale{};
     for (Eigen::Index s = 0; s + 1 < horizon; ++s) {

@@ -31,6 +31,7 @@
 #include "plsa/predict/model_handoff.hpp"
 #include "plsa/predict/plan_sensitivity.hpp"
 #include "plsa/predict/predictor_options.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
 #include "plsa/predict/tip_angles.hpp"
 
 namespace plsa {
@@ -115,10 +116,16 @@ class NStepPredictor {
       restart(m, u);
       return status;
     }
-    if (options_.simulate) {  // the increment predicted for this sample, before it is consumed
-      increments(m, state_, us_, dir_, dy_);
-      y_sim_ += dy_;
+    // The increment predicted for this sample, before it is consumed: for the
+    // simulation, and while the sensor's yaw is registered (the model's tip).
+    const bool registering = yaw_.registering();
+    if (options_.simulate || registering) increments(m, state_, us_, dir_, dy_);
+    if (options_.simulate) y_sim_ += dy_;
+    if (registering) {
+      yaw_tip_[0] += dy_(0);
+      yaw_tip_[1] += dy_(1);
     }
+    if (m.frame == OutputFrame::kTipCartesian) yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
     for (int j = 0; j < m.n_u; ++j) {
       du_(j) = u[j] - u_(j);
       u_(j) = u[j];
@@ -179,7 +186,7 @@ class NStepPredictor {
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
     if (status != PredictorStatus::kOk) return status;
-    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, jacobian, fill);
+    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, yaw_.angle(), jacobian, fill);
     return PredictorStatus::kOk;
   }
 
@@ -241,7 +248,17 @@ class NStepPredictor {
     dir_ = DirectionState{};
     if (m.input_side) nodeWeights(m, us_, node_w_);
     y_ = y_sim_ = ym_;
+    restartSensorYaw(m);
     samples_ = 1;
+  }
+
+  // The sensor's yaw registered afresh from this sample (settledTip).
+  void restartSensorYaw(const CompiledModel& m) noexcept {
+    yaw_.configure(m.yaw_window, m.yaw_drift_per_sample);
+    yaw_.restart();
+    if (m.yaw_window == 0) return;
+    settledTip(m, node_w_, vc_, yaw_tip_);
+    yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
   }
 
   // us <- the lag's next value toward u (lagTowards).
@@ -383,11 +400,19 @@ class NStepPredictor {
     work_y_ = options_.simulate ? y_sim_ : y_;
     // A held input keeps the schedule fixed once its lag has settled: every
     // mode then decays on its own, y(k+1+h) = y(k) + sum_q zeta_q sum_{s<=h} lambda_q^s.
-    if (plan.rows() == 0 && us_ == u_ && m.modal) return predictSettled(m, horizon, out);
+    PredictorStatus status;
     const bool merged = m.modal && m.input_side && m.n_y <= 8;  // the merged paths keep outputs in fixed arrays
-    if (merged && plan.rows() == 0 && !m.modal_form.lag_sum.empty()) return predictHeldLagged(m, horizon, out);
-    if (merged::fits(m)) return predictMergedModes(m, horizon, plan, out);
-    return predictStepByStep(m, horizon, plan, out);
+    if (plan.rows() == 0 && us_ == u_ && m.modal)
+      status = predictSettled(m, horizon, out);
+    else if (merged && plan.rows() == 0 && !m.modal_form.lag_sum.empty())
+      status = predictHeldLagged(m, horizon, out);
+    else if (merged::fits(m))
+      status = predictMergedModes(m, horizon, plan, out);
+    else
+      status = predictStepByStep(m, horizon, plan, out);
+    if (status == PredictorStatus::kOk && m.frame == OutputFrame::kTipCartesian)
+      turnIncrements(yaw_.angle(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
+    return status;
   }
 
   // Input side, input held while its lagged schedule still moves: the modes
@@ -528,7 +553,9 @@ class NStepPredictor {
   double t_ = 0.0;
   int behind_ = 0;  // samples in a row behind t_, each after the one before
   double behind_time_ = 0.0;
-  double steer_reference_ = 0.0;  // tip_cartesian: the last measured steering angle
+  double steer_reference_ = 0.0;    // tip_cartesian: the last measured steering angle
+  SensorYaw yaw_;                   // tip_cartesian: the turn from the model's frame to the sensor's
+  double yaw_tip_[2] = {0.0, 0.0};  // while registering: the model's tip, in its frame
   std::int64_t samples_ = 0;
 };
 

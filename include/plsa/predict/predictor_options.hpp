@@ -74,6 +74,12 @@ struct PredictorOptions {
   double input_margin = 0.25;   ///< accepted inputs: model range widened by this share of it
   double max_gap_factor = 2.5;  ///< a time step above this many sample times is a gap
   bool simulate = false;        ///< free simulation: the output is never reset to a measurement
+  /// tip_cartesian models: seconds after each start over which the turn
+  /// between the model's frame and the sensor's is registered (SensorYaw);
+  /// predictions then add the model's increments turned into the sensor's
+  /// frame, turning on at the training run's yaw drift. 0: the model's frame
+  /// (the training sensor's yaw at its mean time). Not in simulation mode.
+  double yaw_registration_s = 5.0;
   /// Run in modal form when the model allows it (false: always step the banks
   /// as state-space filters, the slower reference the modal form is checked
   /// and measured against).

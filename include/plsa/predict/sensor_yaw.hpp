@@ -1,0 +1,104 @@
+// The turn between a tip_cartesian model's frame and its sensor's on a run.
+// Identification takes a drifting sensor yaw out of the training outputs,
+// so the model's frame is the sensor's at the training run's mean time; on
+// a new run the sensor's frame is another. SensorYaw registers the turn over
+// the first samples after a start, as the least-squares rotation of the
+// model's tip (its level: output_level, the settled response to the first
+// sample and the increments since, turned at the training run's yaw drift)
+// onto the measured tip, weighing each sample by how far the tip is from the
+// axis, then turns on at that drift. One value, shared by
+// validation's simulation and k-step predictions and the real-time
+// predictor, so the three agree; no allocation.
+#pragma once
+
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "plsa/predict/compiled_model.hpp"
+
+namespace plsa {
+
+/// Samples a registration of `seconds` spans at `sample_time` (at least one
+/// when > 0; 0: none).
+inline int yawRegistrationWindow(double seconds, double sample_time) noexcept {
+  if (!(seconds > 0.0) || !(sample_time > 0.0)) return 0;
+  const double n = std::round(seconds / sample_time);
+  return n < 1.0 ? 1 : n > 1e9 ? 1000000000 : static_cast<int>(n);
+}
+
+class SensorYaw {
+ public:
+  /// Registers over `window` samples from each start (0: never, no turn at
+  /// all), turning the model's tip `drift_per_sample` rad per sample from the start.
+  void configure(int window, double drift_per_sample) noexcept {
+    window_ = window;
+    drift_ = drift_per_sample;
+  }
+  /// A (re)start: the next sample is the start's.
+  void restart() noexcept {
+    cross_ = dot_ = offset_ = 0.0;
+    samples_ = 0;
+  }
+  /// Whether add() reads the model's tip (the window is still open).
+  bool registering() const noexcept { return samples_ < window_; }
+  /// The next sample: the model's tip (level_x, level_y), in its frame, and
+  /// the measured one. Once the window is full the offset is set.
+  void add(double level_x, double level_y, double x, double y) noexcept {
+    const double k = static_cast<double>(samples_++);
+    if (samples_ > window_) return;
+    const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
+    const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
+    cross_ += tx * y - ty * x;
+    dot_ += tx * x + ty * y;
+    if (samples_ < window_) return;
+    // A tip on the axis in both has no direction to register: the model's frame.
+    const bool known = std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) && std::isfinite(dot_);
+    offset_ = known ? std::atan2(cross_, dot_) : 0.0;
+  }
+  /// The registered turn (rad), 0 until the window is full.
+  double offset() const noexcept { return offset_; }
+  /// The turn (rad) from the model's frame to the sensor's at the last sample
+  /// added: the offset and the drift since the start.
+  double angle() const noexcept {
+    return window_ > 0 && samples_ > 0 ? offset_ + drift_ * static_cast<double>(samples_ - 1) : 0.0;
+  }
+
+ private:
+  int window_ = 0;
+  double drift_ = 0.0;
+  double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0;
+  long samples_ = 0;
+};
+
+/// An input-side tip model's tip (its frame) at a start: its output level and
+/// the filters' settled response to the start's inputs (each bank's DC gain
+/// times its node weight and channel level), as validation's modelTip starts.
+inline void settledTip(const CompiledModel& m, const Eigen::VectorXd& node_w, const Eigen::VectorXd& vc,
+                       double tip[2]) noexcept {
+  const StateSpaceForm& s = m.state_space;
+  double settled[2] = {0.0, 0.0};
+  for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
+    const int o = s.bank_output[b], j = s.bank_input[b];
+    const double drive = node_w(s.bank_node[b]) * vc(s.bank_channel[b]);
+    if (drive == 0.0 || o > 1) continue;
+    const Eigen::VectorXd& gain = s.dc_gain[static_cast<std::size_t>(o * m.n_u + j)];
+    settled[o] +=
+        drive * s.coefficient[0][static_cast<std::size_t>(o)].segment(s.coefficient_offset[b], m.poles).dot(gain);
+  }
+  for (int o = 0; o < 2; ++o) tip[o] = m.output_level[static_cast<std::size_t>(o)] + settled[o];
+}
+
+/// Rows [0, horizon) of a tip prediction (components) turned by `angle` (rad)
+/// about the anchor (x0, y0): the model's increments into the sensor's frame.
+inline void turnIncrements(double angle, double x0, double y0, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+  if (angle == 0.0) return;
+  const double c = std::cos(angle), s = std::sin(angle);
+  for (int h = 0; h < horizon; ++h) {
+    const double dx = out(h, 0) - x0, dy = out(h, 1) - y0;
+    out(h, 0) = x0 + c * dx - s * dy;
+    out(h, 1) = y0 + s * dx + c * dy;
+  }
+}
+
+}  // namespace plsa

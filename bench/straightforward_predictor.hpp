@@ -11,6 +11,8 @@
 #include <Eigen/Dense>
 
 #include "plsa/model/dio_pwl_obf_model.hpp"
+#include "plsa/predict/predictor_options.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
 namespace plsa::bench {
@@ -58,8 +60,11 @@ class StraightforwardPredictor {
                            play_[c], m_.shaping.start);
       w_ = nodeWeights(us_);
       y_ = y;
+      startSensorYaw(y);
       return;
     }
+    if (yaw_.registering()) tip_ += increments(x_, us_, dir_);
+    if (m_.output_frame == OutputFrame::kTipCartesian) yaw_.add(tip_(0), tip_(1), y(0), y(1));
     step(x_, u_, us_, vc_, w_, dir_, u);
     y_ = y;
   }
@@ -78,6 +83,9 @@ class StraightforwardPredictor {
       step(x, u, us, vc, w, dir, next);
     }
     if (m_.output_frame == OutputFrame::kTipCartesian) {
+      const double a = yaw_.angle();  // the increments turned into the sensor's frame
+      for (int h = 0; h < horizon && a != 0.0; ++h)
+        out.row(h) = y_.transpose() + (Eigen::Rotation2Dd(a) * (out.row(h) - y_.transpose()).transpose()).transpose();
       double reference = steer_;
       for (int h = 0; h < horizon; ++h) {
         tipAngles(out(h, 0), out(h, 1), reference, out(h, 0), out(h, 1));
@@ -94,6 +102,27 @@ class StraightforwardPredictor {
     Eigen::VectorXd B;
     int offset;  // of its coefficients in its output's vector
   };
+
+  // A tip-frame input-side model registers the sensor's yaw from its first
+  // sample (the predictor's default window): its tip there is its output
+  // level and each bank's settled state, (I - A)^-1 B, weighted as it is driven.
+  void startSensorYaw(const Eigen::VectorXd& y) {
+    if (m_.output_frame != OutputFrame::kTipCartesian || m_.schedule_side != ScheduleSide::kInput ||
+        m_.output_level.empty())
+      return;
+    const double dt = m_.sample_time_s;
+    yaw_.configure(yawRegistrationWindow(PredictorOptions{}.yaw_registration_s, dt),
+                   m_.training_drift_per_s.size() == 2 ? m_.training_drift_per_s[1] * kRadPerDeg * dt : 0.0);
+    yaw_.restart();
+    tip_ = Eigen::Vector2d(m_.output_level[0], m_.output_level[1]);
+    for (const Bank& b : banks_) {
+      const Eigen::Index n = b.A.rows();
+      const Eigen::VectorXd settled = (Eigen::MatrixXd::Identity(n, n) - b.A).partialPivLu().solve(b.B);
+      tip_(b.output) += coefficients_[0][static_cast<std::size_t>(b.output)].segment(b.offset, n).dot(settled) *
+                        w_(b.node) * vc_(b.channel);
+    }
+    yaw_.add(tip_(0), tip_(1), y(0), y(1));
+  }
 
   Eigen::VectorXd toModel(const Eigen::VectorXd& y) const {
     Eigen::VectorXd m = y;
@@ -168,6 +197,8 @@ class StraightforwardPredictor {
   Eigen::VectorXd u_, us_, vc_, w_, y_;
   DirectionState dir_;
   double steer_ = 0.0;
+  SensorYaw yaw_;  // tip frame: the turn from the model's frame into the sensor's
+  Eigen::Vector2d tip_ = Eigen::Vector2d::Zero();
 };
 
 }  // namespace plsa::bench

@@ -159,19 +159,20 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
   const bool tip = model.output_frame == OutputFrame::kTipCartesian;
   // A tip's k-step predictions turn into the sensor's frame as the predictor's do.
-  const Eigen::VectorXd yaw = tip && yawRegistrationSamples(model, start) > 0
-                                  ? trackSensorYaw(model, modelTip(model, u, dy), ym, start).angle
-                                  : Eigen::VectorXd::Zero(ym.rows());
+  const bool turned = tip && yawRegistrationSamples(model, start) > 0;
+  const Eigen::VectorXd yaw =
+      turned ? trackSensorYaw(model, modelTip(model, u, dy), ym, start).angle : Eigen::VectorXd();
   for (int k : horizons) {
     PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
-    if (tip) {
+    if (turned) {
       std::tie(out[0][k], out[1][k]) = turnedKStepAhead(ym, dy, yaw, k);
+    } else {
+      for (int o = 0; o < model.outputCount(); ++o)
+        out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
+    }
+    if (tip)
       std::tie(out[0][k], out[1][k]) =
           toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
-      continue;
-    }
-    for (int o = 0; o < model.outputCount(); ++o)
-      out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
   }
   if (with_simulation) {
     const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy, start);

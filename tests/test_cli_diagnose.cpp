@@ -19,9 +19,19 @@ namespace {
 using Cli = plsa::test::CliTest;
 }  // namespace
 
-TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
-  // Data from an actuator with hysteresis; a simulator with every effect off,
-  // asked about two candidates.
+namespace {
+// Data from an actuator with hysteresis (a.csv, b.csv) and a simulator with
+// every effect off (sim.json), written into the test's directory.
+class DiagnoseOnLogs : public plsa::test::CliTest {
+ protected:
+  void SetUp() override {
+    CliTest::SetUp();
+    writeHysteresisCase();
+  }
+  void writeHysteresisCase();
+};
+
+void DiagnoseOnLogs::writeHysteresisCase() {
   ASSERT_EQ(run("sim-config --out " + file("full.json")), 0) << err_;
   auto j = nlohmann::json::parse(slurp(file("full.json")));
   for (const char* e : {"deadzone", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"})
@@ -36,6 +46,11 @@ TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
                 file("b.csv")),
             0)
       << err_;
+}
+}  // namespace
+
+// Asked about two candidates, diagnose ranks the withheld one first and writes its report.
+TEST_F(DiagnoseOnLogs, RanksTheWithheldEffectFirst) {
   ASSERT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
                 " --candidates hysteresis,creep --evaluations 60 --out " + file("diag")),
             0)
@@ -46,7 +61,10 @@ TEST_F(Cli, DiagnoseRunsOnLogsAndRejectsBadOnes) {
   EXPECT_TRUE(fs::exists(file("diag/report.html")));
   EXPECT_TRUE(fs::exists(file("diag/calibrated_sim.json")));
   EXPECT_NE(err_.find("nominal calibration"), std::string::npos) << "no progress shown: " << err_;
-  // Bad input: a command column far outside the simulator's range names the fix.
+}
+
+TEST_F(DiagnoseOnLogs, RejectsBadOnes) {
+  // A command column far outside the simulator's range names the fix.
   std::ofstream(file("psi.csv")) << "time_s,cmd_1,cmd_2,cmd_3,bend_deg,steer_deg\n";
   {
     std::ofstream f(file("psi.csv"), std::ios::app);

@@ -530,3 +530,27 @@ TEST(PredictorHandBuilt, PlannedPathAgreesOnEveryGridAndBlockShape) {
     EXPECT_LT(a.worst, 1e-9) << "merged planned path and offline predictions differ";
   }
 }
+
+// The turn a prediction applies is kept by SensorYaw::add without
+// trigonometry past the window (a rotation by the drift per sample): it must
+// stay cos and sin of angle() over a long run, registration included.
+TEST(SensorYawTurn, StaysTheCosineAndSineOfItsAngleOverALongRun) {
+  SensorYaw yaw;
+  yaw.configure(400, 3.5e-4);
+  yaw.restart();
+  double worst = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    const double t = 0.01 * k;  // a tip circling at 10 deg, the model's 0.3 rad behind
+    yaw.add(10.0 * std::cos(t - 0.3), 10.0 * std::sin(t - 0.3), 10.0 * std::cos(t), 10.0 * std::sin(t));
+    worst = std::max(
+        {worst, std::abs(yaw.turn().cos - std::cos(yaw.angle())), std::abs(yaw.turn().sin - std::sin(yaw.angle()))});
+  }
+  EXPECT_GT(std::abs(yaw.offset()), 0.1) << "nothing was registered: the check shows nothing";
+  EXPECT_LT(worst, 1e-12);
+  SensorYaw off;  // no registration: no turn at all
+  off.configure(0, 3.5e-4);
+  off.restart();
+  off.add(1.0, 0.0, 0.0, 1.0);
+  EXPECT_EQ(off.turn().cos, 1.0);
+  EXPECT_EQ(off.turn().sin, 0.0);
+}

@@ -35,6 +35,16 @@ inline bool fits(const CompiledModel& m) noexcept {
          static_cast<int>(m.node_grid.inputs.size()) <= kMaxGridInputs;
 }
 
+/// Four doubles as one vector (GCC and Clang vector extensions: one AVX
+/// register in an AVX2 build, two SSE2 ones otherwise); `Loose` at any
+/// double's alignment.
+typedef double Quad __attribute__((vector_size(32)));
+typedef double LooseQuad __attribute__((vector_size(32), aligned(8)));
+
+/// Doubles seen as quads (GCC's vector types alias their elements).
+inline const LooseQuad* quads(const double* p) noexcept { return reinterpret_cast<const LooseQuad*>(p); }
+inline LooseQuad* quads(double* p) noexcept { return reinterpret_cast<LooseQuad*>(p); }
+
 /// The plan's inputs as a run steps them: the input, its lag on the
 /// scheduling inputs, the played channels and the grid's blend.
 struct PlannedSchedule {
@@ -48,6 +58,12 @@ struct PlannedSchedule {
   const int* input_of = nullptr;        ///< [nc] each channel's input
   std::array<int, kMaxGridInputs> grid_input{}, last_level{}, stride{}, upper_step{}, hint{};
   std::array<const double*, kMaxGridInputs> levels{};
+  /// One channel per input and at most four inputs (the usual chamber
+  /// model): stepQuad moves every input, lag and channel as one vector each,
+  /// lane j input j (lanes past the inputs stay zero). The quads then hold
+  /// the state; `us` is kept for the blend.
+  bool quad = false;
+  Quad u4{}, us4{}, vc4{}, width4{}, slope4{};
 
   PlannedSchedule(const CompiledModel& m, const Eigen::VectorXd& u0, const Eigen::VectorXd& us0,
                   const Eigen::VectorXd& vc0) noexcept
@@ -63,6 +79,13 @@ struct PlannedSchedule {
     for (int c = 0; c < nc; ++c) {
       const auto cc = static_cast<std::size_t>(c);
       vc[cc] = vc0(c);
+    }
+    quad = nu <= 4 && nc == nu;
+    for (int c = 0; c < nc; ++c) quad = quad && input_of[c] == c;
+    for (int j = 0; quad && j < nu; ++j) {
+      u4[j] = u[static_cast<std::size_t>(j)], us4[j] = us[static_cast<std::size_t>(j)];
+      vc4[j] = vc[static_cast<std::size_t>(j)];
+      width4[j] = play[j].width, slope4[j] = play[j].slope;
     }
     for (int s = 0; s < grid_inputs; ++s) {
       const auto ss = static_cast<std::size_t>(s);
@@ -99,6 +122,45 @@ struct PlannedSchedule {
       if (shaped) level = shaping->level(level, positive_sum);
       next[c] = play[cc].follow(level, previous[c]);
     }
+  }
+
+  /// takeAndLag and moveChannels for a quad schedule, lane by lane the
+  /// same arithmetic; the channels into `next` (four doubles).
+  PLSA_ALWAYS_INLINE void stepQuad(const double* plan, Eigen::Index ld, int h, bool take, double* next) noexcept {
+    // Lane by lane as the scalar functions pick, NaN included: std::max(0, x)
+    // is 0 < x ? x : 0, std::max(a, b) a < b ? b : a, std::min(a, b) b < a ? b : a.
+    const Quad zero{};
+    if (take) {
+      Quad v{};
+      for (int j = 0; j < nu; ++j) v[j] = plan[h + j * ld];
+      u4 = v;
+    }
+    const Quad lagged = pole * us4 + (1.0 - pole) * u4;  // lagTowards
+    const Quad size = u4 < zero ? -u4 : u4, step = lagged - u4;
+    const Quad scale = size > 1e-3 ? size : zero + 1e-3;
+    us4 = (step < zero ? -step : step) <= 1e-12 * scale ? u4 : lagged;
+    *quads(us.data()) = us4;
+    const double threshold = shaping->threshold;
+    Quad level = u4;
+    if (shaped) {  // InputShaping::level
+      double positive_sum = 0.0;
+      if (shaping->coupling != 0.0) {
+        const Quad gap = u4 - threshold, above = zero < gap ? gap : zero;
+        positive_sum = ((above[0] + above[1]) + above[2]) + above[3];
+      }
+      if (threshold > 0.0) level = zero < u4 - threshold ? u4 - threshold : zero;
+      const Quad own = zero < level ? level : zero;
+      if (const double soft = shaping->softening; soft > 0.0) {
+        const Quad x = 0.5 / soft < own ? zero + 0.5 / soft : own;
+        level = zero < own ? x - soft * x * x : level;
+      }
+      level = level - shaping->coupling * (zero < level ? level : zero) * (positive_sum - own);
+    }
+    const Quad half = width4 + slope4 * (zero < level ? level : zero);  // PlayChannel::follow
+    const Quad low = level - half, high = level + half;
+    const Quad held = vc4 < low ? low : vc4;
+    vc4 = high < held ? high : held;
+    *quads(next) = vc4;
   }
 
   /// The grid's blend at us: the regions and weights of PwlPartition::blend,
@@ -158,16 +220,6 @@ struct PlannedSchedule {
     }
   }
 };
-
-/// Four doubles as one vector (GCC and Clang vector extensions: one AVX
-/// register in an AVX2 build, two SSE2 ones otherwise); `Loose` at any
-/// double's alignment.
-typedef double Quad __attribute__((vector_size(32)));
-typedef double LooseQuad __attribute__((vector_size(32), aligned(8)));
-
-/// Doubles seen as quads (GCC's vector types alias their elements).
-inline const LooseQuad* quads(const double* p) noexcept { return reinterpret_cast<const LooseQuad*>(p); }
-inline LooseQuad* quads(double* p) noexcept { return reinterpret_cast<LooseQuad*>(p); }
 
 /// Input j's levels: sum over the blend's nodes r and j's channels c of
 /// w_r v_c times the node-channel row (ModalForm::by_copy), into `level`
@@ -244,6 +296,13 @@ struct ScheduleChunk {
 /// steps overlap in the processor instead of waiting on the modes.
 PLSA_ALWAYS_INLINE void scheduleSteps(PlannedSchedule& sched, int first, const double* plan, Eigen::Index plan_ld,
                                       Eigen::Index plan_rows, ScheduleChunk& chunk) noexcept {
+  if (sched.quad) {
+    for (int k = 0; k < chunk.steps; ++k) {
+      sched.stepQuad(plan, plan_ld, first + k, first + k < plan_rows, chunk.vc[k]);
+      sched.blend(chunk.blend[static_cast<std::size_t>(k)]);
+    }
+    return;
+  }
   for (int k = 0; k < chunk.steps; ++k) {
     const int h = first + k;
     const double positive_sum = sched.takeAndLag(plan, plan_ld, h, h < plan_rows);
@@ -271,19 +330,25 @@ PLSA_ALWAYS_INLINE void modesOverChunk(const CompiledModel& m, int j, const Sche
                                        double* __restrict totals) noexcept {
   const ModalForm& f = m.modal_form;
   const int block = B > 0 ? B : f.block, at = j * block;
+  const int count = block / 4;
   const LooseQuad *l = quads(f.merged_lambda.data() + at), *b = quads(f.merged_beta.data() + at);
   LooseQuad *z = quads(zeta + at), *now = quads(level + at);
+  // The modes and levels in locals over the chunk (registers for a fixed
+  // block): each step's update waits on the last one's, not on a store.
+  Quad zk[B > 0 ? B / 4 : kMaxBlock / 4], gk[B > 0 ? B / 4 : kMaxBlock / 4];
+  for (int i = 0; i < count; ++i) zk[i] = z[i], gk[i] = now[i];
   for (int k = 0; k < chunk.steps; ++k) {
     alignas(32) double next[B > 0 ? B : kMaxBlock];
     levelsOfInput<B>(m, j, chunk.blend[static_cast<std::size_t>(k)], chunk.vc[k], next);
     const LooseQuad* g = quads(next);
     LooseQuad* t = quads(totals + k * block);
-    for (int i = 0; i < block / 4; ++i) {
-      z[i] = l[i] * z[i] + b[i] * (g[i] - now[i]);
-      now[i] = g[i];
-      t[i] += z[i];
+    for (int i = 0; i < count; ++i) {
+      zk[i] = l[i] * zk[i] + b[i] * (g[i] - gk[i]);
+      gk[i] = g[i];
+      t[i] += zk[i];
     }
   }
+  for (int i = 0; i < count; ++i) z[i] = zk[i], now[i] = gk[i];
 }
 
 /// The run: rows 0..horizon-1 of `out` (column-major, leading dimension

@@ -16,6 +16,7 @@
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
 #include "plsa/predict/predictor_options.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
 
 namespace plsa {
 
@@ -44,7 +45,7 @@ class PlanSensitivity {
   /// (us, dir) with node weights node_w, the channels starting at vc.
   void compute(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
                const Eigen::VectorXd& us, const DirectionState& dir, const Eigen::VectorXd& node_w,
-               const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal, double yaw,
+               const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal, const SensorYaw::Turn& yaw,
                Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill what) noexcept {
     frozenKernels(m, horizon, us, dir, node_w);
     channelPath(m, plan, vc);
@@ -148,17 +149,17 @@ class PlanSensitivity {
 
   // Sensitivity, stage 3: jacobian(h, o; s, j) = sum_c D_cj(s) (CK(h-1-s) -
   // CK(h-1-t)), t the channel's next push (the second term only once h-1 >=
-  // t); a tip_cartesian model's row pairs turned by the sensor's yaw (rad,
-  // SensorYaw) and from components into angles at the nominal prediction on
+  // t); a tip_cartesian model's row pairs turned by the sensor's yaw
+  // (SensorYaw::turn) and from components into angles at the nominal prediction on
   // the way (d(bend, steer) / d(x, y)); the structural zeros (rows h <= s of
   // column (s, j)) only when `whole`.
-  void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal, double yaw,
-            Eigen::Ref<Eigen::MatrixXd> jacobian, bool whole) noexcept {
+  void fill(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& nominal,
+            const SensorYaw::Turn& yaw, Eigen::Ref<Eigen::MatrixXd> jacobian, bool whole) noexcept {
     const int ny = m.n_y, nu = m.n_u;
     const Eigen::Index channels = static_cast<Eigen::Index>(m.play.size());
     const bool tip = m.frame == OutputFrame::kTipCartesian;
     if (tip) {  // the rows' 2 x 2 turn from the model's components to angles
-      const double c = std::cos(yaw), s = std::sin(yaw);
+      const double c = yaw.cos, s = yaw.sin;
       for (int h = 0; h < horizon; ++h) {
         const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y;
         const double inv_r = r2 == 0.0 ? 0.0 : 1.0 / std::sqrt(r2);  // straight: no direction to move

@@ -90,8 +90,11 @@ class NStepPredictor {
     }
     for (int o = 0; o < m.n_y; ++o)
       if (!std::isfinite(y[o])) return PredictorStatus::kNotFinite;
+    SteeringReference steering;
     if (m.frame == OutputFrame::kTipCartesian) {
-      tipComponents(y[0], y[1], ym_(0), ym_(1));
+      steering = SteeringReference::of(y[1]);  // tipComponents' own
+      ym_(0) = y[0] * steering.cos;
+      ym_(1) = y[0] * steering.sin;
     } else {
       for (int o = 0; o < m.n_y; ++o) ym_(o) = y[o];
     }
@@ -111,7 +114,7 @@ class NStepPredictor {
     }
     behind_ = 0;
     t_ = time_s;
-    if (m.frame == OutputFrame::kTipCartesian) steer_reference_ = y[1];
+    steer_reference_ = steering;
     if (samples_ == 0) {
       restart(m, u);
       return status;
@@ -186,7 +189,7 @@ class NStepPredictor {
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
     if (status != PredictorStatus::kOk) return status;
-    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, yaw_.angle(), jacobian, fill);
+    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, yaw_.turn(), jacobian, fill);
     return PredictorStatus::kOk;
   }
 
@@ -411,7 +414,7 @@ class NStepPredictor {
     else
       status = predictStepByStep(m, horizon, plan, out);
     if (status == PredictorStatus::kOk && m.frame == OutputFrame::kTipCartesian)
-      turnIncrements(yaw_.angle(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
+      turnIncrements(yaw_.turn(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
     return status;
   }
 
@@ -553,9 +556,9 @@ class NStepPredictor {
   double t_ = 0.0;
   int behind_ = 0;  // samples in a row behind t_, each after the one before
   double behind_time_ = 0.0;
-  double steer_reference_ = 0.0;    // tip_cartesian: the last measured steering angle
-  SensorYaw yaw_;                   // tip_cartesian: the turn from the model's frame to the sensor's
-  double yaw_tip_[2] = {0.0, 0.0};  // while registering: the model's tip, in its frame
+  SteeringReference steer_reference_;  // tip_cartesian: the last measured steering angle
+  SensorYaw yaw_;                      // tip_cartesian: the turn from the model's frame to the sensor's
+  double yaw_tip_[2] = {0.0, 0.0};     // while registering: the model's tip, in its frame
   std::int64_t samples_ = 0;
 };
 

@@ -34,11 +34,13 @@ class SensorYaw {
   void configure(int window, double drift_per_sample) noexcept {
     window_ = window;
     drift_ = drift_per_sample;
+    step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
   }
   /// A (re)start: the next sample is the start's.
   void restart() noexcept {
     cross_ = dot_ = offset_ = 0.0;
     samples_ = 0;
+    turn_ = {1.0, 0.0};
   }
   /// Whether add() reads the model's tip (the window is still open).
   bool registering() const noexcept { return samples_ < window_; }
@@ -46,15 +48,19 @@ class SensorYaw {
   /// the measured one. Once the window is full the offset is set.
   void add(double level_x, double level_y, double x, double y) noexcept {
     const double k = static_cast<double>(samples_++);
-    if (samples_ > window_) return;
+    if (samples_ > window_) return advanceTurn();
     const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
     cross_ += tx * y - ty * x;
     dot_ += tx * x + ty * y;
-    if (samples_ < window_) return;
+    if (samples_ < window_) {
+      turn_ = {c, s};  // the drift's turn alone (no offset yet): angle()
+      return;
+    }
     // A tip on the axis in both has no direction to register: the model's frame.
     const bool known = std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) && std::isfinite(dot_);
     offset_ = known ? std::atan2(cross_, dot_) : 0.0;
+    turn_ = {std::cos(angle()), std::sin(angle())};
   }
   /// The registered turn (rad), 0 until the window is full.
   double offset() const noexcept { return offset_; }
@@ -63,10 +69,29 @@ class SensorYaw {
   double angle() const noexcept {
     return window_ > 0 && samples_ > 0 ? offset_ + drift_ * static_cast<double>(samples_ - 1) : 0.0;
   }
+  /// cos and sin of angle(), kept by add(): a prediction turns without trigonometry.
+  struct Turn {
+    double cos = 1.0, sin = 0.0;
+  };
+  const Turn& turn() const noexcept { return turn_; }
 
  private:
+  // Past the window the angle grows by the drift each sample: the turn
+  // rotates by the drift's (a complex product), and is taken afresh from
+  // angle() every kExactEvery samples so rounding cannot build up.
+  static constexpr long kExactEvery = 4096;
+  void advanceTurn() noexcept {
+    if (window_ == 0) return;
+    if (samples_ % kExactEvery == 0) {
+      turn_ = {std::cos(angle()), std::sin(angle())};
+      return;
+    }
+    turn_ = {turn_.cos * step_.cos - turn_.sin * step_.sin, turn_.sin * step_.cos + turn_.cos * step_.sin};
+  }
+
   int window_ = 0;
   double drift_ = 0.0;
+  Turn step_, turn_;
   double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0;
   long samples_ = 0;
 };
@@ -89,15 +114,18 @@ inline void settledTip(const CompiledModel& m, const Eigen::VectorXd& node_w, co
   for (int o = 0; o < 2; ++o) tip[o] = m.output_level[static_cast<std::size_t>(o)] + settled[o];
 }
 
-/// Rows [0, horizon) of a tip prediction (components) turned by `angle` (rad)
-/// about the anchor (x0, y0): the model's increments into the sensor's frame.
-inline void turnIncrements(double angle, double x0, double y0, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-  if (angle == 0.0) return;
-  const double c = std::cos(angle), s = std::sin(angle);
-  for (int h = 0; h < horizon; ++h) {
-    const double dx = out(h, 0) - x0, dy = out(h, 1) - y0;
-    out(h, 0) = x0 + c * dx - s * dy;
-    out(h, 1) = y0 + s * dx + c * dy;
+/// Rows [0, horizon) of a tip prediction (components) turned by `turn` about
+/// the anchor (x0, y0): the model's increments into the sensor's frame.
+inline void turnIncrements(const SensorYaw::Turn& turn, double x0, double y0, int horizon,
+                           Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+  if (turn.sin == 0.0 && turn.cos == 1.0) return;
+  const double c = turn.cos, s = turn.sin;
+  double* __restrict px = out.col(0).data();
+  double* __restrict py = out.col(1).data();
+  for (int h = 0; h < horizon; ++h) {  // the two columns: contiguous, vectorised
+    const double dx = px[h] - x0, dy = py[h] - y0;
+    px[h] = x0 + c * dx - s * dy;
+    py[h] = y0 + s * dx + c * dy;
   }
 }
 

@@ -423,10 +423,19 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   no_lag.schedule_lag_s = 0.0;
   const DioPwlObfModel registered = registeredTip(d);  // its rows turned by the sensor's yaw
   const Eigen::MatrixXd turned = turnedRun(d.y, 20.0);
+  DioPwlObfModel one_region_shaped = one_region;  // every input moving through the coupled, softened level
+  one_region_shaped.shaping.coupling = 1.0;
+  one_region_shaped.shaping.threshold = 0.07;
+  one_region_shaped.shaping.softening = 1.5;
+  fitCoefficients(one_region_shaped, {d.u}, {d.y});
+  DioPwlObfModel two_channels = d.input_side;  // a channel path not one channel per input
+  for (auto& channels : two_channels.shaping.play) channels.push_back(PlayChannel(0.03, 0.0));
+  fitCoefficients(two_channels, {d.u}, {d.y});
   int index = 0;
   for (const Case& c :
        {Case{&one_region, true, &d.y}, Case{&d.input_side, false, &d.y}, Case{&d.tip, false, &d.y},
-        Case{&d.interpolated, false, &d.y}, Case{&no_lag, false, &d.y}, Case{&registered, false, &turned}}) {
+        Case{&d.interpolated, false, &d.y}, Case{&no_lag, false, &d.y}, Case{&registered, false, &turned},
+        Case{&two_channels, false, &d.y}, Case{&one_region_shaped, true, &d.y}}) {
     SCOPED_TRACE("case " + std::to_string(index++));
     const DioPwlObfModel& m = *c.model;
     PredictorOptions options;

@@ -15,6 +15,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
+#include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/predictor_options.hpp"
 #include "plsa/predict/sensor_yaw.hpp"
 
@@ -48,7 +49,11 @@ class PlanSensitivity {
                const Eigen::VectorXd& vc, const Eigen::Ref<const Eigen::MatrixXd>& nominal, const SensorYaw::Turn& yaw,
                Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill what) noexcept {
     frozenKernels(m, horizon, us, dir, node_w);
-    channelPath(m, plan, vc);
+    if (oneChannelPerInput(m) && predictorUsesAvx2())
+      channelPathQuad(m, plan, vc);
+    else
+      channelPath(m, plan, vc);
+    nextPushes(plan.rows(), static_cast<Eigen::Index>(m.play.size()));
     fill(m, horizon, nominal, yaw, jacobian, what == JacobianFill::kWhole);
   }
 
@@ -138,7 +143,79 @@ class PlanSensitivity {
           if (k != j && shaping.pushesOthers(u[k])) d[k] = by_others;
       }
     }
-    for (Eigen::Index c = 0; c < channels; ++c) {  // the next push of each channel after each step
+  }
+
+  // Whether channel c is input c's only one, for at most four inputs (the
+  // usual chamber model): channelPathQuad's case.
+  static bool oneChannelPerInput(const CompiledModel& m) noexcept {
+    bool yes = m.n_u <= 4 && static_cast<int>(m.play.size()) == m.n_u;
+    for (int c = 0; yes && c < m.n_u; ++c) yes = m.channel_input[static_cast<std::size_t>(c)] == c;
+    return yes;
+  }
+
+  // channelPath for oneChannelPerInput in an AVX2 build (as 256-bit vectors
+  // lowered to SSE2 it is slower than channelPath), every channel of a step
+  // as one vector (lane c channel c), the same arithmetic lane by lane: std::max(0, x) is
+  // 0 < x ? x : 0, std::min(a, b) b < a ? b : a, std::max(a, b) a < b ? b : a.
+  PLSA_TARGET_AVX2 void channelPathQuad(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                        const Eigen::VectorXd& vc_now) noexcept {
+    using merged::Quad;
+    const Eigen::Index steps = plan.rows();
+    const int nu = m.n_u;
+    const InputShaping& shaping = m.shaping;
+    const double threshold = shaping.threshold, kappa = shaping.coupling, soft = shaping.softening;
+    const Quad zero{}, one = zero + 1.0;
+    Quad vc{}, width{}, slope{}, through{};
+    for (int c = 0; c < nu; ++c) {
+      const PlayChannel& play = m.play[static_cast<std::size_t>(c)];
+      vc[c] = vc_now(c), width[c] = play.width, slope[c] = play.slope;
+      through[c] = play.passesThrough() ? 1.0 : 0.0;
+    }
+    double* drive = drive_.data();  // row-major: (s * channels + c) * nu + k
+    int* pushed_at = pushed_.data();
+    for (Eigen::Index s = 0; s < steps; ++s) {
+      Quad u{};
+      double positive_sum = 0.0;
+      for (int j = 0; j < nu; ++j) u[j] = plan(s, j);
+      const Quad gap = u - threshold, above = zero < gap ? gap : zero;
+      for (int j = 0; j < nu; ++j) positive_sum += above[j];
+      // InputShaping::level and ::slopes: the level above the threshold, softened, coupled.
+      const Quad counted = threshold > 0.0 ? above : u, own = zero < counted ? counted : zero;
+      Quad softened = counted, softness = one;
+      if (soft > 0.0) {
+        const Quad x = 0.5 / soft < own ? zero + 0.5 / soft : own;
+        softened = zero < own ? x - soft * x * x : counted;
+        softness = zero < own ? (own < 0.5 / soft ? 1.0 - 2.0 * soft * own : zero) : one;
+      }
+      const Quad softened_up = zero < softened ? softened : zero;
+      const Quad level = softened - kappa * softened_up * (positive_sum - own);
+      // The channel's play: PlayChannel::follow, and whether this step pushed its band.
+      const Quad before = vc, half = width + slope * (zero < level ? level : zero);
+      const Quad low = level - half, high = level + half, held = before < low ? low : before;
+      vc = high < held ? high : held;
+      const Quad tol = 1e-12 * ((level < zero ? -level : level) + half + 1e-9);
+      const Quad off_low = vc - low, off_high = vc - high;
+      const auto edge =
+          ((off_low < zero ? -off_low : off_low) <= tol) | ((off_high < zero ? -off_high : off_high) <= tol);
+      const auto pushed = (vc != before) | edge | (through != zero);
+      // d after / d level (1 -+ the band's growth on the side pushed) by d level / d u.
+      const Quad band = vc <= level ? one - (zero < level ? slope : zero) : one + (zero < level ? slope : zero);
+      const auto flat = threshold > 0.0 ? !(u > threshold) : zero != zero;  // levelAbove is flat below it
+      const Quad slope_own =
+          flat ? zero : softness * (one - kappa * (zero < softened ? one : zero) * (positive_sum - own));
+      const Quad by_own = pushed ? band * slope_own : zero;
+      const Quad by_others = pushed ? band * (-kappa * softened_up) : zero;
+      for (int c = 0; c < nu; ++c) {
+        double* d = drive + (s * nu + c) * nu;
+        pushed_at[s * nu + c] = pushed[c] ? 1 : 0;
+        for (int k = 0; k < nu; ++k) d[k] = k == c ? by_own[c] : kappa != 0.0 && u[k] > threshold ? by_others[c] : 0.0;
+      }
+    }
+  }
+
+  // The next push of each channel after each step (from pushed_).
+  void nextPushes(Eigen::Index steps, Eigen::Index channels) noexcept {
+    for (Eigen::Index c = 0; c < channels; ++c) {
       Eigen::Index next = steps;
       for (Eigen::Index s = steps - 1; s >= 0; --s) {
         next_(s * channels + c) = static_cast<int>(next);

@@ -1,4 +1,5 @@
 // Step 7: the coefficients by regularised least squares, their sample weights and fold sums.
+#include "plsa/identify/lower_gram.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -95,5 +96,28 @@ TEST(CoefficientFit, WeightsAndFoldSumsAgreeWithTheSamplesTheyStandFor) {
     negative(9) = -1.0;
     EXPECT_THROW(fitCoefficients(x, {u}, {y}, {}, {negative}), std::invalid_argument);
     EXPECT_THROW(fitCoefficients(x, {u}, {y}, {}, {Eigen::VectorXd::Ones(T - 1)}), std::invalid_argument);
+  }
+}
+
+// The coefficient fit's Gram kernel against Eigen's product, on tiles of
+// every shape it meets: columns not a multiple of the blocks, rows not a
+// multiple of four, one row, one column; the strict upper triangle zero.
+TEST(CoefficientFit, LowerGramIsTheTilesInnerProduct) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (const auto& [rows, cols] : std::vector<std::pair<int, int>>{{256, 145}, {7, 9}, {1, 3}, {33, 1}, {4, 4}}) {
+    Eigen::MatrixXd p(rows, cols);
+    for (int i = 0; i < p.size(); ++i) p(i) = normal(rng);
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Constant(3, 3, 7.0);  // resized and overwritten
+    lowerGram(p, gram);
+    ASSERT_EQ(gram.rows(), cols);
+    ASSERT_EQ(gram.cols(), cols);
+    const Eigen::MatrixXd expected = p.transpose() * p;
+    for (int j = 0; j < cols; ++j)
+      for (int i = 0; i < cols; ++i)
+        if (i >= j)
+          EXPECT_NEAR(gram(i, j), expected(i, j), 1e-12 * (1.0 + std::abs(expected(i, j)))) << i << "," << j;
+        else
+          EXPECT_EQ(gram(i, j), 0.0) << i << "," << j;
   }
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "plsa/core/parallel_for.hpp"
+#include "plsa/identify/lower_gram.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -103,7 +104,6 @@ void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressor
   const auto nodes = static_cast<int>(phi.cols() / width);
   std::vector<int> active;
   Eigen::MatrixXd P, G;
-  Eigen::VectorXd dy, h;
   for (Eigen::Index a = rows.begin; a < T;) {
     Eigen::Index e = a + 1;
     while (e < T && (e - rows.first) % tile != 0 && rw.groupOf(e) == rw.groupOf(a)) ++e;
@@ -112,20 +112,17 @@ void accumulateInputSide(const DioPwlObfModel& model, const eval::ModelRegressor
     for (int node = 0; node < nodes; ++node)
       if (reg.live.empty() || reg.live[oo]((a - rows.first) / tile, node)) active.push_back(node);
     if (!active.empty()) {
+      // The active nodes' regressors and, last, the increments: one Gram
+      // holds P'P and (its last row) P'dy.
       const auto m = static_cast<Eigen::Index>(active.size()) * width;
-      P.resize(len, m);
+      P.resize(len, m + 1);
       for (std::size_t i = 0; i < active.size(); ++i)
         P.middleCols(static_cast<Eigen::Index>(i) * width, width) =
             phi.block(a - rows.first, active[i] * width, len, width);
-      dy = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
-      if (rw.w) {
-        const Eigen::VectorXd root = rw.w->segment(a, len).cwiseSqrt();
-        P = root.asDiagonal() * P;
-        dy.array() *= root.array();
-      }
-      G.setZero(m, m);
-      G.selfadjointView<Eigen::Lower>().rankUpdate(P.transpose());
-      h.noalias() = P.transpose() * dy;
+      P.col(m) = Y.col(out).segment(a, len) - Y.col(out).segment(a - 1, len);
+      if (rw.w) P = rw.w->segment(a, len).cwiseSqrt().asDiagonal() * P;
+      lowerGram(P, G);
+      const auto h = G.row(m).head(m).transpose();
       CoefficientSums::Group& g = sums.groups[static_cast<std::size_t>(rw.groupOf(a))];
       // Active nodes ascend, so block (i, j), i >= j, lands in J's lower triangle.
       for (std::size_t i = 0; i < active.size(); ++i) {

@@ -59,7 +59,7 @@ struct PlannedSchedule {
   std::array<int, kMaxGridInputs> grid_input{}, last_level{}, stride{}, upper_step{}, hint{};
   std::array<const double*, kMaxGridInputs> levels{};
   /// One channel per input and at most four inputs (the usual chamber
-  /// model): stepQuad moves every input, lag and channel as one vector each,
+  /// model), in an AVX2 run: stepQuad moves every input, lag and channel as one vector each,
   /// lane j input j (lanes past the inputs stay zero). The quads then hold
   /// the state; `us` is kept for the blend.
   bool quad = false;
@@ -80,7 +80,7 @@ struct PlannedSchedule {
       const auto cc = static_cast<std::size_t>(c);
       vc[cc] = vc0(c);
     }
-    quad = nu <= 4 && nc == nu;
+    quad = nu <= 4 && nc == nu && predictorUsesAvx2();  // as 256-bit vectors lowered to SSE2 it is slower
     for (int c = 0; c < nc; ++c) quad = quad && input_of[c] == c;
     for (int j = 0; quad && j < nu; ++j) {
       u4[j] = u[static_cast<std::size_t>(j)], us4[j] = us[static_cast<std::size_t>(j)];

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "plsa/core/parallel_for.hpp"
+#include "plsa/core/simd.hpp"
 #include "plsa/obf/obf_bank.hpp"
 
 namespace plsa::eval {
@@ -132,12 +133,9 @@ double* filterRowsGeneric(const FilterRows& f) { return filterRowsBody(f); }
 // The same built for AVX2 without FMA (the products and sums round as in the
 // generic build, so both give the same regressors bit for bit), chosen at run
 // time where the processor has it.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if PLSA_X86_DISPATCH
 __attribute__((target("avx2"))) double* filterRowsAvx2(const FilterRows& f) { return filterRowsBody(f); }
-double* filterRows(const FilterRows& f) {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2 ? filterRowsAvx2(f) : filterRowsGeneric(f);
-}
+double* filterRows(const FilterRows& f) { return simd::cpuHasAvx2() ? filterRowsAvx2(f) : filterRowsGeneric(f); }
 #else
 double* filterRows(const FilterRows& f) { return filterRowsGeneric(f); }
 #endif

@@ -2,30 +2,28 @@
 
 #include <algorithm>
 
+#include "plsa/core/simd.hpp"
+
 namespace plsa::identify {
 namespace {
 
-#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
-#define PLSA_GRAM_AVX2 1
-// Four doubles as one vector (GCC and Clang vector extensions), at any double's alignment.
-typedef double Quad __attribute__((vector_size(32)));
-typedef double LooseQuad __attribute__((vector_size(32), aligned(8)));
+#if PLSA_X86_DISPATCH
+using simd::Quad;
 
 // Columns i .. i+3 (clamped to the last: repeats are not stored) against
 // columns j and j+1 (j+1 < n when `two`), four rows a step in sixteen
 // accumulators held in registers, then the rows past the last multiple of four.
-__attribute__((target("avx2,fma"))) void lowerGramBlock(const double* p, Eigen::Index ld, Eigen::Index rows,
-                                                        Eigen::Index n, Eigen::Index i, Eigen::Index j, bool two,
-                                                        double* g, Eigen::Index ldg) {
+PLSA_TARGET_AVX2 void lowerGramBlock(const double* p, Eigen::Index ld, Eigen::Index rows, Eigen::Index n,
+                                     Eigen::Index i, Eigen::Index j, bool two, double* g, Eigen::Index ldg) {
   const double* b[2] = {p + j * ld, p + (two ? j + 1 : j) * ld};
   const double* a[4];
   for (int k = 0; k < 4; ++k) a[k] = p + std::min(i + k, n - 1) * ld;
   Quad acc[4][2] = {};
   const Eigen::Index quads = rows / 4 * 4;
   for (Eigen::Index r = 0; r < quads; r += 4) {
-    const Quad b0 = *reinterpret_cast<const LooseQuad*>(b[0] + r), b1 = *reinterpret_cast<const LooseQuad*>(b[1] + r);
+    const Quad b0 = *simd::quads(b[0] + r), b1 = *simd::quads(b[1] + r);
     for (int k = 0; k < 4; ++k) {
-      const Quad x = *reinterpret_cast<const LooseQuad*>(a[k] + r);
+      const Quad x = *simd::quads(a[k] + r);
       acc[k][0] += x * b0;
       acc[k][1] += x * b1;
     }
@@ -45,17 +43,14 @@ void lowerGramAvx2(const Eigen::Ref<const Eigen::MatrixXd>& p, Eigen::MatrixXd& 
     for (Eigen::Index i = j; i < n; i += 4)
       lowerGramBlock(p.data(), p.outerStride(), p.rows(), n, i, j, j + 1 < n, gram.data(), n);
 }
-#else
-#define PLSA_GRAM_AVX2 0
 #endif
 
 }  // namespace
 
 void lowerGram(const Eigen::Ref<const Eigen::MatrixXd>& p, Eigen::MatrixXd& gram) {
   gram.resize(p.cols(), p.cols());
-#if PLSA_GRAM_AVX2
-  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  if (avx2) {
+#if PLSA_X86_DISPATCH
+  if (simd::cpuHasAvx2Fma()) {
     gram.triangularView<Eigen::StrictlyUpper>().setZero();
     return lowerGramAvx2(p, gram);
   }

@@ -7,6 +7,8 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/simd.hpp"
+
 #if defined(__SSE2__)
 #include <xmmintrin.h>
 #endif
@@ -14,29 +16,13 @@
 #include <immintrin.h>
 #endif
 
-// x86-64 with GCC or Clang: the hot kernels also come compiled for AVX2 and
-// FMA, chosen at run time when the processor has them.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define PLSA_PREDICT_AVX2 1
-#define PLSA_TARGET_AVX2 __attribute__((target("avx2,fma")))
-#define PLSA_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#define PLSA_PREDICT_AVX2 0
-#define PLSA_TARGET_AVX2
-#define PLSA_ALWAYS_INLINE inline
-#endif
+// x86-64 with GCC or Clang (PLSA_X86_DISPATCH): the hot kernels also come
+// compiled for AVX2 and FMA, chosen at run time when the processor has them.
 
 namespace plsa {
 
 /// Whether this processor runs the AVX2+FMA versions of the predictor's kernels.
-inline bool predictorUsesAvx2() noexcept {
-#if PLSA_PREDICT_AVX2
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
-#else
-  return false;
-#endif
-}
+inline bool predictorUsesAvx2() noexcept { return simd::cpuHasAvx2Fma(); }
 
 /// y[0, rows) += A[0, rows) x [0, cols) for a column-major table with leading
 /// dimension ld: the held paths' table products, in a generic and an AVX2 build.
@@ -225,7 +211,7 @@ inline bool tipTurnsGeneric(const double* x, const double* y, int rows, double x
   Eigen::Map<Eigen::ArrayXd>(bend, rows) = (xs * xs + ys * ys).sqrt();
   return smooth;
 }
-#if PLSA_PREDICT_AVX2
+#if PLSA_X86_DISPATCH
 PLSA_TARGET_AVX2 inline bool tipTurnsAvx2(const double* x, const double* y, int rows, double x0, double y0,
                                           double* turn, double* bend) noexcept {
   const bool smooth = tipTurnsBody(x, y, rows, x0, y0, turn);
@@ -240,7 +226,7 @@ PLSA_TARGET_AVX2 inline bool tipTurnsAvx2(const double* x, const double* y, int 
 #endif
 inline bool tipTurns(const double* x, const double* y, int rows, double x0, double y0, double* turn,
                      double* bend) noexcept {
-#if PLSA_PREDICT_AVX2
+#if PLSA_X86_DISPATCH
   if (predictorUsesAvx2()) return tipTurnsAvx2(x, y, rows, x0, y0, turn, bend);
 #endif
   return tipTurnsGeneric(x, y, rows, x0, y0, turn, bend);

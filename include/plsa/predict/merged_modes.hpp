@@ -35,15 +35,9 @@ inline bool fits(const CompiledModel& m) noexcept {
          static_cast<int>(m.node_grid.inputs.size()) <= kMaxGridInputs;
 }
 
-/// Four doubles as one vector (GCC and Clang vector extensions: one AVX
-/// register in an AVX2 build, two SSE2 ones otherwise); `Loose` at any
-/// double's alignment.
-typedef double Quad __attribute__((vector_size(32)));
-typedef double LooseQuad __attribute__((vector_size(32), aligned(8)));
-
-/// Doubles seen as quads (GCC's vector types alias their elements).
-inline const LooseQuad* quads(const double* p) noexcept { return reinterpret_cast<const LooseQuad*>(p); }
-inline LooseQuad* quads(double* p) noexcept { return reinterpret_cast<LooseQuad*>(p); }
+using simd::LooseQuad;
+using simd::Quad;
+using simd::quads;
 
 /// The plan's inputs as a run steps them: the input, its lag on the
 /// scheduling inputs, the played channels and the grid's blend.

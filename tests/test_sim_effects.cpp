@@ -110,6 +110,45 @@ TEST(SimEffects, PneumaticLagFillsSlowerThanVentAfterADelay) {
   EXPECT_GT(first_off, 0.0);
 }
 
+// The power law's pressure-dependent time constant: a chamber filling from 0
+// to 0.3 bar and venting from where it got crosses 0.15 bar when the integral of
+// tau e^(k p) / |target - p| over the pressures passed says (k = 0: tau ln 2).
+TEST(SimEffects, PowerLawTimeConstantsScaleWithThePressure) {
+  auto crossing = [](double k) {
+    SimConfig c = only("pneumatic_lag");
+    c.sample_rate_hz = 2000.0;
+    c.internal_step_s = 1e-5;
+    c.pneumatics.max_rate_bar_per_s = 100.0;
+    c.pneumatic_lag.formulation = "power";
+    c.pneumatic_lag.exponent = 1.0;
+    c.pneumatic_lag.delay_s = 0.0;
+    c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = 0.1;
+    c.pneumatic_lag.pressure_per_bar = k;
+    Actuator a(c, 1);
+    const auto fill = hold(a, {0.3, 0, 0}, 3.0);
+    const auto vent = hold(a, {0.0, 0, 0}, 3.0);
+    std::size_t f = 0, v = 0;
+    while (fill[f].pressure_bar[0] < 0.15) ++f;
+    while (vent[v].pressure_bar[0] > 0.15) ++v;
+    return std::tuple{static_cast<double>(f + 1) / c.sample_rate_hz, static_cast<double>(v + 1) / c.sample_rate_hz,
+                      fill.back().pressure_bar[0]};
+  };
+  auto expected = [](double k, double from, double to, double target) {
+    double t = 0.0;  // midpoint rule over 3000 pressure steps
+    const double dp = (to - from) / 3000.0;
+    for (int i = 0; i < 3000; ++i) {
+      const double p = from + (i + 0.5) * dp;
+      t += 0.1 * std::exp(k * p) / std::abs(target - p) * std::abs(dp);
+    }
+    return t;
+  };
+  for (double k : {-3.0, 0.0, 4.0, 8.0}) {
+    const auto [fill_s, vent_s, filled] = crossing(k);
+    EXPECT_NEAR(fill_s, expected(k, 0.0, 0.15, 0.3), 1e-3) << "k = " << k;
+    EXPECT_NEAR(vent_s, expected(k, filled, 0.15, 0.0), 1e-3) << "k = " << k;
+  }
+}
+
 TEST(SimEffects, CreepDriftsUnderConstantPressure) {
   auto drift = [](const SimConfig& c) {
     Actuator a(c, 1);

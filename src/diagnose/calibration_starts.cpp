@@ -28,6 +28,7 @@ void setNeutral(sim::SimConfig& c, const std::string& effect) {
     lagTimesAtNominal(c);
     c.pneumatic_lag.delay_s = 0.0;
     c.pneumatic_lag.exponent = 1.0;  // a power law is the nominal linear one only at 1
+    c.pneumatic_lag.pressure_per_bar = 0.0;
   }
   if (effect == "creep") c.creep.fraction = 0.0;
   if (effect == "sensor_bias") {

@@ -126,8 +126,10 @@ std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delaye
       // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
       if (flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
       if (flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
-      if (flow_law_ == FlowLaw::kPower)
+      if (flow_law_ == FlowLaw::kPower) {
         drive = std::copysign(0.1 * std::pow(std::abs(drive) / 0.1, c.pneumatic_lag.exponent), drive);
+        tau *= std::exp(c.pneumatic_lag.pressure_per_bar * pressure_[i]);
+      }
     }
     const double rate = std::clamp(drive / tau, -c.pneumatics.max_rate_bar_per_s, c.pneumatics.max_rate_bar_per_s);
     pressure_[i] += rate * dt_;

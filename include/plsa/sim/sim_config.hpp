@@ -115,12 +115,15 @@ struct SimConfig {
     /// difference (equal to linear at 0.1 bar), as through a restriction;
     /// "choked": flow stops growing beyond 0.05 bar of difference, as at sonic
     /// speed; "power": difference^exponent (equal at 0.1 bar), spanning
-    /// orifice (0.5) and linear (1).
+    /// orifice (0.5) and linear (1), with time constants that scale by
+    /// exp(pressure_per_bar x the chamber's pressure), as a chamber whose
+    /// volume or outflow changes with its pressure.
     std::string formulation = "linear";
     double fill_time_constant_s = 0.08;
     double vent_time_constant_s = 0.03;
     double delay_s = 0.03;
-    double exponent = 0.75;  ///< only for "power"
+    double exponent = 0.75;         ///< only for "power"
+    double pressure_per_bar = 0.0;  ///< only for "power"
   } pneumatic_lag;
   struct Creep {
     bool enabled = true;

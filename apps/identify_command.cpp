@@ -132,6 +132,9 @@ void runIdentify(IdentifyArgs& a) {
   if (a.structure == "global-linear") {  // plsa's poles and play, one region, refitted on the logs
     const BaselineData b = baselineData(model, report, logs);
     model = globalLinearOf(model, b.U, b.Y);
+    o.progress(
+        "global linear OBF: the poles and play channels chosen above, one region, no schedule lag, "
+        "coefficients refitted on the logs");
   }
   printRejections(report, a.inputs, a.outputs, a.list_rejections);
   if (a.compare_poles) {

@@ -422,8 +422,7 @@ void addDriftAndValidationOptions(CLI::App* id, const std::shared_ptr<IdentifyAr
   addChoice(id, "--output-drift", a->options.output_drift,
             "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
             "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
-            "that if cross-validated simulation is above 0 and gains at least 0.1; on: always take it out; off: fit "
-            "the outputs as logged");
+            "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged");
   addChoice(id, "--cv-layout", a->options.cv_layout,
             "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
             "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "

@@ -34,18 +34,6 @@ TEST(OutputDrift, RemovalIsALinearTrendAboutTheReferenceAndChecksItsInput) {
   }
 }
 
-// auto keeps a drift only where the simulation means something and gains
-// by the margin (figures as identify printed them).
-TEST(OutputDrift, AutoKeepsADriftOnlyAboveTheMeanAndByTheMargin) {
-  EXPECT_TRUE(keepsOutputDrift(87.75, 88.27));   // the built-in simulator's yaw drift, on its grid run
-  EXPECT_FALSE(keepsOutputDrift(89.71, 89.71));  // no gain
-  EXPECT_FALSE(keepsOutputDrift(83.30, 83.35));  // under the margin
-  EXPECT_FALSE(keepsOutputDrift(-1315, -1314));  // a simulation worse than the mean
-  EXPECT_TRUE(keepsOutputDrift(-5.0, 0.5));      // above the mean once taken out
-  EXPECT_FALSE(keepsOutputDrift(-0.5, -0.01));
-  EXPECT_TRUE(keepsOutputDrift(50.0, 50.0 + kDriftMinimumGain));
-}
-
 // A model that is exactly right plus a known trend: the estimate must find
 // the trend, skip an empty record, and give zero where nothing can show one.
 TEST(OutputDrift, EstimateFindsAKnownTrendAndToleratesUninformativeData) {

@@ -5,10 +5,6 @@
 
 namespace plsa::identify {
 
-bool keepsOutputDrift(double fit_as_logged, double fit_taken_out) {
-  return fit_taken_out > 0.0 && fit_taken_out >= fit_as_logged + kDriftMinimumGain;
-}
-
 double meanSampleTime(const std::vector<Eigen::VectorXd>& t) {
   double sum = 0.0;
   Eigen::Index n = 0;

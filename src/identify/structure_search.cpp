@@ -336,7 +336,7 @@ void IdentificationRun::searchOutputDrift() {
       if (frame != OutputFrame::kTipCartesian || oi == 1)
         s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
     rep.output_drift = drift;
-    if (o.output_drift == OutputDriftChoice::kOn || keepsOutputDrift(without, with)) {
+    if (o.output_drift == OutputDriftChoice::kOn || with > without + 1e-9) {
       rep.drift_taken_out = true;
       Yfit = removeOutputDrift(Y, times, drift);
       // Later stages fit to the outputs less the drift found on all of them.
@@ -349,10 +349,8 @@ void IdentificationRun::searchOutputDrift() {
     } else {
       s += "left in";
     }
-    const bool auto_left = o.output_drift == OutputDriftChoice::kAuto && !rep.drift_taken_out;
     s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
-         std::to_string(with).substr(0, 5) + " with it taken out" +
-         (auto_left ? "; taken out only above 0 and at least " + formatNumber(kDriftMinimumGain) + " higher)" : ")");
+         std::to_string(with).substr(0, 5) + " with it taken out)";
     say(s);
   } else if (o.output_drift != OutputDriftChoice::kOff) {
     say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "

@@ -29,18 +29,6 @@ struct OutputDrift {
   }
 };
 
-/// The least gain in held-out simulation fit (percentage points) for which
-/// `--output-drift auto` takes a drift out.
-inline constexpr double kDriftMinimumGain = 0.1;
-
-/// `--output-drift auto`'s choice from the cross-validated simulation fits
-/// (%) of the outputs as logged and with the drift taken out: kept only when
-/// taken out scores better than the outputs' mean (a model whose simulation
-/// is no better than that cannot tell a drift from its own error) and gains
-/// at least kDriftMinimumGain (a drift extrapolates: a spurious 0.03 deg/s is
-/// 18 deg after ten minutes).
-bool keepsOutputDrift(double fit_as_logged, double fit_taken_out);
-
 /// The mean of every sample time in `t`.
 double meanSampleTime(const std::vector<Eigen::VectorXd>& t);
 

@@ -183,8 +183,7 @@ struct IdentifyOptions {
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
   /// taken out of the training outputs. "auto": kept if held-out simulation
-  /// against the logged outputs is above 0 and gains at least 0.1
-  /// (keepsOutputDrift); "on": always taken out; "off": the
+  /// against the logged outputs improves; "on": always taken out; "off": the
   /// outputs as logged. Taken out, the model carries the sensor's mean state
   /// over the training run.
   OutputDriftChoice output_drift = OutputDriftChoice::kAuto;

@@ -128,7 +128,8 @@ std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delaye
       if (flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
       if (flow_law_ == FlowLaw::kPower) {
         drive = std::copysign(0.1 * std::pow(std::abs(drive) / 0.1, c.pneumatic_lag.exponent), drive);
-        tau *= std::exp(c.pneumatic_lag.pressure_per_bar * pressure_[i]);
+        const double per_bar = c.pneumatic_lag.pressure_per_bar;
+        if (per_bar != 0.0) tau *= std::exp(per_bar * pressure_[i]);
       }
     }
     const double rate = std::clamp(drive / tau, -c.pneumatics.max_rate_bar_per_s, c.pneumatics.max_rate_bar_per_s);

@@ -12,7 +12,7 @@
 #if defined(__SSE2__)
 #include <xmmintrin.h>
 #endif
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if PLSA_X86_DISPATCH
 #include <immintrin.h>
 #endif
 

@@ -18,6 +18,7 @@
 #include "plsa/core/check.hpp"
 #include "plsa/predict/compiled_model.hpp"
 #include "plsa/predict/kernels.hpp"
+#include "plsa/predict/shaped_levels_quad.hpp"
 
 namespace plsa::merged {
 
@@ -134,23 +135,8 @@ struct PlannedSchedule {
     const Quad scale = size > 1e-3 ? size : zero + 1e-3;
     us4 = (step < zero ? -step : step) <= 1e-12 * scale ? u4 : lagged;
     *quads(us.data()) = us4;
-    const double threshold = shaping->threshold;
-    Quad level = u4;
-    if (shaped) {  // InputShaping::level
-      double positive_sum = 0.0;
-      if (shaping->coupling != 0.0) {
-        const Quad gap = u4 - threshold, above = zero < gap ? gap : zero;
-        positive_sum = ((above[0] + above[1]) + above[2]) + above[3];
-      }
-      if (threshold > 0.0) level = zero < u4 - threshold ? u4 - threshold : zero;
-      const Quad own = zero < level ? level : zero;
-      if (const double soft = shaping->softening; soft > 0.0) {
-        const Quad x = 0.5 / soft < own ? zero + 0.5 / soft : own;
-        level = zero < own ? x - soft * x * x : level;
-      }
-      level = level - shaping->coupling * (zero < level ? level : zero) * (positive_sum - own);
-    }
-    const Quad half = width4 + slope4 * (zero < level ? level : zero);  // PlayChannel::follow
+    const Quad level = shaped ? shapedLevelsQuad(*shaping, u4).level : u4;  // InputShaping::level
+    const Quad half = width4 + slope4 * (zero < level ? level : zero);      // PlayChannel::follow
     const Quad low = level - half, high = level + half;
     const Quad held = vc4 < low ? low : vc4;
     vc4 = high < held ? high : held;

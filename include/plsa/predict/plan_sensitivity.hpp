@@ -18,6 +18,7 @@
 #include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/predictor_options.hpp"
 #include "plsa/predict/sensor_yaw.hpp"
+#include "plsa/predict/shaped_levels_quad.hpp"
 
 namespace plsa {
 
@@ -163,7 +164,7 @@ class PlanSensitivity {
     const Eigen::Index steps = plan.rows();
     const int nu = m.n_u;
     const InputShaping& shaping = m.shaping;
-    const double threshold = shaping.threshold, kappa = shaping.coupling, soft = shaping.softening;
+    const double threshold = shaping.threshold, kappa = shaping.coupling;
     const Quad zero{}, one = zero + 1.0;
     Quad vc{}, width{}, slope{}, through{};
     for (int c = 0; c < nu; ++c) {
@@ -175,20 +176,12 @@ class PlanSensitivity {
     int* pushed_at = pushed_.data();
     for (Eigen::Index s = 0; s < steps; ++s) {
       Quad u{};
-      double positive_sum = 0.0;
       for (int j = 0; j < nu; ++j) u[j] = plan(s, j);
-      const Quad gap = u - threshold, above = zero < gap ? gap : zero;
-      for (int j = 0; j < nu; ++j) positive_sum += above[j];
       // InputShaping::level and ::slopes: the level above the threshold, softened, coupled.
-      const Quad counted = threshold > 0.0 ? above : u, own = zero < counted ? counted : zero;
-      Quad softened = counted, softness = one;
-      if (soft > 0.0) {
-        const Quad x = 0.5 / soft < own ? zero + 0.5 / soft : own;
-        softened = zero < own ? x - soft * x * x : counted;
-        softness = zero < own ? (own < 0.5 / soft ? 1.0 - 2.0 * soft * own : zero) : one;
-      }
-      const Quad softened_up = zero < softened ? softened : zero;
-      const Quad level = softened - kappa * softened_up * (positive_sum - own);
+      const ShapedLevelsQuad shaped = shapedLevelsQuad(shaping, u);
+      const Quad level = shaped.level, own = shaped.own, softness = shaped.softness;
+      const double positive_sum = shaped.positive_sum;
+      const Quad softened_up = zero < shaped.softened ? shaped.softened : zero;
       // The channel's play: PlayChannel::follow, and whether this step pushed its band.
       const Quad before = vc, half = width + slope * (zero < level ? level : zero);
       const Quad low = level - half, high = level + half, held = before < low ? low : before;
@@ -202,7 +195,7 @@ class PlanSensitivity {
       const Quad band = vc <= level ? one - (zero < level ? slope : zero) : one + (zero < level ? slope : zero);
       const auto flat = threshold > 0.0 ? !(u > threshold) : zero != zero;  // levelAbove is flat below it
       const Quad slope_own =
-          flat ? zero : softness * (one - kappa * (zero < softened ? one : zero) * (positive_sum - own));
+          flat ? zero : softness * (one - kappa * (zero < shaped.softened ? one : zero) * (positive_sum - own));
       const Quad by_own = pushed ? band * slope_own : zero;
       const Quad by_others = pushed ? band * (-kappa * softened_up) : zero;
       for (int c = 0; c < nu; ++c) {

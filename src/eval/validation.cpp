@@ -59,31 +59,31 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
   return track;
 }
 
-std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
-                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
-                                             const SimulationStart& start) {
-  PLSA_CHECK(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
-                 dy.rows() == u.rows(),
-             "simulateModel: the record does not match the model's outputs");
+namespace {
+
+// The yaw registration's samples (yawRegistrationSamples), checked to leave
+// something of a `rows`-sample record to simulate.
+Eigen::Index checkedRegistration(const DioPwlObfModel& model, const SimulationStart& start, Eigen::Index rows) {
   const Eigen::Index n = yawRegistrationSamples(model, start);
-  std::vector<AlignedPrediction> out;
-  if (model.output_level.empty()) {
-    for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
-    return out;
-  }
-  PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
-  Eigen::MatrixXd level = modelTip(model, u, dy);
   if (n > 0)
-    PLSA_CHECK(n < u.rows(), "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
-                                 " s, " + std::to_string(n) + " samples) leaves nothing of the " +
-                                 std::to_string(u.rows()) + "-sample record to simulate");
+    PLSA_CHECK(n < rows, "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
+                             " s, " + std::to_string(n) + " samples) leaves nothing of the " + std::to_string(rows) +
+                             "-sample record to simulate");
+  return n;
+}
+
+// simulateModel from the model's tip (modelTip) and its yaw track
+// (trackSensorYaw on that tip; unused without a registration).
+std::vector<AlignedPrediction> simulatedTip(const DioPwlObfModel& model, Eigen::MatrixXd level,
+                                            const SensorYawTrack& track, const SimulationStart& start) {
+  const Eigen::Index rows = level.rows(), n = checkedRegistration(model, start, rows);
   // The rotation that best maps the predicted tip components onto the
   // measured ones over the window (SensorYaw), after the drift's turn.
-  const double offset = n > 0 ? trackSensorYaw(model, level, y, start).offset : 0.0;
+  const double offset = n > 0 ? track.offset : 0.0;
   if (const double yaw_rate = carriedYawRate(model, start); yaw_rate != 0.0) {
     // Turned from the record's start; the registration takes the turn's offset.
     const double rate = yaw_rate * kRadPerDeg * model.sample_time_s;
-    for (Eigen::Index k = 0; k < level.rows(); ++k) {
+    for (Eigen::Index k = 0; k < rows; ++k) {
       const double c = std::cos(rate * static_cast<double>(k)), s = std::sin(rate * static_cast<double>(k));
       const double x = level(k, 0);
       level(k, 0) = c * x - s * level(k, 1);
@@ -97,13 +97,34 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
     level.col(1) = s * x + c * level.col(1);
   }
   const Eigen::Index first = n > 0 ? n : 1;
+  std::vector<AlignedPrediction> out;
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;
     p.first = first;
-    p.values = level.col(o).tail(u.rows() - first);
+    p.values = level.col(o).tail(rows - first);
     out.push_back(std::move(p));
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                             const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
+                                             const SimulationStart& start) {
+  PLSA_CHECK(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
+                 dy.rows() == u.rows(),
+             "simulateModel: the record does not match the model's outputs");
+  std::vector<AlignedPrediction> out;
+  if (model.output_level.empty()) {
+    for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
+    return out;
+  }
+  PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
+  Eigen::MatrixXd level = modelTip(model, u, dy);
+  SensorYawTrack track;
+  if (checkedRegistration(model, start, u.rows()) > 0) track = trackSensorYaw(model, level, y, start);
+  return simulatedTip(model, std::move(level), track, start);
 }
 
 namespace {
@@ -160,8 +181,13 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   const bool tip = model.output_frame == OutputFrame::kTipCartesian;
   // A tip's k-step predictions turn into the sensor's frame as the predictor's do.
   const bool turned = tip && yawRegistrationSamples(model, start) > 0;
-  const Eigen::VectorXd yaw =
-      turned ? trackSensorYaw(model, modelTip(model, u, dy), ym, start).angle : Eigen::VectorXd();
+  // The model's tip, simulated once for the yaw track and the simulation
+  // (simulateModel's own path refuses a record too short).
+  const bool simulated = with_simulation && !model.output_level.empty() && u.rows() >= 2;
+  Eigen::MatrixXd tip_level = turned || simulated ? modelTip(model, u, dy) : Eigen::MatrixXd();
+  SensorYawTrack track;
+  if (turned) track = trackSensorYaw(model, tip_level, ym, start);
+  const Eigen::VectorXd& yaw = track.angle;
   for (int k : horizons) {
     PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
     if (turned) {
@@ -175,7 +201,8 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
           toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
   }
   if (with_simulation) {
-    const std::vector<AlignedPrediction> sims = simulateModel(model, u, ym, dy, start);
+    const std::vector<AlignedPrediction> sims =
+        simulated ? simulatedTip(model, std::move(tip_level), track, start) : simulateModel(model, u, ym, dy, start);
     for (int o = 0; o < model.outputCount(); ++o)
       out[static_cast<std::size_t>(o)][0] = sims[static_cast<std::size_t>(o)];
     if (model.output_frame == OutputFrame::kTipCartesian)

@@ -1,5 +1,7 @@
-// `plsa crossval`: leave-one-log-out validation of DIO-PWL-OBF against linear
-// ARX fitted on the same logs: the project's real-data check.
+// `plsa crossval`: leave-one-log-out validation of DIO-PWL-OBF against its
+// peers fitted on the same logs (the paper's configuration, the global
+// linear OBF and linear ARX), every model scored on the same samples: the
+// project's real-data check.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +14,7 @@
 #include "plsa/eval/comparison.hpp"
 #include "plsa/core/check.hpp"
 #include "plsa/core/text_file.hpp"
+#include "plsa/identify/baselines.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/io/standard_columns.hpp"
 
@@ -34,8 +37,10 @@ struct CrossvalArgs {
 };
 
 // The models' keys in the JSON (MATLAB's jsondecode and pandas take them as
-// they are); "labels" maps them to the names printed.
-const char* const kKeys[] = {"plsa", "arx"};
+// they are) and the names printed ("labels" in the JSON), in the order fitted.
+const char* const kKeys[] = {"plsa", "paper", "global_linear", "arx"};
+const char* const kLabels[] = {"DIO-PWL-OBF", "paper's config", "global linear", "ARX"};
+constexpr std::size_t kModelCount = 4;
 
 using FitSums = std::vector<std::vector<std::map<int, double>>>;  // [model][output][horizon, 0: sim]
 
@@ -70,7 +75,10 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
   return logs;
 }
 
-/// One fold: both models fitted on every log but `hold`, scored on it.
+/// One fold: every model fitted on every log but `hold`, scored on it: plsa's,
+/// the paper's configuration (identified alike), the global linear OBF (plsa's
+/// bases, one region) and ARX, the baselines fitted to the outputs less any
+/// drift identification took out.
 struct FoldResult {
   IdentifyReport report;
   std::vector<eval::ModelPredictions> predictions;
@@ -91,12 +99,16 @@ FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std:
     }
   FoldResult f;
   const DioPwlObfModel model = identifyModel(train, o, &f.report);
+  const DioPwlObfModel paper = identifyModel(train, paperConfiguration(o));
+  const BaselineData training = baselineData(model, f.report, train);
+  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
   // ARX is fitted to the same outputs as the model: less any drift it took out.
   if (f.report.drift_taken_out) Y = removeOutputDrift(Y, T, f.report.output_drift);
   const eval::ArxModel arx = eval::ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
   const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
-  f.predictions = {eval::predictDio("DIO-PWL-OBF", model, uv, yv, a.horizons),
-                   eval::predictArx("ARX", arx, uv, yv, a.horizons)};
+  f.predictions = {
+      eval::predictDio(kLabels[0], model, uv, yv, a.horizons), eval::predictDio(kLabels[1], paper, uv, yv, a.horizons),
+      eval::predictDio(kLabels[2], linear, uv, yv, a.horizons), eval::predictArx(kLabels[3], arx, uv, yv, a.horizons)};
   f.scores = eval::commonScores(f.predictions, yv);
   return f;
 }
@@ -134,11 +146,10 @@ void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult&
 
 /// The mean rows over the folds, also into the JSON with the models' labels.
 void printMeans(const CrossvalArgs& a, const FitSums& sums, std::size_t folds, nlohmann::json& j) {
-  const char* names[] = {"DIO-PWL-OBF", "ARX"};
-  for (std::size_t m = 0; m < 2; ++m) j["labels"][kKeys[m]] = names[m];
-  for (std::size_t m = 0; m < 2; ++m)
+  for (std::size_t m = 0; m < kModelCount; ++m) j["labels"][kKeys[m]] = kLabels[m];
+  for (std::size_t m = 0; m < kModelCount; ++m)
     for (std::size_t out = 0; out < a.outputs.size(); ++out) {
-      std::printf("%-12s %-8s %-14s", "mean", a.outputs[out].c_str(), names[m]);
+      std::printf("%-12s %-8s %-14s", "mean", a.outputs[out].c_str(), kLabels[m]);
       for (int k : a.horizons) {
         const double v = sums[m][out].at(k) / static_cast<double>(folds);
         std::printf(" %8.1f", v);
@@ -166,7 +177,7 @@ void runCrossval(CrossvalArgs& a) {
   std::printf("%-12s %-8s %-14s", "held out", "output", "model");
   for (int k : a.horizons) std::printf(" %8s", (std::to_string(k) + "-step").c_str());
   std::printf(" %8s\n", "sim");
-  FitSums sums(2, std::vector<std::map<int, double>>(a.outputs.size()));
+  FitSums sums(kModelCount, std::vector<std::map<int, double>>(a.outputs.size()));
   nlohmann::json j;
   for (std::size_t hold = 0; hold < logs.size(); ++hold)
     printFold(a, fold_names[hold], scoreFold(a, o, logs, hold), sums, j);
@@ -178,7 +189,8 @@ void runCrossval(CrossvalArgs& a) {
 
 void addCrossvalCommand(CLI::App& app) {
   auto a = std::make_shared<CrossvalArgs>();
-  CLI::App* c = app.add_subcommand("crossval", "Leave-one-log-out validation against linear ARX");
+  CLI::App* c = app.add_subcommand(
+      "crossval", "Leave-one-log-out validation against the paper's configuration, global linear OBF and ARX");
   c->add_option("--log", a->logs, "Logs or folders of logs")->required();
   c->add_option("--inputs", a->inputs, "Input columns")->delimiter(',');
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');

@@ -366,7 +366,14 @@ def test_crossval_fits(out):
     doc = load(path)
     assert_valid("crossval-fits", doc, "plsa crossval --json")
     assert set(doc["folds"]) == {"joystick2", "joystick3"}
+    # Every peer fitted and scored in the same run, each a model of its own.
+    fold = doc["folds"]["joystick2"]
+    assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx"}
+    sims = {key: fold[key]["bend_deg"]["fit_sim"] for key in ("plsa", "paper", "global_linear", "arx")}
+    assert len(set(sims.values())) == 4, sims
     assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")
+    assert_refused("crossval-fits", broken(doc, without("mean", "global_linear")), "no mean global linear entry")
+    assert_refused("crossval-fits", broken(doc, without("folds", "joystick3", "paper")), "a fold without the paper's")
     assert_refused("crossval-fits", broken(doc, without("folds", "joystick2", "plsa")), "a fold without the model")
     assert_refused("crossval-fits", broken(doc, setting({}, "folds", "joystick2", "LSTM")), "an unknown model 'LSTM'")
 

@@ -102,11 +102,15 @@ double Actuator::effectivePressure(double p) const {
 // Transport delay: a ring of past commands, one per internal step, read
 // between two taps.
 std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd) {
-  const std::size_t size = delay_line_.size();
+  if (delay_whole_ == 0 && delay_frac_ == 0.0) return cmd;  // no delay: the blend below is cmd exactly
+  // The ring's indices wrapped by comparison (a % by the run-time size was an
+  // integer division per index, every substep).
+  const std::size_t size = delay_line_.size();  // delay_whole_ + 2
   delay_line_[delay_head_] = cmd;
-  const auto& newer = delay_line_[(delay_head_ + size - delay_whole_) % size];
-  const auto& older = delay_line_[(delay_head_ + size - delay_whole_ - 1) % size];
-  delay_head_ = (delay_head_ + 1) % size;
+  const std::size_t at = delay_head_ >= delay_whole_ ? delay_head_ - delay_whole_ : delay_head_ + size - delay_whole_;
+  const auto& newer = delay_line_[at];
+  const auto& older = delay_line_[at == 0 ? size - 1 : at - 1];
+  delay_head_ = delay_head_ + 1 == size ? 0 : delay_head_ + 1;
   std::array<double, 3> delayed{};
   for (std::size_t i = 0; i < 3; ++i) delayed[i] = (1.0 - delay_frac_) * newer[i] + delay_frac_ * older[i];
   return delayed;

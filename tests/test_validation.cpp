@@ -3,6 +3,8 @@
 #include <random>
 
 #include "plsa/eval/dio_prediction.hpp"
+#include "plsa/eval/model_regressors.hpp"
+#include "plsa/eval/validation.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -145,6 +147,13 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   }
   EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{-1.0}), std::invalid_argument);
   EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{std::nan("")}), std::invalid_argument);
+  // So does a simulation without an output level, which starts from the measured sample.
+  DioPwlObfModel bare = logged;
+  bare.output_level.clear();
+  const Eigen::MatrixXd u = turned.columnsOf(bare.inputs), y = turned.columnsOf(bare.outputs);
+  const Eigen::MatrixXd dy = eval::modelIncrements(bare, u);
+  EXPECT_EQ(eval::simulateModel(bare, u, y, dy, none).size(), 2u);
+  EXPECT_THROW(eval::simulateModel(bare, u, y, dy, eval::SimulationStart{-1.0}), std::invalid_argument);
 }
 
 // A model fitted with the sensor's yaw drift taken out simulates a new run

@@ -115,6 +115,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   PLSA_CHECK(y.cols() == model.outputCount() && dy.cols() == model.outputCount() && y.rows() == u.rows() &&
                  dy.rows() == u.rows(),
              "simulateModel: the record does not match the model's outputs");
+  const Eigen::Index n = yawRegistrationSamples(model, start);  // refuses a window that is not a duration
   std::vector<AlignedPrediction> out;
   if (model.output_level.empty()) {
     for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
@@ -123,7 +124,7 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
   PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
   Eigen::MatrixXd level = modelTip(model, u, dy);
   SensorYawTrack track;
-  if (checkedRegistration(model, start, u.rows()) > 0) track = trackSensorYaw(model, level, y, start);
+  if (n > 0 && checkedRegistration(model, start, u.rows()) > 0) track = trackSensorYaw(model, level, y, start);
   return simulatedTip(model, std::move(level), track, start);
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <memory>
 
 #include <nlohmann/json.hpp>
@@ -40,7 +41,7 @@ struct CrossvalArgs {
 // they are) and the names printed ("labels" in the JSON), in the order fitted.
 const char* const kKeys[] = {"plsa", "paper", "global_linear", "arx"};
 const char* const kLabels[] = {"DIO-PWL-OBF", "paper's config", "global linear", "ARX"};
-constexpr std::size_t kModelCount = 4;
+constexpr std::size_t kModelCount = std::size(kKeys);
 
 using FitSums = std::vector<std::vector<std::map<int, double>>>;  // [model][output][horizon, 0: sim]
 
@@ -75,10 +76,10 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
   return logs;
 }
 
-/// One fold: every model fitted on every log but `hold`, scored on it: plsa's,
-/// the paper's configuration (identified alike), the global linear OBF (plsa's
-/// bases, one region) and ARX, the baselines fitted to the outputs less any
-/// drift identification took out.
+/// One fold: every model fitted on every log but `hold`, scored on it: plsa's;
+/// the paper's configuration (identified with its own options: no drift taken
+/// out, the outputs as logged); the global linear OBF (plsa's bases, one
+/// region) and ARX, fitted to the outputs less any drift plsa's took out.
 struct FoldResult {
   IdentifyReport report;
   std::vector<eval::ModelPredictions> predictions;
@@ -88,23 +89,15 @@ struct FoldResult {
 FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std::vector<io::Log>& logs,
                      std::size_t hold) {
   std::vector<io::Log> train;
-  std::vector<Eigen::MatrixXd> U, Y;
-  std::vector<Eigen::VectorXd> T;
   for (std::size_t r = 0; r < logs.size(); ++r)
-    if (r != hold) {
-      train.push_back(logs[r]);
-      U.push_back(logs[r].columnsOf(a.inputs));
-      Y.push_back(logs[r].columnsOf(a.outputs));
-      T.push_back(logs[r].column(io::standard_columns::kTime));
-    }
+    if (r != hold) train.push_back(logs[r]);
   FoldResult f;
   const DioPwlObfModel model = identifyModel(train, o, &f.report);
   const DioPwlObfModel paper = identifyModel(train, paperConfiguration(o));
+  // The global linear OBF and ARX are fitted to the same outputs as the model: less any drift it took out.
   const BaselineData training = baselineData(model, f.report, train);
   const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
-  // ARX is fitted to the same outputs as the model: less any drift it took out.
-  if (f.report.drift_taken_out) Y = removeOutputDrift(Y, T, f.report.output_drift);
-  const eval::ArxModel arx = eval::ArxModel::fit(U, Y, a.arx_na, a.arx_nb);
+  const eval::ArxModel arx = eval::ArxModel::fit(training.U, training.Y, a.arx_na, a.arx_nb);
   const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
   f.predictions = {
       eval::predictDio(kLabels[0], model, uv, yv, a.horizons), eval::predictDio(kLabels[1], paper, uv, yv, a.horizons),

@@ -103,8 +103,7 @@ double Actuator::effectivePressure(double p) const {
 // between two taps.
 std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd) {
   if (delay_whole_ == 0 && delay_frac_ == 0.0) return cmd;  // no delay: the blend below is cmd exactly
-  // The ring's indices wrapped by comparison (a % by the run-time size was an
-  // integer division per index, every substep).
+  // The ring's indices wrap by comparison: no integer division in a substep.
   const std::size_t size = delay_line_.size();  // delay_whole_ + 2
   delay_line_[delay_head_] = cmd;
   const std::size_t at = delay_head_ >= delay_whole_ ? delay_head_ - delay_whole_ : delay_head_ + size - delay_whole_;

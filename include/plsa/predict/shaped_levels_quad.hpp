@@ -10,11 +10,11 @@
 
 namespace plsa {
 
-/// One step's shaped levels, lane j input j; lanes past the inputs hold
-/// input 0, and so add nothing to the positive sum (thresholds are >= 0).
+/// One step's shaped levels, lane j input j; lanes past the inputs hold 0,
+/// and so add nothing to the positive sum (thresholds are >= 0).
 struct ShapedLevelsQuad {
   simd::Quad own;             ///< max(0, the input counted from the threshold)
-  simd::Quad softened;        ///< the level before the coupling: own - s own^2 above 0
+  simd::Quad softened;        ///< the level before the coupling: x - s x^2, x = min(own, 1 / 2s), where own > 0
   simd::Quad softness;        ///< d softened / d own
   simd::Quad level;           ///< InputShaping::level
   double positive_sum = 0.0;  ///< InputShaping::positiveSum

@@ -409,3 +409,34 @@ TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
     EXPECT_NEAR(d.y(), 0.1 * rb[k].time_s, 1e-9);
   }
 }
+
+// stepReading is step() read as a bending vector: with an exact sensor it
+// skips the rotation round trip (the same to rounding), otherwise it is
+// step()'s measurement itself (the same random draws, the same numbers).
+TEST(SimKinematics, StepReadingIsTheMeasuredBendingVector) {
+  for (const bool exact : {true, false}) {
+    SimConfig c;
+    if (exact) {
+      c.sensor.noise_deg = 0.0;
+      c.sensor_bias.enabled = false;
+    }
+    Actuator by_step(c, 7), by_reading(c, 7);
+    double largest = 0.0;
+    for (int k = 0; k < 400; ++k) {  // each chamber alone, then pairs: every direction
+      const double t = 0.05 * k;
+      const std::array<double, 3> cmd{0.3 * std::max(0.0, std::sin(t)), 0.3 * std::max(0.0, std::sin(t - 2.1)),
+                                      0.3 * std::max(0.0, std::sin(t - 4.2))};
+      const ActuatorSample s = by_step.step(cmd);
+      const BendingReading r = by_reading.stepReading(cmd);
+      const double steer = s.steer_deg * M_PI / 180;
+      const Eigen::Vector2d measured = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
+      largest = std::max(largest, s.bend_deg);
+      for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(r.pressure_bar[j], s.pressure_bar[j]);
+      if (exact)
+        EXPECT_NEAR((r.bending_deg - measured).norm(), 0.0, 1e-9) << "sample " << k;
+      else
+        EXPECT_EQ(r.bending_deg, measured) << "sample " << k;
+    }
+    EXPECT_GT(largest, 10.0);  // the readings bend well away from straight
+  }
+}

@@ -20,15 +20,13 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   for (int k = 0; k < preroll; ++k) a.step(first);
   SimTrace t;
   const Eigen::Index n = commands.rows();
-  Eigen::VectorXd bend(n), steer(n);
+  t.outputs.resize(n, 2);
   t.pressures.resize(n, 3);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const sim::ActuatorSample s = a.step({commands(i, 0), commands(i, 1), commands(i, 2)});
-    bend(i) = s.bend_deg;
-    steer(i) = s.steer_deg;
-    for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = s.pressure_bar[static_cast<std::size_t>(j)];
+    const sim::BendingReading r = a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)});
+    t.outputs.row(i) = r.bending_deg.transpose();
+    for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = r.pressure_bar[static_cast<std::size_t>(j)];
   }
-  t.outputs = bendingVector(bend, steer);
   return t;
 }
 

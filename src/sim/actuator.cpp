@@ -89,14 +89,10 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   }
 }
 
-double Actuator::effectivePressure(double p) const {
+double Actuator::smoothEffectivePressure(double p) const {
   const auto& dz = config_.deadzone;
-  if (!dz.enabled) return p;
-  if (smooth_deadzone_) {
-    const double w = dz.smooth_width_bar;
-    return w * (softplus((p - dz.threshold_bar) / w) - softplus(-dz.threshold_bar / w));
-  }
-  return std::max(0.0, p - dz.threshold_bar);
+  const double w = dz.smooth_width_bar;
+  return w * (softplus((p - dz.threshold_bar) / w) - softplus(-dz.threshold_bar / w));
 }
 
 // Transport delay: a ring of past commands, one per internal step, read
@@ -119,23 +115,24 @@ std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd)
 // returns the pressures past the deadzone.
 std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delayed) {
   const SimConfig& c = config_;
+  const bool lag = c.pneumatic_lag.enabled;
+  const double max_rate = c.pneumatics.max_rate_bar_per_s, per_bar = c.pneumatic_lag.pressure_per_bar;
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {
-    double tau = c.pneumatics.time_constant_s;
-    if (c.pneumatic_lag.enabled)
-      tau = delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s;
+    double tau =
+        lag ? (delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
+            : c.pneumatics.time_constant_s;
     double drive = delayed[i] - pressure_[i];
-    if (c.pneumatic_lag.enabled) {
+    if (lag) {
       // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
       if (flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
       if (flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
       if (flow_law_ == FlowLaw::kPower) {
         drive = std::copysign(0.1 * std::pow(std::abs(drive) / 0.1, c.pneumatic_lag.exponent), drive);
-        const double per_bar = c.pneumatic_lag.pressure_per_bar;
         if (per_bar != 0.0) tau *= std::exp(per_bar * pressure_[i]);
       }
     }
-    const double rate = std::clamp(drive / tau, -c.pneumatics.max_rate_bar_per_s, c.pneumatics.max_rate_bar_per_s);
+    const double rate = std::clamp(drive / tau, -max_rate, max_rate);
     pressure_[i] += rate * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
   }
@@ -268,7 +265,7 @@ void Actuator::addBendingOffset(ActuatorSample& s) const {
   s.steer_deg = std::atan2(y, x) / kDeg;
 }
 
-ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) {
+std::array<double, 3> Actuator::advance(const std::array<double, 3>& command_bar) {
   std::array<double, 3> cmd{};
   for (std::size_t i = 0; i < 3; ++i) {
     if (!std::isfinite(command_bar[i]))
@@ -279,7 +276,24 @@ ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) {
   for (int k = 0; k < substeps_; ++k) substep(cmd);
   ++sample_count_;
   time_s_ = static_cast<double>(sample_count_) / config_.sample_rate_hz;
-  return measure(cmd);
+  return cmd;
+}
+
+ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) { return measure(advance(command_bar)); }
+
+BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar) {
+  const std::array<double, 3> cmd = advance(command_bar);
+  BendingReading r;
+  if (config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled && bend_.norm() < 0.5 * kPi) {
+    r.bending_deg = bend_ / kDeg;
+    r.pressure_bar = pressure_;
+    return r;
+  }
+  const ActuatorSample s = measure(cmd);
+  const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
+  r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
+  r.pressure_bar = s.pressure_bar;
+  return r;
 }
 
 }  // namespace plsa::sim

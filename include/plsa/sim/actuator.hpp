@@ -4,6 +4,7 @@
 // with the paper's eqs. (5)-(6). Effects are switched by SimConfig.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <random>
@@ -25,6 +26,13 @@ struct ActuatorSample {
   double true_bend_deg = 0.0;            ///< noise- and bias-free, for tests
   double true_steer_deg = 0.0;
   Eigen::Matrix3d sensor_rotation = Eigen::Matrix3d::Identity();  ///< B_A_G
+};
+
+/// What a calibration compares of one measurement: the sensor's bending
+/// vector (bend cos steer, bend sin steer, deg) and the chamber pressures.
+struct BendingReading {
+  Eigen::Vector2d bending_deg = Eigen::Vector2d::Zero();
+  std::array<double, 3> pressure_bar{};
 };
 
 /// Deflection and steering (deg) from a sensor rotation B_A_G, paper eqs. (5), (6).
@@ -49,6 +57,12 @@ class Actuator {
   /// Holds `command_bar` for one sample period and returns the measurement.
   /// Commands are clamped to [0, max_pressure_bar]; a non-finite command throws.
   ActuatorSample step(const std::array<double, 3>& command_bar);
+  /// step() read as a bending vector. With an exact sensor (no noise, no
+  /// sensor_bias) and a bend under 90 deg that is the bending state itself,
+  /// without step()'s rotation round trip (eqs. (5)-(6) give back the bend
+  /// and steering the state holds, to rounding); otherwise step()'s
+  /// measurement, converted (the same random draws).
+  BendingReading stepReading(const std::array<double, 3>& command_bar);
   /// Vent: command zero in every chamber.
   ActuatorSample vent() { return step({0.0, 0.0, 0.0}); }
 
@@ -57,6 +71,8 @@ class Actuator {
   int substepsPerSample() const { return substeps_; }
 
  private:
+  /// step() up to its measurement: the clamped command, held for a sample period.
+  std::array<double, 3> advance(const std::array<double, 3>& command_bar);
   void substep(const std::array<double, 3>& cmd);
   // substep's stages, in order.
   std::array<double, 3> delayedCommand(const std::array<double, 3>& cmd);
@@ -64,7 +80,12 @@ class Actuator {
   double hysteresisStrain(std::size_t chamber, double strain);
   double creepStrain(std::size_t chamber, double strain);
   void bendToward(Eigen::Vector2d target, double sum_p);
-  double effectivePressure(double p) const;
+  /// A chamber's pressure past the deadzone (the smooth law out of line).
+  double effectivePressure(double p) const {
+    if (!config_.deadzone.enabled) return p;
+    return smooth_deadzone_ ? smoothEffectivePressure(p) : std::max(0.0, p - config_.deadzone.threshold_bar);
+  }
+  double smoothEffectivePressure(double p) const;
   ActuatorSample measure(const std::array<double, 3>& cmd);
   void addBendingOffset(ActuatorSample& s) const;  ///< sensor_bias offsets and drifts of the reported angles
 

@@ -260,7 +260,12 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
       runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 41), recorded(truth, 30, 42)}, o);
   ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
   ASSERT_FALSE(d.ranking.empty());
-  EXPECT_GT(d.ranking[0].shrink_percent, 50.0) << d.verdict;
+  // The verdict's figures: the kept model, polished, against the calibrated
+  // nominal physics. The round-1 calibration's own shrink, before the
+  // polish, moves with the simulator's rounding (27% or over 50% here;
+  // docs/diagnosis.md, "How firm a case's figures are").
+  EXPECT_LT(d.gap_after.percent(), 0.5 * d.gap_before.percent()) << d.verdict;
+  EXPECT_GT(d.ranking[0].shrink_percent, 0.0) << d.verdict;
   double weights = 0.0;
   for (const auto& [name, value] : d.ranking[0].params)
     if (name.rfind("hysteresis.weight_", 0) == 0) weights += value;

@@ -189,6 +189,38 @@ TEST(SimKinematics, SensorEquationsRecoverBendAndSteer) {
     }
 }
 
+// stepReading is step() read as a bending vector: with an exact sensor it
+// skips the rotation round trip (the same to rounding), otherwise it is
+// step()'s measurement itself (the same random draws, the same numbers):
+// noise alone, a steady sensor bias alone, a random-walk one alone.
+TEST(SimKinematics, StepReadingIsTheMeasuredBendingVector) {
+  enum class Sensor { kExact, kNoise, kBias, kWalkingBias };
+  for (const Sensor sensor : {Sensor::kExact, Sensor::kNoise, Sensor::kBias, Sensor::kWalkingBias}) {
+    SimConfig c;
+    c.sensor.noise_deg = sensor == Sensor::kNoise ? 0.05 : 0.0;
+    c.sensor_bias.enabled = sensor == Sensor::kBias || sensor == Sensor::kWalkingBias;
+    if (sensor == Sensor::kWalkingBias) c.sensor_bias.formulation = "random_walk";
+    Actuator by_step(c, 7), by_reading(c, 7);
+    double largest = 0.0;
+    for (int k = 0; k < 400; ++k) {  // each chamber alone, then pairs: every direction
+      const double t = 0.05 * k;
+      const std::array<double, 3> cmd{0.3 * std::max(0.0, std::sin(t)), 0.3 * std::max(0.0, std::sin(t - 2.1)),
+                                      0.3 * std::max(0.0, std::sin(t - 4.2))};
+      const ActuatorSample s = by_step.step(cmd);
+      const BendingReading r = by_reading.stepReading(cmd);
+      const double steer = s.steer_deg * M_PI / 180;
+      const Eigen::Vector2d measured = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
+      largest = std::max(largest, s.bend_deg);
+      for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(r.pressure_bar[j], s.pressure_bar[j]);
+      if (sensor == Sensor::kExact)
+        EXPECT_NEAR((r.bending_deg - measured).norm(), 0.0, 1e-6) << "sample " << k;
+      else
+        EXPECT_EQ(r.bending_deg, measured) << "sensor " << static_cast<int>(sensor) << ", sample " << k;
+    }
+    EXPECT_GT(largest, 10.0);  // the readings bend well away from straight
+  }
+}
+
 TEST(SimKinematics, TipPositionIsWebsterJonesArc) {
   const double l = 0.09;
   const Eigen::Vector3d straight = tipPosition(l, 0.0, 0.3);
@@ -407,36 +439,5 @@ TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
     const Eigen::Vector2d d = vec(rb[k]) - vec(ra[k]);
     EXPECT_NEAR(d.x(), 1.0, 1e-9);
     EXPECT_NEAR(d.y(), 0.1 * rb[k].time_s, 1e-9);
-  }
-}
-
-// stepReading is step() read as a bending vector: with an exact sensor it
-// skips the rotation round trip (the same to rounding), otherwise it is
-// step()'s measurement itself (the same random draws, the same numbers).
-TEST(SimKinematics, StepReadingIsTheMeasuredBendingVector) {
-  for (const bool exact : {true, false}) {
-    SimConfig c;
-    if (exact) {
-      c.sensor.noise_deg = 0.0;
-      c.sensor_bias.enabled = false;
-    }
-    Actuator by_step(c, 7), by_reading(c, 7);
-    double largest = 0.0;
-    for (int k = 0; k < 400; ++k) {  // each chamber alone, then pairs: every direction
-      const double t = 0.05 * k;
-      const std::array<double, 3> cmd{0.3 * std::max(0.0, std::sin(t)), 0.3 * std::max(0.0, std::sin(t - 2.1)),
-                                      0.3 * std::max(0.0, std::sin(t - 4.2))};
-      const ActuatorSample s = by_step.step(cmd);
-      const BendingReading r = by_reading.stepReading(cmd);
-      const double steer = s.steer_deg * M_PI / 180;
-      const Eigen::Vector2d measured = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
-      largest = std::max(largest, s.bend_deg);
-      for (std::size_t j = 0; j < 3; ++j) EXPECT_EQ(r.pressure_bar[j], s.pressure_bar[j]);
-      if (exact)
-        EXPECT_NEAR((r.bending_deg - measured).norm(), 0.0, 1e-9) << "sample " << k;
-      else
-        EXPECT_EQ(r.bending_deg, measured) << "sample " << k;
-    }
-    EXPECT_GT(largest, 10.0);  // the readings bend well away from straight
   }
 }

@@ -17,7 +17,7 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   sim::Actuator a(config, seed);
   const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};
   const auto preroll = static_cast<int>(std::lround(preroll_s * config.sample_rate_hz));
-  for (int k = 0; k < preroll; ++k) a.step(first);
+  for (int k = 0; k < preroll; ++k) a.stepReading(first);
   SimTrace t;
   const Eigen::Index n = commands.rows();
   t.outputs.resize(n, 2);

@@ -13,8 +13,9 @@
 
 namespace plsa::diagnose {
 
-/// What the simulator says for a run: noise-free outputs in the run's output
-/// space (bending vector, deg) and chamber pressures.
+/// What the simulator says for a run: its outputs in the run's output space
+/// (bending vector, deg; with the sensor noise its configuration has) and
+/// chamber pressures.
 struct SimTrace {
   Eigen::MatrixXd outputs;    ///< samples x 2
   Eigen::MatrixXd pressures;  ///< samples x 3

@@ -107,8 +107,8 @@ class Actuator {
   FlowLaw flow_law_ = FlowLaw::kLinear;
   StiffeningLaw stiffening_law_ = StiffeningLaw::kLinear;
   bool saturating_coupling_ = false, two_rate_creep_ = false, random_walk_bias_ = false, smooth_deadzone_ = false;
-  /// Each chamber's bending direction (cos, sin), computed once: the step
-  /// ran three sincos per internal step, a quarter of a diagnosis's time.
+  /// Each chamber's bending direction (cos, sin), computed once (not three
+  /// sincos per internal step).
   std::array<std::array<double, 2>, 3> bend_direction_{};
   bool weighted_pi_ = false;
   double full_strain_ = 0.0;  ///< |strain| at max_pressure_bar (weighted_pi's fixed bands)

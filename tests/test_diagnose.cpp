@@ -243,8 +243,8 @@ TEST(Diagnose, NullCaseClaimsNothing) {
 
 // Hysteresis whose loop is steeper on unloading, with a remanent strain
 // (a stop-type operator, as elastoplastic and Bouc-Wen laws): outside the
-// play-only family the candidate had, and reached from a start of that
-// orientation, not from the neutral one. (The spread start the screening
+// family of plays alone, and reached from a start of that orientation, not
+// from the neutral one (a play). (The spread start the screening
 // stage picks and the one with the lowest raw gap both reach it here: this
 // does not test the screening.)
 TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
@@ -257,15 +257,15 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
   h.fixed_band_share = 0.6;
   DiagnoseOptions o = quick();
   o.candidates = {"hysteresis"};
-
   const Diagnosis d =
       runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 41), recorded(truth, 30, 42)}, o);
   ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
   ASSERT_FALSE(d.ranking.empty());
   const CandidateResult& found = d.ranking[0];
   ASSERT_EQ(found.train_gap_per_start.size(), 2u);  // the neutral start, then a spread one
-  EXPECT_LT(found.train_gap_per_start[1], found.train_gap_per_start[0]) << "the spread start calibrates lower";
-  // The kept model, polished, against re-calibrating with nothing added. (The
+  EXPECT_LT(found.train_gap_per_start[1], 0.9 * found.train_gap_per_start[0]) << "another basin than the neutral one";
+  // The kept model (after the polish, when that lowered its training gap)
+  // against re-calibrating with nothing added. (The
   // round-1 calibration's own held-out shrink moves with the simulator's
   // rounding: 27% here, over 50% with other last digits; docs/diagnosis.md,
   // "How firm a case's figures are".)
@@ -277,7 +277,7 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
     return weights;
   };
   EXPECT_LT(weightSum(found.params), -0.1) << "the loop's orientation: a stop, not a play";
-  EXPECT_LT(weightSum(d.final_params), -0.1) << "and still after the polish";
+  EXPECT_LT(weightSum(d.final_params), -0.1) << "and still in the kept model";
 }
 
 TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {

@@ -198,6 +198,37 @@ TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
             validateModel(logged, runs.val, {40}, plain).outputs[1].fit_sim);
 }
 
+// Steering is an angle: a log that writes the same direction a whole turn
+// higher from some sample on (a sensor wrapping its angle as the tip passes
+// +-180 deg) must leave the simulation's error the same. The simulated steering is written on the
+// branch of the measured angle at each sample; following its own previous
+// value it stayed a turn away from the whole second half.
+TEST(Validation, TipFrameSimulationComparesSteeringAsAnAngle) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  io::Log wrapped = runs.val;
+  const Eigen::Index T = wrapped.samples(), half = T / 2;
+  const int steer = wrapped.columnIndex("steer_deg");
+  wrapped.data.col(steer).tail(T - half).array() += 360.0;
+  for (const eval::SimulationStart& start : {eval::SimulationStart{0}, eval::SimulationStart{}}) {
+    const eval::ValidationResult base = validateModel(tip, runs.val, {40}, start),
+                                 turn = validateModel(tip, wrapped, {40}, start);
+    const Eigen::VectorXd shift = turn.outputs[1].simulated - base.outputs[1].simulated;
+    const Eigen::Index first = T - base.outputs[1].simulated.tail(T).array().isFinite().count();
+    ASSERT_LT(first, half);
+    EXPECT_LT(shift.segment(first, half - first).cwiseAbs().maxCoeff(), 1e-9) << start.yaw_registration_s;
+    EXPECT_LT((shift.tail(T - half).array() - 360.0).abs().maxCoeff(), 1e-9) << start.yaw_registration_s;
+    // So the simulation's error is the same at every sample (its fit is not:
+    // the measured spread grows by the turn).
+    const Eigen::VectorXd error_base = (base.outputs[1].measured - base.outputs[1].simulated).tail(T - first),
+                          error_turn = (turn.outputs[1].measured - turn.outputs[1].simulated).tail(T - first);
+    EXPECT_LT((error_turn - error_base).cwiseAbs().maxCoeff(), 1e-9) << start.yaw_registration_s;
+    EXPECT_EQ(turn.outputs[0].fit_sim, base.outputs[0].fit_sim);
+    // The k-step predictions take their anchor's branch, as the Predictor's do.
+    EXPECT_EQ(turn.outputs[0].fit_k.at(40), base.outputs[0].fit_k.at(40));
+  }
+}
+
 // Validation counts the samples beyond the grid's outer nodes per input,
 // not only those beyond the training range: a run recorded from rest spans
 // 0 while its grid starts higher.

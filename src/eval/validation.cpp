@@ -206,10 +206,15 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
         simulated ? simulatedTip(model, std::move(tip_level), track, start) : simulateModel(model, u, ym, dy, start);
     for (int o = 0; o < model.outputCount(); ++o)
       out[static_cast<std::size_t>(o)][0] = sims[static_cast<std::size_t>(o)];
+    // The simulated direction written on the branch (+-360 deg) of the
+    // measured angle at the same sample: only how the same direction is
+    // written, so the steering is compared as an angle. (Following its own
+    // previous value, a simulation that passes near straight, where the
+    // direction can turn half a turn in a sample, or a log whose angle wraps
+    // at +-180 deg would keep a whole turn's error on every later sample.)
     if (model.output_frame == OutputFrame::kTipCartesian)
-      std::tie(out[0][0], out[1][0]) = toTipAngles(out[0][0], out[1][0], [&](Eigen::Index t, double previous) {
-        return t == sims[0].first ? y(t - 1, 1) : previous;
-      });
+      std::tie(out[0][0], out[1][0]) =
+          toTipAngles(out[0][0], out[1][0], [&](Eigen::Index t, double) { return y(t, 1); });
   }
   return out;
 }

@@ -185,15 +185,11 @@ void measureSensitivity(const std::string& tag, FedPredictor& f, long predicts) 
   report(tag + ": sensitivity 80, moving rows only", stats(moving_ns));
   // For scale: the memory's own cost of writing every entry of that Jacobian
   // once (for the demo 160 x 237 doubles, 303 KB: more than L1 holds), timed alike.
-  std::vector<double> zero_ns;
-  for (long i = 0; i < predicts / 4; ++i) {
-    const auto t0 = Clock::now();
-    jacobian.setZero();
-    benchmark::DoNotOptimize(jacobian.data());
-    benchmark::ClobberMemory();
-    zero_ns.push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count());
-  }
-  report(tag + ": writing that jacobian's entries once (setZero)", stats(zero_ns));
+  report(tag + ": writing that jacobian's entries once (setZero)", timeCalls(predicts / 4, [&](long) {
+           jacobian.setZero();
+           benchmark::DoNotOptimize(jacobian.data());
+           benchmark::ClobberMemory();
+         }));
 }
 
 // A robot at rest for 125 s: the held input's schedule settles, its modes decay.

@@ -224,6 +224,12 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
   const DioPwlObfModel with = identifyModel({train}, o, &rep);
   ASSERT_EQ(rep.slow_pole_scores.size(), 4u);
   EXPECT_EQ(rep.slow_pole_scores[0].first, 0.0);
+  // Kept by the one-standard-error rule: the best gain over none, its error over folds and outputs.
+  double best = -INFINITY;
+  for (std::size_t k = 1; k < rep.slow_pole_scores.size(); ++k) best = std::max(best, rep.slow_pole_scores[k].second);
+  EXPECT_NEAR(rep.slow_pole_gain.first, best - rep.slow_pole_scores[0].second, 1e-9);
+  EXPECT_GT(rep.slow_pole_gain.second, 0.0);
+  EXPECT_GT(rep.slow_pole_gain.first, rep.slow_pole_gain.second);
   EXPECT_EQ(with.poles[0][0].size(), without.poles[0][0].size() + 1);
   // The creep's own time constant wins (held-out simulation 85.0 none, 89.9
   // at 2 s, 90.2 at 8 s, 75.0 at 30 s when written).

@@ -143,6 +143,7 @@ struct IdentificationRun {
   int fold_groups = 0;                     ///< the folds, and one more when some rows are warm-up
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
+  std::vector<double> fold_scores;  ///< the last held-out score's terms, per fold (or block) and output
   Scoring scoring;
 
   // The best choice so far.

@@ -156,6 +156,7 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
   FoldFits folds = interleavedFoldFits();
   double score = 0.0;
   int n = 0;
+  fold_scores.clear();
   for (int f = 0; f < o.play_selection_folds; ++f) {
     const auto ff = static_cast<std::size_t>(f);
     DioPwlObfModel& fit = folds.fit[ff];
@@ -179,9 +180,11 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
     for (int out_i = 0; out_i < no; ++out_i) {
       const auto& m = meas[static_cast<std::size_t>(out_i)];
       if (m.size() < 2) continue;
-      score += eval::nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
-                              Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
-                                                                static_cast<Eigen::Index>(m.size())));
+      fold_scores.push_back(
+          eval::nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
+                         Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
+                                                           static_cast<Eigen::Index>(m.size()))));
+      score += fold_scores.back();
       ++n;
     }
   }
@@ -192,6 +195,7 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
 double IdentificationRun::crossValidatedContiguous(Score what) {
   double score = 0.0;
   int n = 0;
+  fold_scores.clear();
   for (int f = 0; f < o.play_selection_folds; ++f) {
     std::vector<Eigen::MatrixXd> TU, TY;
     std::vector<Eigen::VectorXd> TT;
@@ -210,9 +214,11 @@ double IdentificationRun::crossValidatedContiguous(Score what) {
       const std::vector<std::map<int, eval::AlignedPrediction>> pred = eval::predictOutputs(
           model, BU[b], BY[b], sim ? std::vector<int>{} : std::vector<int>{o.play_selection_horizon}, sim,
           kSameSession);
-      for (int out_i = 0; out_i < no; ++out_i, ++n)
-        score +=
-            eval::fitOf(BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon));
+      for (int out_i = 0; out_i < no; ++out_i, ++n) {
+        fold_scores.push_back(eval::fitOf(
+            BY[b].col(out_i), pred[static_cast<std::size_t>(out_i)].at(sim ? 0 : o.play_selection_horizon)));
+        score += fold_scores.back();
+      }
     }
   }
   return score / std::max(1, n);
@@ -358,7 +364,20 @@ void IdentificationRun::searchOutputDrift() {
   }
 }
 
+// The mean of the paired differences a - b and its standard error.
+static std::pair<double, double> pairedGain(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n = std::min(a.size(), b.size());
+  if (n < 2) return {INFINITY, 0.0};
+  double mean = 0.0, sq = 0.0;
+  for (std::size_t k = 0; k < n; ++k) mean += (a[k] - b[k]) / static_cast<double>(n);
+  for (std::size_t k = 0; k < n; ++k) sq += (a[k] - b[k] - mean) * (a[k] - b[k] - mean);
+  return {mean, std::sqrt(sq / static_cast<double>(n - 1) / static_cast<double>(n))};
+}
+
 // A slow pole in every bank, on an input-side model, scored on simulation.
+// The best time constant is kept only if its held-out gain over none exceeds
+// one standard error of that gain across folds and outputs (the one-standard-
+// error rule: the simpler model unless the richer one is clearly better).
 void IdentificationRun::searchSlowPole() {
   if (model.schedule_side != ScheduleSide::kInput || o.slow_pole_candidates.empty()) return;
   const std::vector<std::vector<PoleSet>> base_poles = model.poles;
@@ -372,12 +391,13 @@ void IdentificationRun::searchSlowPole() {
         ps = PoleSet(p);
       }
   };
-  double best_tau = 0.0;
   beginScoring("slow poles",
                1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(), o.slow_pole_candidates.end(),
                                                           [](double tau) { return tau != 0; })));
-  double best_sim = crossValidated(Score::kSimulation);
-  rep.slow_pole_scores.emplace_back(0.0, best_sim);
+  rep.slow_pole_scores.emplace_back(0.0, crossValidated(Score::kSimulation));
+  const std::vector<double> none_scores = fold_scores;
+  double best_tau = 0.0, best_sim = -INFINITY;
+  std::vector<double> best_scores;
   for (double tau : o.slow_pole_candidates) {
     PLSA_CHECK(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
     if (tau == 0) continue;  // none, scored already
@@ -387,12 +407,19 @@ void IdentificationRun::searchSlowPole() {
     if (score > best_sim + 1e-9) {
       best_sim = score;
       best_tau = tau;
+      best_scores = fold_scores;
     }
   }
-  withSlowPole(best_tau);
+  const auto [gain, se] = best_tau > 0 ? pairedGain(best_scores, none_scores) : std::pair<double, double>{0.0, 0.0};
+  rep.slow_pole_gain = {gain, se};
+  const bool keep = best_tau > 0 && gain > se;
+  withSlowPole(keep ? best_tau : 0.0);
   std::string s = "[5/5] slow pole in every bank (scored on held-out simulation): ";
-  s += best_tau > 0 ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
-                    : std::string("none kept");
+  s += keep ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
+            : std::string("none kept");
+  if (best_tau > 0)
+    s += "; the best, " + formatNumber(best_tau) + " s, gains " + formatNumber(gain) + " +- " + formatNumber(se) +
+         (keep ? "" : ", within one standard error");
   s += ". Scores:";
   for (const auto& [tau, sc] : rep.slow_pole_scores)
     s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);

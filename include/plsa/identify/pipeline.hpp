@@ -271,7 +271,10 @@ struct IdentifyReport {
   std::pair<double, double> refine_simulation{0.0, 0.0};
   std::vector<std::pair<double, double>> schedule_lag_scores;  ///< (lag s, held-out k-step fit), 0 first
   std::vector<std::pair<double, double>>
-      slow_pole_scores;                              ///< (time constant s, held-out simulation fit), 0 (none) first
+      slow_pole_scores;  ///< (time constant s, held-out simulation fit), 0 (none) first
+  /// The best slow pole's held-out simulation gain over none, mean and standard
+  /// error over folds and outputs; it is kept only if the mean exceeds the error.
+  std::pair<double, double> slow_pole_gain{0.0, 0.0};
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
   /// pole_method "auto": FKcM's and fuzzy c-means' held-out fits on the
   /// first play set; empty otherwise.

@@ -230,6 +230,12 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
   EXPECT_NEAR(rep.slow_pole_gain.first, best - rep.slow_pole_scores[0].second, 1e-9);
   EXPECT_GT(rep.slow_pole_gain.second, 0.0);
   EXPECT_GT(rep.slow_pole_gain.first, rep.slow_pole_gain.second);
+  // The progress line gives the gain per output as well.
+  const auto line = std::find_if(rep.lines.begin(), rep.lines.end(), [](const std::string& l) {
+    return l.find("slow pole in every bank") != std::string::npos;
+  });
+  ASSERT_NE(line, rep.lines.end());
+  for (const std::string& out : with.outputs) EXPECT_NE(line->find(out + " "), std::string::npos) << *line;
   EXPECT_EQ(with.poles[0][0].size(), without.poles[0][0].size() + 1);
   // The creep's own time constant wins (held-out simulation 85.0 none, 89.9
   // at 2 s, 90.2 at 8 s, 75.0 at 30 s when written).

@@ -179,7 +179,10 @@ double IdentificationRun::crossValidatedInterleaved(Score what) {
     }
     for (int out_i = 0; out_i < no; ++out_i) {
       const auto& m = meas[static_cast<std::size_t>(out_i)];
-      if (m.size() < 2) continue;
+      if (m.size() < 2) {
+        fold_scores.push_back(NAN);  // kept in place: the terms pair up by fold and output
+        continue;
+      }
       fold_scores.push_back(
           eval::nrmseFit(Eigen::Map<const Eigen::VectorXd>(m.data(), static_cast<Eigen::Index>(m.size())),
                          Eigen::Map<const Eigen::VectorXd>(pred[static_cast<std::size_t>(out_i)].data(),
@@ -364,14 +367,19 @@ void IdentificationRun::searchOutputDrift() {
   }
 }
 
-// The mean of the paired differences a - b and its standard error.
+// The mean of the paired differences a - b (terms scored in both) and its
+// standard error; with fewer than two pairs, no gain and an infinite error.
 static std::pair<double, double> pairedGain(const std::vector<double>& a, const std::vector<double>& b) {
-  const std::size_t n = std::min(a.size(), b.size());
-  if (n < 2) return {INFINITY, 0.0};
+  PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
+  std::vector<double> d;
+  for (std::size_t k = 0; k < a.size(); ++k)
+    if (std::isfinite(a[k] - b[k])) d.push_back(a[k] - b[k]);
+  if (d.size() < 2) return {0.0, INFINITY};
+  const auto n = static_cast<double>(d.size());
   double mean = 0.0, sq = 0.0;
-  for (std::size_t k = 0; k < n; ++k) mean += (a[k] - b[k]) / static_cast<double>(n);
-  for (std::size_t k = 0; k < n; ++k) sq += (a[k] - b[k] - mean) * (a[k] - b[k] - mean);
-  return {mean, std::sqrt(sq / static_cast<double>(n - 1) / static_cast<double>(n))};
+  for (double v : d) mean += v / n;
+  for (double v : d) sq += (v - mean) * (v - mean);
+  return {mean, std::sqrt(sq / (n - 1) / n)};
 }
 
 // A slow pole in every bank, on an input-side model, scored on simulation.
@@ -417,9 +425,21 @@ void IdentificationRun::searchSlowPole() {
   std::string s = "[5/5] slow pole in every bank (scored on held-out simulation): ";
   s += keep ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
             : std::string("none kept");
-  if (best_tau > 0)
+  if (best_tau > 0) {
     s += "; the best, " + formatNumber(best_tau) + " s, gains " + formatNumber(gain) + " +- " + formatNumber(se) +
-         (keep ? "" : ", within one standard error");
+         (keep ? "" : ", within one standard error") + " (";
+    for (int out_i = 0; out_i < no; ++out_i) {
+      std::vector<double> a, b;
+      for (std::size_t k = static_cast<std::size_t>(out_i); k < best_scores.size(); k += static_cast<std::size_t>(no)) {
+        a.push_back(best_scores[k]);
+        b.push_back(none_scores[k]);
+      }
+      const auto [g, e] = pairedGain(a, b);
+      s += (out_i ? ", " : "") + o.outputs[static_cast<std::size_t>(out_i)] + " " + formatNumber(g) + " +- " +
+           formatNumber(e);
+    }
+    s += ")";
+  }
   s += ". Scores:";
   for (const auto& [tau, sc] : rep.slow_pole_scores)
     s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);

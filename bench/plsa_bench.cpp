@@ -185,6 +185,8 @@ void measureSensitivity(const std::string& tag, FedPredictor& f, long predicts) 
   report(tag + ": sensitivity 80, moving rows only", stats(moving_ns));
   // For scale: the memory's own cost of writing every entry of that Jacobian
   // once (for the demo 160 x 237 doubles, 303 KB: more than L1 holds), timed alike.
+  g_figures[tag + ": jacobian rows"] = static_cast<double>(jacobian.rows());
+  g_figures[tag + ": jacobian columns"] = static_cast<double>(jacobian.cols());
   report(tag + ": writing that jacobian's entries once (setZero)", timeCalls(predicts / 4, [&](long) {
            jacobian.setZero();
            benchmark::DoNotOptimize(jacobian.data());

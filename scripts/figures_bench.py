@@ -208,6 +208,7 @@ def targets_table(lat, figures):
              "predict 400": "predict 400, input held, moving", "sensitivity": "sensitivity 80 (jacobian to the plan)",
              "after a hold 80": "predict 80, after a 125 s hold", "after a hold 400": "predict 400, after a 125 s hold"}
     zero_fill = "writing that jacobian's entries once (setZero)"
+    jac_rows, jac_cols = int(figures["demo: jacobian rows"]), int(figures["demo: jacobian columns"])
     ratios = {name: ratio(call) for name, call in calls.items()}
     tails = {name: machine_tail(lat, lat[f"demo: {call}"]) for name, call in calls.items()}
     held_after = p50(calls["after a hold 80"])
@@ -233,7 +234,8 @@ def targets_table(lat, figures):
         ("sensitivity 80 x 3 <= 10 us",
          f"{fmt(p50(calls['sensitivity']))} writing every entry; {fmt(p50('sensitivity 80, moving rows only'))} "
          "writing only the rows each plan step moves (JacobianFill::kMovingRows); for scale, writing the "
-         f"Jacobian's 160 x 237 entries (303 KB) once takes {fmt(p50(zero_fill))} (setZero), and the planned "
+         f"Jacobian's {jac_rows} x {jac_cols} entries ({jac_rows * jac_cols * 8 // 1000} KB) once takes "
+         f"{fmt(p50(zero_fill))} (setZero), and the planned "
          f"prediction it starts from {fmt(p50(calls['planned 80']))}",
          sensitivity_verdict(p50(calls["sensitivity"]), p50("sensitivity 80, moving rows only"))),
     ]

@@ -268,6 +268,10 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     EXPECT_EQ(taken.training_drift_per_s, rep.output_drift.rate) << toString(frame);  // recorded in the model
     if (!tip) continue;  // as logged the trend barely moves an angle model's fit (83.02 -> 83.04 held out)
     EXPECT_GT(rep.drift_scores.second, rep.drift_scores.first);
+    // Taken out by the one-standard-error rule: the paired gain is the
+    // difference of the two scores and exceeds its error.
+    EXPECT_NEAR(rep.drift_gain.first, rep.drift_scores.second - rep.drift_scores.first, 1e-9);
+    EXPECT_GT(rep.drift_gain.first, rep.drift_gain.second);
     o.output_drift = OutputDriftChoice::kOff;
     IdentifyReport rep_off;
     const DioPwlObfModel left = identifyModel({runs.train}, o, &rep_off);
@@ -309,6 +313,12 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
   identifyModel({still.train}, fixedInputSide(OutputFrame::kTipCartesian), &rep);
   ASSERT_EQ(rep.output_drift.rate.size(), 2u);
   EXPECT_NEAR(rep.output_drift.rate[1], 0.0, 0.1 * rate);  // -0.00001 when written
+  // Without a drift, taking one out gains less than its error (98.000 ->
+  // 98.002, a gain of 0.002 +- 0.004 when written): left in, where any gain
+  // would have taken it out.
+  EXPECT_GT(rep.drift_scores.second, rep.drift_scores.first - 0.05);
+  EXPECT_LE(rep.drift_gain.first, rep.drift_gain.second);
+  EXPECT_FALSE(rep.drift_taken_out);
 }
 
 TEST(Pipeline, DefaultOutputFrameIsChosenReportedAndOverridable) {

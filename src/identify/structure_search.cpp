@@ -327,46 +327,6 @@ void IdentificationRun::searchScheduleLag() {
   say(s);
 }
 
-void IdentificationRun::searchOutputDrift() {
-  // A sensor drift, on an input-side model: estimated on each fold's training
-  // blocks and taken out of them; kept if the held-out simulation, scored
-  // against the logged outputs, improves.
-  Yfit = Y;
-  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != OutputDriftChoice::kOff) {
-    beginScoring("sensor drift", 2);
-    const double without = crossValidated(Score::kSimulation);
-    drift_per_fold = true;
-    const double with = crossValidated(Score::kSimulation);
-    drift_per_fold = false;
-    rep.drift_scores = {without, with};
-    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
-    std::string s = "[5/5] sensor drift over the training run: ";
-    for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
-      if (frame != OutputFrame::kTipCartesian || oi == 1)
-        s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
-    rep.output_drift = drift;
-    if (o.output_drift == OutputDriftChoice::kOn || with > without + 1e-9) {
-      rep.drift_taken_out = true;
-      Yfit = removeOutputDrift(Y, times, drift);
-      // Later stages fit to the outputs less the drift found on all of them.
-      FYlog = Yfit;
-      for (std::size_t b = 0, r = 0; !interleaved && r < U.size(); ++r) {
-        const Eigen::Index len = U[r].rows() / o.play_selection_folds;
-        for (int f = 0; f < o.play_selection_folds; ++f, ++b) FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
-      }
-      s += "taken out";
-    } else {
-      s += "left in";
-    }
-    s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
-         std::to_string(with).substr(0, 5) + " with it taken out)";
-    say(s);
-  } else if (o.output_drift != OutputDriftChoice::kOff) {
-    say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
-        "inputs)");
-  }
-}
-
 // The mean of the paired differences a - b (terms scored in both) and its
 // standard error; with fewer than two pairs, no gain and an infinite error.
 static std::pair<double, double> pairedGain(const std::vector<double>& a, const std::vector<double>& b) {
@@ -380,6 +340,70 @@ static std::pair<double, double> pairedGain(const std::vector<double>& a, const 
   for (double v : d) mean += v / n;
   for (double v : d) sq += (v - mean) * (v - mean);
   return {mean, std::sqrt(sq / (n - 1) / n)};
+}
+
+// Each output's paired gain of a over b, "name gain +- se" joined by commas
+// (the terms alternate by output within each fold).
+static std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
+                                  const std::vector<std::string>& outputs) {
+  std::string s;
+  const std::size_t no = outputs.size();
+  for (std::size_t out_i = 0; out_i < no; ++out_i) {
+    std::vector<double> ao, bo;
+    for (std::size_t k = out_i; k < a.size() && k < b.size(); k += no) {
+      ao.push_back(a[k]);
+      bo.push_back(b[k]);
+    }
+    const auto [g, e] = pairedGain(ao, bo);
+    s += (out_i ? ", " : "") + outputs[out_i] + " " + formatNumber(g) + " +- " + formatNumber(e);
+  }
+  return s;
+}
+
+void IdentificationRun::searchOutputDrift() {
+  // A sensor drift, on an input-side model: estimated on each fold's training
+  // blocks and taken out of them; kept if the held-out simulation, scored
+  // against the logged outputs, gains more than one standard error (as the
+  // slow pole).
+  Yfit = Y;
+  if (model.schedule_side == ScheduleSide::kInput && o.output_drift != OutputDriftChoice::kOff) {
+    beginScoring("sensor drift", 2);
+    const double without = crossValidated(Score::kSimulation);
+    const std::vector<double> without_scores = fold_scores;
+    drift_per_fold = true;
+    const double with = crossValidated(Score::kSimulation);
+    drift_per_fold = false;
+    rep.drift_scores = {without, with};
+    rep.drift_gain = pairedGain(fold_scores, without_scores);
+    const auto [gain, se] = rep.drift_gain;
+    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
+    std::string s = "[5/5] sensor drift over the training run: ";
+    for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
+      if (frame != OutputFrame::kTipCartesian || oi == 1)
+        s += o.outputs[oi] + " " + formatNumber(drift.rate[oi]) + "/s ";
+    rep.output_drift = drift;
+    if (o.output_drift == OutputDriftChoice::kOn || gain > se) {
+      rep.drift_taken_out = true;
+      Yfit = removeOutputDrift(Y, times, drift);
+      // Later stages fit to the outputs less the drift found on all of them.
+      FYlog = Yfit;
+      for (std::size_t b = 0, r = 0; !interleaved && r < U.size(); ++r) {
+        const Eigen::Index len = U[r].rows() / o.play_selection_folds;
+        for (int f = 0; f < o.play_selection_folds; ++f, ++b) FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
+      }
+      s += "taken out";
+    } else {
+      s += "left in";
+    }
+    s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
+         std::to_string(with).substr(0, 5) + " with it taken out: gains " + formatNumber(gain) + " +- " +
+         formatNumber(se) + (gain > se ? "" : ", within one standard error") + "; " +
+         perOutputGains(fold_scores, without_scores, o.outputs) + ")";
+    say(s);
+  } else if (o.output_drift != OutputDriftChoice::kOff) {
+    say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
+        "inputs)");
+  }
 }
 
 // A slow pole in every bank, on an input-side model, scored on simulation.
@@ -428,17 +452,7 @@ void IdentificationRun::searchSlowPole() {
   if (best_tau > 0) {
     s += "; the best, " + formatNumber(best_tau) + " s, gains " + formatNumber(gain) + " +- " + formatNumber(se) +
          (keep ? "" : ", within one standard error") + " (";
-    for (int out_i = 0; out_i < no; ++out_i) {
-      std::vector<double> a, b;
-      for (std::size_t k = static_cast<std::size_t>(out_i); k < best_scores.size(); k += static_cast<std::size_t>(no)) {
-        a.push_back(best_scores[k]);
-        b.push_back(none_scores[k]);
-      }
-      const auto [g, e] = pairedGain(a, b);
-      s += (out_i ? ", " : "") + o.outputs[static_cast<std::size_t>(out_i)] + " " + formatNumber(g) + " +- " +
-           formatNumber(e);
-    }
-    s += ")";
+    s += perOutputGains(best_scores, none_scores, o.outputs) + ")";
   }
   s += ". Scores:";
   for (const auto& [tau, sc] : rep.slow_pole_scores)

@@ -183,7 +183,8 @@ struct IdentifyOptions {
   /// Then, for an input-side model, a sensor drift linear in time (a tip
   /// sensor's yaw, or each output's trend; output_drift.hpp), estimated and
   /// taken out of the training outputs. "auto": kept if held-out simulation
-  /// against the logged outputs improves; "on": always taken out; "off": the
+  /// against the logged outputs gains more than one standard error of that
+  /// gain over folds and outputs; "on": always taken out; "off": the
   /// outputs as logged. Taken out, the model carries the sensor's mean state
   /// over the training run.
   OutputDriftChoice output_drift = OutputDriftChoice::kAuto;
@@ -276,6 +277,10 @@ struct IdentifyReport {
   /// error over folds and outputs; it is kept only if the mean exceeds the error.
   std::pair<double, double> slow_pole_gain{0.0, 0.0};
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
+  /// Taking the drift out: held-out simulation gain over the outputs as
+  /// logged, mean and standard error over folds and outputs; in "auto" it is
+  /// taken out only if the mean exceeds the error.
+  std::pair<double, double> drift_gain{0.0, 0.0};
   /// pole_method "auto": FKcM's and fuzzy c-means' held-out fits on the
   /// first play set; empty otherwise.
   std::vector<PoleMethodScore> pole_method_scores;

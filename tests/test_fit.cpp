@@ -1,10 +1,14 @@
-// The NRMSE fit and the RMS error in the output's units (plsa/eval/fit.hpp).
+// The NRMSE fit and the RMS error in the output's units (plsa/eval/fit.hpp);
+// the paired gain of one model's scores over another's (paired_gain.hpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "plsa/eval/fit.hpp"
+#include "plsa/eval/paired_gain.hpp"
 
 TEST(Fit, NrmseDefinition) {
   Eigen::VectorXd y(4), yhat(4);
@@ -49,4 +53,32 @@ TEST(Fit, RejectsBadInput) {
   Eigen::VectorXd n = a;
   n(1) = std::nan("");
   EXPECT_THROW(plsa::eval::nrmseFit(a, n), std::invalid_argument);
+}
+
+// The one-standard-error rule's numbers (plsa/eval/paired_gain.hpp).
+TEST(PairedGain, MeanAndStandardErrorOfThePairedDifferences) {
+  // Differences 1, 2, 3: mean 2, sample variance 1, error 1/sqrt(3).
+  const auto [gain, se] = plsa::eval::pairedGain({91.0, 82.0, 73.0}, {90.0, 80.0, 70.0});
+  EXPECT_NEAR(gain, 2.0, 1e-12);
+  EXPECT_NEAR(se, 1.0 / std::sqrt(3.0), 1e-12);
+  // A loss is a negative gain, with the same error.
+  const auto [loss, se_loss] = plsa::eval::pairedGain({90.0, 80.0, 70.0}, {91.0, 82.0, 73.0});
+  EXPECT_NEAR(loss, -2.0, 1e-12);
+  EXPECT_NEAR(se_loss, se, 1e-12);
+  // A term either side could not score is skipped with its pair, not
+  // re-paired: the differences are still 1 and 3.
+  const auto [g_nan, se_nan] = plsa::eval::pairedGain({91.0, NAN, 73.0}, {90.0, 80.0, 70.0});
+  EXPECT_NEAR(g_nan, 2.0, 1e-12);
+  EXPECT_NEAR(se_nan, 1.0, 1e-12);  // sd sqrt(2), over sqrt(2) pairs
+}
+
+TEST(PairedGain, FewerThanTwoPairsIsNoEvidenceAndUnpairedScoresThrow) {
+  for (const auto& [a, b] : std::vector<std::pair<std::vector<double>, std::vector<double>>>{
+           {{}, {}}, {{95.0}, {90.0}}, {{95.0, NAN}, {90.0, 91.0}}, {{95.0, 93.0}, {INFINITY, 91.0}}}) {
+    const auto [gain, se] = plsa::eval::pairedGain(a, b);
+    EXPECT_EQ(gain, 0.0) << a.size();
+    EXPECT_TRUE(std::isinf(se)) << a.size();
+    EXPECT_FALSE(gain > se);  // never kept on it
+  }
+  EXPECT_THROW(plsa::eval::pairedGain({1.0, 2.0}, {1.0}), std::invalid_argument);
 }

@@ -8,6 +8,7 @@
 
 #include "identification_run.hpp"
 #include "plsa/eval/dio_prediction.hpp"
+#include "plsa/eval/paired_gain.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/eval/validation.hpp"
 
@@ -327,21 +328,6 @@ void IdentificationRun::searchScheduleLag() {
   say(s);
 }
 
-// The mean of the paired differences a - b (terms scored in both) and its
-// standard error; with fewer than two pairs, no gain and an infinite error.
-static std::pair<double, double> pairedGain(const std::vector<double>& a, const std::vector<double>& b) {
-  PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
-  std::vector<double> d;
-  for (std::size_t k = 0; k < a.size(); ++k)
-    if (std::isfinite(a[k] - b[k])) d.push_back(a[k] - b[k]);
-  if (d.size() < 2) return {0.0, INFINITY};
-  const auto n = static_cast<double>(d.size());
-  double mean = 0.0, sq = 0.0;
-  for (double v : d) mean += v / n;
-  for (double v : d) sq += (v - mean) * (v - mean);
-  return {mean, std::sqrt(sq / (n - 1) / n)};
-}
-
 // Each output's paired gain of a over b, "name gain +- se" joined by commas
 // (the terms alternate by output within each fold).
 static std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
@@ -354,7 +340,7 @@ static std::string perOutputGains(const std::vector<double>& a, const std::vecto
       ao.push_back(a[k]);
       bo.push_back(b[k]);
     }
-    const auto [g, e] = pairedGain(ao, bo);
+    const auto [g, e] = eval::pairedGain(ao, bo);
     s += (out_i ? ", " : "") + outputs[out_i] + " " + formatNumber(g) + " +- " + formatNumber(e);
   }
   return s;
@@ -374,7 +360,7 @@ void IdentificationRun::searchOutputDrift() {
     const double with = crossValidated(Score::kSimulation);
     drift_per_fold = false;
     rep.drift_scores = {without, with};
-    rep.drift_gain = pairedGain(fold_scores, without_scores);
+    rep.drift_gain = eval::pairedGain(fold_scores, without_scores);
     const auto [gain, se] = rep.drift_gain;
     const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
     std::string s = "[5/5] sensor drift over the training run: ";
@@ -442,7 +428,8 @@ void IdentificationRun::searchSlowPole() {
       best_scores = fold_scores;
     }
   }
-  const auto [gain, se] = best_tau > 0 ? pairedGain(best_scores, none_scores) : std::pair<double, double>{0.0, 0.0};
+  const auto [gain, se] =
+      best_tau > 0 ? eval::pairedGain(best_scores, none_scores) : std::pair<double, double>{0.0, 0.0};
   rep.slow_pole_gain = {gain, se};
   const bool keep = best_tau > 0 && gain > se;
   withSlowPole(keep ? best_tau : 0.0);

@@ -410,9 +410,11 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
                  "held-out fit improves and held-out simulation does not fall; input-side structures only; "
                  "default 0 (none)")
       ->check(CLI::Range(0, 10000));
-  id->add_option("--slow-pole", a->options.slow_pole_candidates,
-                 "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
-                 "creep and drift, tried against none by cross-validated simulation; '0' alone adds none")
+  id->add_option(
+        "--slow-pole", a->options.slow_pole_candidates,
+        "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
+        "creep and drift, tried against none by cross-validated simulation and kept only if the best gains more "
+        "than one standard error over folds and outputs; '0' alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
 }
@@ -421,8 +423,9 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
 void addDriftAndValidationOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   addChoice(id, "--output-drift", a->options.output_drift,
             "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
-            "output's trend otherwise) on an input-side model, take it out of the training outputs and keep "
-            "that if cross-validated simulation improves; on: always take it out; off: fit the outputs as logged");
+            "output's trend otherwise) on an input-side model and take it out of the training outputs if "
+            "cross-validated simulation gains more than one standard error over folds and outputs; on: always "
+            "take it out; off: fit the outputs as logged");
   addChoice(id, "--cv-layout", a->options.cv_layout,
             "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
             "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "

@@ -251,7 +251,8 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
 // A yaw drift turns the tip frame: with tip_cartesian the stage reads one
 // yaw rate; as logged (forced "on"), the steering angle's own trend. Both
 // must find the simulator's rate; in the tip frame it must be kept and lift
-// the simulation. With no drift the estimate must be near zero.
+// the simulation. With no drift the estimate must be near zero and the drift
+// left in.
 TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
   const double rate = 0.03;
   const DriftRuns runs = yawDriftRuns(rate);
@@ -272,6 +273,15 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
     // difference of the two scores and exceeds its error.
     EXPECT_NEAR(rep.drift_gain.first, rep.drift_scores.second - rep.drift_scores.first, 1e-9);
     EXPECT_GT(rep.drift_gain.first, rep.drift_gain.second);
+    // The progress line gives the gain, its error and each output's.
+    const auto line = std::find_if(rep.lines.begin(), rep.lines.end(), [](const std::string& l) {
+      return l.find("[5/5] sensor drift over") != std::string::npos;
+    });
+    ASSERT_NE(line, rep.lines.end());
+    const std::string scores = line->substr(std::min(line->size(), line->find(" (held-out")));
+    EXPECT_NE(scores.find(": gains "), std::string::npos) << *line;
+    EXPECT_NE(scores.find(" +- "), std::string::npos) << *line;
+    for (const std::string& out : o.outputs) EXPECT_NE(scores.find(out + " "), std::string::npos) << *line;
     o.output_drift = OutputDriftChoice::kOff;
     IdentifyReport rep_off;
     const DioPwlObfModel left = identifyModel({runs.train}, o, &rep_off);
@@ -317,6 +327,7 @@ TEST(Pipeline, SensorYawDriftIsFoundInEitherFrameAndTakenOut) {
   // 98.002, a gain of 0.002 +- 0.004 when written): left in, where any gain
   // would have taken it out.
   EXPECT_GT(rep.drift_scores.second, rep.drift_scores.first - 0.05);
+  EXPECT_TRUE(std::isfinite(rep.drift_gain.second));  // scored: the terms paired
   EXPECT_LE(rep.drift_gain.first, rep.drift_gain.second);
   EXPECT_FALSE(rep.drift_taken_out);
 }

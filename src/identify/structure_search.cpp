@@ -332,11 +332,12 @@ void IdentificationRun::searchScheduleLag() {
 // (the terms alternate by output within each fold).
 static std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
                                   const std::vector<std::string>& outputs) {
+  PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
   std::string s;
   const std::size_t no = outputs.size();
   for (std::size_t out_i = 0; out_i < no; ++out_i) {
     std::vector<double> ao, bo;
-    for (std::size_t k = out_i; k < a.size() && k < b.size(); k += no) {
+    for (std::size_t k = out_i; k < a.size(); k += no) {
       ao.push_back(a[k]);
       bo.push_back(b[k]);
     }
@@ -377,7 +378,7 @@ void IdentificationRun::searchOutputDrift() {
         const Eigen::Index len = U[r].rows() / o.play_selection_folds;
         for (int f = 0; f < o.play_selection_folds; ++f, ++b) FY[b] = Yfit[r].middleRows(f * len, BY[b].rows());
       }
-      s += "taken out";
+      s += o.output_drift == OutputDriftChoice::kOn ? "taken out (forced on)" : "taken out";
     } else {
       s += "left in";
     }

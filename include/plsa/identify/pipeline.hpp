@@ -279,7 +279,8 @@ struct IdentifyReport {
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
   /// Taking the drift out: held-out simulation gain over the outputs as
   /// logged, mean and standard error over folds and outputs; in "auto" it is
-  /// taken out only if the mean exceeds the error.
+  /// taken out only if the mean exceeds the error. Both 0: not scored ("off",
+  /// or an output-side model); (0, inf): fewer than two terms paired.
   std::pair<double, double> drift_gain{0.0, 0.0};
   /// pole_method "auto": FKcM's and fuzzy c-means' held-out fits on the
   /// first play set; empty otherwise.

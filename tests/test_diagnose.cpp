@@ -138,8 +138,9 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   truth.bending.natural_freq_hz *= 1.1;  // and a plain parameter mismatch the calibration must absorb
   DiagnoseOptions o = quick();
   o.identified_reference = true;
-  const Diagnosis d =
-      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 11), recorded(truth, 30, 12)}, o);
+  ASSERT_GT(o.threads, 1);  // the reference is identified on its own thread while the calibrations run
+  const RunData train = recorded(truth, 40, 11), held = recorded(truth, 30, 12);
+  const Diagnosis d = runDiagnosis(sim::probes::everyEffectOff(), {train, held}, o);
   ASSERT_FALSE(d.ranking.empty());
   EXPECT_EQ(d.ranking[0].effect, "deadzone");
   ASSERT_FALSE(d.selected.empty());
@@ -190,6 +191,11 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_EQ(j["ranking"][0]["calibration"]["evaluations"], d.ranking[0].evaluations);
   EXPECT_GT(d.nominal_evaluations, 28 + 3 * 20);
   EXPECT_FALSE(d.reference.note.empty());
+  const IdentifiedReference alone = identifiedReference({train}, {held});  // the same, identified by itself
+  ASSERT_TRUE(alone.available) << alone.note;
+  EXPECT_TRUE(d.reference.available);
+  EXPECT_EQ(d.reference.gap.total, alone.gap.total);
+  EXPECT_EQ(d.reference.note, alone.note);
   // Every plotted series is exported: the trace row for row, the map cell for cell, one row per candidate.
   const auto series = reportSeriesCsv(d);
   ASSERT_EQ(series.size(), 3u);

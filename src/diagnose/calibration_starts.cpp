@@ -144,28 +144,34 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
 
 // Two starts for a candidate's calibration: neutral, and the spread point
 // that a short calibration (the screening stage, `screen` simulator runs
-// each) takes furthest: ranking the spread points by their raw gap picked
+// each, at the screening step) takes furthest: ranking the spread points by their raw gap picked
 // the wrong basin whenever the effect shifts what the nominal physics must
 // do (a stop-type loop moves the static gain). Adds the runs spent to `spent`.
+sim::SimConfig screeningResolution(sim::SimConfig c, const Screening& screen) {
+  c.internal_step_s = std::max(c.internal_step_s, screen.step_s);
+  return c;
+}
+
 std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                                      const CalibrationOptions& o, int screen, int& spent) {
+                                      const CalibrationOptions& o, const Screening& screen, int& spent) {
   sim::SimConfig neutral = c;
   setNeutral(neutral, effect);
   CalibrationOptions quick = o;
-  quick.max_evaluations = screen;
+  quick.max_evaluations = screen.evaluations;
   quick.evaluations_per_parameter = 0;
   quick.progress = nullptr;
   double best_gap = INFINITY;
   sim::SimConfig best = c;
   for (const auto& s : spreadFor(c, effect, train)) {
     try {
-      if (screen <= 0) {
+      if (screen.evaluations <= 0) {
         const double gap = measureGap(s, train, o.gap).total;
         if (gap < best_gap) best_gap = gap, best = s;
         continue;
       }
-      const CalibrationResult r = calibrate(s, modules, train, quick);
+      CalibrationResult r = calibrate(screeningResolution(s, screen), modules, train, quick);
+      r.config.internal_step_s = s.internal_step_s;
       spent += r.evaluations;
       if (r.train_gap.total < best_gap) best_gap = r.train_gap.total, best = r.config;
     } catch (const std::invalid_argument&) {}

@@ -20,12 +20,23 @@ void enableCandidate(sim::SimConfig& c, const std::string& effect, const Diagnos
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<RunData>& train);
 
+/// The screening stage: a short calibration of `evaluations` simulator runs
+/// from each spread point, with the simulator's internal step at least
+/// `step_s` (0: as configured).
+struct Screening {
+  int evaluations = 0;
+  double step_s = 0.0;
+};
+
+/// `c` with the screening stage's internal step.
+sim::SimConfig screeningResolution(sim::SimConfig c, const Screening& screen);
+
 /// The starts a candidate is calibrated from: neutral, then the best spread
-/// point (after a short calibration of each when `screen` > 0). Adds the
+/// point (after the screening stage when `screen.evaluations` > 0). Adds the
 /// runs spent to `spent`.
 std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                                      const CalibrationOptions& o, int screen, int& spent);
+                                      const CalibrationOptions& o, const Screening& screen, int& spent);
 
 /// The nominal physics calibrated from the simulator as given and the best
 /// data-derived starts, then restarted from the best; `spent`: the runs of

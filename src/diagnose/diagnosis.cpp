@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <stdexcept>
 
 #include "calibration_starts.hpp"
@@ -146,7 +147,7 @@ std::vector<std::string> modulesWith(const std::vector<std::string>& selected, c
   return modules;
 }
 
-// Noise floor, the simulator as given, the identified reference, then the
+// Noise floor, the simulator as given, then the
 // nominal calibration: the baseline every candidate is measured against.
 CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
   const DiagnoseOptions& o = x.o;
@@ -159,12 +160,6 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
   say(o, "plsa diagnose: " + std::to_string(r.train.size()) + " training / " + std::to_string(r.held.size()) +
              " held-out run(s); held-out gap of the simulator as given " + pct(d.heldout_uncalibrated.percent()) +
              ", noise floor " + pct(d.noise.percent()));
-  if (o.identified_reference) {
-    d.reference = identifiedReference(r.train, r.held);
-    say(o, d.reference.available ? "plsa diagnose: an identified model reaches a held-out gap of " +
-                                       pct(d.reference.gap.percent()) + " (" + d.reference.note + ")"
-                                 : "plsa diagnose: no identified reference: " + d.reference.note);
-  }
   CalibrationOptions nominal_opts = o.calibration;
   nominal_opts.max_evaluations = o.nominal_evaluations;
   nominal_opts.progress = [&](int e, double best) {
@@ -188,30 +183,35 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
 // candidate's budget and nothing added. Without it, any candidate was
 // credited with what further optimisation of the kept parameters buys, and
 // later rounds kept effects that were not there. It gets the budget of the
-// largest candidate, spent as the candidates spend theirs: two calibrations,
-// the second from where the first ended, and with screening the runs of the
-// largest screening stage. Returns its held-out gap.
+// largest candidate, spent as the candidates spend theirs: with screening
+// first the runs of the largest screening stage (at its step), then two
+// calibrations, the second from where the first ended. Returns its
+// held-out gap.
 Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std::string>& selected,
-                                 const std::vector<std::string>& remaining, int screen, const SelectionContext& x) {
+                                 const std::vector<std::string>& remaining, const Screening& screen,
+                                 const SelectionContext& x) {
   const DiagnoseOptions& o = x.o;
   const std::vector<std::string> modules = modulesWith(selected);
-  CalibrationOptions same = o.calibration;
-  same.max_evaluations = candidateBudget(s.config, modules, remaining, o.calibration);
-  CalibrationResult r = calibrate(s.config, modules, x.runs.train, same);
-  const CalibrationResult again = calibrate(r.config, modules, x.runs.train, same);
-  if (again.train_gap.total < r.train_gap.total) r = again;
-  if (screen > 0) {
+  sim::SimConfig start = s.config;
+  if (screen.evaluations > 0) {
     std::size_t points = 0;
     for (const auto& e : remaining) {
       sim::SimConfig c = s.config;
       enableCandidate(c, e, o);
       points = std::max(points, spreadFor(c, e, x.runs.train).size());
     }
-    same.max_evaluations = screen * static_cast<int>(points);
-    same.evaluations_per_parameter = 0;
-    const CalibrationResult third = calibrate(r.config, modules, x.runs.train, same);
-    if (third.train_gap.total < r.train_gap.total) r = third;
+    CalibrationOptions screening = o.calibration;
+    screening.max_evaluations = screen.evaluations * static_cast<int>(points);
+    screening.evaluations_per_parameter = 0;
+    sim::SimConfig screened = calibrate(screeningResolution(s.config, screen), modules, x.runs.train, screening).config;
+    screened.internal_step_s = s.config.internal_step_s;
+    if (measureGap(screened, x.runs.train, o.calibration.gap).total < s.train.total) start = screened;
   }
+  CalibrationOptions same = o.calibration;
+  same.max_evaluations = candidateBudget(s.config, modules, remaining, o.calibration);
+  CalibrationResult r = calibrate(start, modules, x.runs.train, same);
+  const CalibrationResult again = calibrate(r.config, modules, x.runs.train, same);
+  if (again.train_gap.total < r.train_gap.total) r = again;
   OutputFit f = r.fit;
   return measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
 }
@@ -225,7 +225,7 @@ struct CandidateTrial {
 };
 
 CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::string>& selected, const std::string& e,
-                            int round, int screen, const SelectionContext& x) {
+                            int round, const Screening& screen, const SelectionContext& x) {
   const DiagnoseOptions& o = x.o;
   sim::SimConfig c = s.config;
   enableCandidate(c, e, o);
@@ -281,7 +281,7 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   // Screening in the first round only: it finds the basin of the effect
   // that moves the nominal physics most; later rounds start from a model
   // that has absorbed it (and would take twice as long).
-  const int screen = round == 1 ? o.screen_evaluations : 0;
+  const Screening screen{round == 1 ? o.screen_evaluations : 0, o.screen_step_s};
   std::vector<CandidateTrial> trials(remaining.size());
   Gap null_gap = s.heldout;
   parallelFor(remaining.size() + 1, o.threads, [&](std::size_t i) {  // the last index: the bar
@@ -377,6 +377,22 @@ void traceFirstHeldOutRun(Diagnosis& d, const CalibratedState& before, const Cal
 
 }  // namespace
 
+// The identified reference, reported and never used to decide, is the
+// costliest single stage (identification's structure search, serial): with
+// more than one thread it runs on its own while the calibrations do.
+std::future<IdentifiedReference> startReference(const RunSplit& r, const DiagnoseOptions& o) {
+  const auto policy = o.threads > 1 ? std::launch::async : std::launch::deferred;
+  return std::async(policy, [&r] { return identifiedReference(r.train, r.held); });
+}
+
+void takeReference(std::future<IdentifiedReference>& pending, const DiagnoseOptions& o, Diagnosis& d) {
+  if (!pending.valid()) return;
+  d.reference = pending.get();
+  say(o, d.reference.available ? "plsa diagnose: an identified model reaches a held-out gap of " +
+                                     pct(d.reference.gap.percent()) + " (" + d.reference.note + ")"
+                               : "plsa diagnose: no identified reference: " + d.reference.note);
+}
+
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   refuseRepeatedRuns(runs);
@@ -388,11 +404,14 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
   const SelectionContext x{split, o, d.map};
+  std::future<IdentifiedReference> reference;
+  if (o.identified_reference) reference = startReference(split, o);
   const CalibratedState base = calibrateBaseline(simulator, x, d);
   CalibratedState current = base;
   std::vector<std::string> selected;
   for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)
     if (!selectionRound(round, current, selected, remaining, x, d)) break;
+  takeReference(reference, o, d);
   d.selected = selected;
   d.gap_after = current.heldout;
   d.final_config = current.config;

@@ -184,6 +184,10 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_GT(d.margin_over_recalibration, 0.0);
   EXPECT_LE(d.margin_over_recalibration, 1.0);
   EXPECT_TRUE(j["identified_reference"].contains("available"));
+  // The candidates were calibrated at the coarser step: on this physics it moves the gap by under 0.1 noise floors.
+  ASSERT_LT(sim::probes::everyEffectOff().internal_step_s, o.calibration_step_s);
+  EXPECT_EQ(d.calibration_step_s, o.calibration_step_s);
+  EXPECT_EQ(j["calibration_step_s"], o.calibration_step_s);
   // How each calibration went: its starts, runs and where each start ended.
   EXPECT_EQ(d.ranking[0].starts, 2);
   EXPECT_EQ(d.ranking[0].train_gap_per_start.size(), 2u);
@@ -239,8 +243,11 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.elongation.strain_per_bar *= 0.9;
   truth.pneumatics.time_constant_s *= 1.2;
+  DiagnoseOptions o = quick();
+  o.coarse_step_tolerance = 0.0;  // any change of the gap refuses the coarser calibration step
   const Diagnosis d =
-      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, quick());
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, o);
+  EXPECT_EQ(d.calibration_step_s, sim::probes::everyEffectOff().internal_step_s);
   EXPECT_TRUE(d.selected.empty()) << d.verdict;
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
   EXPECT_EQ(d.confidence, "none");

@@ -137,7 +137,33 @@ struct SelectionContext {
   const RunSplit& runs;
   const DiagnoseOptions& o;
   OutputMap map;
+  double step_s = 0.0;  ///< the internal step calibrations run at (0: as configured)
 };
+
+// A calibration at the selection's internal step; the result carries the
+// configured step again, with its training gap and output map measured there.
+CalibrationResult calibrateAtStep(const sim::SimConfig& start, const std::vector<std::string>& modules,
+                                  const SelectionContext& x, const CalibrationOptions& o) {
+  if (!(x.step_s > start.internal_step_s)) return calibrate(start, modules, x.runs.train, o);
+  sim::SimConfig coarse = start;
+  coarse.internal_step_s = x.step_s;
+  CalibrationResult r = calibrate(coarse, modules, x.runs.train, o);
+  r.config.internal_step_s = start.internal_step_s;
+  r.train_gap = measureGap(r.config, x.runs.train, o.gap, &r.fit);
+  return r;
+}
+
+// The coarser calibration step when, on the calibrated nominal physics, it
+// moves the training gap by at most the tolerance; otherwise 0.
+double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const SelectionContext& x,
+                       const Gap& noise) {
+  const DiagnoseOptions& o = x.o;
+  if (!(o.calibration_step_s > calibrated.internal_step_s)) return 0.0;
+  sim::SimConfig coarse = calibrated;
+  coarse.internal_step_s = o.calibration_step_s;
+  const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
+  return moved <= o.coarse_step_tolerance * noise.percent() ? o.calibration_step_s : 0.0;
+}
 
 // Calibration modules: the nominal physics, the kept effects, then `extra` if given.
 std::vector<std::string> modulesWith(const std::vector<std::string>& selected, const std::string& extra = "") {
@@ -209,8 +235,8 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
   }
   CalibrationOptions same = o.calibration;
   same.max_evaluations = candidateBudget(s.config, modules, remaining, o.calibration);
-  CalibrationResult r = calibrate(start, modules, x.runs.train, same);
-  const CalibrationResult again = calibrate(r.config, modules, x.runs.train, same);
+  CalibrationResult r = calibrateAtStep(start, modules, x, same);
+  const CalibrationResult again = calibrateAtStep(r.config, modules, x, same);
   if (again.train_gap.total < r.train_gap.total) r = again;
   OutputFit f = r.fit;
   return measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
@@ -234,7 +260,7 @@ CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::str
   CandidateResult cr;
   bool first = true;
   for (const sim::SimConfig& start : startsFor(c, e, modules, x.runs.train, o.calibration, screen, cr.evaluations)) {
-    CalibrationResult trial = calibrate(start, modules, x.runs.train, o.calibration);
+    CalibrationResult trial = calibrateAtStep(start, modules, x, o.calibration);
     ++cr.starts;
     cr.evaluations += trial.evaluations;
     cr.train_gap_per_start.push_back(trial.train_gap.percent());
@@ -261,7 +287,7 @@ CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::str
 void polishKept(CalibratedState& s, const std::vector<std::string>& selected, const SelectionContext& x, Diagnosis& d) {
   CalibrationOptions polish = x.o.calibration;
   polish.max_evaluations = x.o.nominal_evaluations;
-  const CalibrationResult refit = calibrate(s.config, modulesWith(selected), x.runs.train, polish);
+  const CalibrationResult refit = calibrateAtStep(s.config, modulesWith(selected), x, polish);
   if (!(refit.train_gap.total < s.train.total)) return;
   s.fit = refit.fit;
   s.config = refit.config;
@@ -403,10 +429,18 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   const RunSplit split = splitRuns(runs, o);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
-  const SelectionContext x{split, o, d.map};
+  SelectionContext x{split, o, d.map};
   std::future<IdentifiedReference> reference;
   if (o.identified_reference) reference = startReference(split, o);
   const CalibratedState base = calibrateBaseline(simulator, x, d);
+  x.step_s = calibrationStep(base.config, base.train, x, d.noise);
+  d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;
+  say(o, "plsa diagnose: candidates calibrated at a " + std::to_string(1e3 * d.calibration_step_s).substr(0, 4) +
+             " ms internal step" +
+             (x.step_s > 0.0 ? " (moves the calibrated training gap by under " +
+                                   std::to_string(o.coarse_step_tolerance).substr(0, 4) +
+                                   " noise floors; every gap is measured at the configured step)"
+                             : ""));
   CalibratedState current = base;
   std::vector<std::string> selected;
   for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)

@@ -106,6 +106,7 @@ std::string toJson(const Diagnosis& d) {
   j["noise_floor"] = d.noise.percent();
   j["nominal_params"] = paramsJson(d.nominal_params);
   j["nominal_evaluations"] = d.nominal_evaluations;
+  j["calibration_step_s"] = d.calibration_step_s;
   j["ranking"] = arrayOf(d.ranking, candidateJson);
   j["later_rounds"] = arrayOf(d.later_rounds, candidateJson);
   j["selected"] = d.selected;

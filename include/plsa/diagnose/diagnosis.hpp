@@ -46,6 +46,13 @@ struct DiagnoseOptions {
   /// ranks the starts, and a 4 ms step moves a training gap by under 0.1
   /// point while running about four times fewer steps.
   double screen_step_s = 0.004;
+  /// The candidates', the bar's and the polish's calibrations run at this
+  /// internal step too when accuracy allows: when, on the calibrated
+  /// nominal physics, it moves the training gap by at most
+  /// `coarse_step_tolerance` noise floors (0: always the configured step).
+  /// Every gap reported and compared is measured at the configured step.
+  double calibration_step_s = 0.004;
+  double coarse_step_tolerance = 0.1;
   int max_selected = 3;
   std::vector<std::string> candidates;  ///< empty: every effect switched off in the simulator
   /// A switched-on candidate takes its flexible law where the simulator has
@@ -84,6 +91,7 @@ struct Diagnosis {
   IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
   int nominal_evaluations = 0;           ///< simulator runs the nominal calibration spent (grid and every start)
+  double calibration_step_s = 0.0;       ///< the internal step the candidates were calibrated at
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
   std::vector<std::string> selected;

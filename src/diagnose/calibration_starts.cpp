@@ -142,15 +142,17 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
   return spread;
 }
 
-// Two starts for a candidate's calibration: neutral, and the spread point
-// that a short calibration (the screening stage, `screen` simulator runs
-// each, at the screening step) takes furthest: ranking the spread points by their raw gap picked
-// the wrong basin whenever the effect shifts what the nominal physics must
-// do (a stop-type loop moves the static gain). Adds the runs spent to `spent`.
 sim::SimConfig screeningResolution(sim::SimConfig c, const Screening& screen) {
   c.internal_step_s = std::max(c.internal_step_s, screen.step_s);
   return c;
 }
+
+// Two starts for a candidate's calibration: neutral, and the spread point
+// that a short calibration (the screening stage: `screen.evaluations`
+// simulator runs each, at the screening step) takes furthest: ranking the
+// spread points by their raw gap picked the wrong basin whenever the effect
+// shifts what the nominal physics must do (a stop-type loop moves the
+// static gain). Adds the runs spent to `spent`.
 
 std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<std::string>& modules, const std::vector<RunData>& train,

@@ -401,8 +401,6 @@ void traceFirstHeldOutRun(Diagnosis& d, const CalibratedState& before, const Cal
   d.trace_dt = run.sample_time_s;
 }
 
-}  // namespace
-
 // The identified reference, reported and never used to decide, is the
 // costliest single stage (identification's structure search, serial): with
 // more than one thread it runs on its own while the calibrations do.
@@ -418,6 +416,8 @@ void takeReference(std::future<IdentifiedReference>& pending, const DiagnoseOpti
                                      pct(d.reference.gap.percent()) + " (" + d.reference.note + ")"
                                : "plsa diagnose: no identified reference: " + d.reference.note);
 }
+
+}  // namespace
 
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs, const DiagnoseOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();

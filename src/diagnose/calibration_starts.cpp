@@ -142,9 +142,16 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
   return spread;
 }
 
-sim::SimConfig screeningResolution(sim::SimConfig c, const Screening& screen) {
-  c.internal_step_s = std::max(c.internal_step_s, screen.step_s);
+sim::SimConfig atLeastStep(sim::SimConfig c, double step_s) {
+  c.internal_step_s = std::max(c.internal_step_s, step_s);
   return c;
+}
+
+CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, const std::vector<std::string>& modules,
+                                  const std::vector<RunData>& train, const CalibrationOptions& o) {
+  CalibrationResult r = calibrate(atLeastStep(start, step_s), modules, train, o);
+  r.config.internal_step_s = start.internal_step_s;
+  return r;
 }
 
 // Two starts for a candidate's calibration: neutral, and the spread point
@@ -172,8 +179,7 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
         if (gap < best_gap) best_gap = gap, best = s;
         continue;
       }
-      CalibrationResult r = calibrate(screeningResolution(s, screen), modules, train, quick);
-      r.config.internal_step_s = s.internal_step_s;
+      const CalibrationResult r = calibrateCoarse(s, screen.step_s, modules, train, quick);
       spent += r.evaluations;
       if (r.train_gap.total < best_gap) best_gap = r.train_gap.total, best = r.config;
     } catch (const std::invalid_argument&) {}

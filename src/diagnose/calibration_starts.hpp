@@ -28,8 +28,14 @@ struct Screening {
   double step_s = 0.0;
 };
 
-/// `c` with the screening stage's internal step.
-sim::SimConfig screeningResolution(sim::SimConfig c, const Screening& screen);
+/// `c` with its internal step raised to at least `step_s`.
+sim::SimConfig atLeastStep(sim::SimConfig c, double step_s);
+
+/// `calibrate` with the simulator's internal step at least `step_s`; the
+/// result's configuration carries `start`'s step again (its training gap
+/// and output map are the coarser step's).
+CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, const std::vector<std::string>& modules,
+                                  const std::vector<RunData>& train, const CalibrationOptions& o);
 
 /// The starts a candidate is calibrated from: neutral, then the best spread
 /// point (after the screening stage when `screen.evaluations` > 0). Adds the

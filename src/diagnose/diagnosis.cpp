@@ -145,10 +145,7 @@ struct SelectionContext {
 CalibrationResult calibrateAtStep(const sim::SimConfig& start, const std::vector<std::string>& modules,
                                   const SelectionContext& x, const CalibrationOptions& o) {
   if (!(x.step_s > start.internal_step_s)) return calibrate(start, modules, x.runs.train, o);
-  sim::SimConfig coarse = start;
-  coarse.internal_step_s = x.step_s;
-  CalibrationResult r = calibrate(coarse, modules, x.runs.train, o);
-  r.config.internal_step_s = start.internal_step_s;
+  CalibrationResult r = calibrateCoarse(start, x.step_s, modules, x.runs.train, o);
   r.train_gap = measureGap(r.config, x.runs.train, o.gap, &r.fit);
   return r;
 }
@@ -159,8 +156,7 @@ double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const
                        const Gap& noise) {
   const DiagnoseOptions& o = x.o;
   if (!(o.calibration_step_s > calibrated.internal_step_s)) return 0.0;
-  sim::SimConfig coarse = calibrated;
-  coarse.internal_step_s = o.calibration_step_s;
+  const sim::SimConfig coarse = atLeastStep(calibrated, o.calibration_step_s);
   const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
   return moved <= o.coarse_step_tolerance * noise.percent() ? o.calibration_step_s : 0.0;
 }
@@ -229,8 +225,7 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
     CalibrationOptions screening = o.calibration;
     screening.max_evaluations = screen.evaluations * static_cast<int>(points);
     screening.evaluations_per_parameter = 0;
-    sim::SimConfig screened = calibrate(screeningResolution(s.config, screen), modules, x.runs.train, screening).config;
-    screened.internal_step_s = s.config.internal_step_s;
+    const sim::SimConfig screened = calibrateCoarse(s.config, screen.step_s, modules, x.runs.train, screening).config;
     if (measureGap(screened, x.runs.train, o.calibration.gap).total < s.train.total) start = screened;
   }
   CalibrationOptions same = o.calibration;

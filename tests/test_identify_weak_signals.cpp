@@ -38,15 +38,6 @@ io::Log staircaseLog(Weakness weakness) {
   return log;
 }
 
-// A log of n samples with these columns, its data to be filled.
-io::Log blankLog(std::string source, std::vector<std::string> columns, Eigen::Index n) {
-  io::Log log;
-  log.source = std::move(source);
-  log.columns = std::move(columns);
-  log.data.resize(n, static_cast<Eigen::Index>(log.columns.size()));
-  return log;
-}
-
 // Only the partition's choice: one play set, no lag, threshold, slow pole or drift.
 IdentifyOptions partitionOnly(std::vector<std::string> inputs, std::vector<std::string> outputs) {
   IdentifyOptions o;
@@ -103,45 +94,14 @@ TEST(Pipeline, EveryOutputWeakKeepsTheStaircasePartition) {
   expectStaircaseSplits(m, rep);
 }
 
-// A run whose reference holds one step and then keeps moving (a joystick run
-// that happens to pause once): that step's one local pole is too few to
-// place a bank's five, so local windows add theirs, and the bank is not one
-// pole five times over (the model that made diverged in simulation).
-TEST(Pipeline, OneStepAmongMovingInputsAddsLocalWindows) {
-  const Eigen::Index rest = 160, held = 320, n = 8000;
-  io::Log log = blankLog("one_step.csv", {"time_s", "cmd_1", "p_1", "y"}, n);
-  std::mt19937 rng(3);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  double cmd = 0.0, p = 0.0, y = 0.0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    if (k == rest) cmd = 0.2;
-    if (k >= rest + held) cmd = std::clamp(cmd + 0.01 * noise(rng), 0.05, 0.35);
-    p = 0.9 * p + 0.1 * cmd;
-    y = 0.95 * y + 0.05 * 40.0 * p;
-    log.data.row(k) << static_cast<double>(k) * kDt, cmd, p, y + 0.05 * noise(rng);
-  }
-  IdentifyReport rep;
-  const DioPwlObfModel m = identifyModel({log}, partitionOnly({"p_1"}, {"y"}), &rep);
-  EXPECT_EQ(rep.segments, 1);
-  EXPECT_TRUE(rep.staircase) << "the one step's pole is kept";
-  EXPECT_EQ(rep.window_outputs, (std::vector<std::string>{"y"}));
-  EXPECT_GE(rep.pairs.at(0).identified.size(), 5u);
-  const auto line = std::find_if(rep.lines.begin(), rep.lines.end(),
-                                 [](const std::string& l) { return l.find("[2/5]") != std::string::npos; });
-  ASSERT_NE(line, rep.lines.end());
-  EXPECT_NE(line->find("too few usable step responses for y, fewer poles than the 5 to place"), std::string::npos)
-      << *line;
-  const auto poles = m.poles[0][0].poles();
-  ASSERT_EQ(poles.size(), 5u);
-  EXPECT_TRUE(std::any_of(poles.begin(), poles.end(), [&](const auto& q) { return std::abs(q - poles[0]) > 1e-6; }))
-      << "every pole of the bank is " << poles[0];
-}
-
 // Without a design, the grid is quantiles of the inputs that move: a chamber
 // that is never driven, whose sensor reads only noise, is not scheduled on.
 TEST(Pipeline, QuantileGridLeavesOutAnInputThatOnlyReadsNoise) {
   const Eigen::Index n = 6000;
-  io::Log log = blankLog("unused_chamber.csv", {"time_s", "p_1", "p_2", "y"}, n);
+  io::Log log;
+  log.source = "unused_chamber.csv";
+  log.columns = {"time_s", "p_1", "p_2", "y"};
+  log.data.resize(n, 4);
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 1.0);
   double p = 0.2, y = 0.0;

@@ -43,16 +43,7 @@ struct IdentificationRun {
   void checkOptions(const std::vector<io::Log>& logs) const;
   void readData(const std::vector<io::Log>& logs);
   void fitLocalModels(const std::vector<io::Log>& logs);
-  void fitStepSegments(const std::vector<io::Log>& logs);
-  /// Per output: whether local windows add poles, and whether they replace
-  /// the steps' (none usable); `adds`: some output keeps step poles too.
-  struct WindowChoice {
-    std::vector<bool> needs, replaces;
-    bool adds = false;
-  };
-  WindowChoice chooseWindows();
-  std::string windowsNote(const WindowChoice& w) const;
-  void fitLocalWindows(const std::vector<io::Log>& logs, const WindowChoice& windows);
+  void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows);
   [[noreturn]] void noUsablePoles(int out_i) const;
   std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();

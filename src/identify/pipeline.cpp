@@ -214,27 +214,11 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
 }
 
-// Steps 1-2: local data sets and local LTI fits: the steps first, then local
-// windows for outputs the steps leave short of poles.
+// Steps 1-2: local data sets and local LTI fits.
 void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
   rep.pairs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, {}, 0, {}, {}});
-  fitStepSegments(logs);
-  const WindowChoice windows = chooseWindows();
-  if (rep.used_windows) fitLocalWindows(logs, windows);
-  int usable = 0, rejected = 0;
-  for (const auto& pp : rep.pairs) {
-    usable += static_cast<int>(pp.identified.size());
-    rejected += pp.rejected;
-  }
-  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windowsNote(windows) + ", " +
-      std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
-      " fits rejected (unstable, badly determined or too small for the noise)");
-}
-
-// Each step segment's local fit, per output.
-void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
   rep.segments = 0;
   for (std::size_t r = 0; r < logs.size(); ++r) {
     for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
@@ -256,51 +240,40 @@ void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
       }
     }
   }
-}
-
-// Outputs whose step fits gave fewer usable poles than a bank places get
-// more from local windows: clustering a bank's poles from one or two local
-// poles stacks them all there (a joystick run that happened to hold one
-// step gave five equal poles and a model whose simulation diverged).
-IdentificationRun::WindowChoice IdentificationRun::chooseWindows() {
-  std::vector<std::size_t> step_poles(static_cast<std::size_t>(no), 0);
-  for (const auto& pp : rep.pairs) step_poles[static_cast<std::size_t>(pp.output)] += pp.identified.size();
-  WindowChoice w;
-  w.needs.assign(static_cast<std::size_t>(no), false);
-  w.replaces.assign(static_cast<std::size_t>(no), false);
+  // Outputs whose step fits gave no usable pole get theirs from local windows.
+  std::vector<bool> needs_windows(static_cast<std::size_t>(no), true);
+  for (const auto& pp : rep.pairs)
+    if (!pp.identified.empty()) needs_windows[static_cast<std::size_t>(pp.output)] = false;
   rep.window_outputs.clear();
-  rep.staircase = false;
-  for (int out_i = 0; out_i < no; ++out_i) {
-    const auto oo = static_cast<std::size_t>(out_i);
-    rep.staircase = rep.staircase || step_poles[oo] > 0;
-    if (step_poles[oo] >= static_cast<std::size_t>(o.poles_per_pair)) continue;
-    w.needs[oo] = true;
-    w.replaces[oo] = step_poles[oo] == 0;
-    w.adds = w.adds || !w.replaces[oo];
-    rep.window_outputs.push_back(o.outputs[oo]);
-  }
+  for (int out_i = 0; out_i < no; ++out_i)
+    if (needs_windows[static_cast<std::size_t>(out_i)])
+      rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
   rep.used_windows = !rep.window_outputs.empty();
-  return w;
-}
-
-// The progress line's note on the windows (empty without them).
-std::string IdentificationRun::windowsNote(const WindowChoice& w) const {
-  if (!rep.used_windows) return "";
-  std::string note = w.adds ? " (too few usable step responses" : " (no usable step responses";
-  if (rep.window_outputs.size() < o.outputs.size() || w.adds) {
-    note += " for";
-    for (const auto& name : rep.window_outputs) note += " " + name;
+  rep.staircase = rep.window_outputs.size() < o.outputs.size();
+  if (rep.used_windows) fitLocalWindows(logs, needs_windows);
+  int usable = 0, rejected = 0;
+  for (const auto& pp : rep.pairs) {
+    usable += static_cast<int>(pp.identified.size());
+    rejected += pp.rejected;
   }
-  if (w.adds) note += ", fewer poles than the " + std::to_string(o.poles_per_pair) + " to place";
-  return note + ": local windows of " + std::to_string(o.window_s).substr(0, 4) + " s " +
-         (w.adds ? "as well)" : "instead)");
+  std::string windows_note;
+  if (rep.used_windows) {
+    windows_note = " (no usable step responses";
+    if (rep.staircase) {
+      windows_note += " for";
+      for (const auto& name : rep.window_outputs) windows_note += " " + name;
+    }
+    windows_note += ": local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)";
+  }
+  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windows_note + ", " +
+      std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
+      " fits rejected (unstable, badly determined or too small for the noise)");
 }
 
-// MISO fits on local windows give the outputs `windows` names their poles.
-void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const WindowChoice& windows) {
-  const std::vector<bool>& needs_windows = windows.needs;
+// No staircase: MISO fits on local windows give each output's poles.
+void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows) {
   for (auto& pp : rep.pairs)
-    if (windows.replaces[static_cast<std::size_t>(pp.output)]) {  // the steps' rejections no longer tell
+    if (needs_windows[static_cast<std::size_t>(pp.output)]) {
       pp.rejected = 0;
       pp.rejections.clear();
     }

@@ -287,11 +287,9 @@ struct IdentifyReport {
   std::vector<PoleMethodScore> pole_method_scores;
   OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
-  Eigen::Index search_samples = 0;  ///< the samples the structure search scored on (search_max_samples)
-  bool used_windows = false;        ///< some output's poles came from local windows (see window_outputs)
-  /// Outputs whose step responses gave fewer usable poles than a bank
-  /// places: local windows added theirs (replaced them, with none usable).
-  std::vector<std::string> window_outputs;
+  Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)
+  bool used_windows = false;                ///< some output's poles came from local windows (see window_outputs)
+  std::vector<std::string> window_outputs;  ///< outputs without a usable step response, fitted on windows
   /// The logs hold a staircase: some output's poles came from its steps, so the
   /// partition follows the reference levels (if few) rather than quantiles.
   bool staircase = false;

@@ -14,8 +14,8 @@
 namespace plsa {
 
 /// Kolmogorov distance of one pole p to one basis pole xi (the 1-width inner function).
-/// |a / b| as sqrt(|a|^2 / |b|^2): no complex division (libgcc's, which
-/// guards infinities and NaN, was a tenth of identifying an hour of data);
+/// |a / b| as sqrt(|a|^2 / |b|^2): no complex division (libgcc's guards
+/// infinities and NaN at a cost that shows when identifying long logs);
 /// inside the unit disc neither square can overflow or underflow to harm.
 inline double poleDistance(std::complex<double> p, std::complex<double> xi) {
   return std::sqrt(std::norm(p - xi) / std::norm(1.0 - std::conj(xi) * p));

@@ -38,6 +38,43 @@ io::Log staircaseLog(Weakness weakness) {
   return log;
 }
 
+// A log of n samples with these columns, its data to be filled.
+io::Log blankLog(std::string source, std::vector<std::string> columns, Eigen::Index n) {
+  io::Log log;
+  log.source = std::move(source);
+  log.columns = std::move(columns);
+  log.data.resize(n, static_cast<Eigen::Index>(log.columns.size()));
+  return log;
+}
+
+// A reference that holds one step and then keeps moving (a joystick run that
+// happens to pause once), through two first-order lags (poles 0.9 and 0.95);
+// `creep`: fast lags (0.5, 0.5) and a slow creep (0.999) as large as they.
+io::Log oneStepLog(bool creep = false) {
+  const Eigen::Index rest = 160, held = 320, n = 8000;
+  io::Log log = blankLog("one_step.csv", {"time_s", "cmd_1", "p_1", "y"}, n);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const double lag_p = creep ? 0.5 : 0.9, lag_y = creep ? 0.5 : 0.95, creep_gain = creep ? 40.0 : 0.0;
+  double cmd = 0.0, p = 0.0, y = 0.0, c = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k == rest) cmd = 0.2;
+    if (k >= rest + held) cmd = std::clamp(cmd + 0.01 * noise(rng), 0.05, 0.35);
+    p = lag_p * p + (1.0 - lag_p) * cmd;
+    y = lag_y * y + (1.0 - lag_y) * 40.0 * p;
+    c = 0.999 * c + 0.001 * creep_gain * p;
+    log.data.row(k) << static_cast<double>(k) * kDt, cmd, p, y + c + 0.05 * noise(rng);
+  }
+  return log;
+}
+
+// The identify progress line that starts with `tag`.
+std::string progressLine(const IdentifyReport& rep, const std::string& tag) {
+  const auto line = std::find_if(rep.lines.begin(), rep.lines.end(),
+                                 [&](const std::string& l) { return l.find(tag) != std::string::npos; });
+  return line == rep.lines.end() ? std::string() : *line;
+}
+
 // Only the partition's choice: one play set, no lag, threshold, slow pole or drift.
 IdentifyOptions partitionOnly(std::vector<std::string> inputs, std::vector<std::string> outputs) {
   IdentifyOptions o;
@@ -94,14 +131,57 @@ TEST(Pipeline, EveryOutputWeakKeepsTheStaircasePartition) {
   expectStaircaseSplits(m, rep);
 }
 
+// One step's single local pole is too few to place a bank's five: local
+// windows are fitted too, but while the steps' model (five times the one
+// pole, a Laguerre basis) scores above window_poles_below, their poles are
+// not tried.
+TEST(Pipeline, OneStepAmongMovingInputsKeepsItsRepeatedPoleWhileItScores) {
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({oneStepLog()}, partitionOnly({"p_1"}, {"y"}), &rep);
+  EXPECT_EQ(rep.segments, 1);
+  EXPECT_TRUE(rep.window_outputs.empty());
+  EXPECT_EQ(rep.window_candidate_outputs, (std::vector<std::string>{"y"}));
+  EXPECT_EQ(rep.pairs.at(0).identified.size(), 1u);
+  EXPECT_GE(rep.pairs.at(0).window_identified.size(), 5u);
+  ASSERT_EQ(rep.pole_method_scores.size(), 2u);
+  EXPECT_GE(rep.pole_method_scores[0].step_ahead, 0.0);
+  EXPECT_NE(progressLine(rep, "[2/5]").find("fewer usable step poles than the 5 to place for y"), std::string::npos);
+  EXPECT_NE(progressLine(rep, "[5/5] poles kept").find("windows' poles for y not tried"), std::string::npos);
+  const auto poles = m.poles[0][0].poles();
+  ASSERT_EQ(poles.size(), 5u);
+  for (const auto& q : poles) EXPECT_EQ(q, poles[0]) << "the step's one pole, five times";
+}
+
+// window_poles_below 100: the steps' and windows' poles together are two
+// more candidates, and the model keeps the best of the four by held-out
+// score (the first unless another beats it by 0.1), with its poles. With a
+// creep, the step's one pole follows it and the windows' poles score higher.
+TEST(Pipeline, WindowPolesCompeteWithTheStepsWhenAskedTo) {
+  IdentifyOptions o = partitionOnly({"p_1"}, {"y"});
+  o.window_poles_below = 100.0;
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({oneStepLog(true)}, o, &rep);
+  ASSERT_EQ(rep.pole_method_scores.size(), 4u);
+  EXPECT_EQ(rep.pole_method_scores[2].method, "fkcm+windows");
+  EXPECT_EQ(rep.pole_method_scores[3].method, "fcm+windows");
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < 4; ++i)
+    if (rep.pole_method_scores[i].step_ahead > rep.pole_method_scores[best].step_ahead + 0.1) best = i;
+  EXPECT_NE(progressLine(rep, "[5/5] poles kept").find("poles kept: " + rep.pole_method_scores[best].method + " "),
+            std::string::npos)
+      << progressLine(rep, "[5/5] poles kept");
+  const auto poles = m.poles[0][0].poles();
+  const bool repeated =
+      std::all_of(poles.begin(), poles.end(), [&](const auto& q) { return std::abs(q - poles[0]) < 1e-9; });
+  EXPECT_GE(best, 2u) << progressLine(rep, "[5/5] poles kept");
+  EXPECT_EQ(repeated, best < 2) << "the steps' candidates repeat their one pole; the windows' do not";
+}
+
 // Without a design, the grid is quantiles of the inputs that move: a chamber
 // that is never driven, whose sensor reads only noise, is not scheduled on.
 TEST(Pipeline, QuantileGridLeavesOutAnInputThatOnlyReadsNoise) {
   const Eigen::Index n = 6000;
-  io::Log log;
-  log.source = "unused_chamber.csv";
-  log.columns = {"time_s", "p_1", "p_2", "y"};
-  log.data.resize(n, 4);
+  io::Log log = blankLog("unused_chamber.csv", {"time_s", "p_1", "p_2", "y"}, n);
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 1.0);
   double p = 0.2, y = 0.0;

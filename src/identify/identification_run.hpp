@@ -43,7 +43,13 @@ struct IdentificationRun {
   void checkOptions(const std::vector<io::Log>& logs) const;
   void readData(const std::vector<io::Log>& logs);
   void fitLocalModels(const std::vector<io::Log>& logs);
-  void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows);
+  void fitStepSegments(const std::vector<io::Log>& logs);
+  /// What local windows do for an output: nothing, give its poles (no usable
+  /// step pole), or give a second pole candidate (too few to place a bank).
+  enum class WindowUse { kNone, kInstead, kCandidate };
+  std::vector<WindowUse> chooseWindows();
+  std::string windowsNote() const;
+  void fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<WindowUse>& use);
   [[noreturn]] void noUsablePoles(int out_i) const;
   std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();
@@ -57,15 +63,23 @@ struct IdentificationRun {
   };
   struct PoleCandidate {
     PoleMethod method;
+    bool with_windows;  ///< the steps' poles and the windows' (PairPoles::window_identified)
     std::vector<std::vector<PoleSet>> poles;
     std::vector<ClusteringResult> chosen;
   };
-  std::vector<PoleSource> poleSources();
-  PoleCandidate clusterPairs(PoleMethod method, const std::vector<PoleSource>& sources);
+  std::vector<PoleSource> poleSources(bool with_windows);
+  PoleCandidate clusterPairs(PoleMethod method, bool with_windows, const std::vector<PoleSource>& sources);
+  std::vector<PoleMethod> poleMethods() const;
   void selectPoles();
   void adoptPoles(const PoleCandidate& c);
   void choosePoleMethod();  // the first stage of the structure search
   double poleMethodScore(const Structure* input_side, PoleMethodScore& into);
+  /// The best pole candidate so far and its score.
+  struct PoleChoice {
+    std::size_t best = 0;
+    double fit = -INFINITY;
+  };
+  void scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice);
   void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
 
   // The structure search (structure_search.cpp).

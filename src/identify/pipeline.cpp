@@ -151,6 +151,7 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(o.search_max_samples >= 0, "identify: the search's sample size must be >= 0 (0: every sample)");
   PLSA_CHECK(std::isfinite(o.search_window_s) && o.search_window_s > 0 && o.search_window_s < 1e9,
              "identify: the search's windows must last a positive, finite number of seconds");
+  PLSA_CHECK(!std::isnan(o.window_poles_below), "identify: window_poles_below is NaN");
   checkOption(o.pole_method);
   checkOption(o.scheduling);
   checkOption(o.output_drift);
@@ -214,11 +215,27 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
 }
 
-// Steps 1-2: local data sets and local LTI fits.
+// Steps 1-2: local data sets and local LTI fits: the steps first, then local
+// windows for outputs the steps leave short of poles.
 void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
   rep.pairs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
-    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, {}, 0, {}, {}});
+    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, {}, {}, 0, {}, {}});
+  fitStepSegments(logs);
+  const std::vector<WindowUse> windows = chooseWindows();
+  if (rep.used_windows || !rep.window_candidate_outputs.empty()) fitLocalWindows(logs, windows);
+  int usable = 0, rejected = 0;
+  for (const auto& pp : rep.pairs) {
+    usable += static_cast<int>(pp.identified.size() + pp.window_identified.size());
+    rejected += pp.rejected;
+  }
+  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windowsNote() + ", " +
+      std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
+      " fits rejected (unstable, badly determined or too small for the noise)");
+}
+
+// Each step segment's local fit, per output.
+void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
   rep.segments = 0;
   for (std::size_t r = 0; r < logs.size(); ++r) {
     for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
@@ -240,40 +257,61 @@ void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
       }
     }
   }
-  // Outputs whose step fits gave no usable pole get theirs from local windows.
-  std::vector<bool> needs_windows(static_cast<std::size_t>(no), true);
-  for (const auto& pp : rep.pairs)
-    if (!pp.identified.empty()) needs_windows[static_cast<std::size_t>(pp.output)] = false;
-  rep.window_outputs.clear();
-  for (int out_i = 0; out_i < no; ++out_i)
-    if (needs_windows[static_cast<std::size_t>(out_i)])
-      rep.window_outputs.push_back(o.outputs[static_cast<std::size_t>(out_i)]);
-  rep.used_windows = !rep.window_outputs.empty();
-  rep.staircase = rep.window_outputs.size() < o.outputs.size();
-  if (rep.used_windows) fitLocalWindows(logs, needs_windows);
-  int usable = 0, rejected = 0;
-  for (const auto& pp : rep.pairs) {
-    usable += static_cast<int>(pp.identified.size());
-    rejected += pp.rejected;
-  }
-  std::string windows_note;
-  if (rep.used_windows) {
-    windows_note = " (no usable step responses";
-    if (rep.staircase) {
-      windows_note += " for";
-      for (const auto& name : rep.window_outputs) windows_note += " " + name;
-    }
-    windows_note += ": local windows of " + std::to_string(o.window_s).substr(0, 4) + " s instead)";
-  }
-  say("[2/5] local LTI fits: " + std::to_string(rep.segments) + " step segments" + windows_note + ", " +
-      std::to_string(usable) + " poles kept, " + std::to_string(rejected) +
-      " fits rejected (unstable, badly determined or too small for the noise)");
 }
 
-// No staircase: MISO fits on local windows give each output's poles.
-void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<bool>& needs_windows) {
+// Per output, what local windows do: an output whose steps gave no usable
+// pole takes its poles from them; one whose steps gave fewer than a bank
+// places gets a second pole candidate, steps and windows together, which
+// the structure search scores against the steps' alone (choosePoleMethod):
+// five poles clustered from one step's single pole stack on it, which can
+// be the model's undoing (a slow pole from a joystick run's one pause) or
+// the better basis (a repeated pole is a Laguerre basis; windows' poles
+// follow drift), and only held-out data tell.
+std::vector<IdentificationRun::WindowUse> IdentificationRun::chooseWindows() {
+  std::vector<std::size_t> step_poles(static_cast<std::size_t>(no), 0);
+  for (const auto& pp : rep.pairs) step_poles[static_cast<std::size_t>(pp.output)] += pp.identified.size();
+  std::vector<WindowUse> use(static_cast<std::size_t>(no), WindowUse::kNone);
+  rep.window_outputs.clear();
+  rep.window_candidate_outputs.clear();
+  for (int out_i = 0; out_i < no; ++out_i) {
+    const auto oo = static_cast<std::size_t>(out_i);
+    if (step_poles[oo] == 0) {
+      use[oo] = WindowUse::kInstead;
+      rep.window_outputs.push_back(o.outputs[oo]);
+    } else if (step_poles[oo] < static_cast<std::size_t>(o.poles_per_pair)) {
+      use[oo] = WindowUse::kCandidate;
+      rep.window_candidate_outputs.push_back(o.outputs[oo]);
+    }
+  }
+  rep.used_windows = !rep.window_outputs.empty();
+  rep.staircase = rep.window_outputs.size() < o.outputs.size();
+  return use;
+}
+
+// The progress line's note on the windows (empty without them).
+std::string IdentificationRun::windowsNote() const {
+  std::string note;
+  if (rep.used_windows) {
+    note = " (no usable step responses";
+    if (rep.staircase) {
+      note += " for";
+      for (const auto& name : rep.window_outputs) note += " " + name;
+    }
+    note += ": local windows of " + formatNumber(o.window_s) + " s instead)";
+  }
+  if (!rep.window_candidate_outputs.empty()) {
+    note += " (fewer usable step poles than the " + std::to_string(o.poles_per_pair) + " to place for";
+    for (const auto& name : rep.window_candidate_outputs) note += " " + name;
+    note += ": local windows of " + formatNumber(o.window_s) + " s fitted, their poles tried if the steps' fail)";
+  }
+  return note;
+}
+
+// MISO fits on local windows give the outputs `use` names their poles (or a
+// candidate's).
+void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const std::vector<WindowUse>& use) {
   for (auto& pp : rep.pairs)
-    if (needs_windows[static_cast<std::size_t>(pp.output)]) {
+    if (use[static_cast<std::size_t>(pp.output)] == WindowUse::kInstead) {  // the steps' rejections no longer tell
       pp.rejected = 0;
       pp.rejections.clear();
     }
@@ -281,7 +319,8 @@ void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const 
   for (std::size_t r = 0; r < logs.size(); ++r)
     for (Eigen::Index b = 1; b + w <= U[r].rows(); b += w)
       for (int out_i = 0; out_i < no; ++out_i) {
-        if (!needs_windows[static_cast<std::size_t>(out_i)]) continue;
+        const WindowUse how = use[static_cast<std::size_t>(out_i)];
+        if (how == WindowUse::kNone) continue;
         // Fit y on each input separately is ill-posed with all moving: use the strongest input.
         Eigen::Index best = 0;
         double spread = -1;
@@ -297,11 +336,12 @@ void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const 
                                          U[r](b - 1, best), Ym[r](b - 1, out_i), o.local_order);
         for (int in_i = 0; in_i < ni; ++in_i) {
           PairPoles& pp = pairAt(in_i, out_i);
+          auto& into = how == WindowUse::kInstead ? pp.identified : pp.window_identified;
           if (f.usable)
-            pp.identified.insert(pp.identified.end(), f.poles.begin(), f.poles.end());
-          else if (f.uncertain)
+            into.insert(into.end(), f.poles.begin(), f.poles.end());
+          else if (f.uncertain && how == WindowUse::kInstead)
             pp.uncertain.insert(pp.uncertain.end(), f.poles.begin(), f.poles.end());
-          if (!f.usable && in_i == 0) {
+          if (!f.usable && in_i == 0 && how == WindowUse::kInstead) {
             ++pp.rejected;
             pp.rejections.push_back(logs[r].source + " window at " + std::to_string(b) + ": " + f.reason);
           }

@@ -1,7 +1,8 @@
 // Steps 5-6, pole selection: each pair's local poles clustered into its
 // basis poles by the method asked for, or (PoleMethod::kAuto) by FKcM and by
-// fuzzy c-means, the structure search's first stage keeping the one whose
-// model scores higher on held-out data.
+// fuzzy c-means, each also with local windows' poles when the steps gave too
+// few; the structure search's first stage keeps the candidate whose model
+// scores higher on held-out data.
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -46,17 +47,32 @@ ClusteringResult cluster(PoleMethod method, const std::vector<C>& poles, const C
   throw std::invalid_argument("identify: pole method out of range");
 }
 
+// As the scores name it: the method, "+windows" with the windows' poles.
+std::string candidateName(const IdentificationRun::PoleCandidate& c) {
+  return std::string(optionName(c.method)) + (c.with_windows ? "+windows" : "");
+}
+
 }  // namespace
 
 // Which local poles each pair clusters: its own; with fewer than two, its
 // output's (and an output without any borrows every other output's: the
-// same chambers drive them all), saying so.
-std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources() {
+// same chambers drive them all), saying so. `with_windows`: its own are the
+// steps' and the windows' (PairPoles::window_identified).
+std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(bool with_windows) {
+  std::vector<std::vector<C>> pair_poles;
+  for (const PairPoles& pp : rep.pairs) {
+    pair_poles.push_back(pp.identified);
+    if (with_windows)
+      pair_poles.back().insert(pair_poles.back().end(), pp.window_identified.begin(), pp.window_identified.end());
+  }
+  const auto own = [&](int in_i, int out_i) -> const std::vector<C>& {
+    return pair_poles[static_cast<std::size_t>(out_i * ni + in_i)];
+  };
   std::vector<std::vector<C>> output_poles(static_cast<std::size_t>(no));
   std::vector<C> every_pole;
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) {
-      const auto& id = pairAt(in_i, out_i).identified;
+      const auto& id = own(in_i, out_i);
       output_poles[static_cast<std::size_t>(out_i)].insert(output_poles[static_cast<std::size_t>(out_i)].end(),
                                                            id.begin(), id.end());
       every_pole.insert(every_pole.end(), id.begin(), id.end());
@@ -66,13 +82,13 @@ std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources() {
   std::vector<PoleSource> sources;
   for (int out_i = 0; out_i < no; ++out_i) {
     const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
-    if (mine.empty() && !rep.uncertain_poles)
+    if (mine.empty() && !rep.uncertain_poles && !with_windows)
       say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
           " (every one rejected): it takes the other outputs' poles");
     for (int in_i = 0; in_i < ni; ++in_i) {
-      const PairPoles& pp = pairAt(in_i, out_i);
-      if (pp.identified.size() >= 2)
-        sources.push_back({pp.identified, " own"});
+      const std::vector<C>& pp = own(in_i, out_i);
+      if (pp.size() >= 2)
+        sources.push_back({pp, with_windows ? " step and window" : " own"});
       else if (!mine.empty())
         sources.push_back({mine, " output-wide"});
       else
@@ -85,12 +101,12 @@ std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources() {
 // Every pair's basis poles by one method. Window fits give every input of an
 // output the same poles: each distinct set is clustered once (on an hour of
 // data, seconds per set).
-IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod method,
+IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod method, bool with_windows,
                                                                  const std::vector<PoleSource>& sources) {
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
   std::vector<std::pair<const std::vector<C>*, ClusteringResult>> clustered;
-  PoleCandidate cand{method, std::vector<std::vector<PoleSet>>(static_cast<std::size_t>(no)), {}};
+  PoleCandidate cand{method, with_windows, std::vector<std::vector<PoleSet>>(static_cast<std::size_t>(no)), {}};
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) {
       const PoleSource& src = sources[static_cast<std::size_t>(out_i * ni + in_i)];
@@ -100,11 +116,21 @@ IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod meth
       const ClusteringResult& r = same->second;
       cand.chosen.push_back(r);
       cand.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(r.centres));
-      say("[3/5] poles " + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
-          o.outputs[static_cast<std::size_t>(out_i)] + " (" + r.method + " over " + std::to_string(src.poles.size()) +
-          src.label + " poles, rho " + std::to_string(r.rho).substr(0, 8) + "): " + fmtPoles(r.centres));
+      say("[3/5] poles" + std::string(with_windows ? " (with windows) " : " ") +
+          o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] + " (" +
+          r.method + " over " + std::to_string(src.poles.size()) + src.label + " poles, rho " +
+          std::to_string(r.rho).substr(0, 8) + "): " + fmtPoles(r.centres));
     }
   return cand;
+}
+
+// With kAuto FKcM and fuzzy c-means, else the method asked for
+// (fuzzy c-means places real centres only: with complex pairs asked for,
+// auto is FKcM).
+std::vector<PoleMethod> IdentificationRun::poleMethods() const {
+  if (o.pole_method == PoleMethod::kAuto && o.clustering.complex_pairs == 0)
+    return {PoleMethod::kFkcm, PoleMethod::kFuzzyCMeans};
+  return {o.pole_method == PoleMethod::kAuto ? PoleMethod::kFkcm : o.pole_method};
 }
 
 void IdentificationRun::selectPoles() {
@@ -112,14 +138,9 @@ void IdentificationRun::selectPoles() {
   model.inputs = o.inputs;
   model.outputs = o.outputs;
   model.output_frame = frame;
-  const std::vector<PoleSource> sources = poleSources();
-  // Fuzzy c-means places real centres only: with complex pairs asked for, auto is FKcM.
-  const bool both = o.pole_method == PoleMethod::kAuto && o.clustering.complex_pairs == 0;
-  const std::vector<PoleMethod> methods =
-      both ? std::vector<PoleMethod>{PoleMethod::kFkcm, PoleMethod::kFuzzyCMeans}
-           : std::vector<PoleMethod>{o.pole_method == PoleMethod::kAuto ? PoleMethod::kFkcm : o.pole_method};
+  const std::vector<PoleSource> sources = poleSources(false);
   pole_candidates.clear();
-  for (PoleMethod m : methods) pole_candidates.push_back(clusterPairs(m, sources));
+  for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, false, sources));
   adoptPoles(pole_candidates.front());
 }
 
@@ -128,15 +149,25 @@ void IdentificationRun::adoptPoles(const PoleCandidate& c) {
   for (std::size_t i = 0; i < rep.pairs.size(); ++i) rep.pairs[i].chosen = c.chosen[i];
 }
 
-// With kAuto: each method's poles scored on the first play set, by held-out
-// 40-step fit on the first structure and, when a structure schedules on the
-// input side, held-out simulation on the first such one (the mean of the
-// two); FKcM (the paper's) unless fuzzy c-means scores higher by more than
-// kPoleMethodMargin fit points (on a staircase both find nearly the same
-// poles and scores, and a tie keeps the paper's). FKcM minimises the largest
-// weighted distance to any local pole, so on window fits (hundreds of local
-// poles, some spurious) a few outliers can set its centres, and a simulation
-// on them can run away; the scores decide on the data.
+// Each pole candidate (with kAuto FKcM's and fuzzy c-means') scored on the
+// first play set, by held-out 40-step fit on the first structure and, when a
+// structure schedules on the input side, held-out simulation on the first
+// such one (the mean of the two); the first (FKcM, the paper's) unless
+// another scores higher by more than kPoleMethodMargin fit points (on a
+// staircase both find nearly the same poles and scores, and a tie keeps the
+// paper's). FKcM minimises the largest weighted distance to any local pole,
+// so on window fits (hundreds of local poles, some spurious) a few outliers
+// can set its centres, and a simulation on them can run away; the scores
+// decide on the data.
+//
+// An output with fewer usable step poles than a bank places has a bank of
+// its one or two poles repeated. That can be the better basis (a repeated
+// pole is a Laguerre basis: on the real arm's leave-one-out it simulates
+// better than local windows' poles, whose slow ones follow drift, though
+// the search's own held-out scores prefer the windows'), or the model's
+// undoing (a slow pole from a joystick run's one pause: a simulation that
+// runs away). So the steps' and windows' poles together are tried only when
+// the steps' best model scores below IdentifyOptions::window_poles_below.
 double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMethodScore& into) {
   applyPlay(o.play_candidates.front());
   applyStructure(structures.front());
@@ -148,34 +179,50 @@ double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMetho
 }
 
 void IdentificationRun::choosePoleMethod() {
-  if (pole_candidates.size() < 2) return;
+  const bool windows = !rep.window_candidate_outputs.empty();
+  if (pole_candidates.size() < 2 && !windows) return;
   const auto first_input_side = std::find_if(structures.begin(), structures.end(),
                                              [](const Structure& st) { return st.side == ScheduleSide::kInput; });
   const Structure* input_side = first_input_side == structures.end() ? nullptr : &*first_input_side;
-  const bool sim = input_side != nullptr;
-  beginScoring("pole methods", pole_candidates.size() * (sim ? 2 : 1));
   rep.pole_method_scores.clear();
-  std::size_t best = 0;
-  double best_fit = -INFINITY;
-  for (std::size_t i = 0; i < pole_candidates.size(); ++i) {
+  PoleChoice choice;
+  scorePoleCandidates("pole methods", input_side, choice);
+  std::string held_back;
+  if (windows && choice.fit < o.window_poles_below) {
+    const std::vector<PoleSource> sources = poleSources(true);
+    for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, true, sources));
+    scorePoleCandidates("pole candidates with windows", input_side, choice);
+  } else if (windows) {
+    held_back = "; windows' poles for";
+    for (const auto& name : rep.window_candidate_outputs) held_back += " " + name;
+    held_back += " not tried: the steps' score " + formatNumber(o.window_poles_below) + " or more";
+  }
+  adoptPoles(pole_candidates[choice.best]);
+  std::string s = "[5/5] poles kept: " + candidateName(pole_candidates[choice.best]) +
+                  " (held-out fits on the first play set, 40 steps ahead" + (input_side ? " and simulated" : "") +
+                  "; the first unless another scores " + formatNumber(kPoleMethodMargin) + " higher:";
+  for (const PoleMethodScore& sc : rep.pole_method_scores)
+    s += " " + sc.method + "->" + std::to_string(sc.step_ahead).substr(0, 5) +
+         (input_side ? "/" + std::to_string(sc.simulation).substr(0, 5) : std::string());
+  say(s + held_back + ")");
+}
+
+// Scores the candidates not scored yet (from rep.pole_method_scores' size
+// on), keeping the best in `choice`.
+void IdentificationRun::scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice) {
+  const std::size_t first = rep.pole_method_scores.size();
+  beginScoring(stage, (pole_candidates.size() - first) * (input_side ? 2 : 1));
+  for (std::size_t i = first; i < pole_candidates.size(); ++i) {
     adoptPoles(pole_candidates[i]);
-    PoleMethodScore sc{optionName(pole_candidates[i].method)};
+    PoleMethodScore sc{candidateName(pole_candidates[i])};
     double score = poleMethodScore(input_side, sc);
     if (!std::isfinite(score)) score = -INFINITY;  // a simulation run off to NaN loses
     rep.pole_method_scores.push_back(sc);
-    if (score > best_fit + kPoleMethodMargin) {
-      best_fit = score;
-      best = i;
+    if (i == 0 || score > choice.fit + kPoleMethodMargin) {
+      choice.fit = score;
+      choice.best = i;
     }
   }
-  adoptPoles(pole_candidates[best]);
-  std::string s = "[5/5] poles kept: " + std::string(optionName(pole_candidates[best].method)) +
-                  " (held-out fits on the first play set, 40 steps ahead" + (sim ? " and simulated" : "") +
-                  "; fkcm unless fcm scores 0.1 higher:";
-  for (const PoleMethodScore& sc : rep.pole_method_scores)
-    s += " " + sc.method + "->" + std::to_string(sc.step_ahead).substr(0, 5) +
-         (sim ? "/" + std::to_string(sc.simulation).substr(0, 5) : std::string());
-  say(s + ")");
 }
 
 }  // namespace plsa::identify

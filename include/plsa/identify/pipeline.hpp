@@ -135,6 +135,16 @@ struct IdentifyOptions {
   /// Refuse training data with a gross outlier (grossOutlier()); false fits them as they are.
   bool refuse_outliers = true;
   double window_s = 8.0;  ///< local windows when the log has no steps
+  /// An output whose steps give fewer usable poles than a bank places (one
+  /// step's pole, say) takes a bank of them repeated; local windows' poles
+  /// with the steps' are a second candidate, scored against them, when the
+  /// steps' best model scores below this on held-out data (the mean of its
+  /// 40-step and simulation fits, in percent). Default 0: only when the
+  /// steps' model is worse than the outputs' mean (on the real arm's
+  /// leave-one-out the repeated pole generalises better than the windows',
+  /// though the search's own held-out scores prefer the windows'); 100:
+  /// always; -inf: never.
+  double window_poles_below = 0.0;
   CoefficientFitOptions coefficients;
   /// Hysteresis memory: candidate sets of play channels. A channel's width is
   /// a fraction of the input's range in the training data, its slope a
@@ -220,9 +230,11 @@ struct IdentifyOptions {
   double progress_interval_s = 5.0;
 };
 
-/// A pole method's held-out fits (IdentifyOptions::pole_method "auto"):
-/// 40 steps ahead on the first structure, and simulated on the first
-/// input-side structure (0 when no structure schedules on the input side).
+/// A pole candidate's held-out fits (IdentifyOptions::pole_method "auto",
+/// or local windows' poles as a candidate): 40 steps ahead on the first
+/// structure, and simulated on the first input-side structure (0 when no
+/// structure schedules on the input side). `method`: "fkcm", "fcm", ...,
+/// with "+windows" for the steps' and windows' poles together.
 struct PoleMethodScore {
   std::string method;
   double step_ahead = 0.0, simulation = 0.0;
@@ -231,6 +243,9 @@ struct PoleMethodScore {
 struct PairPoles {
   int input = 0, output = 0;
   std::vector<std::complex<double>> identified;  ///< usable local poles
+  /// Usable poles of local windows for an output whose steps gave fewer than
+  /// a bank places: the second pole candidate's (with `identified`).
+  std::vector<std::complex<double>> window_identified;
   /// Poles of fits rejected only as badly determined or too weak for the
   /// noise (LocalFit::uncertain): used only when no output has a usable one.
   std::vector<std::complex<double>> uncertain;
@@ -282,14 +297,20 @@ struct IdentifyReport {
   /// taken out only if the mean exceeds the error. Both 0: not scored ("off",
   /// or an output-side model); (0, inf): fewer than two terms paired.
   std::pair<double, double> drift_gain{0.0, 0.0};
-  /// pole_method "auto": FKcM's and fuzzy c-means' held-out fits on the
-  /// first play set; empty otherwise.
+  /// Each pole candidate's held-out fits on the first play set: with
+  /// pole_method "auto" FKcM's and fuzzy c-means', and, when some output has
+  /// too few step poles (window_candidate_outputs), those with the windows'
+  /// poles too if the steps' score below window_poles_below; empty when
+  /// there was one candidate and no output short of step poles.
   std::vector<PoleMethodScore> pole_method_scores;
   OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
   Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)
   bool used_windows = false;                ///< some output's poles came from local windows (see window_outputs)
   std::vector<std::string> window_outputs;  ///< outputs without a usable step response, fitted on windows
+  /// Outputs with fewer usable step poles than a bank places: local windows'
+  /// poles with theirs were a second candidate (pole_method_scores, "+windows").
+  std::vector<std::string> window_candidate_outputs;
   /// The logs hold a staircase: some output's poles came from its steps, so the
   /// partition follows the reference levels (if few) rather than quantiles.
   bool staircase = false;

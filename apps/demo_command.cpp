@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "plsa/core/number_text.hpp"
 #include "log_paths.hpp"
 #include "plsa/eval/comparison.hpp"
 #include "plsa/identify/baselines.hpp"
@@ -290,7 +291,7 @@ void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, c
                  const OutputFolder& path) {
   const std::string drift_text =
       m.report.drift_taken_out
-          ? "A sensor yaw drift of " + std::to_string(m.report.output_drift.rate[1]).substr(0, 6) +
+          ? "A sensor yaw drift of " + significantDigits(m.report.output_drift.rate[1], 3) +
                 " deg/s was found in the grid run and taken out of the training outputs of plsa's model and of the "
                 "linear baselines; their simulations (sim) turn at that rate over the validation run, as its sensor "
                 "drifts on (sim, no drift: they do not). "

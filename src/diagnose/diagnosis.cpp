@@ -1,4 +1,5 @@
 #include "plsa/diagnose/diagnosis.hpp"
+#include "plsa/core/number_text.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -430,12 +431,12 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   const CalibratedState base = calibrateBaseline(simulator, x, d);
   x.step_s = calibrationStep(base.config, base.train, x, d.noise);
   d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;
-  say(o, "plsa diagnose: candidates calibrated at a " + std::to_string(1e3 * d.calibration_step_s).substr(0, 4) +
+  say(o, "plsa diagnose: candidates calibrated at a " + significantDigits(1e3 * d.calibration_step_s, 3) +
              " ms internal step" +
-             (x.step_s > 0.0 ? " (moves the calibrated training gap by under " +
-                                   std::to_string(o.coarse_step_tolerance).substr(0, 4) +
-                                   " noise floors; every gap is measured at the configured step)"
-                             : ""));
+             (x.step_s > 0.0
+                  ? " (moves the calibrated training gap by under " + significantDigits(o.coarse_step_tolerance, 3) +
+                        " noise floors; every gap is measured at the configured step)"
+                  : ""));
   CalibratedState current = base;
   std::vector<std::string> selected;
   for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)

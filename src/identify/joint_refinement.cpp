@@ -14,6 +14,7 @@
 #include <nlopt.hpp>
 
 #include "identification_run.hpp"
+#include "plsa/core/number_text.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -138,7 +139,7 @@ bool simulationHolds(IdentificationRun& r, RefinementSpace& space, const Refinem
   return r.rep.refine_simulation.second >= r.rep.refine_simulation.first;
 }
 
-std::string score5(double v) { return std::to_string(v).substr(0, 5); }
+std::string scoreText(double v) { return fixedDecimals(v, 2); }
 
 /// The refinement's closing progress line.
 std::string refinementLine(const IdentificationRun& r, const RefinementSpace& space, bool kept) {
@@ -150,15 +151,15 @@ std::string refinementLine(const IdentificationRun& r, const RefinementSpace& sp
   std::string outcome;
   if (kept)
     outcome = "kept " + point + ", play " + formatPlaySet(r.best_set) + " (x" + formatNumber(b.channel_scale) +
-              "): " + score5(b.score) + " from " + score5(s0.score);
+              "): " + scoreText(b.score) + " from " + scoreText(s0.score);
   else if (b.score > s0.score + 1e-9)
-    outcome = "best point (" + point + ", x" + formatNumber(b.channel_scale) + ", " + score5(b.score) + " from " +
-              score5(s0.score) + ") not kept";
+    outcome = "best point (" + point + ", x" + formatNumber(b.channel_scale) + ", " + scoreText(b.score) + " from " +
+              scoreText(s0.score) + ") not kept";
   else
-    outcome = "no better point than the choice above (" + score5(s0.score) + ")";
+    outcome = "no better point than the choice above (" + scoreText(s0.score) + ")";
   const auto& sim = r.rep.refine_simulation;
   if (sim.first != 0.0 || sim.second != 0.0)
-    outcome += "; held-out simulation " + score5(sim.second) + " against " + score5(sim.first);
+    outcome += "; held-out simulation " + scoreText(sim.second) + " against " + scoreText(sim.first);
   return "[5/5] refined jointly (" + std::to_string(r.rep.refine_evaluations) + " held-out scores over " + over +
          "; threshold x top level, coupling and softening x top level above it, channels x the chosen size): " +
          outcome;
@@ -188,7 +189,7 @@ void IdentificationRun::refineJointly() {
     if (rep.refine_evaluations % 10 == 0)
       say("[5/5] refining threshold, coupling, softening and channel size: " + std::to_string(rep.refine_evaluations) +
           " of at most " + std::to_string(o.play_refine_evaluations) + " scores, best " +
-          score5(rep.refine_best.score));
+          scoreText(rep.refine_best.score));
     return std::isfinite(sc) ? sc : -1e6;
   };
   maximiseBobyqa(space, o.play_refine_evaluations, score);

@@ -1,4 +1,5 @@
 #include "plsa/identify/pipeline.hpp"
+#include "plsa/core/number_text.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -28,7 +29,7 @@ void checkOption(E value) {
 }  // namespace
 
 std::string formatPlaySet(const std::vector<PlayChannel>& set) {
-  auto num = [](double v) { return std::to_string(v).substr(0, 4); };
+  auto num = [](double v) { return fixedDecimals(v, 2); };
   std::string s = "{";
   for (std::size_t i = 0; i < set.size(); ++i) {
     s += i ? "," : "";
@@ -203,7 +204,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   total = 0;
   for (const auto& u : U) total += u.rows();
   say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
-      std::to_string(1.0 / dt).substr(0, 6) + " Hz");
+      formatNumber(1.0 / dt) + " Hz");
   if (!o.output_frame) say("[1/5] " + rep.output_frame.reason);
   if (frame == OutputFrame::kTipCartesian)
     say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] +
@@ -457,7 +458,7 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
     for (std::size_t i = 0; i < sched.size(); ++i) {
       s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] +
            (interpolated ? " nodes" : " split at");
-      for (double b : bps[i]) s += " " + std::to_string(b).substr(0, 6);
+      for (double b : bps[i]) s += " " + fixedDecimals(b, 4);
     }
     if (!designed) s += " (quantile grid: the logs hold no designed reference levels)";
     if (o.direction_split) s += "; split by direction of change";

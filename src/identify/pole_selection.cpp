@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "identification_run.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/identify/pole_clustering.hpp"
 
 namespace plsa::identify {
@@ -119,7 +120,7 @@ IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod meth
       say("[3/5] poles" + std::string(with_windows ? " (with windows) " : " ") +
           o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] + " (" +
           r.method + " over " + std::to_string(src.poles.size()) + src.label + " poles, rho " +
-          std::to_string(r.rho).substr(0, 8) + "): " + fmtPoles(r.centres));
+          fixedDecimals(r.rho, 6) + "): " + fmtPoles(r.centres));
     }
   return cand;
 }
@@ -202,8 +203,8 @@ void IdentificationRun::choosePoleMethod() {
                   " (held-out fits on the first play set, 40 steps ahead" + (input_side ? " and simulated" : "") +
                   "; the first unless another scores " + formatNumber(kPoleMethodMargin) + " higher:";
   for (const PoleMethodScore& sc : rep.pole_method_scores)
-    s += " " + sc.method + "->" + std::to_string(sc.step_ahead).substr(0, 5) +
-         (input_side ? "/" + std::to_string(sc.simulation).substr(0, 5) : std::string());
+    s += " " + sc.method + "->" + fixedDecimals(sc.step_ahead, 2) +
+         (input_side ? "/" + fixedDecimals(sc.simulation, 2) : std::string());
   say(s + held_back + ")");
 }
 

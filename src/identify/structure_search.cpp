@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "identification_run.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/eval/paired_gain.hpp"
 #include "plsa/identify/output_drift.hpp"
@@ -112,7 +113,7 @@ double IdentificationRun::crossValidated(Score what) {
   if (std::chrono::duration<double>(Clock::now() - last_line).count() >= o.progress_interval_s)
     say("[5/5] scoring " + scoring.stage + ": " + std::to_string(scoring.done) +
         (scoring.total > 0 ? " of " + std::to_string(scoring.total) : std::string()) + " held-out fits, last " +
-        std::to_string(score).substr(0, 5));
+        fixedDecimals(score, 2));
   return score;
 }
 
@@ -287,17 +288,15 @@ void IdentificationRun::reportPlayChoice() {
     std::size_t i = 0;
     for (const auto& [f, sc] : rep.play_scores)
       s += std::string(" ") + structures[i++ / o.play_candidates.size()].tag + formatPlaySet(f) + "->" +
-           std::to_string(sc).substr(0, 5);
+           fixedDecimals(sc, 2);
     say(s);
   }
   if (!rep.coupling_scores.empty()) {
     std::string s = "[5/5] coupled to the other inputs (kappa x top level): ";
-    s +=
-        best_coupling > 0 ? "kept " + std::to_string(best_coupling * top_level).substr(0, 4) : std::string("none kept");
+    s += best_coupling > 0 ? "kept " + fixedDecimals(best_coupling * top_level, 2) : std::string("none kept");
     s += ". Scores:";
     for (const auto& c : rep.coupling_scores)
-      s += " " + std::to_string(c.coupling).substr(0, 4) + formatPlaySet(c.set) + "->" +
-           std::to_string(c.score).substr(0, 5);
+      s += " " + fixedDecimals(c.coupling, 2) + formatPlaySet(c.set) + "->" + fixedDecimals(c.score, 2);
     say(s);
   }
 }
@@ -323,8 +322,7 @@ void IdentificationRun::searchScheduleLag() {
   std::string s = "[5/5] lag on the scheduling inputs: ";
   s += best_lag > 0 ? "kept " + formatNumber(best_lag) + " s" : std::string("none kept");
   s += ". Scores:";
-  for (const auto& [lag, sc] : rep.schedule_lag_scores)
-    s += " " + formatNumber(lag) + "s->" + std::to_string(sc).substr(0, 5);
+  for (const auto& [lag, sc] : rep.schedule_lag_scores) s += " " + formatNumber(lag) + "s->" + fixedDecimals(sc, 2);
   say(s);
 }
 
@@ -382,9 +380,9 @@ void IdentificationRun::searchOutputDrift() {
     } else {
       s += "left in";
     }
-    s += " (held-out simulation " + std::to_string(without).substr(0, 5) + " as logged, " +
-         std::to_string(with).substr(0, 5) + " with it taken out: gains " + formatNumber(gain) + " +- " +
-         formatNumber(se) + (gain > se ? "" : ", within one standard error") + "; " +
+    s += " (held-out simulation " + fixedDecimals(without, 2) + " as logged, " + fixedDecimals(with, 2) +
+         " with it taken out: gains " + formatNumber(gain) + " +- " + formatNumber(se) +
+         (gain > se ? "" : ", within one standard error") + "; " +
          perOutputGains(fold_scores, without_scores, o.outputs) + ")";
     say(s);
   } else if (o.output_drift != OutputDriftChoice::kOff) {
@@ -444,7 +442,7 @@ void IdentificationRun::searchSlowPole() {
   }
   s += ". Scores:";
   for (const auto& [tau, sc] : rep.slow_pole_scores)
-    s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + std::to_string(sc).substr(0, 5);
+    s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + fixedDecimals(sc, 2);
   say(s);
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "identification_run.hpp"
+#include "plsa/core/number_text.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -56,7 +57,7 @@ std::string thresholdLine(const IdentificationRun& r, bool softened) {
   for (const auto& t : r.rep.threshold_scores)
     line += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) +
             (softened ? "/" + formatNumber(t.softening) : std::string()) + formatPlaySet(t.set) + "->" +
-            std::to_string(t.score).substr(0, 5);
+            fixedDecimals(t.score, 2);
   return line;
 }
 

@@ -261,13 +261,10 @@ void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
 }
 
 // Per output, what local windows do: an output whose steps gave no usable
-// pole takes its poles from them; one whose steps gave fewer than a bank
-// places gets a second pole candidate, steps and windows together, which
-// the structure search scores against the steps' alone (choosePoleMethod):
-// five poles clustered from one step's single pole stack on it, which can
-// be the model's undoing (a slow pole from a joystick run's one pause) or
-// the better basis (a repeated pole is a Laguerre basis; windows' poles
-// follow drift), and only held-out data tell.
+// pole takes its poles from them; for one whose steps gave fewer than a
+// bank places they are fitted too, kept apart (PairPoles::window_identified)
+// for the structure search to try with the steps' when the steps' model
+// fails (choosePoleMethod).
 std::vector<IdentificationRun::WindowUse> IdentificationRun::chooseWindows() {
   std::vector<std::size_t> step_poles(static_cast<std::size_t>(no), 0);
   for (const auto& pp : rep.pairs) step_poles[static_cast<std::size_t>(pp.output)] += pp.identified.size();

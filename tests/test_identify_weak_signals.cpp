@@ -68,6 +68,30 @@ io::Log oneStepLog(bool creep = false) {
   return log;
 }
 
+// Two chambers: four steps on cmd_2 (z follows p_2, pole 0.95), then one on
+// cmd_1 held 4 s and random moves after it (y follows p_1, pole 0.9): y's
+// steps give one usable pole, z's four.
+io::Log twoChamberLog() {
+  const Eigen::Index hold = 320, n = 8000;
+  io::Log log = blankLog("two_chambers.csv", {"time_s", "cmd_1", "cmd_2", "p_1", "p_2", "y", "z"}, n);
+  std::mt19937 rng(6);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  double cmd_1 = 0.0, cmd_2 = 0.0, p_1 = 0.0, p_2 = 0.0, y = 0.0, z = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Index step = k / hold;
+    if (step >= 1 && step <= 4) cmd_2 = 0.08 * static_cast<double>(step);
+    if (step == 5) cmd_1 = 0.2;
+    if (step >= 6) cmd_1 = std::clamp(cmd_1 + 0.01 * noise(rng), 0.05, 0.35);
+    p_1 = 0.5 * p_1 + 0.5 * cmd_1;
+    p_2 = 0.5 * p_2 + 0.5 * cmd_2;
+    y = 0.9 * y + 0.1 * 40.0 * p_1;
+    z = 0.95 * z + 0.05 * 40.0 * p_2;
+    log.data.row(k) << static_cast<double>(k) * kDt, cmd_1, cmd_2, p_1, p_2, y + 0.05 * noise(rng),
+        z + 0.05 * noise(rng);
+  }
+  return log;
+}
+
 // The identify progress line that starts with `tag`.
 std::string progressLine(const IdentifyReport& rep, const std::string& tag) {
   const auto line = std::find_if(rep.lines.begin(), rep.lines.end(),
@@ -175,6 +199,31 @@ TEST(Pipeline, WindowPolesCompeteWithTheStepsWhenAskedTo) {
       std::all_of(poles.begin(), poles.end(), [&](const auto& q) { return std::abs(q - poles[0]) < 1e-9; });
   EXPECT_GE(best, 2u) << progressLine(rep, "[5/5] poles kept");
   EXPECT_EQ(repeated, best < 2) << "the steps' candidates repeat their one pole; the windows' do not";
+}
+
+// The windows' candidates cluster only the short output's poles anew: z,
+// whose steps give poles enough, reuses the steps' candidates' clustering
+// and is not printed again.
+TEST(Pipeline, WindowCandidatesClusterOnlyTheShortOutputsPolesAgain) {
+  IdentifyOptions o = partitionOnly({"p_1", "p_2"}, {"y", "z"});
+  o.poles_per_pair = 3;
+  o.window_poles_below = 100.0;
+  IdentifyReport rep;
+  identifyModel({twoChamberLog()}, o, &rep);
+  ASSERT_EQ(rep.window_candidate_outputs, (std::vector<std::string>{"y"}));
+  ASSERT_EQ(rep.pole_method_scores.size(), 4u);
+  int y_lines = 0, z_lines = 0, with_windows = 0;
+  for (const auto& l : rep.lines) {
+    if (l.rfind("[3/5] poles", 0) != 0) continue;
+    y_lines += l.find("-> y ") != std::string::npos;
+    z_lines += l.find("-> z ") != std::string::npos;
+    if (l.find("(with windows)") == std::string::npos) continue;
+    ++with_windows;
+    EXPECT_NE(l.find("-> y "), std::string::npos) << l;
+  }
+  EXPECT_EQ(z_lines, 4) << "z: each input once per method";
+  EXPECT_EQ(y_lines, 8) << "y: each input once per method, then again with its windows";
+  EXPECT_EQ(with_windows, 4);
 }
 
 // Without a design, the grid is quantiles of the inputs that move: a chamber

@@ -13,13 +13,18 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/number_text.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/model/dio_pwl_obf_model.hpp"
 
 namespace plsa::identify {
 
-/// Shortest form that round-trips a plain candidate value: 0.4, 0.15.
-std::string formatNumber(double v);
+/// A candidate value in a progress line (a width, lag, time constant): six
+/// significant digits, 0.4, 0.15, 1.79e-05.
+inline std::string formatNumber(double v) { return significantDigits(v, 6); }
+
+/// A fit score in a progress line (percent): two decimals, -477.21.
+inline std::string scoreText(double v) { return fixedDecimals(v, 2); }
 
 struct IdentificationRun {
   using Clock = std::chrono::steady_clock;
@@ -66,6 +71,14 @@ struct IdentificationRun {
     bool with_windows;  ///< the steps' poles and the windows' (PairPoles::window_identified)
     std::vector<std::vector<PoleSet>> poles;
     std::vector<ClusteringResult> chosen;
+  };
+  /// One clustered set of local poles, kept so that a later candidate with
+  /// the same source poles (the windows' fallback, for outputs that are not
+  /// short) reuses it instead of clustering and printing it again.
+  struct ClusteredSet {
+    PoleMethod method;
+    std::vector<std::complex<double>> poles;
+    ClusteringResult result;
   };
   std::vector<PoleSource> poleSources(bool with_windows);
   PoleCandidate clusterPairs(PoleMethod method, bool with_windows, const std::vector<PoleSource>& sources);
@@ -141,6 +154,7 @@ struct IdentificationRun {
   // The model being built, its pole sets to choose from and the structures it may take.
   DioPwlObfModel model;
   std::vector<PoleCandidate> pole_candidates;
+  std::vector<ClusteredSet> clustered_sets;
   std::vector<PwlPartition> partitions;
   std::vector<Structure> structures;
   std::vector<double> range;  ///< per input: its training range (play widths are fractions of it)

@@ -139,8 +139,6 @@ bool simulationHolds(IdentificationRun& r, RefinementSpace& space, const Refinem
   return r.rep.refine_simulation.second >= r.rep.refine_simulation.first;
 }
 
-std::string scoreText(double v) { return fixedDecimals(v, 2); }
-
 /// The refinement's closing progress line.
 std::string refinementLine(const IdentificationRun& r, const RefinementSpace& space, bool kept) {
   const Refinement &b = r.rep.refine_best, &s0 = r.rep.refine_start;

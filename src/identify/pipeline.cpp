@@ -99,12 +99,6 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
   return run.identify(logs);
 }
 
-std::string formatNumber(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 IdentificationRun::IdentificationRun(const IdentifyOptions& options, IdentifyReport& report)
     : o(options), rep(report), last_line(Clock::now()) {}
 

@@ -100,23 +100,27 @@ std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(bool w
 }
 
 // Every pair's basis poles by one method. Window fits give every input of an
-// output the same poles: each distinct set is clustered once (on an hour of
-// data, seconds per set).
+// output the same poles: each distinct set is clustered once per run (on an
+// hour of data, seconds per set), and a pair whose set an earlier candidate
+// clustered is not printed again.
 IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod method, bool with_windows,
                                                                  const std::vector<PoleSource>& sources) {
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
-  std::vector<std::pair<const std::vector<C>*, ClusteringResult>> clustered;
+  const std::size_t earlier = clustered_sets.size();
   PoleCandidate cand{method, with_windows, std::vector<std::vector<PoleSet>>(static_cast<std::size_t>(no)), {}};
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) {
       const PoleSource& src = sources[static_cast<std::size_t>(out_i * ni + in_i)];
-      auto same =
-          std::find_if(clustered.begin(), clustered.end(), [&](const auto& c) { return *c.first == src.poles; });
-      if (same == clustered.end()) same = clustered.insert(same, {&src.poles, cluster(method, src.poles, co)});
-      const ClusteringResult& r = same->second;
+      auto same = std::find_if(clustered_sets.begin(), clustered_sets.end(),
+                               [&](const ClusteredSet& c) { return c.method == method && c.poles == src.poles; });
+      if (same == clustered_sets.end())
+        same = clustered_sets.insert(same, {method, src.poles, cluster(method, src.poles, co)});
+      const bool new_set = static_cast<std::size_t>(same - clustered_sets.begin()) >= earlier;
+      const ClusteringResult& r = same->result;
       cand.chosen.push_back(r);
       cand.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(r.centres));
+      if (!new_set) continue;
       say("[3/5] poles" + std::string(with_windows ? " (with windows) " : " ") +
           o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] + " (" +
           r.method + " over " + std::to_string(src.poles.size()) + src.label + " poles, rho " +
@@ -141,6 +145,7 @@ void IdentificationRun::selectPoles() {
   model.output_frame = frame;
   const std::vector<PoleSource> sources = poleSources(false);
   pole_candidates.clear();
+  clustered_sets.clear();
   for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, false, sources));
   adoptPoles(pole_candidates.front());
 }
@@ -203,8 +208,8 @@ void IdentificationRun::choosePoleMethod() {
                   " (held-out fits on the first play set, 40 steps ahead" + (input_side ? " and simulated" : "") +
                   "; the first unless another scores " + formatNumber(kPoleMethodMargin) + " higher:";
   for (const PoleMethodScore& sc : rep.pole_method_scores)
-    s += " " + sc.method + "->" + fixedDecimals(sc.step_ahead, 2) +
-         (input_side ? "/" + fixedDecimals(sc.simulation, 2) : std::string());
+    s += " " + sc.method + "->" + scoreText(sc.step_ahead) +
+         (input_side ? "/" + scoreText(sc.simulation) : std::string());
   say(s + held_back + ")");
 }
 

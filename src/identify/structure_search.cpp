@@ -113,7 +113,7 @@ double IdentificationRun::crossValidated(Score what) {
   if (std::chrono::duration<double>(Clock::now() - last_line).count() >= o.progress_interval_s)
     say("[5/5] scoring " + scoring.stage + ": " + std::to_string(scoring.done) +
         (scoring.total > 0 ? " of " + std::to_string(scoring.total) : std::string()) + " held-out fits, last " +
-        fixedDecimals(score, 2));
+        scoreText(score));
   return score;
 }
 
@@ -287,8 +287,7 @@ void IdentificationRun::reportPlayChoice() {
                     "S switched, N input side):";
     std::size_t i = 0;
     for (const auto& [f, sc] : rep.play_scores)
-      s += std::string(" ") + structures[i++ / o.play_candidates.size()].tag + formatPlaySet(f) + "->" +
-           fixedDecimals(sc, 2);
+      s += std::string(" ") + structures[i++ / o.play_candidates.size()].tag + formatPlaySet(f) + "->" + scoreText(sc);
     say(s);
   }
   if (!rep.coupling_scores.empty()) {
@@ -296,7 +295,7 @@ void IdentificationRun::reportPlayChoice() {
     s += best_coupling > 0 ? "kept " + fixedDecimals(best_coupling * top_level, 2) : std::string("none kept");
     s += ". Scores:";
     for (const auto& c : rep.coupling_scores)
-      s += " " + fixedDecimals(c.coupling, 2) + formatPlaySet(c.set) + "->" + fixedDecimals(c.score, 2);
+      s += " " + fixedDecimals(c.coupling, 2) + formatPlaySet(c.set) + "->" + scoreText(c.score);
     say(s);
   }
 }
@@ -322,7 +321,7 @@ void IdentificationRun::searchScheduleLag() {
   std::string s = "[5/5] lag on the scheduling inputs: ";
   s += best_lag > 0 ? "kept " + formatNumber(best_lag) + " s" : std::string("none kept");
   s += ". Scores:";
-  for (const auto& [lag, sc] : rep.schedule_lag_scores) s += " " + formatNumber(lag) + "s->" + fixedDecimals(sc, 2);
+  for (const auto& [lag, sc] : rep.schedule_lag_scores) s += " " + formatNumber(lag) + "s->" + scoreText(sc);
   say(s);
 }
 
@@ -380,7 +379,7 @@ void IdentificationRun::searchOutputDrift() {
     } else {
       s += "left in";
     }
-    s += " (held-out simulation " + fixedDecimals(without, 2) + " as logged, " + fixedDecimals(with, 2) +
+    s += " (held-out simulation " + scoreText(without) + " as logged, " + scoreText(with) +
          " with it taken out: gains " + formatNumber(gain) + " +- " + formatNumber(se) +
          (gain > se ? "" : ", within one standard error") + "; " +
          perOutputGains(fold_scores, without_scores, o.outputs) + ")";
@@ -442,7 +441,7 @@ void IdentificationRun::searchSlowPole() {
   }
   s += ". Scores:";
   for (const auto& [tau, sc] : rep.slow_pole_scores)
-    s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + fixedDecimals(sc, 2);
+    s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + scoreText(sc);
   say(s);
 }
 

@@ -57,7 +57,7 @@ std::string thresholdLine(const IdentificationRun& r, bool softened) {
   for (const auto& t : r.rep.threshold_scores)
     line += " " + formatNumber(t.threshold) + "/" + formatNumber(t.coupling) +
             (softened ? "/" + formatNumber(t.softening) : std::string()) + formatPlaySet(t.set) + "->" +
-            fixedDecimals(t.score, 2);
+            scoreText(t.score);
   return line;
 }
 

@@ -56,6 +56,7 @@ TEST_F(DiagnoseOnLogs, RanksTheWithheldEffectFirst) {
             0)
       << err_;
   const auto d = nlohmann::json::parse(slurp(file("diag/diagnosis.json")));
+  EXPECT_TRUE(d["identified_reference"]["available"].get<bool>()) << d["identified_reference"].dump();
   ASSERT_EQ(d["ranking"].size(), 2u);
   EXPECT_EQ(d["ranking"][0]["effect"], "hysteresis");
   EXPECT_TRUE(fs::exists(file("diag/report.html")));
@@ -128,11 +129,13 @@ TEST_F(Cli, IndependentSelfcheckCasesAreSavedForDiagnoseAndScored) {
     sim[e]["enabled"] = false;
   std::ofstream(file("off.json")) << sim.dump();
   ASSERT_EQ(run("diagnose --sim " + file("off.json") + " --real " + train + " " + held +
-                " --candidates deadzone creep --out " + file("dg")),
+                " --candidates deadzone creep --no-identified-reference --out " + file("dg")),
             0)
       << err_;
   const auto d = nlohmann::json::parse(slurp(file("dg") + "/diagnosis.json"));
   EXPECT_EQ(d["selected"][0], "deadzone");
+  EXPECT_FALSE(d["identified_reference"]["available"].get<bool>());
+  EXPECT_NE(d["identified_reference"]["note"].get<std::string>().find("not computed"), std::string::npos);
   // The runs were recorded from rest and are replayed so: the gap the self-check saw (up to the
   // optimiser's path, which rounding in the CSV moves; a case misread as settled gave 18.1% for 11.3%).
   const double seen = j["cases"][0]["gap_before"].get<double>();

@@ -427,7 +427,10 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
   SelectionContext x{split, o, d.map};
   std::future<IdentifiedReference> reference;
-  if (o.identified_reference) reference = startReference(split, o);
+  if (o.identified_reference)
+    reference = startReference(split, o);
+  else
+    d.reference.note = "not computed (switched off: --no-identified-reference)";
   const CalibratedState base = calibrateBaseline(simulator, x, d);
   x.step_s = calibrationStep(base.config, base.train, x, d.noise);
   d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;

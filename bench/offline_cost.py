@@ -18,19 +18,8 @@ import json
 import os
 import subprocess
 import tempfile
-import time
 
-
-def measured(cmd):
-    """(peak resident KB, CPU seconds, wall seconds) of one process; its output discarded, its failure fatal."""
-    start = time.monotonic()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    err = proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    if proc.returncode != 0:
-        raise SystemExit(f"offline_cost: {' '.join(cmd)} exited with {proc.returncode}:\n{err}")
-    return usage.ru_maxrss, usage.ru_utime + usage.ru_stime, time.monotonic() - start
+from bench_process import default_build, measured, plsa_exe
 
 
 def new_run_fits(exe, tmp, models):
@@ -49,14 +38,11 @@ def new_run_fits(exe, tmp, models):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--build", default=os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                                                     "build"))
+    ap.add_argument("--build", default=default_build())
     ap.add_argument("--minutes", type=float, default=60.0, help="length of the recorded run (default 60)")
     ap.add_argument("--json", metavar="FILE", help="write the figures here")
     a = ap.parse_args()
-    exe = os.path.join(a.build, "apps", "plsa")
-    if not os.access(exe, os.X_OK):
-        raise SystemExit(f"offline_cost: no {exe}; build first (scripts/plsa-dev setup)")
+    exe = plsa_exe(a.build, "offline_cost")
     figures = {"minutes": a.minutes, "steps": {}}
     with tempfile.TemporaryDirectory() as tmp:
         log, model = os.path.join(tmp, "run.csv"), os.path.join(tmp, "model.json")
@@ -72,7 +58,7 @@ def main():
                  "identify, search on every sample": identify + [every, "--search-samples", "0"],
                  "validate": [exe, "validate", "--model", model, "--log", log]}
         for name, cmd in steps.items():
-            kb, cpu, wall = measured(cmd)
+            kb, cpu, wall = measured(cmd, "offline_cost")
             figures["steps"][name] = {"peak_kb": kb, "kb_per_sample": kb / samples, "cpu_s": cpu,
                                       "cpu_s_per_hour": cpu / hours, "wall_s": wall}
         figures["new_run_fits"] = new_run_fits(exe, tmp, {"identify": model,

@@ -1,9 +1,11 @@
 """The bench figure blocks of scripts/plsa-figures (bench/README.md): per call, the 80 Hz loop,
-Google Benchmark, Python's overhead, offline cost, and the demo model against the predictor's targets."""
+Google Benchmark, Python's overhead, offline cost, the diagnosis's time, and the demo model against the predictor's
+targets."""
 import json
 import math
 import os
 import re
+import statistics
 import sys
 import tempfile
 
@@ -134,13 +136,18 @@ def bench_python(build, dry_run):
                   dry_run)
 
 
+def bench_script(build, script):
+    """The figures a bench/ script writes with --json, from one run of it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "figures.json")
+        run([sys.executable, os.path.join(HERE, "bench", script), "--build", build, "--json", out])
+        with open(out) as f:
+            return json.load(f)
+
+
 def bench_offline(build, dry_run):
     """Peak memory and CPU time of identify and validate on an hour of 80 Hz data, against the offline targets."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = os.path.join(tmp, "offline.json")
-        run([sys.executable, os.path.join(HERE, "bench", "offline_cost.py"), "--build", build, "--json", out])
-        with open(out) as f:
-            data = json.load(f)
+    data = bench_script(build, "offline_cost.py")
     rows = ["| step | peak memory | per sample (target <= 1 KB) | CPU time | per hour of data (target <= 20 s) |",
             "| --- | --- | --- | --- | --- |"]
     for name, s in data["steps"].items():
@@ -156,6 +163,40 @@ def bench_offline(build, dry_run):
     replace_block(os.path.join(HERE, "bench", "README.md"), "bench-offline",
                   stamp("bench/offline_cost.py") + f" {data['samples']} samples ({data['minutes']:g} min at 80 Hz)."
                   "\n\n" + "\n".join(rows) + "\n", dry_run)
+
+
+def case_name(saved):
+    """A self-check case's saved-run name as its table names it: hysteresis__bouc_wen___2 -> hysteresis (bouc_wen) #2."""
+    head, _, number = saved.rpartition("_")
+    head = head.rstrip("_")
+    effect, _, law = head.partition("__")
+    return f"{effect} ({law}) #{number}" if law else f"{effect} #{number}"
+
+
+def bench_diagnose(build, dry_run):
+    """plsa diagnose's wall and CPU time on three 60 s runs per withheld effect, with and without the reference."""
+    data = bench_script(build, "diagnose_cost.py")
+    rows = ["| case (withheld effect, law, seed) | wall / CPU, default | without the reference | selected | "
+            "held-out gap left / reference's |", "| --- | --- | --- | --- | --- |"]
+    walls = {"with_reference": [], "without_reference": []}
+    for c in data["cases"]:
+        w, wo = c["with_reference"], c["without_reference"]
+        walls["with_reference"].append(w["wall_s"])
+        walls["without_reference"].append(wo["wall_s"])
+        ref = "-" if w["reference_gap_percent"] is None else f"{w['reference_gap_percent']:.1f}%"
+        rows.append(f"| {case_name(c['case'])} | {w['wall_s']:.1f} s / {w['cpu_s']:.1f} s | "
+                    f"{wo['wall_s']:.1f} s / {wo['cpu_s']:.1f} s | {'+'.join(w['selected']) or 'nothing'} | "
+                    f"{w['gap_after_percent']:.1f}% / {ref} |")
+    summary = []
+    for mode, label in (("with_reference", "default"), ("without_reference", "--no-identified-reference")):
+        v = walls[mode]
+        met = sum(1 for x in v if x <= 10.0)
+        summary.append(f"{label}: median {statistics.median(v):.1f} s, at most {max(v):.1f} s, "
+                       f"{met} of {len(v)} within the 10 s target")
+    replace_block(os.path.join(HERE, "bench", "README.md"), "bench-diagnose",
+                  stamp("bench/diagnose_cost.py") + f" Seeds {data['seed']}-{data['seed'] + len(data['cases']) - 1}, "
+                  f"{data['repeats']} diagnosis per case and mode.\n\n" + "\n".join(rows) + "\n\n" +
+                  "; ".join(summary) + ".\n", dry_run)
 
 
 def bench_gbench(build, dry_run):

@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""Wall and CPU time of `plsa diagnose` on three 60 s runs, per withheld effect (bench/README.md, "Diagnosis").
+
+The runs come from the independently written simulator of `plsa
+diagnose-selfcheck` (laws outside every candidate's family, nominal physics
+randomised): one case per effect and one with nothing withheld (seeds
+--seed .. --seed + 7, the self-check's numbering), each a 120 s training run
+cut in two and a 60 s held-out run, recorded from rest. Each case's
+diagnosis (defaults, every effect a candidate, nominal physics plsa's
+defaults with every effect off: `plsa sim-config`) runs as its own process,
+with the identified reference (the default) and without it
+(--no-identified-reference), --repeats times each; the median wall time and
+CPU time (user + system, every thread, from wait4's rusage) are printed with
+the effects it selected; --json FILE writes them.
+
+Usage: python3 bench/diagnose_cost.py [--build build] [--seed 1] [--repeats 1] [--json FILE]
+"""
+import argparse
+import glob
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+from bench_process import default_build, measured, plsa_exe
+
+def say(text):
+    print(text, file=sys.stderr, flush=True)
+
+
+EFFECTS = ["deadzone", "hysteresis", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"]
+
+
+def split_training(train, first, second):
+    """The training run's first and second halves as two runs, the second's time restarted at 0."""
+    with open(train) as f:
+        lines = f.read().splitlines()
+    head = next(i for i, line in enumerate(lines) if not line.startswith("#")) + 1
+    body = lines[head:]
+    half = len(body) // 2
+    t0 = float(body[half].split(",", 1)[0])
+    retimed = [repr(float(line.split(",", 1)[0]) - t0) + "," + line.split(",", 1)[1] for line in body[half:]]
+    for path, rows in ((first, body[:half]), (second, retimed)):
+        with open(path + ".part", "w") as f:
+            f.write("\n".join(lines[:head] + rows) + "\n")
+        os.replace(path + ".part", path)
+
+
+def record_cases(exe, tmp, seed):
+    """Runs of one case per effect and a null case; {case name: (training csv, held-out csv)}."""
+    runs = os.path.join(tmp, "runs")
+    os.mkdir(runs)
+    cmd = [exe, "diagnose-selfcheck", "--seeds", "1", "--no-pairs", "--null", "1", "--seed", str(seed),
+           "--train-s", "120", "--heldout-s", "60", "--save-runs", runs, "--effects"] + EFFECTS
+    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if done.returncode not in (0, 1):  # 1: the self-check's targets not met, which is not this bench's question
+        raise SystemExit(f"diagnose_cost: {' '.join(cmd)} exited with {done.returncode}:\n{done.stderr}")
+    cases = {}
+    for train in sorted(glob.glob(os.path.join(runs, "*_train.csv"))):
+        name = os.path.basename(train)[:-len("_train.csv")]
+        cases[name] = (train, train[:-len("_train.csv")] + "_heldout.csv")
+    if len(cases) != len(EFFECTS) + 1:
+        raise SystemExit(f"diagnose_cost: expected {len(EFFECTS) + 1} cases in {runs}, found {sorted(cases)}")
+    return cases
+
+
+def diagnose_case(exe, tmp, sim, name, train, heldout, repeats):
+    """Per mode (with and without the identified reference): median CPU s, median wall s, what was selected."""
+    run1, run2 = os.path.join(tmp, name + "_run1.csv"), os.path.join(tmp, name + "_run2.csv")
+    split_training(train, run1, run2)
+    result = {}
+    for mode, extra in (("with_reference", []), ("without_reference", ["--no-identified-reference"])):
+        out = os.path.join(tmp, name + "_" + mode)
+        cmd = [exe, "diagnose", "--sim", sim, "--real", run1, "--real", run2, "--real", heldout, "--out", out] + extra
+        times = [measured(cmd, "diagnose_cost")[1:] for _ in range(repeats)]
+        with open(os.path.join(out, "diagnosis.json")) as f:
+            d = json.load(f)
+        result[mode] = {"cpu_s": statistics.median(t[0] for t in times),
+                        "wall_s": statistics.median(t[1] for t in times), "selected": d["selected"],
+                        "reference_gap_percent": d["identified_reference"]["heldout_gap_percent"]
+                        if d["identified_reference"]["available"] else None,
+                        "gap_after_percent": d["gap_after"]}
+    return result
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--build", default=default_build())
+    ap.add_argument("--seed", type=int, default=1, help="the first case's seed (default 1)")
+    ap.add_argument("--repeats", type=int, default=1, help="diagnoses per case and mode (default 1; the median is kept)")
+    ap.add_argument("--json", metavar="FILE", help="write the figures here")
+    a = ap.parse_args()
+    exe = plsa_exe(a.build, "diagnose_cost")
+    figures = {"seed": a.seed, "repeats": a.repeats, "cases": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        sim = os.path.join(tmp, "sim_all_off.json")
+        subprocess.run([exe, "sim-config", "--out", sim], check=True, stdout=subprocess.DEVNULL)
+        with open(sim) as f:
+            config = json.load(f)
+        for e in EFFECTS:
+            config[e]["enabled"] = False
+        with open(sim, "w") as f:
+            json.dump(config, f)
+        for name, (train, heldout) in record_cases(exe, tmp, a.seed).items():
+            say(f"diagnose_cost: {name}")
+            figures["cases"].append({"case": name, **diagnose_case(exe, tmp, sim, name, train, heldout, a.repeats)})
+    for c in figures["cases"]:
+        print(c["case"] + ": " + "; ".join(
+            f"{mode.replace('_', ' ')} wall {m['wall_s']:.1f} s, CPU {m['cpu_s']:.1f} s, selected "
+            f"{'+'.join(m['selected']) or 'nothing'}" for mode, m in ((k, c[k]) for k in
+                                                                      ("with_reference", "without_reference"))))
+    if a.json:
+        with open(a.json + ".part", "w") as f:
+            json.dump(figures, f, indent=1)
+        os.replace(a.json + ".part", a.json)
+
+
+if __name__ == "__main__":
+    main()

@@ -67,8 +67,9 @@ IdentifiedReference identifiedReference(const std::vector<RunData>& train, const
   const bool pressures = allHavePressures(train) && allHavePressures(held);
   std::vector<io::Log> logs;
   for (const auto& r : train) logs.push_back(asLog(r, pressures));
+  const IdentifyOptions options = referenceOptions(trainingSeconds(train));
   try {
-    const DioPwlObfModel model = identifyModel(logs, referenceOptions(trainingSeconds(train)));
+    const DioPwlObfModel model = identifyModel(logs, options);
     double residual = 0.0, spread = 0.0;
     Eigen::Index n = 0;
     Eigen::RowVector2d sum = Eigen::RowVector2d::Zero();
@@ -88,8 +89,7 @@ IdentifiedReference identifiedReference(const std::vector<RunData>& train, const
     ref.gap.outputs = ref.gap.total = residual / std::max(1e-12, spread);
     ref.available = std::isfinite(ref.gap.total);
     ref.note = std::string("DIO-PWL OBF model identified on the training runs (inputs: ") +
-               (pressures ? "measured pressures" : "commands") + ", " +
-               std::to_string(referenceOptions(trainingSeconds(train)).quantile_levels) +
+               (pressures ? "measured pressures" : "commands") + ", " + std::to_string(options.quantile_levels) +
                " grid levels per input), simulated freely on the held-out runs";
     if (!ref.available) ref.note = "the identified model's simulation is not finite";
   } catch (const std::exception& e) {

@@ -188,7 +188,10 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--inputs", a->inputs, "Input columns")->delimiter(',');
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',');
-  c->add_option("--levels", a->options.quantile_levels, "Grid levels per input (quantiles)")->check(CLI::Range(1, 12));
+  c->add_option("--levels", a->options.quantile_levels,
+                "Grid levels per input (quantiles); 0 (default): 3, or 2 when 3 would leave under 10 s of data per "
+                "region")
+      ->check(CLI::Range(0, 12));
   addChoice(c, "--cv-layout", a->options.cv_layout,
             "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");
   c->add_option("--play-softening", a->options.play_softening_candidates,

@@ -184,8 +184,8 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_GT(d.margin_over_recalibration, 0.0);
   EXPECT_LE(d.margin_over_recalibration, 1.0);
   EXPECT_TRUE(j["identified_reference"].contains("available"));
-  // 40 s of training: the reference's quantile grid has 2 levels per input, not identification's 3.
-  EXPECT_NE(d.reference.note.find("2 grid levels per input"), std::string::npos) << d.reference.note;
+  // 40 s of training: the reference's quantile grid has 2 levels per chamber, not 3 (27 regions).
+  EXPECT_NE(d.reference.note.find(", 8 regions)"), std::string::npos) << d.reference.note;
   // The candidates were calibrated at the coarser step: on this physics it moves the gap by under 0.1 noise floors.
   ASSERT_LT(sim::probes::everyEffectOff().internal_step_s, o.calibration_step_s);
   EXPECT_EQ(d.calibration_step_s, o.calibration_step_s);

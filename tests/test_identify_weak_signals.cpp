@@ -248,6 +248,43 @@ TEST(Pipeline, QuantileGridLeavesOutAnInputThatOnlyReadsNoise) {
   EXPECT_EQ(line->find("p_2"), std::string::npos) << *line;
 }
 
+// Three chambers moved at random, no staircase: `seconds` of a quantile
+// grid's data, its output a lag of their sum.
+io::Log randomChambersLog(double seconds) {
+  const auto n = static_cast<Eigen::Index>(seconds / kDt);
+  io::Log log = blankLog("random_chambers.csv", {"time_s", "p_1", "p_2", "p_3", "y"}, n);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  double p[3] = {0.2, 0.2, 0.2}, y = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    for (double& pj : p) pj = std::clamp(pj + 0.01 * noise(rng), 0.05, 0.35);
+    y = 0.95 * y + 0.05 * 40.0 * (p[0] + 0.8 * p[1] + 0.6 * p[2]);
+    log.data.row(k) << static_cast<double>(k) * kDt, p[0], p[1], p[2], y + 0.05 * noise(rng);
+  }
+  return log;
+}
+
+// quantile_levels 0 (the default): 3 levels per moving input, or 2 when 3
+// would leave under 10 s of data per region (three chambers: 270 s); a
+// number given is kept.
+TEST(Pipeline, QuantileGridTakesTwoLevelsWhenThreeWouldLeaveRegionsShortOfData) {
+  IdentifyOptions o = partitionOnly({"p_1", "p_2", "p_3"}, {"y"});
+  ASSERT_EQ(o.quantile_levels, 0);
+  IdentifyReport short_rep, long_rep, asked_rep;
+  const DioPwlObfModel short_model = identifyModel({randomChambersLog(120.0)}, o, &short_rep);
+  EXPECT_EQ(short_model.partition.regionCount(), 8);
+  const std::string line = progressLine(short_rep, "[4/5] partition");
+  EXPECT_NE(line.find("quantile grid of 2 levels"), std::string::npos) << line;
+  EXPECT_NE(line.find("3 would leave under 10 s of data per region"), std::string::npos) << line;
+  EXPECT_EQ(identifyModel({randomChambersLog(300.0)}, o, &long_rep).partition.regionCount(), 27)
+      << progressLine(long_rep, "[4/5] partition");
+  o.quantile_levels = 3;
+  EXPECT_EQ(identifyModel({randomChambersLog(120.0)}, o, &asked_rep).partition.regionCount(), 27);
+  EXPECT_EQ(progressLine(asked_rep, "[4/5] partition").find("would leave"), std::string::npos);
+  o.quantile_levels = -1;
+  EXPECT_THROW(identifyModel({randomChambersLog(20.0)}, o), std::invalid_argument);
+}
+
 // An output no local fit can use (it reads noise alone) takes the poles the
 // other outputs found, and says so. Alone, it gets the poles of the fits
 // rejected only as badly determined or too weak for the noise, with a

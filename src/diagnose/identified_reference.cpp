@@ -32,22 +32,10 @@ io::Log asLog(const RunData& run, bool pressures) {
   return log;
 }
 
-// Training shorter than this takes a quantile grid of 2 levels per input
-// instead of identification's 3: with three chambers the 27 regions of 3
-// levels get under 10 s of data each, and on self-check cases of two
-// minutes (bench/diagnose_cost.py's eight) the 8 regions of 2 levels
-// simulated the held-out run better in every case, at a fifth of the time.
-constexpr double kShortTrainingS = 270.0;
-
-double trainingSeconds(const std::vector<RunData>& train) {
-  double s = 0.0;
-  for (const auto& r : train) s += static_cast<double>(r.samples()) * r.sample_time_s;
-  return s;
-}
-
-IdentifyOptions referenceOptions(double training_s) {
+// Identification's defaults: on short runs its quantile grid takes 2
+// levels per input instead of 3 (IdentifyOptions::quantile_levels).
+IdentifyOptions referenceOptions() {
   IdentifyOptions o;
-  if (training_s < kShortTrainingS) o.quantile_levels = 2;
   o.inputs = {"u_1", "u_2", "u_3"};
   o.outputs = {"y_1", "y_2"};
   o.reference = io::standard_columns::commands();
@@ -67,9 +55,8 @@ IdentifiedReference identifiedReference(const std::vector<RunData>& train, const
   const bool pressures = allHavePressures(train) && allHavePressures(held);
   std::vector<io::Log> logs;
   for (const auto& r : train) logs.push_back(asLog(r, pressures));
-  const IdentifyOptions options = referenceOptions(trainingSeconds(train));
   try {
-    const DioPwlObfModel model = identifyModel(logs, options);
+    const DioPwlObfModel model = identifyModel(logs, referenceOptions());
     double residual = 0.0, spread = 0.0;
     Eigen::Index n = 0;
     Eigen::RowVector2d sum = Eigen::RowVector2d::Zero();
@@ -89,8 +76,8 @@ IdentifiedReference identifiedReference(const std::vector<RunData>& train, const
     ref.gap.outputs = ref.gap.total = residual / std::max(1e-12, spread);
     ref.available = std::isfinite(ref.gap.total);
     ref.note = std::string("DIO-PWL OBF model identified on the training runs (inputs: ") +
-               (pressures ? "measured pressures" : "commands") + ", " + std::to_string(options.quantile_levels) +
-               " grid levels per input), simulated freely on the held-out runs";
+               (pressures ? "measured pressures" : "commands") + ", " + std::to_string(model.partition.regionCount()) +
+               " regions), simulated freely on the held-out runs";
     if (!ref.available) ref.note = "the identified model's simulation is not finite";
   } catch (const std::exception& e) {
     ref.note = std::string("identification failed: ") + e.what();

@@ -58,6 +58,8 @@ struct IdentificationRun {
   [[noreturn]] void noUsablePoles(int out_i) const;
   std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();
+  std::vector<int> quantileInputs() const;
+  int quantileLevels(std::size_t inputs) const;
 
   // Pole selection (pole_selection.cpp): the local poles a pair clusters
   // (and how the progress line names them), and one method's basis poles for

@@ -138,6 +138,8 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  PLSA_CHECK(o.quantile_levels >= 0 && o.quantile_levels <= 12,
+             "identify: quantile levels must be 0 (automatic) or 1..12, got " + std::to_string(o.quantile_levels));
   PLSA_CHECK(
       o.play_refine_evaluations >= 0 && o.play_refine_evaluations <= 10000,
       "identify: play refinement evaluations must be in 0..10000, got " + std::to_string(o.play_refine_evaluations));
@@ -393,41 +395,60 @@ void IdentificationRun::buildPartitions() {
   top_level = std::max(1e-12, all_u.maxCoeff());
 }
 
+// The inputs a quantile grid schedules on: not those whose central 90%
+// spans no more than a step, or a twentieth of the widest input's (an unused
+// chamber's sensor noise).
+std::vector<int> IdentificationRun::quantileInputs() const {
+  std::vector<double> spread;
+  for (int in_i = 0; in_i < ni; ++in_i) {
+    const Eigen::VectorXd col = all_u.col(in_i);
+    spread.push_back(centralSpread(std::vector<double>(col.data(), col.data() + col.size())));
+  }
+  const double widest = spread.empty() ? 0.0 : *std::max_element(spread.begin(), spread.end());
+  std::vector<int> inputs;
+  for (int in_i = 0; in_i < ni; ++in_i)
+    if (spread[static_cast<std::size_t>(in_i)] > std::max(o.step_threshold, 0.05 * widest)) inputs.push_back(in_i);
+  return inputs;
+}
+
+// IdentifyOptions::quantile_levels, or with 0 the automatic choice: 3, or 2
+// when 3 would leave under kMinSecondsPerRegion of data per region.
+int IdentificationRun::quantileLevels(std::size_t inputs) const {
+  if (o.quantile_levels > 0) return o.quantile_levels;
+  const double seconds = static_cast<double>(total) * dt;
+  const double regions = std::pow(double{IdentifyOptions::kAutoQuantileLevels}, static_cast<double>(inputs));
+  return seconds / regions >= IdentifyOptions::kMinSecondsPerRegion ? IdentifyOptions::kAutoQuantileLevels : 2;
+}
+
 // One partition (interpolated nodes or switched cells) over the scheduling
 // inputs: designed levels, or quantiles of the inputs.
 void IdentificationRun::addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed) {
   std::vector<int> sched;
   std::vector<std::vector<double>> bps;
-  double widest_spread = 0.0;
-  for (int in_i = 0; in_i < ni && !designed; ++in_i) {
-    const Eigen::VectorXd col = all_u.col(in_i);
-    widest_spread = std::max(widest_spread, centralSpread(std::vector<double>(col.data(), col.data() + col.size())));
-  }
-  for (int in_i = 0; in_i < ni; ++in_i) {
+  const std::vector<int> moving = designed ? std::vector<int>{} : quantileInputs();
+  const int quantile_levels = quantileLevels(moving.size());
+  for (int in_i = 0; in_i < ni && designed; ++in_i) {
     std::vector<double> lv;
     for (double l : levels[static_cast<std::size_t>(in_i)])
       if (l > o.step_threshold) lv.push_back(l);  // the vented level is not a reference pressure
-    if (designed && lv.size() >= 2) {
+    if (lv.size() >= 2) {
       sched.push_back(in_i);
       bps.push_back(interpolated ? lv : midpoints(lv));
-    } else if (!designed) {
-      const Eigen::VectorXd col = all_u.col(in_i);
-      std::vector<double> values(col.data(), col.data() + col.size());
-      // An input whose central 90% spans no more than a step, or a twentieth
-      // of the widest input's, is nothing to schedule on (an unused chamber's
-      // sensor noise).
-      if (centralSpread(values) <= std::max(o.step_threshold, 0.05 * widest_spread)) continue;
-      // Switched: cells between quantiles; interpolated: nodes at the cells' medians.
-      auto b = quantileBreakpoints(values, interpolated ? 2 * o.quantile_levels : o.quantile_levels);
-      if (interpolated) {
-        std::vector<double> nodes;
-        for (std::size_t i = 0; i < b.size(); i += 2) nodes.push_back(b[i]);
-        b = nodes;
-      }
-      if (!b.empty()) {
-        sched.push_back(in_i);
-        bps.push_back(b);
-      }
+    }
+  }
+  for (const int in_i : moving) {
+    const Eigen::VectorXd col = all_u.col(in_i);
+    // Switched: cells between quantiles; interpolated: nodes at the cells' medians.
+    auto b = quantileBreakpoints(std::vector<double>(col.data(), col.data() + col.size()),
+                                 interpolated ? 2 * quantile_levels : quantile_levels);
+    if (interpolated) {
+      std::vector<double> nodes;
+      for (std::size_t i = 0; i < b.size(); i += 2) nodes.push_back(b[i]);
+      b = nodes;
+    }
+    if (!b.empty()) {
+      sched.push_back(in_i);
+      bps.push_back(b);
     }
   }
   partitions.push_back(interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
@@ -451,7 +472,14 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
            (interpolated ? " nodes" : " split at");
       for (double b : bps[i]) s += " " + fixedDecimals(b, 4);
     }
-    if (!designed) s += " (quantile grid: the logs hold no designed reference levels)";
+    if (!designed)
+      s += " (quantile grid of " + std::to_string(quantile_levels) +
+           " levels: the logs hold no designed reference levels" +
+           (o.quantile_levels > 0 || quantile_levels == IdentifyOptions::kAutoQuantileLevels
+                ? std::string()
+                : "; " + std::to_string(IdentifyOptions::kAutoQuantileLevels) + " would leave under " +
+                      formatNumber(IdentifyOptions::kMinSecondsPerRegion) + " s of data per region") +
+           ")";
     if (o.direction_split) s += "; split by direction of change";
     say(s);
   }

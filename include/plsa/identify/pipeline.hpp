@@ -122,8 +122,13 @@ struct IdentifyOptions {
   /// fuzzy c-means scores higher; FKcM alone with clustering.complex_pairs).
   PoleMethod pole_method = PoleMethod::kAuto;
   ClusteringOptions clustering;
-  /// Levels per scheduling input when the log has no staircase (quantile grid).
-  int quantile_levels = 3;
+  /// Levels per scheduling input when the log has no staircase (quantile
+  /// grid). 0 (default): 3, or 2 when the training data give under
+  /// kMinSecondsPerRegion per region of 3 levels (two minutes of three
+  /// chambers: 27 regions of under 5 s each).
+  int quantile_levels = 0;
+  static constexpr int kAutoQuantileLevels = 3;
+  static constexpr double kMinSecondsPerRegion = 10.0;
   bool direction_split = false;
   /// "interpolated" (coefficients blended between grid nodes), "switched"
   /// (the paper's PWL), "input" (interpolated on the input side:

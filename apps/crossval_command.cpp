@@ -189,8 +189,7 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',');
   c->add_option("--levels", a->options.quantile_levels,
-                "Grid levels per input (quantiles); 0 (default): 3, or 2 when 3 would leave under 10 s of data per "
-                "region")
+                "Grid levels per input (quantiles); 0 (default): " + identify::IdentifyOptions::autoQuantileRule())
       ->check(CLI::Range(0, 12));
   addChoice(c, "--cv-layout", a->options.cv_layout,
             "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");

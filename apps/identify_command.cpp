@@ -333,8 +333,8 @@ void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
                  "An output with fewer usable step poles than --poles: local windows' poles are tried with its "
                  "steps' when the steps' model scores below this held-out fit % (default 0; 100: always)");
   id->add_option("--levels", a->options.quantile_levels,
-                 "Levels per input when the logs have no staircase (quantile grid); 0 (default): 3, or 2 when 3 "
-                 "would leave under 10 s of data per region")
+                 "Levels per input when the logs have no staircase (quantile grid); 0 (default): " +
+                     identify::IdentifyOptions::autoQuantileRule())
       ->check(CLI::Range(0, 12));
   id->add_flag("--direction-split", a->options.direction_split, "Separate regions for rising and falling pressure");
 }

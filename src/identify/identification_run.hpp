@@ -58,6 +58,16 @@ struct IdentificationRun {
   [[noreturn]] void noUsablePoles(int out_i) const;
   std::vector<std::complex<double>> uncertainPoles();
   void buildPartitions();
+  /// The partition's grid: the staircase's reference levels per input, or,
+  /// when the logs hold no designed levels, a quantile grid of
+  /// quantile_levels levels over the moving inputs.
+  struct GridPlan {
+    bool designed = false;
+    std::vector<std::vector<double>> levels;
+    std::vector<int> moving;
+    int quantile_levels = 0;
+  };
+  GridPlan gridPlan() const;
   std::vector<int> quantileInputs() const;
   int quantileLevels(std::size_t inputs) const;
 
@@ -95,7 +105,9 @@ struct IdentificationRun {
     double fit = -INFINITY;
   };
   void scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice);
-  void addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed);
+  void addPartition(bool interpolated, const GridPlan& grid);
+  std::string partitionLine(bool interpolated, const GridPlan& grid, const std::vector<int>& sched,
+                            const std::vector<std::vector<double>>& bps) const;
 
   // The structure search (structure_search.cpp).
   void listStructures();

@@ -380,19 +380,30 @@ void IdentificationRun::buildPartitions() {
       row += U[r].rows();
     }
   }
-  const auto levels = referenceLevels(all_ref, o.step_threshold, min_len);
+  const GridPlan grid = gridPlan();
+  std::vector<bool> schedulings;  // interpolated?
+  if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
+  if (o.scheduling != SchedulingChoice::kInterpolated) schedulings.push_back(false);
+  for (const bool interpolated : schedulings) addPartition(interpolated, grid);
+  top_level = std::max(1e-12, all_u.maxCoeff());
+}
+
+// The staircase's reference levels, or a quantile grid when the logs hold
+// no designed levels.
+IdentificationRun::GridPlan IdentificationRun::gridPlan() const {
+  GridPlan grid;
+  grid.levels = referenceLevels(all_ref, o.step_threshold, min_len);
   // A designed staircase holds a few reference levels; measured data that
   // merely pauses holds hundreds: that is no grid, use quantiles instead.
   constexpr std::size_t kMaxDesignedLevels = 8;
   // The design is the reference's: outputs too weak for their step fits (a
   // nearly straight segment, a noisy sensor) do not make it less designed.
-  bool designed = rep.segments > 0;
-  for (const auto& lv : levels) designed = designed && lv.size() <= kMaxDesignedLevels + 1;
-  std::vector<bool> schedulings;  // interpolated?
-  if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
-  if (o.scheduling != SchedulingChoice::kInterpolated) schedulings.push_back(false);
-  for (const bool interpolated : schedulings) addPartition(interpolated, levels, designed);
-  top_level = std::max(1e-12, all_u.maxCoeff());
+  grid.designed = rep.segments > 0;
+  for (const auto& lv : grid.levels) grid.designed = grid.designed && lv.size() <= kMaxDesignedLevels + 1;
+  if (grid.designed) return grid;
+  grid.moving = quantileInputs();
+  grid.quantile_levels = quantileLevels(grid.moving.size());
+  return grid;
 }
 
 // The inputs a quantile grid schedules on: not those whose central 90%
@@ -420,27 +431,31 @@ int IdentificationRun::quantileLevels(std::size_t inputs) const {
   return seconds / regions >= IdentifyOptions::kMinSecondsPerRegion ? IdentifyOptions::kAutoQuantileLevels : 2;
 }
 
+std::string IdentifyOptions::autoQuantileRule() {
+  const std::string three = std::to_string(kAutoQuantileLevels);
+  return three + ", or 2 when " + three + " would leave under " + formatNumber(kMinSecondsPerRegion) +
+         " s of data per region";
+}
+
 // One partition (interpolated nodes or switched cells) over the scheduling
-// inputs: designed levels, or quantiles of the inputs.
-void IdentificationRun::addPartition(bool interpolated, const std::vector<std::vector<double>>& levels, bool designed) {
+// inputs the grid plan gives.
+void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
   std::vector<int> sched;
   std::vector<std::vector<double>> bps;
-  const std::vector<int> moving = designed ? std::vector<int>{} : quantileInputs();
-  const int quantile_levels = quantileLevels(moving.size());
-  for (int in_i = 0; in_i < ni && designed; ++in_i) {
+  for (int in_i = 0; in_i < ni && grid.designed; ++in_i) {
     std::vector<double> lv;
-    for (double l : levels[static_cast<std::size_t>(in_i)])
+    for (double l : grid.levels[static_cast<std::size_t>(in_i)])
       if (l > o.step_threshold) lv.push_back(l);  // the vented level is not a reference pressure
     if (lv.size() >= 2) {
       sched.push_back(in_i);
       bps.push_back(interpolated ? lv : midpoints(lv));
     }
   }
-  for (const int in_i : moving) {
+  for (const int in_i : grid.moving) {
     const Eigen::VectorXd col = all_u.col(in_i);
     // Switched: cells between quantiles; interpolated: nodes at the cells' medians.
     auto b = quantileBreakpoints(std::vector<double>(col.data(), col.data() + col.size()),
-                                 interpolated ? 2 * quantile_levels : quantile_levels);
+                                 interpolated ? 2 * grid.quantile_levels : grid.quantile_levels);
     if (interpolated) {
       std::vector<double> nodes;
       for (std::size_t i = 0; i < b.size(); i += 2) nodes.push_back(b[i]);
@@ -464,25 +479,28 @@ void IdentificationRun::addPartition(bool interpolated, const std::vector<std::v
   model.input_ranges.clear();
   for (Eigen::Index c = 0; c < all_u.cols(); ++c)
     model.input_ranges.push_back({all_u.col(c).minCoeff(), all_u.col(c).maxCoeff()});
-  {
-    std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") +
-                    "): " + std::to_string(model.partition.regionCount()) + " regions";
-    for (std::size_t i = 0; i < sched.size(); ++i) {
-      s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] +
-           (interpolated ? " nodes" : " split at");
-      for (double b : bps[i]) s += " " + fixedDecimals(b, 4);
-    }
-    if (!designed)
-      s += " (quantile grid of " + std::to_string(quantile_levels) +
-           " levels: the logs hold no designed reference levels" +
-           (o.quantile_levels > 0 || quantile_levels == IdentifyOptions::kAutoQuantileLevels
-                ? std::string()
-                : "; " + std::to_string(IdentifyOptions::kAutoQuantileLevels) + " would leave under " +
-                      formatNumber(IdentifyOptions::kMinSecondsPerRegion) + " s of data per region") +
-           ")";
-    if (o.direction_split) s += "; split by direction of change";
-    say(s);
+  say(partitionLine(interpolated, grid, sched, bps));
+}
+
+// The [4/5] line: the partition, its breakpoints, and why its grid.
+std::string IdentificationRun::partitionLine(bool interpolated, const GridPlan& grid, const std::vector<int>& sched,
+                                             const std::vector<std::vector<double>>& bps) const {
+  std::string s = std::string("[4/5] partition (") + (interpolated ? "interpolated" : "switched") +
+                  "): " + std::to_string(model.partition.regionCount()) + " regions";
+  for (std::size_t i = 0; i < sched.size(); ++i) {
+    s += (i ? "; " : " over ") + o.inputs[static_cast<std::size_t>(sched[i])] + (interpolated ? " nodes" : " split at");
+    for (double b : bps[i]) s += " " + fixedDecimals(b, 4);
   }
+  if (!grid.designed)
+    s += " (quantile grid of " + std::to_string(grid.quantile_levels) +
+         " levels: the logs hold no designed reference levels" +
+         (o.quantile_levels > 0 || grid.quantile_levels == IdentifyOptions::kAutoQuantileLevels
+              ? std::string()
+              : "; " + std::to_string(IdentifyOptions::kAutoQuantileLevels) + " would leave under " +
+                    formatNumber(IdentifyOptions::kMinSecondsPerRegion) + " s of data per region") +
+         ")";
+  if (o.direction_split) s += "; split by direction of change";
+  return s;
 }
 
 }  // namespace plsa::identify

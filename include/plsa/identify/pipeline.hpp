@@ -129,6 +129,9 @@ struct IdentifyOptions {
   int quantile_levels = 0;
   static constexpr int kAutoQuantileLevels = 3;
   static constexpr double kMinSecondsPerRegion = 10.0;
+  /// quantile_levels 0's rule in words, for help texts: "3, or 2 when 3
+  /// would leave under 10 s of data per region".
+  static std::string autoQuantileRule();
   bool direction_split = false;
   /// "interpolated" (coefficients blended between grid nodes), "switched"
   /// (the paper's PWL), "input" (interpolated on the input side:

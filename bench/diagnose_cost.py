@@ -26,11 +26,22 @@ import tempfile
 
 from bench_process import default_build, measured, plsa_exe
 
+
 def say(text):
     print(text, file=sys.stderr, flush=True)
 
 
-EFFECTS = ["deadzone", "hysteresis", "stiffening", "coupling", "pneumatic_lag", "creep", "sensor_bias"]
+def nominal_config(exe, path):
+    """The simulator's defaults with every effect off, written to path; the effects' names."""
+    subprocess.run([exe, "sim-config", "--out", path], check=True, stdout=subprocess.DEVNULL)
+    with open(path) as f:
+        config = json.load(f)
+    effects = [name for name, entry in config.items() if isinstance(entry, dict) and "enabled" in entry]
+    for name in effects:
+        config[name]["enabled"] = False
+    with open(path, "w") as f:
+        json.dump(config, f)
+    return effects
 
 
 def split_training(train, first, second):
@@ -48,12 +59,13 @@ def split_training(train, first, second):
         os.replace(path + ".part", path)
 
 
-def record_cases(exe, tmp, seed):
-    """Runs of one case per effect and a null case; {case name: (training csv, held-out csv)}."""
+def record_cases(exe, tmp, seed, effects):
+    """Runs of one case per effect (the self-check's default: every effect) and a null case;
+    {case name: (training csv, held-out csv)}."""
     runs = os.path.join(tmp, "runs")
     os.mkdir(runs)
     cmd = [exe, "diagnose-selfcheck", "--seeds", "1", "--no-pairs", "--null", "1", "--seed", str(seed),
-           "--train-s", "120", "--heldout-s", "60", "--save-runs", runs, "--effects"] + EFFECTS
+           "--train-s", "120", "--heldout-s", "60", "--save-runs", runs]
     done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if done.returncode not in (0, 1):  # 1: the self-check's targets not met, which is not this bench's question
         raise SystemExit(f"diagnose_cost: {' '.join(cmd)} exited with {done.returncode}:\n{done.stderr}")
@@ -61,8 +73,8 @@ def record_cases(exe, tmp, seed):
     for train in sorted(glob.glob(os.path.join(runs, "*_train.csv"))):
         name = os.path.basename(train)[:-len("_train.csv")]
         cases[name] = (train, train[:-len("_train.csv")] + "_heldout.csv")
-    if len(cases) != len(EFFECTS) + 1:
-        raise SystemExit(f"diagnose_cost: expected {len(EFFECTS) + 1} cases in {runs}, found {sorted(cases)}")
+    if len(cases) != len(effects) + 1:
+        raise SystemExit(f"diagnose_cost: expected {len(effects) + 1} cases in {runs}, found {sorted(cases)}")
     return cases
 
 
@@ -96,14 +108,8 @@ def main():
     figures = {"seed": a.seed, "repeats": a.repeats, "cases": []}
     with tempfile.TemporaryDirectory() as tmp:
         sim = os.path.join(tmp, "sim_all_off.json")
-        subprocess.run([exe, "sim-config", "--out", sim], check=True, stdout=subprocess.DEVNULL)
-        with open(sim) as f:
-            config = json.load(f)
-        for e in EFFECTS:
-            config[e]["enabled"] = False
-        with open(sim, "w") as f:
-            json.dump(config, f)
-        for name, (train, heldout) in record_cases(exe, tmp, a.seed).items():
+        effects = nominal_config(exe, sim)
+        for name, (train, heldout) in record_cases(exe, tmp, a.seed, effects).items():
             say(f"diagnose_cost: {name}")
             figures["cases"].append({"case": name, **diagnose_case(exe, tmp, sim, name, train, heldout, a.repeats)})
     for c in figures["cases"]:

@@ -200,11 +200,13 @@ TEST(Validation, TipFrameSimulationCarriesTheTrainingSensorDrift) {
 
 // Steering is an angle: a log that writes the same direction a whole turn
 // higher from some sample on (a sensor wrapping its angle as the tip passes
-// +-180 deg) must leave the simulation's error the same. The simulated
-// steering is written on the branch of the measured angle at each sample; a
-// simulation that followed its own previous value would stay a turn away
-// from the whole second half.
-TEST(Validation, TipFrameSimulationComparesSteeringAsAnAngle) {
+// +-180 deg) must leave the simulation's and the k-step predictions' errors
+// the same. Each predicted steering angle is written on the branch of the
+// measured angle at its sample; a simulation that followed its own previous
+// value would stay a turn away from the whole second half, and a k-step
+// prediction on the branch of the angle it starts from a turn away from the
+// horizon's samples after the wrap.
+TEST(Validation, TipFramePredictionsCompareSteeringAsAnAngle) {
   const DriftRuns runs = yawDriftRuns(0.0);
   const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
   io::Log wrapped = runs.val;
@@ -225,8 +227,13 @@ TEST(Validation, TipFrameSimulationComparesSteeringAsAnAngle) {
                           error_turn = (turn.outputs[1].measured - turn.outputs[1].simulated).tail(T - first);
     EXPECT_LT((error_turn - error_base).cwiseAbs().maxCoeff(), 1e-9) << start.yaw_registration_s;
     EXPECT_EQ(turn.outputs[0].fit_sim, base.outputs[0].fit_sim);
-    // The k-step predictions take their anchor's branch, as the Predictor's do.
     EXPECT_NEAR(turn.outputs[0].fit_k.at(40), base.outputs[0].fit_k.at(40), 1e-9);
+    const Eigen::Index k_first = T - base.outputs[1].predicted_k.at(40).array().isFinite().count();
+    ASSERT_LT(k_first, half);
+    const Eigen::VectorXd k_base = (base.outputs[1].measured - base.outputs[1].predicted_k.at(40)).tail(T - k_first),
+                          k_turn = (turn.outputs[1].measured - turn.outputs[1].predicted_k.at(40)).tail(T - k_first);
+    EXPECT_LT((k_turn - k_base).cwiseAbs().maxCoeff(), 1e-9) << start.yaw_registration_s;
+    EXPECT_NEAR(turn.outputs[1].rms_k.at(40), base.outputs[1].rms_k.at(40), 1e-9) << start.yaw_registration_s;
   }
 }
 

@@ -197,9 +197,13 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
       for (int o = 0; o < model.outputCount(); ++o)
         out[static_cast<std::size_t>(o)][k] = kStepAhead(ym.col(o), dy.col(o), k);
     }
+    // As the simulation's below: each predicted direction written on the
+    // branch of the measured angle at the same sample. (On the branch of the
+    // angle it starts from, as the predictor writes it, a log whose angle
+    // wraps at +-180 deg within the horizon scored a 2 deg miss as 358.)
     if (tip)
       std::tie(out[0][k], out[1][k]) =
-          toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t - k, 1); });
+          toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t, 1); });
   }
   if (with_simulation) {
     const std::vector<AlignedPrediction> sims =

@@ -144,8 +144,8 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
 /// Every output's predictions in the log's frame (y as logged): key k >= 1
 /// the k-step-ahead predictions, key 0 the free simulation when asked for.
 /// A tip_cartesian model's steering is put on the branch (+-360 deg) of the
-/// measured angle its prediction starts from (simulation: of the measured
-/// angle at the same sample), so it is compared as an angle.
+/// measured angle at the same sample, so it is compared as an angle (the
+/// predictor writes it on the branch of the angle it starts from).
 std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                                                              bool with_simulation = true,

@@ -64,12 +64,13 @@ int main(int argc, char** argv) {
   Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(kHorizon * 2, (kHorizon - 1) * nu);
   for (int tick = 0; tick < 160; ++tick) {
     // A few projected-gradient steps on the plan, warm-started from the last one.
-    predictor.predict(kHorizon, plan, predicted);
-    double now = cost(predicted, target, plan, u.transpose());
+    double now = 0.0;
     for (int iteration = 0; iteration < 5; ++iteration) {
-      if (predictor.sensitivity(kHorizon, plan, jacobian, plsa::JacobianFill::kMovingRows) !=
+      // The Jacobian and the prediction it is taken at, from one planned prediction.
+      if (predictor.sensitivity(kHorizon, plan, jacobian, plsa::JacobianFill::kMovingRows, predicted) !=
           plsa::PredictorStatus::kOk)
         return 1;
+      now = cost(predicted, target, plan, u.transpose());
       Eigen::MatrixXd gradient = Eigen::MatrixXd::Zero(kHorizon - 1, nu);
       for (int h = 0; h < kHorizon; ++h)
         for (Eigen::Index s = 0; s + 1 < kHorizon; ++s)
@@ -92,7 +93,6 @@ int main(int argc, char** argv) {
           break;
         }
       }
-      predictor.predict(kHorizon, plan, predicted);
     }
     // Apply the first planned pressures; shift the plan for the next tick.
     u = plan.row(0).transpose();

@@ -217,12 +217,17 @@ class PyPredictor {
     return ns[static_cast<std::size_t>(calls / 2)];
   }
 
-  Eigen::MatrixXd sensitivity(int horizon, const Eigen::MatrixXd& plan) {
+  py::object sensitivity(int horizon, const Eigen::MatrixXd& plan, bool with_prediction) {
     checkHorizon(horizon);
     Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(horizon) * p_.outputCount(),
                              static_cast<Eigen::Index>(horizon - 1) * p_.inputCount());
-    check("sensitivity", p_.sensitivity(horizon, plan, jacobian));
-    return jacobian;
+    if (!with_prediction) {
+      check("sensitivity", p_.sensitivity(horizon, plan, jacobian));
+      return py::cast(std::move(jacobian));
+    }
+    Eigen::MatrixXd predicted(horizon, p_.outputCount());
+    check("sensitivity", p_.sensitivity(horizon, plan, jacobian, plsa::JacobianFill::kWhole, predicted));
+    return py::make_tuple(std::move(jacobian), std::move(predicted));
   }
 
   // A re-identified model of the same structure, adopted at the next update.
@@ -331,7 +336,9 @@ void bindPredictor(py::module_& m) {
       .def("_time_predict", &PyPredictor::timePredictNs, py::arg("horizon"), py::arg("plan"), py::arg("calls"),
            "For the bench: the p50 (ns) of `calls` C++ predict() calls on the current state, each timed alone")
       .def("sensitivity", &PyPredictor::sensitivity, py::arg("horizon"), py::arg("plan"),
-           "(horizon * outputs) x ((horizon - 1) * inputs): d prediction / d plan")
+           py::arg("with_prediction") = false,
+           "(horizon * outputs) x ((horizon - 1) * inputs): d prediction / d plan; with_prediction: the tuple "
+           "(that, the prediction it is taken at, as predict(horizon, plan) gives it) from one planned prediction")
       .def("install", &PyPredictor::install, py::arg("model"),
            "A model of the same structure (e.g. re-identified), adopted whole at the next update; raises "
            "ValueError for another structure")

@@ -511,6 +511,36 @@ TEST(Predictor, SensitivityWritesOnlyTheMovingRowsWhenAsked) {
   EXPECT_GT(lower, 100) << "the plan moves nothing: the check shows nothing";
 }
 
+// The sensitivity's prediction is predict()'s under the same plan, to the
+// bit (a tip model's in angles, a model as logged in its outputs); a
+// prediction matrix of the wrong shape is refused before anything is written.
+TEST(Predictor, SensitivityGivesThePredictionItIsTakenAt) {
+  const Data& d = data();
+  for (const DioPwlObfModel* m : {&d.tip, &d.input_side}) {
+    Predictor<> p(*m);
+    const int H = 30, ny = 2, nu = 3;
+    for (int t = 0; t < 300; ++t) ASSERT_EQ(p.update(t * d.dt, d.u.row(t), d.y.row(t)), PredictorStatus::kOk);
+    const Eigen::MatrixXd plan = d.u.middleRows(300, H - 1);
+    Eigen::MatrixXd jacobian(H * ny, (H - 1) * nu), alone(H * ny, (H - 1) * nu), expected(H, ny), predicted(H + 5, ny);
+    predicted.setConstant(std::numeric_limits<double>::quiet_NaN());
+    ASSERT_EQ(p.predict(H, plan, expected), PredictorStatus::kOk);
+    ASSERT_EQ(p.sensitivity(H, plan, alone), PredictorStatus::kOk);
+    ASSERT_EQ(p.sensitivity(H, plan, jacobian, JacobianFill::kWhole, predicted), PredictorStatus::kOk);
+    EXPECT_TRUE(predicted.topRows(H) == expected) << "the sensitivity's prediction is not predict()'s";
+    EXPECT_TRUE(predicted.bottomRows(5).array().isNaN().all()) << "rows past the horizon written";
+    EXPECT_TRUE(jacobian == alone);
+    EXPECT_GT((expected.bottomRows(1) - expected.topRows(1)).cwiseAbs().maxCoeff(), 1e-3)
+        << "the plan moves nothing: the check shows nothing";
+    Eigen::MatrixXd narrow(H, ny + 1), short_rows(H - 1, ny);
+    jacobian.setConstant(7.0);
+    EXPECT_EQ(p.sensitivity(H, plan, jacobian, JacobianFill::kWhole, narrow), PredictorStatus::kBadShape);
+    EXPECT_EQ(p.sensitivity(H, plan, jacobian, JacobianFill::kWhole, short_rows), PredictorStatus::kBadShape);
+    EXPECT_TRUE((jacobian.array() == 7.0).all()) << "a refused call wrote the jacobian";
+  }
+  ASSERT_EQ(d.tip.output_frame, OutputFrame::kTipCartesian);
+  ASSERT_NE(d.input_side.output_frame, OutputFrame::kTipCartesian);
+}
+
 // The sensitivity keeps each step's pushed channels in fixed arrays: a model
 // with more play channels than they hold is refused, not overrun.
 TEST(Predictor, SensitivityRefusesMorePlayChannelsThanItHolds) {

@@ -432,7 +432,8 @@ TYPED_TEST(PredictorSizes, HeldInputEqualsARepeatedPlan) {
   }
 }
 
-// Neither update, predict (planned and held) nor sensitivity allocates, on
+// Neither update, predict (planned and held) nor sensitivity (with and
+// without its prediction) allocates, on
 // any variant's paths, over the run twice.
 TYPED_TEST(PredictorSizes, NoAllocationInUpdatePredictOrSensitivity) {
   using P = typename TestFixture::P;
@@ -456,6 +457,9 @@ TYPED_TEST(PredictorSizes, NoAllocationInUpdatePredictOrSensitivity) {
           failures += p.predict(H, u.middleRows(t + 1, H - 1), out) != PredictorStatus::kOk;
           failures += p.predict(HL, none, out) != PredictorStatus::kOk;
           if (t % 10 == 0) failures += p.sensitivity(H, u.middleRows(t + 1, H - 1), jacobian) != sensitivity_status;
+          if (t % 10 == 5)
+            failures += p.sensitivity(H, u.middleRows(t + 1, H - 1), jacobian, JacobianFill::kMovingRows, out) !=
+                        sensitivity_status;
         }
       allocations = guard.allocations();
     }

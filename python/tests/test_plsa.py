@@ -111,6 +111,9 @@ def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model
     plan[:, 2] = 0.08 + 0.002 * np.arange(79)  # rising: pushes the channels down every step
     jac = p.sensitivity(80, plan)
     assert jac.shape == (160, 237)
+    # With its prediction: the same Jacobian and predict()'s prediction, from one call.
+    jac_too, predicted = p.sensitivity(80, plan, with_prediction=True)
+    assert np.array_equal(jac_too, jac) and np.array_equal(predicted, p.predict(80, plan))
     eps = 1e-6
     for s in (0, 10, 40):
         up, down = plan.copy(), plan.copy()

@@ -193,6 +193,23 @@ class NStepPredictor {
     return PredictorStatus::kOk;
   }
 
+  /// sensitivity(), and the prediction it is taken at (what predict(horizon,
+  /// plan, ...) gives) into the first `horizon` rows of `predicted` (n_y
+  /// columns): one planned prediction for both, where a controller would
+  /// otherwise call predict() too.
+  PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                              Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill fill,
+                              Eigen::Ref<Eigen::MatrixXd> predicted) noexcept {
+    if (predicted.rows() < horizon || predicted.cols() != model().n_y) return PredictorStatus::kBadShape;
+    const PredictorStatus status = sensitivity(horizon, plan, jacobian, fill);
+    if (status != PredictorStatus::kOk) return status;
+    const SubnormalsFlushed flushed;
+    predicted.topRows(horizon) = sens_nominal_.topRows(horizon);
+    if (model().frame == OutputFrame::kTipCartesian)
+      tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, predicted);
+    return status;
+  }
+
   /// Installs a model of the same structure (inputs, outputs, pole counts,
   /// play channels, partition, output frame) from any thread but the
   /// real-time one. It compiles (allocates), and throws std::invalid_argument

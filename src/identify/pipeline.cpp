@@ -428,12 +428,17 @@ int IdentificationRun::quantileLevels(std::size_t inputs) const {
   if (o.quantile_levels > 0) return o.quantile_levels;
   const double seconds = static_cast<double>(total) * dt;
   const double regions = std::pow(double{IdentifyOptions::kAutoQuantileLevels}, static_cast<double>(inputs));
-  return seconds / regions >= IdentifyOptions::kMinSecondsPerRegion ? IdentifyOptions::kAutoQuantileLevels : 2;
+  return seconds / regions >= IdentifyOptions::kMinSecondsPerRegion ? IdentifyOptions::kAutoQuantileLevels
+                                                                    : IdentifyOptions::kShortDataQuantileLevels;
 }
 
 std::string IdentifyOptions::autoQuantileRule() {
-  const std::string three = std::to_string(kAutoQuantileLevels);
-  return three + ", or 2 when " + three + " would leave under " + formatNumber(kMinSecondsPerRegion) +
+  return std::to_string(kAutoQuantileLevels) + ", or " + std::to_string(kShortDataQuantileLevels) + " when " +
+         shortDataReason();
+}
+
+std::string IdentifyOptions::shortDataReason() {
+  return std::to_string(kAutoQuantileLevels) + " would leave under " + formatNumber(kMinSecondsPerRegion) +
          " s of data per region";
 }
 
@@ -496,8 +501,7 @@ std::string IdentificationRun::partitionLine(bool interpolated, const GridPlan& 
          " levels: the logs hold no designed reference levels" +
          (o.quantile_levels > 0 || grid.quantile_levels == IdentifyOptions::kAutoQuantileLevels
               ? std::string()
-              : "; " + std::to_string(IdentifyOptions::kAutoQuantileLevels) + " would leave under " +
-                    formatNumber(IdentifyOptions::kMinSecondsPerRegion) + " s of data per region") +
+              : "; " + IdentifyOptions::shortDataReason()) +
          ")";
   if (o.direction_split) s += "; split by direction of change";
   return s;

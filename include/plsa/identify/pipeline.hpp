@@ -123,15 +123,19 @@ struct IdentifyOptions {
   PoleMethod pole_method = PoleMethod::kAuto;
   ClusteringOptions clustering;
   /// Levels per scheduling input when the log has no staircase (quantile
-  /// grid). 0 (default): 3, or 2 when the training data give under
+  /// grid). 0 (default): 3, or 2 (kShortDataQuantileLevels) when the training data give under
   /// kMinSecondsPerRegion per region of 3 levels (two minutes of three
   /// chambers: 27 regions of under 5 s each).
   int quantile_levels = 0;
   static constexpr int kAutoQuantileLevels = 3;
+  static constexpr int kShortDataQuantileLevels = 2;
   static constexpr double kMinSecondsPerRegion = 10.0;
   /// quantile_levels 0's rule in words, for help texts: "3, or 2 when 3
   /// would leave under 10 s of data per region".
   static std::string autoQuantileRule();
+  /// Why the rule takes kShortDataQuantileLevels: "3 would leave under 10 s
+  /// of data per region".
+  static std::string shortDataReason();
   bool direction_split = false;
   /// "interpolated" (coefficients blended between grid nodes), "switched"
   /// (the paper's PWL), "input" (interpolated on the input side:

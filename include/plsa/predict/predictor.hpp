@@ -152,8 +152,7 @@ class NStepPredictor {
                           Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const SubnormalsFlushed flushed;
     const PredictorStatus status = predictInModelFrame(horizon, plan, out);
-    if (status != PredictorStatus::kOk || model().frame != OutputFrame::kTipCartesian) return status;
-    tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, out);
+    if (status == PredictorStatus::kOk) toLoggedFrame(horizon, out);
     return status;
   }
 
@@ -205,8 +204,7 @@ class NStepPredictor {
     if (status != PredictorStatus::kOk) return status;
     const SubnormalsFlushed flushed;
     predicted.topRows(horizon) = sens_nominal_.topRows(horizon);
-    if (model().frame == OutputFrame::kTipCartesian)
-      tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, predicted);
+    toLoggedFrame(horizon, predicted);
     return status;
   }
 
@@ -433,6 +431,13 @@ class NStepPredictor {
     if (status == PredictorStatus::kOk && m.frame == OutputFrame::kTipCartesian)
       turnIncrements(yaw_.turn(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
     return status;
+  }
+
+  // A prediction's first `horizon` rows from the model's frame into the
+  // logged one: a tip_cartesian model's components into bending and steering.
+  void toLoggedFrame(int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    if (model().frame == OutputFrame::kTipCartesian)
+      tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, out);
   }
 
   // Input side, input held while its lagged schedule still moves: the modes

@@ -1,0 +1,587 @@
+// The real-time n-step-ahead predictor of a DIO-PWL-OBF model (method notes):
+// update() once per tick with the measured inputs and outputs, predict() for
+// yhat(k+1..k+H) from the measured y(k) and planned inputs. After
+// construction neither allocates, locks, throws nor does I/O; they return
+// status codes. The model runs in its compiled form (compiled_model.hpp),
+// which several predictors may share; a new one of the same structure can be
+// installed from another thread while they run: it is adopted whole at the
+// next update(), never torn, and the filter states carry over.
+//
+// Filter states below kTinyState are flushed to zero at every step, so no
+// history (a long hold, decaying modes) ever leaves subnormal numbers to
+// slow the arithmetic down.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "plsa/model/dio_pwl_obf_model.hpp"
+#include "plsa/predict/compiled_model.hpp"
+#include "plsa/predict/filter_states.hpp"
+#include "plsa/predict/held_lagged.hpp"
+#include "plsa/predict/kernels.hpp"
+#include "plsa/predict/merged_modes.hpp"
+#include "plsa/predict/model_handoff.hpp"
+#include "plsa/predict/plan_sensitivity.hpp"
+#include "plsa/predict/predictor_options.hpp"
+#include "plsa/predict/sensor_yaw.hpp"
+#include "plsa/predict/tip_angles.hpp"
+
+namespace plsa {
+
+/// The predictor for any number of poles per bank. update() and predict()
+/// belong to one (real-time) thread; install() may be called from any other.
+class NStepPredictor {
+ public:
+  /// Compiles `model` (may throw std::invalid_argument) and preallocates everything.
+  explicit NStepPredictor(const DioPwlObfModel& model, const PredictorOptions& options = {})
+      : NStepPredictor(compileModel(model, options), options) {}
+  /// Shares an already compiled model; `options` must be those it was compiled with.
+  NStepPredictor(std::shared_ptr<const CompiledModel> model, const PredictorOptions& options)
+      : options_(options), handoff_(model) {
+    PLSA_CHECK(model != nullptr, "Predictor: no compiled model");
+    PLSA_CHECK(model->max_horizon == options.max_horizon,
+               "Predictor: the compiled model holds tables for another max_horizon");
+    allocate(*model);
+  }
+
+  NStepPredictor(const NStepPredictor&) = delete;
+  NStepPredictor& operator=(const NStepPredictor&) = delete;
+
+  int inputCount() const noexcept { return model().n_u; }
+  int outputCount() const noexcept { return model().n_y; }
+  int maxHorizon() const noexcept { return options_.max_horizon; }
+  /// True when the model runs in modal form (all poles real and distinct,
+  /// well-conditioned bases); false: its banks are stepped as state-space filters.
+  bool heldPathIsModal() const noexcept { return model().modal; }
+  /// The model in force on the real-time thread (0 the first; each install adds 1).
+  std::uint64_t modelId() const noexcept { return handoff_.currentId(); }
+  /// Filter states that are subnormal numbers (always 0: states below
+  /// kTinyState are flushed at every step; for tests and benchmarks).
+  int subnormalStates() const noexcept {
+    int n = 0;
+    for (Eigen::Index i = 0; i < state_.size(); ++i) n += std::fpclassify(state_(i)) == FP_SUBNORMAL;
+    return n;
+  }
+  /// The compiled model in force (real-time thread, or before it starts).
+  const std::shared_ptr<const CompiledModel>& compiledModel() const noexcept { return handoff_.currentShared(); }
+
+  /// One tick: time (s), measured inputs (n_u) and outputs (n_y), any
+  /// indexable vectors with size().
+  template <class U, class Y>
+  PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
+    const SubnormalsFlushed flushed;
+    handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
+      carryFilterStates(from, to, state_, work_state_, bank_x_);
+    });
+    const CompiledModel& m = model();
+    if (static_cast<int>(u.size()) != m.n_u || static_cast<int>(y.size()) != m.n_y) return PredictorStatus::kBadShape;
+    if (!std::isfinite(time_s)) return PredictorStatus::kNotFinite;
+    for (int j = 0; j < m.n_u; ++j) {
+      if (!std::isfinite(u[j])) return PredictorStatus::kNotFinite;
+      if (u[j] < accept_min_ || u[j] > accept_max_) return PredictorStatus::kInputOutOfRange;
+    }
+    for (int o = 0; o < m.n_y; ++o)
+      if (!std::isfinite(y[o])) return PredictorStatus::kNotFinite;
+    SteeringReference steering;
+    if (m.frame == OutputFrame::kTipCartesian) {
+      steering = SteeringReference::of(y[1]);  // tipComponents' own
+      ym_(0) = y[0] * steering.cos;
+      ym_(1) = y[0] * steering.sin;
+    } else {
+      for (int o = 0; o < m.n_y; ++o) ym_(o) = y[o];
+    }
+    PredictorStatus status = PredictorStatus::kOk;
+    if (samples_ > 0) {
+      if (!(time_s > t_)) {
+        // Count samples behind the last accepted time that advance among themselves.
+        behind_ = behind_ > 0 && time_s > behind_time_ ? behind_ + 1 : 1;
+        behind_time_ = time_s;
+        if (behind_ < kClockStepSamples) return PredictorStatus::kTimeNotIncreasing;
+        samples_ = 0;
+        status = PredictorStatus::kClockStepBack;
+      } else if (time_s - t_ > options_.max_gap_factor * m.sample_time) {
+        samples_ = 0;  // restart at rest from this sample, as after construction
+        status = PredictorStatus::kTimeGap;
+      }
+    }
+    behind_ = 0;
+    t_ = time_s;
+    steer_reference_ = steering;
+    if (samples_ == 0) {
+      restart(m, u);
+      return status;
+    }
+    // The increment predicted for this sample, before it is consumed: for the
+    // simulation, and while the sensor's yaw is registered (the model's tip).
+    const bool registering = yaw_.registering();
+    if (options_.simulate || registering) increments(m, state_, us_, dir_, dy_);
+    if (options_.simulate) y_sim_ += dy_;
+    if (registering) {
+      yaw_tip_[0] += dy_(0);
+      yaw_tip_[1] += dy_(1);
+    }
+    if (m.frame == OutputFrame::kTipCartesian) yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
+    for (int j = 0; j < m.n_u; ++j) {
+      du_(j) = u[j] - u_(j);
+      u_(j) = u[j];
+    }
+    m.partition.updateDirections(du_, dir_);
+    lagSchedule(m, u_, us_);
+    advance(m, state_, vc_, us_, node_w_, u_, resting_);
+    y_ = ym_;
+    ++samples_;
+    return status;
+  }
+
+  /// yhat(k+1..k+horizon) into the first `horizon` rows of out (n_y columns),
+  /// from the measured y(k) (or the simulated output in simulation mode).
+  /// `plan` row h holds the planned input u(k+1+h); with fewer rows than
+  /// horizon-1 the last input is held (0 rows: hold u(k)).
+  /// A tip_cartesian model answers in bending and steering, each predicted
+  /// steering angle on the branch nearest the one before it (the first: the
+  /// last measured).
+  PredictorStatus predict(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                          Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const SubnormalsFlushed flushed;
+    const PredictorStatus status = predictInModelFrame(horizon, plan, out);
+    if (status == PredictorStatus::kOk) toLoggedFrame(horizon, out);
+    return status;
+  }
+
+  /// The sensitivity of predict(horizon, plan, ...) to the plan:
+  /// jacobian(h * n_y + o, s * n_u + j) = d yhat_o(k+1+h) / d plan(s, j), with
+  /// the schedule frozen where it is now. So it is exact for the
+  /// scheduled-linear model at the current schedule point: for a model of one
+  /// region, and for any model while its schedule does not move; the play
+  /// channels, their threshold, coupling and softening are followed along the
+  /// plan (a play channel's derivative is 0 inside its band, and its edge's
+  /// when the input sits on an edge, as a held input does). `plan` needs
+  /// horizon - 1 rows, `jacobian` horizon * n_y rows and (horizon - 1) * n_u
+  /// columns. A tip_cartesian model answers in bending and steering (through
+  /// the angles at the predicted trajectory). Modal form, at most 8 outputs,
+  /// 16 inputs and 64 play channels (kUnsupported otherwise); no allocation. `fill`: every entry, or only the rows each
+  /// plan step moves (JacobianFill::kMovingRows, for a matrix zeroed once and
+  /// passed every tick).
+  PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                              Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill fill = JacobianFill::kWhole) noexcept {
+    const SubnormalsFlushed flushed;
+    const CompiledModel& m = model();
+    if (samples_ == 0) return PredictorStatus::kNotReady;
+    if (!m.modal || m.n_y > 8 || m.n_u > kMaxSensitivityInputs ||
+        m.play.size() > static_cast<std::size_t>(kMaxSensitivityChannels))
+      return PredictorStatus::kUnsupported;
+    if (horizon < 2 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
+    const Eigen::Index steps = horizon - 1;
+    if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
+        jacobian.cols() != steps * m.n_u)
+      return PredictorStatus::kBadShape;
+    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    auto nominal = sens_nominal_.topRows(horizon);
+    work_y_ = options_.simulate ? y_sim_ : y_;
+    const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
+    if (status != PredictorStatus::kOk) return status;
+    sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, yaw_.turn(), jacobian, fill);
+    return PredictorStatus::kOk;
+  }
+
+  /// sensitivity(), and the prediction it is taken at (what predict(horizon,
+  /// plan, ...) gives) into the first `horizon` rows of `predicted` (n_y
+  /// columns): one planned prediction for both, where a controller would
+  /// otherwise call predict() too.
+  PredictorStatus sensitivity(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                              Eigen::Ref<Eigen::MatrixXd> jacobian, JacobianFill fill,
+                              Eigen::Ref<Eigen::MatrixXd> predicted) noexcept {
+    if (predicted.rows() < horizon || predicted.cols() != model().n_y) return PredictorStatus::kBadShape;
+    const PredictorStatus status = sensitivity(horizon, plan, jacobian, fill);
+    if (status != PredictorStatus::kOk) return status;
+    const SubnormalsFlushed flushed;
+    predicted.topRows(horizon) = sens_nominal_.topRows(horizon);
+    toLoggedFrame(horizon, predicted);
+    return status;
+  }
+
+  /// Installs a model of the same structure (inputs, outputs, pole counts,
+  /// play channels, partition, output frame) from any thread but the
+  /// real-time one. It compiles (allocates), and throws std::invalid_argument
+  /// on a structure mismatch. The real-time thread adopts it whole at its
+  /// next update(), the filter states carried into its bases.
+  void install(const DioPwlObfModel& model) { install(compileModel(model, options_)); }
+  /// The same with an already compiled model (shared, e.g. by many segments).
+  void install(std::shared_ptr<const CompiledModel> model) {
+    PLSA_CHECK(model != nullptr && sameStructure(*shape_, *model),
+               "Predictor::install: the new model's structure differs from the running one");
+    handoff_.offer(std::move(model), ++installs_);
+  }
+  /// Frees a model the real-time thread has let go of (install() does this too).
+  void collectRetired() { handoff_.collect(); }
+
+ private:
+  const CompiledModel& model() const noexcept { return handoff_.current(); }
+
+  void allocate(const CompiledModel& m) {
+    shape_ = handoff_.currentShared();
+    accept_min_ = m.accept_min;
+    accept_max_ = m.accept_max;
+    const auto nu = static_cast<Eigen::Index>(m.n_u), nc = static_cast<Eigen::Index>(m.play.size());
+    for (Eigen::VectorXd* v : {&u_, &du_, &us_, &work_u_, &work_us_}) v->setZero(nu);
+    for (Eigen::VectorXd* v : {&vc_, &work_vc_, &delta_}) v->setZero(nc);
+    for (Eigen::VectorXd* v : {&y_, &ym_, &y_sim_, &work_y_, &dy_}) v->setZero(m.n_y);
+    const Eigen::Index nodes = m.input_side ? m.nodes : 0;
+    for (Eigen::VectorXd* v : {&node_w_, &work_node_w_, &next_node_w_}) v->setZero(nodes);
+    state_.setZero(m.states());
+    work_state_.setZero(m.states());
+    bank_x_.setZero(m.poles);
+    const Eigen::Index modes = static_cast<Eigen::Index>(m.n_u) * m.n_y * m.poles;
+    zeta_.setZero(modes);
+    const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
+    for (Eigen::VectorXd* v : {&merged_, &g_}) v->setZero(slots);  // the planned path: modes, levels
+    held_lagged_.allocate(m);
+    zeta_of_output_.setZero(modes);
+    turn_.setZero(2 * static_cast<Eigen::Index>(options_.max_horizon));  // turns, then lengths
+    sens_nominal_.setZero(options_.max_horizon, m.n_y);
+    sensitivity_.allocate(m, options_.max_horizon);
+    blended_.setZero(m.states());
+    drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
+  }
+
+  // The first sample, or the first after a gap: filters at rest, channels and lag settled here.
+  template <class U>
+  void restart(const CompiledModel& m, const U& u) noexcept {
+    state_.setZero();
+    resting_.fill(true);
+    for (int j = 0; j < m.n_u; ++j) u_(j) = u[j];
+    us_ = u_;  // the schedule's lag starts settled
+    const double positive_sum = m.shaping.positiveSum(u_);
+    for (std::size_t c = 0; c < m.play.size(); ++c)
+      vc_(static_cast<Eigen::Index>(c)) =
+          playStartState(m.shaping.level(u_(m.channel_input[c]), positive_sum), m.play[c], m.shaping.start);
+    dir_ = DirectionState{};
+    if (m.input_side) nodeWeights(m, us_, node_w_);
+    y_ = y_sim_ = ym_;
+    restartSensorYaw(m);
+    samples_ = 1;
+  }
+
+  // The sensor's yaw registered afresh from this sample (settledTip).
+  void restartSensorYaw(const CompiledModel& m) noexcept {
+    yaw_.configure(m.yaw_window, m.yaw_drift_per_sample);
+    yaw_.restart();
+    if (m.yaw_window == 0) return;
+    settledTip(m, node_w_, vc_, yaw_tip_);
+    yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
+  }
+
+  // us <- the lag's next value toward u (lagTowards).
+  static void lagSchedule(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& us) noexcept {
+    for (Eigen::Index j = 0; j < us.size(); ++j) us(j) = lagTowards(us(j), u(j), m.schedule_pole);
+  }
+
+  // Dense node weights (input side) at the scheduling point us.
+  static void nodeWeights(const CompiledModel& m, const Eigen::VectorXd& us, Eigen::VectorXd& w) noexcept {
+    ScheduleBlend blend;
+    m.node_partition.blend(us, DirectionState{}, blend);
+    w.setZero();
+    for (int k = 0; k < blend.count; ++k)
+      w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
+  }
+
+  // Moves the played channels to the input u (delta_: how far each moved).
+  void moveChannels(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& vc) noexcept {
+    const double positive_sum = m.shaping.coupling != 0.0 ? m.shaping.positiveSum(u) : 0.0;  // unused when uncoupled
+    for (std::size_t c = 0; c < m.play.size(); ++c) {
+      const auto cc = static_cast<Eigen::Index>(c);
+      const double level = m.shaping.level(u(m.channel_input[c]), positive_sum);
+      const double next = m.play[c].follow(level, vc(cc));
+      delta_(cc) = next - vc(cc);
+      vc(cc) = next;
+    }
+  }
+
+  // What drives the filters this step: per copy of each input's banks (node
+  // r, channel c at nodes * first_channel(j) + r * channels(j) + c), the
+  // channel's move, or on the input side the move of its node's weight times
+  // the channel (w' v' - w v); every output's and pole's bank of that copy
+  // takes the same drive.
+  void driveInputs(const CompiledModel& m, const Eigen::VectorXd& vc, const Eigen::VectorXd& node_w) noexcept {
+    const int nodes = m.nodes;
+    for (int ch = 0; ch < static_cast<int>(m.play.size()); ++ch) {
+      const int j = m.channel_input[static_cast<std::size_t>(ch)];
+      const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
+      double* __restrict d = drive_.data() + nodes * first + (ch - first);
+      const double v = vc(ch), before = v - delta_(ch);
+      if (!m.input_side) {
+        d[0] = delta_(ch);
+        continue;
+      }
+      const double* __restrict next = next_node_w_.data();
+      const double* __restrict now = node_w.data();
+      if (channels == 1) {
+        for (int r = 0; r < nodes; ++r) d[r] = next[r] * v - now[r] * before;
+      } else {
+        for (int r = 0; r < nodes; ++r) d[r * channels] = next[r] * v - now[r] * before;
+      }
+    }
+  }
+
+  // Moves the channels to u and steps every filter with its drive; on the
+  // input side the node weights move to the lagged input us (node_w holds
+  // the previous ones).
+  void advance(const CompiledModel& m, Eigen::VectorXd& state, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
+               Eigen::VectorXd& node_w, const Eigen::VectorXd& u,
+               std::array<bool, kMaxRestingInputs>& resting) noexcept {
+    moveChannels(m, u, vc);
+    if (m.input_side) nodeWeights(m, us, next_node_w_);
+    driveInputs(m, vc, node_w);
+    stepFilters(m, drive_, state, resting, bank_x_);
+    if (m.input_side) node_w = next_node_w_;
+  }
+
+  // zeta <- each mode's copies merged through the coefficients scheduled at
+  // (us, dir): one number per mode.
+  void mergeModes(const CompiledModel& m, const Eigen::VectorXd& state, const Eigen::VectorXd& us,
+                  const DirectionState& dir, Eigen::VectorXd& zeta) noexcept {
+    const ModalForm& f = m.modal_form;
+    ScheduleBlend blend;
+    m.partition.blend(us, dir, blend);
+    if (blend.count == 1) {  // one region (always on the input side): its row as it is
+      segmentDots(f.coefficient.data() + static_cast<Eigen::Index>(blend.region[0]) * f.coefficient.cols(),
+                  state.data(), f.offset.data(), static_cast<int>(zeta.size()), zeta.data());
+      return;
+    }
+    blended_.setZero();
+    for (int k = 0; k < blend.count; ++k)
+      blended_ += blend.weight[static_cast<std::size_t>(k)] *
+                  f.coefficient.row(blend.region[static_cast<std::size_t>(k)]).transpose();
+    for (Eigen::Index q = 0; q < zeta.size(); ++q) {
+      const int begin = f.offset[static_cast<std::size_t>(q)],
+                width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
+      zeta(q) = blended_.segment(begin, width).dot(state.segment(begin, width));
+    }
+  }
+
+  // dy_o = the sum of output o's modes (modes run input, output, pole).
+  static void sumModes(const CompiledModel& m, const Eigen::VectorXd& zeta, Eigen::VectorXd& dy) noexcept {
+    const int n = m.poles;
+    const double* z = zeta.data();
+    for (int o = 0; o < m.n_y; ++o) dy(o) = 0.0;
+    for (int j = 0; j < m.n_u; ++j)
+      for (int o = 0; o < m.n_y; ++o, z += n) {
+        double acc = 0.0;
+        for (int i = 0; i < n; ++i) acc += z[i];
+        dy(o) += acc;
+      }
+  }
+
+  // dy for the next sample from the filter states, scheduled on (us, dir).
+  void increments(const CompiledModel& m, const Eigen::VectorXd& state, const Eigen::VectorXd& us,
+                  const DirectionState& dir, Eigen::VectorXd& dy) noexcept {
+    if (m.modal) {
+      mergeModes(m, state, us, dir, zeta_);
+      sumModes(m, zeta_, dy);
+      return;
+    }
+    const StateSpaceForm& s = m.state_space;
+    ScheduleBlend blend;
+    m.partition.blend(us, dir, blend);
+    const int n = m.poles;
+    dy.setZero();
+    for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
+      const int o = s.bank_output[b];
+      double dot = 0.0;
+      for (int k = 0; k < blend.count; ++k)
+        dot += blend.weight[static_cast<std::size_t>(k)] *
+               s.coefficient[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(k)])]
+                            [static_cast<std::size_t>(o)]
+                                .segment(s.coefficient_offset[b], n)
+                                .dot(state.segment(static_cast<Eigen::Index>(b) * n, n));
+      dy(o) += dot;
+    }
+  }
+
+  // predict() in the model's output frame.
+  PredictorStatus predictInModelFrame(int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                      Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const CompiledModel& m = model();
+    if (samples_ == 0) return PredictorStatus::kNotReady;
+    if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
+    if (out.rows() < horizon || out.cols() != m.n_y || (plan.rows() > 0 && plan.cols() != m.n_u))
+      return PredictorStatus::kBadShape;
+    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    work_y_ = options_.simulate ? y_sim_ : y_;
+    // A held input keeps the schedule fixed once its lag has settled: every
+    // mode then decays on its own, y(k+1+h) = y(k) + sum_q zeta_q sum_{s<=h} lambda_q^s.
+    PredictorStatus status;
+    const bool merged = m.modal && m.input_side && m.n_y <= 8;  // the merged paths keep outputs in fixed arrays
+    if (plan.rows() == 0 && us_ == u_ && m.modal)
+      status = predictSettled(m, horizon, out);
+    else if (merged && plan.rows() == 0 && !m.modal_form.lag_sum.empty())
+      status = predictHeldLagged(m, horizon, out);
+    else if (merged::fits(m))
+      status = predictMergedModes(m, horizon, plan, out);
+    else
+      status = predictStepByStep(m, horizon, plan, out);
+    if (status == PredictorStatus::kOk && m.frame == OutputFrame::kTipCartesian)
+      turnIncrements(yaw_.turn(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
+    return status;
+  }
+
+  // A prediction's first `horizon` rows from the model's frame into the
+  // logged one: a tip_cartesian model's components into bending and steering.
+  void toLoggedFrame(int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    if (model().frame == OutputFrame::kTipCartesian)
+      tipAnglesFromComponents(horizon, steer_reference_, turn_.data(), turn_.data() + options_.max_horizon, out);
+  }
+
+  // Input side, input held while its lagged schedule still moves: the modes
+  // merged at the schedule now, then the closed form (held_lagged.hpp).
+  PredictorStatus predictHeldLagged(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    mergeModes(m, state_, us_, dir_, zeta_);
+    held_lagged_.run(m, zeta_, us_, u_, vc_, work_y_, horizon, out);
+    return PredictorStatus::kOk;
+  }
+
+  PredictorStatus predictSettled(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const ModalForm& f = m.modal_form;
+    mergeModes(m, state_, u_, dir_, zeta_);
+    for (int o = 0; o < m.n_y; ++o) {
+      const auto& modes = f.modes_of_output[static_cast<std::size_t>(o)];
+      auto zeta = zeta_of_output_.head(static_cast<Eigen::Index>(modes.size()));
+      for (std::size_t t = 0; t < modes.size(); ++t) zeta(static_cast<Eigen::Index>(t)) = zeta_(modes[t]);
+      auto column = out.col(o).head(horizon);
+      column.setConstant(work_y_(o));
+      const Eigen::MatrixXd& sums = f.power_sum[static_cast<std::size_t>(o)];
+      accumulateMovingGroups(sums.data(), sums.rows(), horizon, m.n_u, m.poles, zeta.data(), column.data());
+    }
+    return PredictorStatus::kOk;
+  }
+
+  // The input for step h of a plan (held past its last row).
+  void planStep(const CompiledModel& m, const Eigen::Ref<const Eigen::MatrixXd>& plan, int h,
+                DirectionState& dir) noexcept {
+    if (h < plan.rows()) {
+      for (int j = 0; j < m.n_u; ++j) {
+        du_(j) = plan(h, j) - work_u_(j);
+        work_u_(j) = plan(h, j);
+      }
+      m.partition.updateDirections(du_, dir);
+    }
+    lagSchedule(m, work_u_, work_us_);
+  }
+
+  // Input side, modal: the copies merged once into one state per mode; each
+  // step then drives every mode with the change of its scheduled level,
+  // g = sum over the active nodes of w_r times the channels, zeta <- lambda
+  // zeta + beta (g' - g). The modes run in padded blocks (ModalForm::block),
+  // whose usual sizes get kernels with the size fixed at compile time.
+  PredictorStatus predictMergedModes(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                     Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const bool avx2 = predictorUsesAvx2();
+    switch (m.modal_form.block) {
+      case 4:
+        return avx2 ? runMergedAvx2<4>(m, horizon, plan, out) : runMerged<4>(m, horizon, plan, out);
+      case 8:
+        return avx2 ? runMergedAvx2<8>(m, horizon, plan, out) : runMerged<8>(m, horizon, plan, out);
+      case 12:
+        return avx2 ? runMergedAvx2<12>(m, horizon, plan, out) : runMerged<12>(m, horizon, plan, out);
+      case 16:
+        return avx2 ? runMergedAvx2<16>(m, horizon, plan, out) : runMerged<16>(m, horizon, plan, out);
+      case 20:
+        return avx2 ? runMergedAvx2<20>(m, horizon, plan, out) : runMerged<20>(m, horizon, plan, out);
+      case 24:
+        return avx2 ? runMergedAvx2<24>(m, horizon, plan, out) : runMerged<24>(m, horizon, plan, out);
+      default:
+        return runMerged<0>(m, horizon, plan, out);
+    }
+  }
+
+  template <int B>
+  PredictorStatus runMerged(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                            Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    return runMergedBody<B>(m, horizon, plan, out);
+  }
+  template <int B>
+  PLSA_TARGET_AVX2 PredictorStatus runMergedAvx2(const CompiledModel& m, int horizon,
+                                                 const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                                 Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    return runMergedBody<B>(m, horizon, plan, out);
+  }
+
+  // B: the block size, or 0 for any (read from the model): the modes merged
+  // at the schedule now, laid out a block per input, then merged::runPlanned.
+  template <int B>
+  PLSA_ALWAYS_INLINE PredictorStatus runMergedBody(const CompiledModel& m, int horizon,
+                                                   const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                                   Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    const ModalForm& f = m.modal_form;
+    const int block = B > 0 ? B : f.block, per_input = m.n_y * m.poles;
+    PLSA_DEBUG_ASSERT(block == f.block && block % 4 == 0 && per_input <= block && merged::fits(m));
+    PLSA_DEBUG_ASSERT(merged_.size() == static_cast<Eigen::Index>(m.n_u) * block && g_.size() == merged_.size());
+    mergeModes(m, state_, us_, dir_, zeta_);
+    merged_.setZero();
+    for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
+    merged::PlannedSchedule schedule(m, u_, us_, vc_);
+    const merged::MergedStart start{merged_.data(), g_.data(), work_y_.data()};
+    merged::runPlanned<B>(m, schedule, start, horizon, plan.data(), plan.outerStride(), plan.rows(), out.data(),
+                          out.outerStride(), work_y_.data());
+    return PredictorStatus::kOk;
+  }
+
+  // Any form: the filters stepped on a copy of the state, the schedule
+  // re-blended at every step.
+  PredictorStatus predictStepByStep(const CompiledModel& m, int horizon, const Eigen::Ref<const Eigen::MatrixXd>& plan,
+                                    Eigen::Ref<Eigen::MatrixXd> out) noexcept {
+    work_state_ = state_;
+    work_u_ = u_;
+    work_us_ = us_;
+    work_vc_ = vc_;
+    work_node_w_ = node_w_;
+    DirectionState dir = dir_;
+    std::array<bool, kMaxRestingInputs> work_resting = resting_;
+    for (int h = 0; h < horizon; ++h) {
+      increments(m, work_state_, work_us_, dir, dy_);
+      work_y_ += dy_;
+      out.row(h) = work_y_.transpose();
+      if (h + 1 == horizon) break;
+      planStep(m, plan, h, dir);
+      advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_, work_resting);
+    }
+    return PredictorStatus::kOk;
+  }
+
+  PredictorOptions options_;
+  ModelHandOff<CompiledModel> handoff_;
+  std::shared_ptr<const CompiledModel> shape_;  // the first model: structure reference for install()
+  std::uint64_t installs_ = 0;                  // install() side only
+  double accept_min_ = 0.0, accept_max_ = 0.0;  // the first model's: a swap does not move them
+
+  // Real-time state, all sized at construction.
+  Eigen::VectorXd state_, work_state_;  // filter states: modal z, or banks' x, in the model's form
+  Eigen::VectorXd drive_;               // per state: what drives it this step
+  Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
+  Eigen::VectorXd zeta_, merged_, g_, zeta_of_output_, blended_;
+  std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
+  HeldLaggedForm held_lagged_;                     // held input with a moving lag
+  Eigen::VectorXd turn_;                           // tip frame: each predicted row's turn
+  Eigen::MatrixXd sens_nominal_;                   // sensitivity(): the nominal prediction
+  PlanSensitivity sensitivity_;
+  Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
+  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
+  DirectionState dir_;
+  double t_ = 0.0;
+  int behind_ = 0;  // samples in a row behind t_, each after the one before
+  double behind_time_ = 0.0;
+  SteeringReference steer_reference_;  // tip_cartesian: the last measured steering angle
+  SensorYaw yaw_;                      // tip_cartesian: the turn from the model's frame to the sensor's
+  double yaw_tip_[2] = {0.0, 0.0};     // while registering: the model's tip, in its frame
+  std::int64_t samples_ = 0;
+};
+
+}  // namespace plsa

@@ -332,6 +332,10 @@ void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option("--window-poles-below", a->options.window_poles_below,
                  "An output with fewer usable step poles than --poles: local windows' poles are tried with its "
                  "steps' when the steps' model scores below this held-out fit % (default 0; 100: always)");
+  id->add_option("--second-order-windows-below", a->options.second_order_windows_below,
+                 "An output without steps takes its poles from local windows: the windows' second-order poles are "
+                 "tried too when the first-order poles' model scores below this held-out fit % (default 100: always; "
+                 "-inf: never, as the paper)");
   id->add_option("--levels", a->options.quantile_levels,
                  "Levels per input when the logs have no staircase (quantile grid); 0 (default): " +
                      identify::IdentifyOptions::autoQuantileRule())

@@ -2,6 +2,7 @@
 // step fits or for any fit (the partition still follows the design, the
 // poles come from windows or from the other outputs), and an input that
 // only reads noise (left out of a quantile grid).
+#include "plsa/identify/baselines.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -283,6 +284,42 @@ TEST(Pipeline, QuantileGridTakesTwoLevelsWhenThreeWouldLeaveRegionsShortOfData) 
   EXPECT_EQ(progressLine(asked_rep, "[4/5] partition").find("would leave"), std::string::npos);
   o.quantile_levels = -1;
   EXPECT_THROW(identifyModel({randomChambersLog(20.0)}, o), std::invalid_argument);
+}
+
+// Random excitation gives no step: the poles come from windows, and the same
+// windows fitted at second order give two more candidates ("+order2"),
+// scored with the others; asked for second-order local fits, there is no
+// second set to offer.
+TEST(Pipeline, WindowsInsteadOfStepsAlsoOfferTheirSecondOrderPoles) {
+  IdentifyOptions o = partitionOnly({"p_1", "p_2", "p_3"}, {"y"});
+  IdentifyReport rep;
+  identifyModel({randomChambersLog(120.0)}, o, &rep);
+  ASSERT_EQ(rep.window_outputs, (std::vector<std::string>{"y"}));
+  EXPECT_TRUE(std::any_of(rep.pairs.begin(), rep.pairs.end(),
+                          [](const PairPoles& pp) { return !pp.window_second_order.empty(); }));
+  std::vector<std::string> names;
+  for (const auto& s : rep.pole_method_scores) names.push_back(s.method);
+  EXPECT_EQ(names, (std::vector<std::string>{"fkcm", "fcm", "fkcm+order2", "fcm+order2"}));
+  EXPECT_NE(progressLine(rep, "[3/5] poles (order 2)").find("own (order 2) poles"), std::string::npos)
+      << progressLine(rep, "[3/5] poles (order 2)");
+  EXPECT_NE(progressLine(rep, "[5/5] poles kept").find("fkcm+order2->"), std::string::npos);
+  // Offered only while the first-order poles score below the bound; the
+  // paper's configuration never fits them.
+  IdentifyOptions bounded = o;
+  bounded.second_order_windows_below = -1e9;
+  IdentifyReport held;
+  identifyModel({randomChambersLog(120.0)}, bounded, &held);
+  EXPECT_EQ(held.pole_method_scores.size(), 2u);
+  EXPECT_NE(progressLine(held, "[5/5] poles kept").find("second-order windows' poles not tried"), std::string::npos)
+      << progressLine(held, "[5/5] poles kept");
+  IdentifyReport paper;
+  identifyModel({randomChambersLog(120.0)}, paperConfiguration(o), &paper);
+  for (const auto& pp : paper.pairs) EXPECT_TRUE(pp.window_second_order.empty());
+  o.local_order = 2;
+  IdentifyReport second;
+  identifyModel({randomChambersLog(120.0)}, o, &second);
+  for (const auto& s : second.pole_method_scores) EXPECT_EQ(s.method.find("order2"), std::string::npos) << s.method;
+  for (const auto& pp : second.pairs) EXPECT_TRUE(pp.window_second_order.empty());
 }
 
 // An output no local fit can use (it reads noise alone) takes the poles the

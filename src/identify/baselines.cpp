@@ -1,5 +1,7 @@
 #include "plsa/identify/baselines.hpp"
 
+#include <limits>
+
 #include "plsa/identify/coefficient_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/io/standard_columns.hpp"
@@ -17,6 +19,7 @@ IdentifyOptions paperConfiguration(IdentifyOptions o) {
   o.schedule_lag_candidates = {};
   o.slow_pole_candidates = {};
   o.output_drift = OutputDriftChoice::kOff;
+  o.second_order_windows_below = -std::numeric_limits<double>::infinity();
   return o;
 }
 

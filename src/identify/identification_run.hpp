@@ -78,9 +78,15 @@ struct IdentificationRun {
     std::vector<std::complex<double>> poles;
     const char* label;
   };
+  /// Which local poles a candidate clusters.
+  enum class PoleSourceKind {
+    kSteps,               ///< PairPoles::identified (the windows' for an output without steps)
+    kStepsAndWindows,     ///< and PairPoles::window_identified
+    kSecondOrderWindows,  ///< an output without steps: PairPoles::window_second_order instead
+  };
   struct PoleCandidate {
     PoleMethod method;
-    bool with_windows;  ///< the steps' poles and the windows' (PairPoles::window_identified)
+    PoleSourceKind kind;
     std::vector<std::vector<PoleSet>> poles;
     std::vector<ClusteringResult> chosen;
   };
@@ -92,8 +98,9 @@ struct IdentificationRun {
     std::vector<std::complex<double>> poles;
     ClusteringResult result;
   };
-  std::vector<PoleSource> poleSources(bool with_windows);
-  PoleCandidate clusterPairs(PoleMethod method, bool with_windows, const std::vector<PoleSource>& sources);
+  std::vector<PoleSource> poleSources(PoleSourceKind kind);
+  PoleCandidate clusterPairs(PoleMethod method, PoleSourceKind kind, const std::vector<PoleSource>& sources);
+  bool secondOrderWindowsFitted() const;
   std::vector<PoleMethod> poleMethods() const;
   void selectPoles();
   void adoptPoles(const PoleCandidate& c);
@@ -105,6 +112,7 @@ struct IdentificationRun {
     double fit = -INFINITY;
   };
   void scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice);
+  void addPoleCandidates(PoleSourceKind kind, const char* stage, const Structure* input_side, PoleChoice& choice);
   void addPartition(bool interpolated, const GridPlan& grid);
   std::string partitionLine(bool interpolated, const GridPlan& grid, const std::vector<int>& sched,
                             const std::vector<std::vector<double>>& bps) const;

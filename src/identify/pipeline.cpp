@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <sstream>
 
@@ -149,6 +150,7 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(std::isfinite(o.search_window_s) && o.search_window_s > 0 && o.search_window_s < 1e9,
              "identify: the search's windows must last a positive, finite number of seconds");
   PLSA_CHECK(!std::isnan(o.window_poles_below), "identify: window_poles_below is NaN");
+  PLSA_CHECK(!std::isnan(o.second_order_windows_below), "identify: second_order_windows_below is NaN");
   checkOption(o.pole_method);
   checkOption(o.scheduling);
   checkOption(o.output_drift);
@@ -217,7 +219,12 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
 void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
   rep.pairs.clear();
   for (int out_i = 0; out_i < no; ++out_i)
-    for (int in_i = 0; in_i < ni; ++in_i) rep.pairs.push_back({in_i, out_i, {}, {}, {}, 0, {}, {}});
+    for (int in_i = 0; in_i < ni; ++in_i) {
+      PairPoles pp;
+      pp.input = in_i;
+      pp.output = out_i;
+      rep.pairs.push_back(pp);
+    }
   fitStepSegments(logs);
   const std::vector<WindowUse> windows = chooseWindows();
   if (rep.used_windows || !rep.window_candidate_outputs.empty()) fitLocalWindows(logs, windows);
@@ -328,8 +335,16 @@ void IdentificationRun::fitLocalWindows(const std::vector<io::Log>& logs, const 
         }
         const LocalFit f = fitLocalModel(U[r].col(best).segment(b, w), Ym[r].col(out_i).segment(b, w),
                                          U[r](b - 1, best), Ym[r](b - 1, out_i), o.local_order);
+        // At first order, random excitation's windows can give slow poles
+        // only: the same window at second order is a further candidate.
+        const bool second = how == WindowUse::kInstead && o.local_order == 1 &&
+                            o.second_order_windows_below > -std::numeric_limits<double>::infinity();
+        const LocalFit f2 = second ? fitLocalModel(U[r].col(best).segment(b, w), Ym[r].col(out_i).segment(b, w),
+                                                   U[r](b - 1, best), Ym[r](b - 1, out_i), 2)
+                                   : LocalFit{};
         for (int in_i = 0; in_i < ni; ++in_i) {
           PairPoles& pp = pairAt(in_i, out_i);
+          if (f2.usable) pp.window_second_order.insert(pp.window_second_order.end(), f2.poles.begin(), f2.poles.end());
           auto& into = how == WindowUse::kInstead ? pp.identified : pp.window_identified;
           if (f.usable)
             into.insert(into.end(), f.poles.begin(), f.poles.end());

@@ -1,8 +1,9 @@
 // Steps 5-6, pole selection: each pair's local poles clustered into its
 // basis poles by the method asked for, or (PoleMethod::kAuto) by FKcM and by
 // fuzzy c-means, each also with local windows' poles when the steps gave too
-// few; the structure search's first stage keeps the candidate whose model
-// scores higher on held-out data.
+// few, or with the windows' second-order poles when an output had no steps;
+// the structure search's first stage keeps the candidate whose model scores
+// higher on held-out data.
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -48,21 +49,37 @@ ClusteringResult cluster(PoleMethod method, const std::vector<C>& poles, const C
   throw std::invalid_argument("identify: pole method out of range");
 }
 
-// As the scores name it: the method, "+windows" with the windows' poles.
+using Kind = IdentificationRun::PoleSourceKind;
+
+// As the scores name it: the method, "+windows" with the windows' poles,
+// "+order2" with the windows' second-order poles.
 std::string candidateName(const IdentificationRun::PoleCandidate& c) {
-  return std::string(optionName(c.method)) + (c.with_windows ? "+windows" : "");
+  return std::string(optionName(c.method)) + (c.kind == Kind::kStepsAndWindows      ? "+windows"
+                                              : c.kind == Kind::kSecondOrderWindows ? "+order2"
+                                                                                    : "");
+}
+
+// How a progress line names the candidate's poles.
+const char* kindLabel(Kind kind) {
+  return kind == Kind::kStepsAndWindows ? " (with windows) " : kind == Kind::kSecondOrderWindows ? " (order 2) " : " ";
 }
 
 }  // namespace
 
 // Which local poles each pair clusters: its own; with fewer than two, its
 // output's (and an output without any borrows every other output's: the
-// same chambers drive them all), saying so. `with_windows`: its own are the
-// steps' and the windows' (PairPoles::window_identified).
-std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(bool with_windows) {
+// same chambers drive them all), saying so. kStepsAndWindows: its own are
+// the steps' and the windows' (PairPoles::window_identified);
+// kSecondOrderWindows: an output without steps has its windows' second-order
+// poles (PairPoles::window_second_order).
+std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(PoleSourceKind kind) {
+  const bool with_windows = kind == PoleSourceKind::kStepsAndWindows;
   std::vector<std::vector<C>> pair_poles;
   for (const PairPoles& pp : rep.pairs) {
-    pair_poles.push_back(pp.identified);
+    const bool windows_instead = std::find(rep.window_outputs.begin(), rep.window_outputs.end(),
+                                           o.outputs[static_cast<std::size_t>(pp.output)]) != rep.window_outputs.end();
+    pair_poles.push_back(kind == PoleSourceKind::kSecondOrderWindows && windows_instead ? pp.window_second_order
+                                                                                        : pp.identified);
     if (with_windows)
       pair_poles.back().insert(pair_poles.back().end(), pp.window_identified.begin(), pp.window_identified.end());
   }
@@ -83,13 +100,15 @@ std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(bool w
   std::vector<PoleSource> sources;
   for (int out_i = 0; out_i < no; ++out_i) {
     const auto& mine = output_poles[static_cast<std::size_t>(out_i)];
-    if (mine.empty() && !rep.uncertain_poles && !with_windows)
+    if (mine.empty() && !rep.uncertain_poles && kind == PoleSourceKind::kSteps)
       say("[3/5] no usable local fit for " + o.outputs[static_cast<std::size_t>(out_i)] +
           " (every one rejected): it takes the other outputs' poles");
     for (int in_i = 0; in_i < ni; ++in_i) {
       const std::vector<C>& pp = own(in_i, out_i);
       if (pp.size() >= 2)
-        sources.push_back({pp, with_windows ? " step and window" : " own"});
+        sources.push_back({pp, with_windows                                  ? " step and window"
+                               : kind == PoleSourceKind::kSecondOrderWindows ? " own (order 2)"
+                                                                             : " own"});
       else if (!mine.empty())
         sources.push_back({mine, " output-wide"});
       else
@@ -103,12 +122,12 @@ std::vector<IdentificationRun::PoleSource> IdentificationRun::poleSources(bool w
 // output the same poles: each distinct set is clustered once per run (on an
 // hour of data, seconds per set), and a pair whose set an earlier candidate
 // clustered is not printed again.
-IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod method, bool with_windows,
+IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod method, PoleSourceKind kind,
                                                                  const std::vector<PoleSource>& sources) {
   ClusteringOptions co = o.clustering;
   co.centres = o.poles_per_pair;
   const std::size_t earlier = clustered_sets.size();
-  PoleCandidate cand{method, with_windows, std::vector<std::vector<PoleSet>>(static_cast<std::size_t>(no)), {}};
+  PoleCandidate cand{method, kind, std::vector<std::vector<PoleSet>>(static_cast<std::size_t>(no)), {}};
   for (int out_i = 0; out_i < no; ++out_i)
     for (int in_i = 0; in_i < ni; ++in_i) {
       const PoleSource& src = sources[static_cast<std::size_t>(out_i * ni + in_i)];
@@ -121,10 +140,9 @@ IdentificationRun::PoleCandidate IdentificationRun::clusterPairs(PoleMethod meth
       cand.chosen.push_back(r);
       cand.poles[static_cast<std::size_t>(out_i)].push_back(PoleSet(r.centres));
       if (!new_set) continue;
-      say("[3/5] poles" + std::string(with_windows ? " (with windows) " : " ") +
-          o.inputs[static_cast<std::size_t>(in_i)] + " -> " + o.outputs[static_cast<std::size_t>(out_i)] + " (" +
-          r.method + " over " + std::to_string(src.poles.size()) + src.label + " poles, rho " +
-          fixedDecimals(r.rho, 6) + "): " + fmtPoles(r.centres));
+      say("[3/5] poles" + std::string(kindLabel(kind)) + o.inputs[static_cast<std::size_t>(in_i)] + " -> " +
+          o.outputs[static_cast<std::size_t>(out_i)] + " (" + r.method + " over " + std::to_string(src.poles.size()) +
+          src.label + " poles, rho " + fixedDecimals(r.rho, 6) + "): " + fmtPoles(r.centres));
     }
   return cand;
 }
@@ -143,11 +161,18 @@ void IdentificationRun::selectPoles() {
   model.inputs = o.inputs;
   model.outputs = o.outputs;
   model.output_frame = frame;
-  const std::vector<PoleSource> sources = poleSources(false);
+  const std::vector<PoleSource> sources = poleSources(PoleSourceKind::kSteps);
   pole_candidates.clear();
   clustered_sets.clear();
-  for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, false, sources));
+  for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, PoleSourceKind::kSteps, sources));
   adoptPoles(pole_candidates.front());
+}
+
+// Whether the windows an output without steps took its poles from were
+// fitted at second order too (local_order 1), with some usable fit.
+bool IdentificationRun::secondOrderWindowsFitted() const {
+  return std::any_of(rep.pairs.begin(), rep.pairs.end(),
+                     [](const PairPoles& pp) { return !pp.window_second_order.empty(); });
 }
 
 void IdentificationRun::adoptPoles(const PoleCandidate& c) {
@@ -174,6 +199,12 @@ void IdentificationRun::adoptPoles(const PoleCandidate& c) {
 // undoing (a slow pole from a joystick run's one pause: a simulation that
 // runs away). So the steps' and windows' poles together are tried only when
 // the steps' best model scores below IdentifyOptions::window_poles_below.
+//
+// Windows of random excitation fitted at first order (the paper's local
+// model) can give slow poles only, and a model on them that runs away; the
+// same windows at second order can give the faster ones, or worse poles.
+// So where an output took its poles from windows, their second-order poles
+// are two more candidates ("+order2"), scored alike.
 double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMethodScore& into) {
   applyPlay(o.play_candidates.front());
   applyStructure(structures.front());
@@ -185,8 +216,8 @@ double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMetho
 }
 
 void IdentificationRun::choosePoleMethod() {
-  const bool windows = !rep.window_candidate_outputs.empty();
-  if (pole_candidates.size() < 2 && !windows) return;
+  const bool windows = !rep.window_candidate_outputs.empty(), second_order = secondOrderWindowsFitted();
+  if (pole_candidates.size() < 2 && !windows && !second_order) return;
   const auto first_input_side = std::find_if(structures.begin(), structures.end(),
                                              [](const Structure& st) { return st.side == ScheduleSide::kInput; });
   const Structure* input_side = first_input_side == structures.end() ? nullptr : &*first_input_side;
@@ -195,14 +226,18 @@ void IdentificationRun::choosePoleMethod() {
   scorePoleCandidates("pole methods", input_side, choice);
   std::string held_back;
   if (windows && choice.fit < o.window_poles_below) {
-    const std::vector<PoleSource> sources = poleSources(true);
-    for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, true, sources));
-    scorePoleCandidates("pole candidates with windows", input_side, choice);
+    addPoleCandidates(PoleSourceKind::kStepsAndWindows, "pole candidates with windows", input_side, choice);
   } else if (windows) {
     held_back = "; windows' poles for";
     for (const auto& name : rep.window_candidate_outputs) held_back += " " + name;
     held_back += " not tried: the steps' score " + formatNumber(o.window_poles_below) + " or more";
   }
+  if (second_order && choice.fit < o.second_order_windows_below)
+    addPoleCandidates(PoleSourceKind::kSecondOrderWindows, "pole candidates from second-order windows", input_side,
+                      choice);
+  else if (second_order)
+    held_back += "; second-order windows' poles not tried: the first-order score " +
+                 formatNumber(o.second_order_windows_below) + " or more";
   adoptPoles(pole_candidates[choice.best]);
   std::string s = "[5/5] poles kept: " + candidateName(pole_candidates[choice.best]) +
                   " (held-out fits on the first play set, 40 steps ahead" + (input_side ? " and simulated" : "") +
@@ -211,6 +246,15 @@ void IdentificationRun::choosePoleMethod() {
     s += " " + sc.method + "->" + scoreText(sc.step_ahead) +
          (input_side ? "/" + scoreText(sc.simulation) : std::string());
   say(s + held_back + ")");
+}
+
+// One more candidate per pole method, clustering the poles `kind` names,
+// scored with the others.
+void IdentificationRun::addPoleCandidates(PoleSourceKind kind, const char* stage, const Structure* input_side,
+                                          PoleChoice& choice) {
+  const std::vector<PoleSource> sources = poleSources(kind);
+  for (PoleMethod m : poleMethods()) pole_candidates.push_back(clusterPairs(m, kind, sources));
+  scorePoleCandidates(stage, input_side, choice);
 }
 
 // Scores the candidates not scored yet (from rep.pole_method_scores' size

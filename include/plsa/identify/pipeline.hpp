@@ -157,6 +157,14 @@ struct IdentifyOptions {
   /// though the search's own held-out scores prefer the windows'); 100:
   /// always; -inf: never.
   double window_poles_below = 0.0;
+  /// An output without a usable step response (random excitation) takes its
+  /// poles from local windows; fitted at first order (local_order 1, the
+  /// paper's) they can give slow poles only. The same windows fitted at
+  /// second order are two more pole candidates ("+order2"), scored with the
+  /// others, when the best first-order candidate scores below this on
+  /// held-out data (percent, as window_poles_below). 100: always; -inf: never
+  /// (paperConfiguration).
+  double second_order_windows_below = 100.0;
   CoefficientFitOptions coefficients;
   /// Hysteresis memory: candidate sets of play channels. A channel's width is
   /// a fraction of the input's range in the training data, its slope a
@@ -258,6 +266,10 @@ struct PairPoles {
   /// Usable poles of local windows for an output whose steps gave fewer than
   /// a bank places: the second pole candidate's (with `identified`).
   std::vector<std::complex<double>> window_identified;
+  /// Usable poles of the same windows fitted at second order, for an output
+  /// without a usable step response when local_order is 1: the
+  /// "+order2" pole candidates' (choosePoleMethod).
+  std::vector<std::complex<double>> window_second_order;
   /// Poles of fits rejected only as badly determined or too weak for the
   /// noise (LocalFit::uncertain): used only when no output has a usable one.
   std::vector<std::complex<double>> uncertain;

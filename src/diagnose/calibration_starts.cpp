@@ -154,18 +154,19 @@ CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, co
   return r;
 }
 
-// Two starts for a candidate's calibration: neutral, and the spread point
-// that a short calibration (the screening stage: `screen.evaluations`
-// simulator runs each, at the screening step) takes furthest: ranking the
-// spread points by their raw gap picked the wrong basin whenever the effect
-// shifts what the nominal physics must do (a stop-type loop moves the
-// static gain). Adds the runs spent to `spent`.
+sim::SimConfig neutralStart(sim::SimConfig c, const std::string& effect) {
+  setNeutral(c, effect);
+  return c;
+}
 
-std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                                      const CalibrationOptions& o, const Screening& screen, int& spent) {
-  sim::SimConfig neutral = c;
-  setNeutral(neutral, effect);
+// The best spread point: the one that a short calibration (the screening
+// stage: `screen.evaluations` simulator runs each, at the screening step)
+// takes furthest. Ranking the spread points by their raw gap picked the
+// wrong basin whenever the effect shifts what the nominal physics must do
+// (a stop-type loop moves the static gain). Adds the runs spent to `spent`.
+sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
+                               const std::vector<std::string>& modules, const std::vector<RunData>& train,
+                               const CalibrationOptions& o, const Screening& screen, int& spent) {
   CalibrationOptions quick = o;
   quick.max_evaluations = screen.evaluations;
   quick.evaluations_per_parameter = 0;
@@ -184,7 +185,7 @@ std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string
       if (r.train_gap.total < best_gap) best_gap = r.train_gap.total, best = r.config;
     } catch (const std::invalid_argument&) {}
   }
-  return {neutral, best};
+  return best;
 }
 
 // A candidate switched on, with its flexible law unless told otherwise.

@@ -37,12 +37,14 @@ sim::SimConfig atLeastStep(sim::SimConfig c, double step_s);
 CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, const std::vector<std::string>& modules,
                                   const std::vector<RunData>& train, const CalibrationOptions& o);
 
-/// The starts a candidate is calibrated from: neutral, then the best spread
-/// point (after the screening stage when `screen.evaluations` > 0). Adds the
-/// runs spent to `spent`.
-std::vector<sim::SimConfig> startsFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                                      const CalibrationOptions& o, const Screening& screen, int& spent);
+/// A candidate's two calibration starts: neutral (the effect switched on
+/// but doing nothing), and the best spread point, after the screening stage
+/// when `screen.evaluations` > 0, else by its training gap alone
+/// (bestSpreadStart adds the runs it spent to `spent`).
+sim::SimConfig neutralStart(sim::SimConfig c, const std::string& effect);
+sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
+                               const std::vector<std::string>& modules, const std::vector<RunData>& train,
+                               const CalibrationOptions& o, const Screening& screen, int& spent);
 
 /// The nominal physics calibrated from the simulator as given and the best
 /// data-derived starts, then restarted from the best; `spent`: the runs of

@@ -238,31 +238,50 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
   return measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
 }
 
-// One candidate added to the current model and calibrated from each of its
-// starts; the best start's result.
+// One candidate added to the current model, calibrated from each of its
+// two starts (two tasks of a round); the better start's result.
 struct CandidateTrial {
   CandidateResult result;
   sim::SimConfig config;
   OutputFit fit;
 };
 
-CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::string>& selected, const std::string& e,
-                            int round, const Screening& screen, const SelectionContext& x) {
+struct StartTrial {
+  CalibrationResult calibrated;
+  int evaluations = 0;  ///< the screening's runs included
+};
+
+// Start 0: neutral; start 1: the best spread point (after screening, if any).
+StartTrial calibrateFromStart(const CalibratedState& s, const std::vector<std::string>& selected, const std::string& e,
+                              int start, const Screening& screen, const SelectionContext& x) {
   const DiagnoseOptions& o = x.o;
   sim::SimConfig c = s.config;
   enableCandidate(c, e, o);
   const std::vector<std::string> modules = modulesWith(selected, e);
-  CalibrationResult r;
+  StartTrial t;
+  const sim::SimConfig from = start == 0
+                                  ? neutralStart(c, e)
+                                  : bestSpreadStart(c, e, modules, x.runs.train, o.calibration, screen, t.evaluations);
+  t.calibrated = calibrateAtStep(from, modules, x, o.calibration);
+  t.evaluations += t.calibrated.evaluations;
+  return t;
+}
+
+// The candidate's result from its starts' calibrations (the first wins a tie).
+CandidateTrial candidateTrial(const CalibratedState& s, const std::string& e, int round, std::vector<StartTrial> starts,
+                              const SelectionContext& x) {
+  const DiagnoseOptions& o = x.o;
   CandidateResult cr;
-  bool first = true;
-  for (const sim::SimConfig& start : startsFor(c, e, modules, x.runs.train, o.calibration, screen, cr.evaluations)) {
-    CalibrationResult trial = calibrateAtStep(start, modules, x, o.calibration);
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < starts.size(); ++i) {
     ++cr.starts;
-    cr.evaluations += trial.evaluations;
-    cr.train_gap_per_start.push_back(trial.train_gap.percent());
-    if (first || trial.train_gap.total < r.train_gap.total) r = std::move(trial);
-    first = false;
+    cr.evaluations += starts[i].evaluations;
+    cr.train_gap_per_start.push_back(starts[i].calibrated.train_gap.percent());
+    if (starts[i].calibrated.train_gap.total < starts[best].calibrated.train_gap.total) best = i;
   }
+  CalibrationResult& r = starts[best].calibrated;
+  sim::SimConfig c = s.config;
+  enableCandidate(c, e, o);
   OutputFit f = r.fit;
   cr.effect = e;
   cr.formulation = c.formulationOf(e);
@@ -275,6 +294,30 @@ CandidateTrial tryCandidate(const CalibratedState& s, const std::vector<std::str
   const auto sig = s.where.signatures.find(e);
   if (sig != s.where.signatures.end()) cr.signature = sig->second;
   return {cr, r.config, f};
+}
+
+// Every remaining candidate from both its starts, and the nothing-added bar:
+// 2n + 1 tasks, so that two cores finish a round together (a candidate as
+// one task left a core idle while the costliest ran on). The best spread
+// points' starts (screened in round 1: the larger tasks) go first. The
+// results are those of the candidates run whole.
+std::vector<CandidateTrial> tryCandidates(const CalibratedState& s, const std::vector<std::string>& selected,
+                                          const std::vector<std::string>& remaining, int round, const Screening& screen,
+                                          const SelectionContext& x, Gap& null_gap) {
+  const std::size_t n = remaining.size();
+  std::vector<StartTrial> starts(2 * n);
+  parallelFor(2 * n + 1, x.o.threads, [&](std::size_t i) {
+    if (i == 2 * n)
+      null_gap = recalibratedWithNothingAdded(s, selected, remaining, screen, x);
+    else if (i < n)
+      starts[2 * i + 1] = calibrateFromStart(s, selected, remaining[i], 1, screen, x);
+    else
+      starts[2 * (i - n)] = calibrateFromStart(s, selected, remaining[i - n], 0, screen, x);
+  });
+  std::vector<CandidateTrial> trials;
+  for (std::size_t i = 0; i < n; ++i)
+    trials.push_back(candidateTrial(s, remaining[i], round, {starts[2 * i], starts[2 * i + 1]}, x));
+  return trials;
 }
 
 // Polish the kept model with the nominal fit's budget (chosen on training
@@ -304,14 +347,8 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   // that moves the nominal physics most; later rounds start from a model
   // that has absorbed it (and would take twice as long).
   const Screening screen{round == 1 ? o.screen_evaluations : 0, o.screen_step_s};
-  std::vector<CandidateTrial> trials(remaining.size());
   Gap null_gap = s.heldout;
-  parallelFor(remaining.size() + 1, o.threads, [&](std::size_t i) {  // the last index: the bar
-    if (i == remaining.size())
-      null_gap = recalibratedWithNothingAdded(s, selected, remaining, screen, x);
-    else
-      trials[i] = tryCandidate(s, selected, remaining[i], round, screen, x);
-  });
+  const std::vector<CandidateTrial> trials = tryCandidates(s, selected, remaining, round, screen, x, null_gap);
   std::vector<std::size_t> order(trials.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

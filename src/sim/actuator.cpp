@@ -83,6 +83,8 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   two_rate_creep_ = config_.creep.formulation == "two_rate";
   random_walk_bias_ = config_.sensor_bias.formulation == "random_walk";
   smooth_deadzone_ = config_.deadzone.formulation == "smooth";
+  const double tilt = config_.sensor_bias.enabled ? config_.sensor_bias.tilt_deg * kDeg : 0.0;
+  tilted_x_axis_ = {std::cos(tilt - kPi / 2.0), -std::sin(tilt - kPi / 2.0)};
   for (std::size_t i = 0; i < 3; ++i) {
     const double dir = config_.geometry.bend_direction_deg[i] * kDeg;
     bend_direction_[i] = {std::cos(dir), std::sin(dir)};
@@ -224,6 +226,15 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   bendToward(target, sum_p);
 }
 
+// The yaw the sensor reads at this sample (deg): its steady drift, or one
+// step of its random walk (one draw).
+double Actuator::sensorYawDeg() {
+  const auto& b = config_.sensor_bias;
+  if (!random_walk_bias_) return b.yaw_drift_deg_per_s * time_s_;
+  yaw_walk_deg_ += std::abs(b.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / config_.sample_rate_hz) * normal_(rng_);
+  return yaw_walk_deg_;
+}
+
 ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   const SimConfig& c = config_;
   ActuatorSample s;
@@ -236,15 +247,7 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   s.true_steer_deg = phi / kDeg;
   // Tip frame (Webster & Jones): Rz(phi) Ry(theta) Rz(-phi); the sensor's x axis is the tip normal.
   Eigen::Matrix3d g_r_b = rotZ(phi) * rotY(theta) * rotZ(-phi) * rotY(-kPi / 2.0);
-  if (c.sensor_bias.enabled) {
-    double yaw_deg = c.sensor_bias.yaw_drift_deg_per_s * time_s_;
-    if (random_walk_bias_) {
-      yaw_walk_deg_ +=
-          std::abs(c.sensor_bias.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / c.sample_rate_hz) * normal_(rng_);
-      yaw_deg = yaw_walk_deg_;
-    }
-    g_r_b = rotZ(yaw_deg * kDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
-  }
+  if (c.sensor_bias.enabled) g_r_b = rotZ(sensorYawDeg() * kDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
   if (c.sensor.noise_deg > 0.0) {
     const Eigen::Vector3d w(normal_(rng_), normal_(rng_), normal_(rng_));
     const double sigma = c.sensor.noise_deg * kDeg;
@@ -252,17 +255,51 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   }
   s.sensor_rotation = g_r_b.transpose();
   anglesFromRotation(s.sensor_rotation, s.bend_deg, s.steer_deg);
-  if (c.sensor_bias.enabled) addBendingOffset(s);
+  if (c.sensor_bias.enabled) addBendingOffset(s.bend_deg, s.steer_deg);
   return s;
 }
 
-void Actuator::addBendingOffset(ActuatorSample& s) const {
+// measure()'s reading without noise, as a bending vector (deg), without
+// its matrices and angle round trips. Eqs. (5)-(6) read only the first
+// column of G_R_B = Rz(yaw) Rz(phi) Ry(theta) Rz(-phi) Ry(-pi/2) Ry(tilt),
+// the sensor's x axis (the tip normal), so that axis is turned through the
+// same rotations as a vector; its bend acos(z) points along its (x, y),
+// and the bias offsets and drifts add to that vector as they do to
+// measure()'s angles. The same to rounding, for two sincos and one acos
+// where measure() and its conversion take nine sincos, two atan2, an acos
+// and five matrix products (a diagnosis's calibrations read a biased sensor
+// this way once sensor_bias is a candidate or kept).
+Eigen::Vector2d Actuator::bendingWithoutNoise() {
+  const SimConfig& c = config_;
+  const double theta = bend_.norm();
+  const double cp = theta > 1e-12 ? bend_.x() / theta : 1.0, sp = theta > 1e-12 ? bend_.y() / theta : 0.0;
+  const bool bias = c.sensor_bias.enabled;
+  const double yaw = bias ? sensorYawDeg() * kDeg : 0.0;
+  Eigen::Vector3d x(tilted_x_axis_[0], 0.0, tilted_x_axis_[1]);                  // Ry(tilt - pi/2) e_x
+  x = Eigen::Vector3d(cp * x.x() + sp * x.y(), cp * x.y() - sp * x.x(), x.z());  // Rz(-phi)
+  const double ct = std::cos(theta), st = std::sin(theta);
+  x = Eigen::Vector3d(ct * x.x() + st * x.z(), x.y(), ct * x.z() - st * x.x());  // Ry(theta)
+  x = Eigen::Vector3d(cp * x.x() - sp * x.y(), sp * x.x() + cp * x.y(), x.z());  // Rz(phi)
+  const double cy = std::cos(yaw), sy = std::sin(yaw);
+  x = Eigen::Vector3d(cy * x.x() - sy * x.y(), sy * x.x() + cy * x.y(), x.z());  // Rz(yaw)
+  const double across = std::sqrt(x.x() * x.x() + x.y() * x.y());                // a unit vector: no overflow to guard
+  Eigen::Vector2d bending = Eigen::Vector2d::Zero();
+  if (across > 0.0) bending = std::acos(std::clamp(x.z(), -1.0, 1.0)) / kDeg / across * Eigen::Vector2d(x.x(), x.y());
+  if (bias) {
+    const auto& b = c.sensor_bias;
+    bending +=
+        Eigen::Vector2d(b.offset_x_deg + b.drift_x_deg_per_s * time_s_, b.offset_y_deg + b.drift_y_deg_per_s * time_s_);
+  }
+  return bending;
+}
+
+void Actuator::addBendingOffset(double& bend_deg, double& steer_deg) const {
   const auto& b = config_.sensor_bias;
-  const double x = s.bend_deg * std::cos(s.steer_deg * kDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
-  const double y = s.bend_deg * std::sin(s.steer_deg * kDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
-  if (x == 0.0 && y == 0.0 && s.bend_deg == 0.0) return;
-  s.bend_deg = std::hypot(x, y);
-  s.steer_deg = std::atan2(y, x) / kDeg;
+  const double x = bend_deg * std::cos(steer_deg * kDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
+  const double y = bend_deg * std::sin(steer_deg * kDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
+  if (x == 0.0 && y == 0.0 && bend_deg == 0.0) return;
+  bend_deg = std::hypot(x, y);
+  steer_deg = std::atan2(y, x) / kDeg;
 }
 
 std::array<double, 3> Actuator::advance(const std::array<double, 3>& command_bar) {
@@ -284,15 +321,18 @@ ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) { return
 BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar) {
   const std::array<double, 3> cmd = advance(command_bar);
   BendingReading r;
+  r.pressure_bar = pressure_;
   if (config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled && bend_.norm() < 0.5 * kPi) {
     r.bending_deg = bend_ / kDeg;
-    r.pressure_bar = pressure_;
+    return r;
+  }
+  if (config_.sensor.noise_deg == 0.0) {
+    r.bending_deg = bendingWithoutNoise();
     return r;
   }
   const ActuatorSample s = measure(cmd);
   const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
   r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
-  r.pressure_bar = s.pressure_bar;
   return r;
 }
 

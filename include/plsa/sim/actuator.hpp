@@ -60,8 +60,10 @@ class Actuator {
   /// step() read as a bending vector. With an exact sensor (no noise, no
   /// sensor_bias) and a bend under 90 deg that is the bending state itself,
   /// without step()'s rotation round trip (eqs. (5)-(6) give back the bend
-  /// and steering the state holds, to rounding); otherwise step()'s
-  /// measurement, converted (the same random draws).
+  /// and steering the state holds, to rounding); without noise, step()'s
+  /// reading through vectors, not its matrices and angles (the same to
+  /// rounding); with noise, step()'s measurement, converted (the same
+  /// random draws).
   BendingReading stepReading(const std::array<double, 3>& command_bar);
   /// Vent: command zero in every chamber.
   ActuatorSample vent() { return step({0.0, 0.0, 0.0}); }
@@ -87,7 +89,11 @@ class Actuator {
   }
   double smoothEffectivePressure(double p) const;
   ActuatorSample measure(const std::array<double, 3>& cmd);
-  void addBendingOffset(ActuatorSample& s) const;  ///< sensor_bias offsets and drifts of the reported angles
+  double sensorYawDeg();  ///< sensor_bias's yaw at this sample (a random walk draws once)
+  /// measure()'s reading for a sensor without noise as a bending vector
+  /// (deg), through vectors rather than measure()'s rotation matrices.
+  Eigen::Vector2d bendingWithoutNoise();
+  void addBendingOffset(double& bend_deg, double& steer_deg) const;  ///< sensor_bias offsets and drifts
 
   SimConfig config_;
   std::mt19937_64 rng_;
@@ -110,6 +116,8 @@ class Actuator {
   /// Each chamber's bending direction (cos, sin), computed once (not three
   /// sincos per internal step).
   std::array<std::array<double, 2>, 3> bend_direction_{};
+  /// The sensor's x axis tilted by sensor_bias (x and z of Ry(tilt - pi/2) e_x), computed once.
+  std::array<double, 2> tilted_x_axis_{};
   bool weighted_pi_ = false;
   double full_strain_ = 0.0;  ///< |strain| at max_pressure_bar (weighted_pi's fixed bands)
   std::array<double, 3> pi_weights_{};

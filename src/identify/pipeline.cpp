@@ -1,19 +1,19 @@
 #include "plsa/identify/pipeline.hpp"
-#include "plsa/core/number_text.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
+#include "identification_run.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/eval/dio_prediction.hpp"
+#include "plsa/eval/validation.hpp"
 #include "plsa/identify/local_fit.hpp"
 #include "plsa/identify/output_drift.hpp"
 #include "plsa/identify/segmentation.hpp"
-#include "plsa/eval/validation.hpp"
-#include "identification_run.hpp"
 #include "plsa/io/standard_columns.hpp"
 
 namespace plsa::identify {

@@ -1,6 +1,7 @@
 // The predictor's low-level kernels and arithmetic environment: AVX2+FMA
 // builds of the hot loops chosen at run time, the held paths' table
-// product, and the scope in which subnormal numbers are flushed to zero.
+// product, and (from core) the scope in which subnormal numbers are
+// flushed to zero.
 #pragma once
 
 #include <cmath>
@@ -8,10 +9,8 @@
 #include <Eigen/Dense>
 
 #include "plsa/core/simd.hpp"
+#include "plsa/core/subnormals_flushed.hpp"
 
-#if defined(__SSE2__)
-#include <xmmintrin.h>
-#endif
 #if PLSA_X86_DISPATCH
 #include <immintrin.h>
 #endif
@@ -235,21 +234,5 @@ inline bool tipTurns(const double* x, const double* y, int rows, double x0, doub
 /// Filter states smaller than this are zero (far below any measurable
 /// output, far above the subnormal range).
 inline constexpr double kTinyState = 1e-150;
-
-/// For its scope, arithmetic flushes subnormal results and operands to zero
-/// (x86 SSE: MXCSR's FTZ and DAZ bits, restored on exit; elsewhere a no-op,
-/// and the stored states' flush alone keeps them out). Every real-time call
-/// of the predictor runs under one, so no intermediate of a prediction can
-/// slow down on a subnormal number either.
-class SubnormalsFlushed {
- public:
-#if defined(__SSE2__)
-  SubnormalsFlushed() noexcept : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
-  ~SubnormalsFlushed() { _mm_setcsr(saved_); }
-
- private:
-  unsigned saved_;
-#endif
-};
 
 }  // namespace plsa

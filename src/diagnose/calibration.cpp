@@ -17,8 +17,8 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
                         double preroll_s) {
   // A run's long holds bring the simulator's pressure errors, rates and
   // creep states into the subnormal range; calibrated physics that does so
-  // cost 1.5x as long on the real arm (the same diagnosis, 133 against 75
-  // CPU s). Nothing flushed is above 2.2e-308.
+  // cost 1.8x the CPU time on the real arm (the same diagnosis, 133 against
+  // 75 CPU s). Nothing flushed is above 2.2e-308.
   const SubnormalsFlushed flushed;
   sim::Actuator a(config, seed);
   const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};

@@ -19,13 +19,16 @@ class SubnormalsFlushed {
 #if defined(__SSE2__)
   SubnormalsFlushed() noexcept : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
   ~SubnormalsFlushed() { _mm_setcsr(saved_); }
+#else
+  SubnormalsFlushed() noexcept = default;
+#endif
+  SubnormalsFlushed(const SubnormalsFlushed&) = delete;
+  SubnormalsFlushed& operator=(const SubnormalsFlushed&) = delete;
 
+#if defined(__SSE2__)
  private:
   unsigned saved_;
 #endif
- public:
-  SubnormalsFlushed(const SubnormalsFlushed&) = delete;
-  SubnormalsFlushed& operator=(const SubnormalsFlushed&) = delete;
 };
 
 }  // namespace plsa

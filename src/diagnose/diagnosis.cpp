@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <future>
 #include <stdexcept>
+#include <utility>
 
 #include "calibration_starts.hpp"
 #include "plsa/core/parallel_for.hpp"
@@ -280,11 +281,9 @@ CandidateTrial candidateTrial(const CalibratedState& s, const std::string& e, in
     if (starts[i].calibrated.train_gap.total < starts[best].calibrated.train_gap.total) best = i;
   }
   CalibrationResult& r = starts[best].calibrated;
-  sim::SimConfig c = s.config;
-  enableCandidate(c, e, o);
   OutputFit f = r.fit;
   cr.effect = e;
-  cr.formulation = c.formulationOf(e);
+  cr.formulation = r.config.formulationOf(e);  // the law it was switched on with; calibration moves values only
   cr.round = round;
   cr.heldout_before = s.heldout;
   cr.heldout_after = measureGap(r.config, x.runs.held, o.calibration.gap, &f, false);
@@ -316,7 +315,8 @@ std::vector<CandidateTrial> tryCandidates(const CalibratedState& s, const std::v
   });
   std::vector<CandidateTrial> trials;
   for (std::size_t i = 0; i < n; ++i)
-    trials.push_back(candidateTrial(s, remaining[i], round, {starts[2 * i], starts[2 * i + 1]}, x));
+    trials.push_back(
+        candidateTrial(s, remaining[i], round, {std::move(starts[2 * i]), std::move(starts[2 * i + 1])}, x));
   return trials;
 }
 

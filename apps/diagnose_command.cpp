@@ -86,6 +86,7 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
                             {"gap_after", c.gap_after},
                             {"noise", c.noise},
                             {"true_effect_shrink", c.true_effect_shrink},
+                            {"true_effect_shrink_above_noise", c.true_effect_shrink_above_noise},
                             {"spurious", c.spurious},
                             {"verdict", c.verdict},
                             {"confidence", c.confidence},
@@ -109,7 +110,9 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
                     {"uncertain", r.uncertain},
                     {"qualified", r.qualified},
                     {"median_true_shrink", r.median_true_shrink},
-                    {"min_true_shrink", r.min_true_shrink}};
+                    {"min_true_shrink", r.min_true_shrink},
+                    {"median_true_shrink_above_noise", r.median_true_shrink_above_noise},
+                    {"cases_above_noise", r.cases_above_noise}};
     writeTextFile(a.out, j.dump(2), "self-check results");
   }
   if (!r.targets_met) throw std::runtime_error("diagnose-selfcheck: targets not met (see the table above)");

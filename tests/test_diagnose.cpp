@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -64,6 +65,34 @@ TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) 
   const double expected = measureGap(truth, {noisy}, {}).outputs;  // residual is exactly the noise
   const double floor = noiseFloor({noisy}, {}).outputs;
   EXPECT_NEAR(floor / expected, 1.0, 0.25) << "floor " << floor << " vs injected " << expected;
+}
+
+TEST(Diagnose, ShrinkAboveNoiseCountsOnlyTheGapAModelCanClose) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.sensor.noise_deg = 0.0;
+  RunData noisy = recorded(truth, 20, 3);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> n(0.0, 0.3);
+  for (Eigen::Index i = 0; i < noisy.outputs.size(); ++i) noisy.outputs(i) += n(rng);
+  sim::SimConfig other = truth;  // a gap of a few noise floors, where the noise is much of the raw gap
+  other.elongation.strain_per_bar *= 0.97;
+  const Gap noise = noiseFloor({noisy}, {});
+  const Gap before = measureGap(other, {noisy}, {});
+  const Gap after = measureGap(truth, {noisy}, {});  // the true physics: only the noise is left
+  ASSERT_GT(before.percent(), 2.0 * noise.percent());
+  const double raw = 100.0 * (1.0 - after.percent() / before.percent());
+  const double closed = shrinkAboveNoise(before, after, noise);
+  EXPECT_GT(closed, 85.0) << "the true physics closes the gap a model can close";
+  EXPECT_LT(raw, closed - 5.0) << "the raw shrink counts the noise as gap left";
+  // Nothing closed, and the floor itself: 0% and 100%; no gap above the floor: undefined.
+  EXPECT_NEAR(shrinkAboveNoise(before, before, noise), 0.0, 1e-9);
+  Gap at_floor = noise;
+  EXPECT_NEAR(shrinkAboveNoise(before, at_floor, noise), 100.0, 1e-9);
+  at_floor.total = 0.5 * noise.total;  // an estimate can land under the floor: clamped
+  EXPECT_NEAR(shrinkAboveNoise(before, at_floor, noise), 100.0, 1e-9);
+  Gap small = noise;
+  small.total = 3.9 * noise.total;  // under twice the floor in %
+  EXPECT_TRUE(std::isnan(shrinkAboveNoise(small, noise, noise)));
 }
 
 TEST(Diagnose, CalibrationRecoversPerturbedNominalPhysics) {

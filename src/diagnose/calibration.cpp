@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <nlopt.hpp>
@@ -128,6 +129,12 @@ Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& o) {
   if (pressures) g.pressures = p / std::max(1e-12, pooledSpread(runs, true));
   g.total = g.outputs + o.pressure_weight * g.pressures;
   return g;
+}
+
+double shrinkAboveNoise(const Gap& before, const Gap& after, const Gap& noise) {
+  if (!(before.total > 4.0 * noise.total)) return std::numeric_limits<double>::quiet_NaN();
+  const double left = std::max(0.0, after.total - noise.total) / (before.total - noise.total);
+  return 100.0 * (1.0 - std::sqrt(left));
 }
 
 namespace {

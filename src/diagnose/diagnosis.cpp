@@ -401,11 +401,14 @@ std::string verdictOf(const Diagnosis& d, const DiagnoseOptions& o) {
     for (const auto& s : d.selected) list += (list.empty() ? "" : ", then ") + s;
     std::snprintf(v, sizeof v,
                   "The gap is explained by %s: adding %s shrinks the held-out gap from %.1f%% to %.1f%% "
-                  "(noise floor %.1f%%).",
+                  "(noise floor %.1f%%",
                   d.selected[0].c_str(), list.c_str(), d.gap_before.percent(), d.gap_after.percent(),
                   d.noise.percent());
   }
   std::string verdict = v;
+  const double closed = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
+  if (!d.selected.empty())
+    verdict += std::isfinite(closed) ? ", " + pct(closed) + " of the gap above it closed)." : ").";
   if (d.confidence == "uncertain")
     verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
                d.selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";

@@ -68,7 +68,7 @@ json breakdownJson(const Breakdown& b) {
   return j;
 }
 
-json candidateJson(const CandidateResult& c) {
+json candidateJson(const CandidateResult& c, const Gap& noise) {
   return {
       {"effect", c.effect},
       {"formulation", c.formulation},
@@ -76,6 +76,7 @@ json candidateJson(const CandidateResult& c) {
       {"heldout_gap_before", c.heldout_before.percent()},
       {"heldout_gap_after", c.heldout_after.percent()},
       {"shrink_percent", c.shrink_percent},
+      {"shrink_above_noise_percent", shrinkAboveNoise(c.heldout_before, c.heldout_after, noise)},
       {"train_gap_after", c.train_after.percent()},
       {"calibration",
        {{"starts", c.starts}, {"evaluations", c.evaluations}, {"train_gap_percent_per_start", c.train_gap_per_start}}},
@@ -107,12 +108,14 @@ std::string toJson(const Diagnosis& d) {
   j["nominal_params"] = paramsJson(d.nominal_params);
   j["nominal_evaluations"] = d.nominal_evaluations;
   j["calibration_step_s"] = d.calibration_step_s;
-  j["ranking"] = arrayOf(d.ranking, candidateJson);
-  j["later_rounds"] = arrayOf(d.later_rounds, candidateJson);
+  const auto candidate = [&](const CandidateResult& c) { return candidateJson(c, d.noise); };
+  j["ranking"] = arrayOf(d.ranking, candidate);
+  j["later_rounds"] = arrayOf(d.later_rounds, candidate);
   j["selected"] = d.selected;
   j["steps"] = json::array();
   for (const auto& [e, gap] : d.steps) j["steps"].push_back({{"effect", e}, {"heldout_gap_after", gap.percent()}});
   j["gap_after"] = d.gap_after.percent();
+  j["shrink_above_noise_percent"] = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
   j["final_params"] = paramsJson(d.final_params);
   j["where"] = breakdownJson(d.where);
   j["where_after"] = breakdownJson(d.where_after);

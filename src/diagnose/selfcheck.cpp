@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -106,20 +107,25 @@ Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint6
   return u;
 }
 
+namespace {
+std::string roundedPercent(double v) { return std::isfinite(v) ? std::to_string(std::lround(v)) + "%" : "-"; }
+}  // namespace
+
 std::string SelfcheckResult::summary() const {
   std::ostringstream o;
   char line[512];
-  o << "case | effect size | withheld -> selected (round-1 top 2) | gap before -> after (noise) | true-effect shrink | "
-       "confidence | pass\n";
+  o << "case | effect size | withheld -> selected (round-1 top 2) | gap before -> after (noise) | true-effect shrink "
+       "(above the noise) | confidence | pass\n";
   for (const auto& c : cases) {
     std::string w, s, t;
     for (const auto& x : c.withheld) w += (w.empty() ? "" : "+") + x;
     for (const auto& x : c.selected) s += (s.empty() ? "" : "+") + x;
     for (const auto& x : c.top2) t += (t.empty() ? "" : ",") + x;
-    std::snprintf(line, sizeof line, "%-38s %5.1f%%  %s -> %s (%s)  %.1f%% -> %.1f%% (%.1f%%)  %.0f%%  %s  %s\n",
+    const std::string above = roundedPercent(c.true_effect_shrink_above_noise);
+    std::snprintf(line, sizeof line, "%-38s %5.1f%%  %s -> %s (%s)  %.1f%% -> %.1f%% (%.1f%%)  %.0f%% (%s)  %s  %s\n",
                   c.name.c_str(), c.effect_size, w.empty() ? "nothing" : w.c_str(), s.empty() ? "nothing" : s.c_str(),
-                  t.c_str(), c.gap_before, c.gap_after, c.noise, c.true_effect_shrink, c.confidence.c_str(),
-                  c.pass ? "yes" : "NO");
+                  t.c_str(), c.gap_before, c.gap_after, c.noise, c.true_effect_shrink, above.c_str(),
+                  c.confidence.c_str(), c.pass ? "yes" : "NO");
     o << line;
   }
   o << "\nconfusion matrix (rows: withheld effect, single cases and null; columns: first effect selected)\n";
@@ -151,8 +157,10 @@ std::string SelfcheckResult::summary() const {
   o << line;
   std::snprintf(line, sizeof line,
                 "single cases with a calibrated gap over twice the noise floor: %d/%d, the withheld effect named "
-                "first in %d of them; verdicts: %d uncertain, %d qualified\n",
-                gap_single_cases, single_cases, gap_single_top1, uncertain, qualified);
+                "first in %d of them; true-effect shrink of the gap above the noise floor, median over the %d cases "
+                "(single or pair) with such a gap: %s; verdicts: %d uncertain, %d qualified\n",
+                gap_single_cases, single_cases, gap_single_top1, cases_above_noise,
+                roundedPercent(median_true_shrink_above_noise).c_str(), uncertain, qualified);
   o << line;
   return o.str();
 }
@@ -338,10 +346,15 @@ void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, Selfcheck
   const std::string first = d.selected.empty() ? "none" : d.selected[0];
   if (spec.withheld.size() == 1) {
     for (const auto& r : d.ranking)
-      if (r.effect == spec.withheld[0]) c.true_effect_shrink = r.shrink_percent;
+      if (r.effect == spec.withheld[0]) {
+        c.true_effect_shrink = r.shrink_percent;
+        c.true_effect_shrink_above_noise = shrinkAboveNoise(r.heldout_before, r.heldout_after, d.noise);
+      }
     // Kept first: its gap once its calibration is polished.
-    if (!d.steps.empty() && d.steps[0].first == spec.withheld[0])
+    if (!d.steps.empty() && d.steps[0].first == spec.withheld[0]) {
       c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].second.percent() / std::max(1e-12, c.gap_before));
+      c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.steps[0].second, d.noise);
+    }
     c.pass = first == spec.withheld[0] && c.true_effect_shrink >= 60.0 && c.spurious == 0;
     ++res.single_cases;
     res.single_top1 += first == spec.withheld[0];
@@ -353,6 +366,7 @@ void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, Selfcheck
     shrinks.push_back(c.true_effect_shrink);
   } else if (spec.withheld.size() == 2) {
     c.true_effect_shrink = 100.0 * (1.0 - c.gap_after / std::max(1e-12, c.gap_before));
+    c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
     const bool both = withheld(c.top2.size() > 0 ? c.top2[0] : "") && withheld(c.top2.size() > 1 ? c.top2[1] : "");
     c.pass = both;
     ++res.pair_cases;
@@ -371,6 +385,14 @@ void summarise(SelfcheckResult& res, std::vector<double>& shrinks) {
     std::sort(shrinks.begin(), shrinks.end());
     res.min_true_shrink = shrinks.front();
     res.median_true_shrink = shrinks[shrinks.size() / 2];
+  }
+  std::vector<double> above;
+  for (const auto& c : res.cases)
+    if (std::isfinite(c.true_effect_shrink_above_noise)) above.push_back(c.true_effect_shrink_above_noise);
+  res.cases_above_noise = static_cast<int>(above.size());
+  if (!above.empty()) {
+    std::sort(above.begin(), above.end());
+    res.median_true_shrink_above_noise = above[above.size() / 2];
   }
   const auto n = static_cast<double>(res.cases.size());
   res.targets_met = (res.single_cases == 0 || res.single_top1 >= 0.95 * res.single_cases) &&

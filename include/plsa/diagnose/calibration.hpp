@@ -62,6 +62,12 @@ Gap measureGap(const sim::SimConfig& config, const std::vector<RunData>& runs, c
 /// (second differences: a smooth signal has little, white noise 6 sigma^2).
 Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& options);
 
+/// The share of the gap above the noise floor that `after` closes, %: gaps
+/// are mean squares, so the noise adds to the modelling error and no
+/// simulator gets below it; 100 reaches the floor. NaN when `before` is not
+/// over twice the noise floor (in %): nothing a model could close.
+double shrinkAboveNoise(const Gap& before, const Gap& after, const Gap& noise);
+
 struct CalibrationOptions {
   int max_evaluations = 150;
   /// ...raised to this many per calibrated parameter: BOBYQA spends 2n + 1

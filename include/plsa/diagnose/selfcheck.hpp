@@ -6,6 +6,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -59,9 +60,12 @@ struct SelfcheckCase {
   std::vector<std::string> top2;  ///< round-1 ranking, best two
   double gap_before = 0, gap_after = 0, noise = 0;
   double true_effect_shrink = 0;  ///< single: the withheld effect's own round-1 shrink; pair: overall
-  int spurious = 0;               ///< selected effects that were not withheld
-  std::string verdict;            ///< the diagnosis's own words
-  std::string confidence;         ///< Diagnosis::confidence
+  /// The same gap's share above the noise floor closed (shrinkAboveNoise);
+  /// NaN when the calibrated gap is not over twice the noise floor.
+  double true_effect_shrink_above_noise = std::numeric_limits<double>::quiet_NaN();
+  int spurious = 0;        ///< selected effects that were not withheld
+  std::string verdict;     ///< the diagnosis's own words
+  std::string confidence;  ///< Diagnosis::confidence
   /// How much the withheld effect(s) change the held-out outputs: RMS of the
   /// noise-free difference with and without them (same nominal physics) over
   /// the outputs' spread, %. Below the noise floor no diagnosis can see it.
@@ -83,6 +87,11 @@ struct SelfcheckResult {
   int gap_single_cases = 0, gap_single_top1 = 0;
   int uncertain = 0, qualified = 0;  ///< verdicts with that confidence
   double min_true_shrink = 0, median_true_shrink = 0;
+  /// Median true_effect_shrink_above_noise over the cases where it is
+  /// defined (NaN if none), and their number: the share of the closable gap
+  /// closed. Reported beside the targets, which use median_true_shrink.
+  double median_true_shrink_above_noise = std::numeric_limits<double>::quiet_NaN();
+  int cases_above_noise = 0;
   /// Targets: top-1 in >= 95% of single cases, both effects in the top two in
   /// >= 90% of pairs, no claim on a null case, median true-effect shrink
   /// >= 60%, spurious selections in <= 10% of cases.

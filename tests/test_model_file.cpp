@@ -72,6 +72,13 @@ std::vector<FieldCase> fieldCases() {
           {"no sample time", false, [](J& j) { j.erase("sample_time_s"); }, "missing field 'sample_time_s'"},
           {"a newer version", false, [](J& j) { j["version"] = 7; }, "version 7 is newer than this build reads"},
           {"a fractional version", false, [](J& j) { j["version"] = 1.0; }, "'version' must be an integer"},
+          {"version 0", false, [](J& j) { j["version"] = 0; }, "'version' must be an integer in 1.."},
+          {"65 poles in a bank", false,
+           [](J& j) {
+             j["poles"][0][0] = J::array();
+             for (int i = 0; i < 65; ++i) j["poles"][0][0].push_back({0.5, 0.0});
+           },
+           "poles[0][0]: more than 64 poles"},
           {"an unknown key", false, [](J& j) { j["extra"] = 1; }, "unknown key 'extra'"},
           {"an unknown region key", false, [](J& j) { j["regions"][0]["extra"] = 1; },
            "unknown key 'regions[0].extra'"},

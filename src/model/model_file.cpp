@@ -256,6 +256,8 @@ class ModelReader {
       for (std::size_t i = 0; i < sets.size(); ++i) {
         std::vector<std::complex<double>> list;
         const std::string path = "poles[" + std::to_string(o) + "][" + std::to_string(i) + "]";
+        if (array(sets[i], path).size() > DioPwlObfModel::kMaxPolesPerBank)
+          bad(path + ": more than " + std::to_string(DioPwlObfModel::kMaxPolesPerBank) + " poles");
         for (const auto& p : array(sets[i], path)) {
           if (!p.is_array() || p.size() != 2) bad(path + ": each pole is [re, im]");
           list.emplace_back(number(p[0], path), number(p[1], path));

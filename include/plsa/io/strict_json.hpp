@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <initializer_list>
 #include <set>
 #include <stdexcept>
@@ -21,49 +22,82 @@ namespace plsa::io {
 /// Deepest nesting of objects and arrays a plsa file has, with room to spare.
 inline constexpr int kMaxJsonDepth = 32;
 
+/// What parseStrictJson refuses, found in one SAX pass before the document
+/// is built (nlohmann's parser callback is quadratic in an array's length:
+/// a model of 800k regions took minutes to load).
+class StrictJsonCheck {
+ public:
+  using json = nlohmann::json;
+  explicit StrictJsonCheck(const std::string& source) : source_(source) {}
+
+  bool null() { return true; }
+  bool boolean(bool) { return true; }
+  bool number_integer(json::number_integer_t) { return true; }
+  bool number_unsigned(json::number_unsigned_t) { return true; }
+  bool number_float(json::number_float_t v, const json::string_t& text) {
+    if (!std::isfinite(v)) refuse("not valid JSON: number overflow parsing '" + text + "' at '" + where() + "'");
+    return true;
+  }
+  bool string(json::string_t&) { return true; }
+  bool binary(json::binary_t&) { return true; }
+  bool start_object(std::size_t) {
+    open();
+    seen_.emplace_back();
+    path_.emplace_back();
+    return true;
+  }
+  bool key(json::string_t& k) {
+    path_.back() = k;
+    if (!seen_.back().insert(k).second) refuse("key '" + where() + "' is given twice (which one is meant?)");
+    return true;
+  }
+  bool end_object() {
+    seen_.pop_back();
+    path_.pop_back();
+    --depth_;
+    return true;
+  }
+  bool start_array(std::size_t) {
+    open();
+    return true;
+  }
+  bool end_array() {
+    --depth_;
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) {
+    refuse(std::string("not valid JSON: ") + e.what());
+    return false;
+  }
+
+ private:
+  void open() {
+    if (depth_ >= kMaxJsonDepth)
+      refuse("nested deeper than " + std::to_string(kMaxJsonDepth) + " levels at '" + where() + "'");
+    ++depth_;
+  }
+  [[noreturn]] void refuse(const std::string& why) const { throw std::invalid_argument(source_ + ": " + why); }
+  std::string where() const {
+    std::string p;
+    for (const auto& k : path_) p += (p.empty() ? "" : ".") + k;
+    return p;
+  }
+
+  const std::string& source_;
+  int depth_ = 0;
+  std::vector<std::set<std::string>> seen_;  // keys of each open object
+  std::vector<std::string> path_;            // the key being read at each open object
+};
+
 /// Parses `text`; throws std::invalid_argument "SOURCE: reason" for invalid
 /// JSON, a number beyond double range, a key given twice in one object (naming
-/// its path) or nesting deeper than kMaxJsonDepth.
+/// its path) or nesting deeper than kMaxJsonDepth. Linear in the text.
 inline nlohmann::json parseStrictJson(const std::string& text, const std::string& source) {
-  using nlohmann::json;
-  std::vector<std::set<std::string>> seen;  // keys of each open object
-  std::vector<std::string> path;            // the key being read at each open object
-  auto where = [&path] {
-    std::string p;
-    for (const auto& k : path) p += (p.empty() ? "" : ".") + k;
-    return p;
-  };
-  const json::parser_callback_t check = [&](int depth, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start:
-      case json::parse_event_t::array_start:
-        if (depth >= kMaxJsonDepth)
-          throw std::invalid_argument(source + ": nested deeper than " + std::to_string(kMaxJsonDepth) +
-                                      " levels at '" + where() + "'");
-        if (event == json::parse_event_t::object_start) {
-          seen.emplace_back();
-          path.emplace_back();
-        }
-        break;
-      case json::parse_event_t::key: {
-        const std::string key = parsed.get<std::string>();
-        path.back() = key;
-        if (!seen.back().insert(key).second)
-          throw std::invalid_argument(source + ": key '" + where() + "' is given twice (which one is meant?)");
-        break;
-      }
-      case json::parse_event_t::object_end:
-        seen.pop_back();
-        path.pop_back();
-        break;
-      default:
-        break;
-    }
-    return true;
-  };
+  StrictJsonCheck check(source);
+  nlohmann::json::sax_parse(text, &check);  // throws on the first refusal
   try {
-    return json::parse(text, check);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e400
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {  // checked above; kept so that nothing raw escapes
     throw std::invalid_argument(source + ": not valid JSON: " + e.what());
   }
 }
@@ -106,7 +140,7 @@ inline long long integerIn(const nlohmann::json& v, long long lo, long long hi, 
   if (!v.is_number_integer()) throw std::invalid_argument(source + ": '" + path + "'" + range);
   if (v.is_number_unsigned()) {
     const auto u = v.get<unsigned long long>();
-    if (hi < 0 || u > static_cast<unsigned long long>(hi))
+    if (hi < 0 || u > static_cast<unsigned long long>(hi) || (lo > 0 && u < static_cast<unsigned long long>(lo)))
       throw std::invalid_argument(source + ": '" + path + "'" + range);
     return static_cast<long long>(u);
   }

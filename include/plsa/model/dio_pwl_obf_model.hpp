@@ -40,6 +40,9 @@ struct DioPwlObfModel {
   /// Model files this build writes; it reads 1 (fields added since then take
   /// the meaning they had before) and 2 (every field required, unknown keys refused).
   static constexpr int kSchemaVersion = 2;
+  /// Most poles one bank takes: identification fits at most 20 (plus a slow
+  /// pole); a bank's set-up grows with the square of its poles.
+  static constexpr std::size_t kMaxPolesPerBank = 64;
 
   double sample_time_s = 1.0 / 80.0;
   std::vector<std::string> inputs;   ///< column names of the inputs
@@ -148,8 +151,12 @@ struct DioPwlObfModel {
                "model: input-side scheduling needs an interpolated partition without a direction split");
     for (std::size_t o = 0; o < poles.size(); ++o) {
       PLSA_CHECK(poles[o].size() == inputs.size(), "model: output '" + outputs[o] + "' needs one pole set per input");
-      for (std::size_t j = 0; j < poles[o].size(); ++j)
+      for (std::size_t j = 0; j < poles[o].size(); ++j) {
         PLSA_CHECK(!poles[o][j].empty(), "model: empty pole set for " + inputs[j] + " -> " + outputs[o]);
+        PLSA_CHECK(
+            static_cast<std::size_t>(poles[o][j].size()) <= kMaxPolesPerBank,
+            "model: more than " + std::to_string(kMaxPolesPerBank) + " poles for " + inputs[j] + " -> " + outputs[o]);
+      }
     }
     PLSA_CHECK(partition.maxInputIndex() < inputCount(),
                "model: the partition schedules on an input that does not exist");

@@ -114,6 +114,7 @@ struct IdentificationRun {
   void scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice);
   void addPoleCandidates(PoleSourceKind kind, const char* stage, const Structure* input_side, PoleChoice& choice);
   void addPartition(bool interpolated, const GridPlan& grid);
+  void requireDataForPartition(const PwlPartition& partition, const GridPlan& grid) const;
   std::string partitionLine(bool interpolated, const GridPlan& grid, const std::vector<int>& sched,
                             const std::vector<std::vector<double>>& bps) const;
 

@@ -85,8 +85,12 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
       const double bands = std::abs(x(k) - median) / band;
       if (bands <= kGrossOutlierBands) continue;
       std::ostringstream msg;
-      msg << log.source << ": data row " << k + 1 << ", column '" << name << "': " << x(k) << " lies " << bands
-          << " times the width of the column's 1-99% band (" << quantile(0.01) << " to " << quantile(0.99)
+      msg << log.source << ": data row " << k + 1 << ", column '" << name << "': " << x(k) << " lies ";
+      if (std::isfinite(bands))
+        msg << bands << " times";
+      else
+        msg << "beyond any multiple of";
+      msg << " the width of the column's 1-99% band (" << quantile(0.01) << " to " << quantile(0.99)
           << ") from its median " << median;
       return msg.str();
     }
@@ -166,7 +170,13 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     for (std::size_t j = 0; j < o.inputs.size(); ++j)
       reference.push_back(have_cmd ? columns::command(static_cast<int>(j) + 1) : o.inputs[j]);
   }
-  PLSA_CHECK(reference.size() == o.inputs.size(), "identify: need one reference column per input");
+  if (reference.size() != o.inputs.size()) {
+    std::string names;
+    for (const auto& r : reference) names += (names.empty() ? "" : ", ") + r;
+    throw std::invalid_argument("identify: the reference columns (" + names + ") are " +
+                                std::to_string(reference.size()) + " for " + std::to_string(o.inputs.size()) +
+                                " inputs; name one per input, in the inputs' order");
+  }
   for (const auto& log : logs) {
     if (o.refuse_outliers) {
       std::vector<std::string> columns = o.inputs;
@@ -493,6 +503,7 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
     throw std::invalid_argument(
         "identify: the partition would have " + std::to_string(partitions.back().regionCount()) + " regions (limit " +
         std::to_string(kMaxRegions) + "); use fewer --levels or scheduling inputs, or no direction split");
+  requireDataForPartition(partitions.back(), grid);
   model.partition = partitions.back();
   model.input_min = all_u.minCoeff();
   model.input_max = all_u.maxCoeff();
@@ -500,6 +511,22 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
   for (Eigen::Index c = 0; c < all_u.cols(); ++c)
     model.input_ranges.push_back({all_u.col(c).minCoeff(), all_u.col(c).maxCoeff()});
   say(partitionLine(interpolated, grid, sched, bps));
+}
+
+// Each region's coefficients need samples: with more coefficients than
+// samples the fit is underdetermined, and the structure search's solves
+// (cubic in the coefficients) run for hours before saying so.
+void IdentificationRun::requireDataForPartition(const PwlPartition& partition, const GridPlan& grid) const {
+  const long long regions = partition.regionCount();
+  const long long coefficients = regions * ni * o.poles_per_pair;  // per output, one play channel per input
+  if (coefficients <= static_cast<long long>(total)) return;
+  const std::string levels = grid.designed
+                                 ? std::string("the logs' reference levels give")
+                                 : "a quantile grid of " + std::to_string(grid.quantile_levels) + " levels gives";
+  throw std::invalid_argument("identify: " + levels + " " + std::to_string(regions) + " regions, so " +
+                              std::to_string(coefficients) + " coefficients per output (regions x inputs x poles), " +
+                              "more than the " + std::to_string(total) +
+                              " samples can determine; use fewer --levels or --poles, or more data");
 }
 
 // The [4/5] line: the partition, its breakpoints, and why its grid.

@@ -119,7 +119,10 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   log.source = "r.csv";
   log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "bend_deg", "steer_deg"};
   log.data = Eigen::MatrixXd::Zero(100, 6);
-  for (int i = 0; i < 100; ++i) log.data(i, 0) = 0.0125 * i;
+  for (int i = 0; i < 100; ++i) {
+    log.data(i, 0) = 0.0125 * i;
+    log.data(i, 4) = 5.0 + std::sin(0.1 * i);
+  }
   auto errorOf = [&](const io::Log& l, RunColumns c = {}) -> std::string {
     try {
       runFromLog(l, c, 0.4);
@@ -137,10 +140,36 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   EXPECT_NE(errorOf(bad).find("check --input-scale"), std::string::npos) << errorOf(bad);
   bad = log;
   bad.data(5, 4) = INFINITY;
-  EXPECT_NE(errorOf(bad).find("output column has NaN or Inf"), std::string::npos);
+  EXPECT_NE(errorOf(bad).find("column 'bend_deg' has NaN or Inf"), std::string::npos) << errorOf(bad);
+  bad = log;
+  bad.data(50, 4) = 1e308;  // a glitch: finite, and every calibration would chase it
+  EXPECT_NE(errorOf(bad).find("data row 51, column 'bend_deg'"), std::string::npos) << errorOf(bad);
+  bad = log;
+  bad.data.col(4).setConstant(3.0);
+  EXPECT_NE(errorOf(bad).find("the outputs never move"), std::string::npos) << errorOf(bad);
+  bad = log;
+  bad.data.col(0).tail(40).array() += 0.5;  // samples lost: simulating across would be wrong
+  EXPECT_NE(errorOf(bad).find("time gap of 0.5125 s before data row 61"), std::string::npos) << errorOf(bad);
   RunColumns c;
   c.outputs = {"bend_deg"};
   EXPECT_NE(errorOf(log, c).find("exactly 2 output columns"), std::string::npos);
+  c = {};
+  c.outputs = {"bend_deg", "bend_deg"};
+  EXPECT_NE(errorOf(log, c).find("column 'bend_deg' is named twice"), std::string::npos) << errorOf(log, c);
+  c = {};
+  c.pressures = {"cmd_1"};
+  EXPECT_NE(errorOf(log, c).find("needs 3 pressure columns"), std::string::npos) << errorOf(log, c);
+  // Pressures: all three used, none a run without them, some an error naming the missing one.
+  io::Log with_p = log;
+  with_p.columns.insert(with_p.columns.end(), {"p_1", "p_2", "p_3"});
+  with_p.data.conservativeResize(Eigen::NoChange, 9);
+  with_p.data.rightCols(3).setZero();
+  EXPECT_EQ(errorOf(with_p), "accepted");
+  EXPECT_TRUE(runFromLog(with_p, {}, 0.4).hasPressures());
+  EXPECT_FALSE(runFromLog(log, {}, 0.4).hasPressures());
+  c = {};
+  c.pressures = {"p_1", "p_2", "p_4"};
+  EXPECT_NE(errorOf(with_p, c).find("no 'p_4'"), std::string::npos) << errorOf(with_p, c);
   EXPECT_THROW(runDiagnosis(sim::probes::everyEffectOff(), {}, quick()), std::invalid_argument);
   DiagnoseOptions o = quick();
   o.candidates = {"friction"};

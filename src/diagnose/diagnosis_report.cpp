@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
+#include <stdexcept>
+#include <system_error>
 
 #include <nlohmann/json.hpp>
 
@@ -344,7 +346,11 @@ std::string reportHtml(const Diagnosis& d) {
 }
 
 void writeDiagnosisFolder(const Diagnosis& d, const std::string& dir) {
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (dir.empty() || ec || !std::filesystem::is_directory(dir))
+    throw std::invalid_argument("diagnosis: cannot make the output folder '" + dir + "'" +
+                                (ec ? ": " + ec.message() : std::string(": it exists and is not a folder")));
   const std::filesystem::path folder(dir);
   writeTextFile((folder / "diagnosis.json").string(), toJson(d), "diagnosis");
   writeTextFile((folder / "report.html").string(), reportHtml(d), "HTML report");

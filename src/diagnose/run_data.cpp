@@ -1,4 +1,6 @@
 #include "plsa/diagnose/run_data.hpp"
+#include "plsa/identify/pipeline.hpp"
+#include "plsa/io/csv_log.hpp"
 #include "plsa/io/standard_columns.hpp"
 
 #include <algorithm>
@@ -17,30 +19,43 @@ Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::Vect
   return v;
 }
 
-RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_bar) {
-  const std::string where = "diagnosis: run '" + log.source + "': ";
+namespace {
+
+// The columns a run reads: each named once, none both an input and an
+// output or pressure, three pressures or none; a pressure set half present
+// in the log is an error (all absent: a run without pressures).
+void checkColumns(const io::Log& log, const RunColumns& c, const std::string& where) {
   if (c.inputs.empty() || c.inputs.size() > 3) throw std::invalid_argument(where + "needs 1 to 3 input columns");
   if (c.outputs.size() != 2) throw std::invalid_argument(where + "needs exactly 2 output columns");
-  if (!(c.input_scale > 0) || !std::isfinite(c.input_scale))
-    throw std::invalid_argument(where + "input scale must be positive");
+  if (!c.pressures.empty() && c.pressures.size() != 3)
+    throw std::invalid_argument(where + "needs 3 pressure columns, one per chamber, or none");
+  std::vector<std::string> all = c.inputs;
+  all.insert(all.end(), c.outputs.begin(), c.outputs.end());
+  all.insert(all.end(), c.pressures.begin(), c.pressures.end());
+  for (auto at = all.begin(); at != all.end(); ++at)
+    if (std::find(all.begin(), at, *at) != at)
+      throw std::invalid_argument(where + "column '" + *at +
+                                  "' is named twice among the inputs, outputs and pressures");
+  const auto present =
+      std::count_if(c.pressures.begin(), c.pressures.end(), [&](const std::string& p) { return log.hasColumn(p); });
+  if (present > 0 && present < static_cast<long>(c.pressures.size()))
+    for (const auto& p : c.pressures)
+      if (!log.hasColumn(p))
+        throw std::invalid_argument(where + "has some pressure columns but no '" + p +
+                                    "' (name all three, or --pressures none)");
   if (!log.hasColumn(io::standard_columns::kTime))
     throw std::invalid_argument(where + "has no " + io::standard_columns::kTime + " column");
   if (log.samples() < 50)
     throw std::invalid_argument(where + "has " + std::to_string(log.samples()) + " samples; at least 50 needed");
-  RunData r;
-  r.name = log.source;
-  const Eigen::VectorXd t = log.column(io::standard_columns::kTime);
-  std::vector<double> steps;
-  for (Eigen::Index i = 1; i < t.size(); ++i) steps.push_back(t(i) - t(i - 1));
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  r.sample_time_s = steps[steps.size() / 2];
-  if (!(r.sample_time_s > 0)) throw std::invalid_argument(where + "time does not increase");
-  r.commands = Eigen::MatrixXd::Zero(log.samples(), 3);
+}
+
+Eigen::MatrixXd commandsOf(const io::Log& log, const RunColumns& c, double max_pressure_bar, const std::string& where) {
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(log.samples(), 3);
   for (std::size_t j = 0; j < c.inputs.size(); ++j)
-    r.commands.col(static_cast<Eigen::Index>(j)) = log.column(c.inputs[j]) * c.input_scale;
-  for (Eigen::Index i = 0; i < r.commands.rows(); ++i)
+    u.col(static_cast<Eigen::Index>(j)) = log.column(c.inputs[j]) * c.input_scale;
+  for (Eigen::Index i = 0; i < u.rows(); ++i)
     for (Eigen::Index j = 0; j < 3; ++j) {
-      const double v = r.commands(i, j);
+      const double v = u(i, j);
       if (!std::isfinite(v))
         throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " is not finite at row " +
                                     std::to_string(i + 1));
@@ -49,16 +64,46 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
                                     " bar at row " + std::to_string(i + 1) + " is outside 0.." +
                                     std::to_string(max_pressure_bar) + " bar (check --input-scale)");
     }
-  r.commands = r.commands.cwiseMax(0.0);
-  const Eigen::MatrixXd y = log.columnsOf(c.outputs);
-  if (!y.allFinite()) throw std::invalid_argument(where + "an output column has NaN or Inf");
-  r.outputs = c.map == OutputMap::kAngles ? bendingVector(y.col(0), y.col(1)) : y;
-  bool all = !c.pressures.empty();
-  for (const auto& p : c.pressures) all = all && log.hasColumn(p);
-  if (all && c.pressures.size() == 3) {
-    r.pressures = log.columnsOf(c.pressures);
-    if (!r.pressures.allFinite()) throw std::invalid_argument(where + "a pressure column has NaN or Inf");
+  return u.cwiseMax(0.0);
+}
+
+// Outputs and pressures: finite, no gross outlier (a glitch would swamp the
+// gap every calibration minimises), and outputs that move.
+bool hasPressures(const io::Log& log, const RunColumns& c) {
+  return !c.pressures.empty() && log.hasColumn(c.pressures[0]);  // all or none (checkColumns)
+}
+
+void checkMeasured(const io::Log& log, const RunColumns& c, const std::string& where) {
+  std::vector<std::string> measured = c.outputs;
+  if (hasPressures(log, c)) measured.insert(measured.end(), c.pressures.begin(), c.pressures.end());
+  for (const auto& name : measured)
+    if (!log.column(name).allFinite()) throw std::invalid_argument(where + "column '" + name + "' has NaN or Inf");
+  const std::string outlier = identify::grossOutlier(log, measured);
+  if (!outlier.empty()) throw std::invalid_argument("diagnosis: " + outlier + "; fix or remove the row");
+  bool moves = false;
+  for (const auto& name : c.outputs) {
+    const Eigen::VectorXd y = log.column(name);
+    moves = moves || y.maxCoeff() > y.minCoeff();
   }
+  if (!moves) throw std::invalid_argument(where + "the outputs never move: there is no response to diagnose");
+}
+
+}  // namespace
+
+RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_bar) {
+  const std::string where = "diagnosis: run '" + log.source + "': ";
+  if (!(c.input_scale > 0) || !std::isfinite(c.input_scale))
+    throw std::invalid_argument(where + "input scale must be positive");
+  checkColumns(log, c, where);
+  RunData r;
+  r.name = log.source;
+  r.sample_time_s = io::checkedSampleTime(log, io::standard_columns::kTime, io::kToleratedGapFactor);
+  if (!(r.sample_time_s > 0)) throw std::invalid_argument(where + "time does not increase");
+  r.commands = commandsOf(log, c, max_pressure_bar, where);
+  checkMeasured(log, c, where);
+  const Eigen::MatrixXd y = log.columnsOf(c.outputs);
+  r.outputs = c.map == OutputMap::kAngles ? bendingVector(y.col(0), y.col(1)) : y;
+  if (hasPressures(log, c)) r.pressures = log.columnsOf(c.pressures);
   r.start = c.start == RunStart::kAuto ? detectRunStart(r, c.map) : c.start;
   return r;
 }

@@ -38,6 +38,18 @@ inline CLI::Validator finiteNumberAtLeast(double lo, bool strict) {
       strict ? "POSITIVE" : "NONNEGATIVE");
 }
 inline const CLI::Validator kPositive = finiteNumberAtLeast(0.0, true);
+/// Any finite number ("nan" passes CLI::Range: its comparisons are false),
+/// or an infinity where `infinities` (a threshold meaning always or never).
+inline CLI::Validator finiteNumber(bool infinities = false) {
+  return CLI::Validator(
+      [infinities](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        const bool ok = !text.empty() && end && *end == '\0' && !std::isnan(v) && (infinities || std::isfinite(v));
+        return ok ? std::string() : "'" + text + "' is not a " + (infinities ? "number" : "finite number");
+      },
+      "NUMBER");
+}
 inline const CLI::Validator kNonNegative = finiteNumberAtLeast(0.0, false);
 
 /// A random seed as digits only: CLI11 reads "-3" as 2^64 - 3 and clamps an

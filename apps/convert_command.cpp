@@ -25,7 +25,8 @@ struct ConvertArgs {
 };
 
 void runConvert(const ConvertArgs& a) {
-  refuseOverwritingInputs(a.out, "--out", {a.in}, "plsa convert");
+  refuseOverwritingInputs(a.out, "--out", {a.in, a.can_profile}, "plsa convert");
+  logPaths({a.in}, "convert", false);  // a file or a pipe; a device is no log
   io::ReadOptions ro;
   ro.lcm_channel = a.channel;
   ro.can_profile = a.can_profile;

@@ -14,6 +14,7 @@
 #include "log_paths.hpp"
 #include "plsa/eval/comparison.hpp"
 #include "plsa/core/check.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/identify/baselines.hpp"
 #include "plsa/identify/pipeline.hpp"
@@ -55,6 +56,26 @@ std::vector<std::string> foldNames(const std::vector<std::string>& files) {
   return names;
 }
 
+/// Every fold trains on all logs but one: a log at another rate is named
+/// here, against the rate most logs share, not in whichever fold meets it.
+void requireOneSampleTime(const std::vector<io::Log>& logs, const std::vector<std::string>& files) {
+  std::vector<double> dt;
+  for (const auto& log : logs)
+    dt.push_back(io::checkedSampleTime(log, io::standard_columns::kTime, io::kToleratedGapFactor));
+  std::size_t common = 0, most = 0;
+  for (std::size_t i = 0; i < dt.size(); ++i) {
+    const auto n = static_cast<std::size_t>(
+        std::count_if(dt.begin(), dt.end(), [&](double t) { return io::sameSampleTime(t, dt[i]); }));
+    if (n > most) most = n, common = i;
+  }
+  for (std::size_t i = 0; i < dt.size(); ++i)
+    if (!io::sameSampleTime(dt[i], dt[common]))
+      throw std::invalid_argument("crossval: " + files[i] + ": sample time " + significantDigits(dt[i], 6) +
+                                  " s differs from the " + significantDigits(dt[common], 6) + " s of " +
+                                  std::to_string(most) + " of the " + std::to_string(dt.size()) +
+                                  " logs; resample it or leave it out");
+}
+
 /// The logs, each long enough to score the longest horizon after ARX's lags
 /// when held out.
 std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::string>& files) {
@@ -64,7 +85,9 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
   ro.lcm_channel = a.channel;
   ro.can_profile = a.can_profile;
   std::vector<io::Log> logs;
-  refuseOverwritingInputs(a.json, "--json", files, "plsa crossval");
+  std::vector<std::string> read = files;
+  read.push_back(a.can_profile);
+  refuseOverwritingInputs(a.json, "--json", read, "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
   const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
   const int lags = std::max(a.arx_na, a.arx_nb);
@@ -73,6 +96,7 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
       throw std::invalid_argument("crossval: " + files[i] + ": " + std::to_string(logs[i].samples()) +
                                   " samples are too few to score horizon " + std::to_string(longest) + " after ARX's " +
                                   std::to_string(lags) + " lags (a fit needs 2 samples); give a shorter horizon");
+  requireOneSampleTime(logs, files);
   return logs;
 }
 
@@ -187,7 +211,7 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--log", a->logs, "Logs or folders of logs")->required();
   c->add_option("--inputs", a->inputs, "Input columns")->delimiter(',');
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
-  c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',');
+  c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',')->check(CLI::Range(1, 1000000));
   c->add_option("--levels", a->options.quantile_levels,
                 "Grid levels per input (quantiles); 0 (default): " + identify::IdentifyOptions::autoQuantileRule())
       ->check(CLI::Range(0, 12));
@@ -196,7 +220,7 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--play-softening", a->options.play_softening_candidates,
                 "Candidate softenings of the play channels' level, as in identify; default none")
       ->delimiter(',')
-      ->check(CLI::Range(0.0, 0.49));
+      ->check(finiteNumber() & CLI::Range(0.0, 0.49));
   c->add_option("--refine-play", a->options.play_refine_evaluations,
                 "Fits spent refining threshold, coupling, softening and band together, as in identify; default 0")
       ->check(CLI::Range(0, 10000));

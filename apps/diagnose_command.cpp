@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
+#include <system_error>
 
 #include <nlohmann/json.hpp>
 
@@ -29,11 +31,21 @@ struct DiagnoseArgs {
   std::string can_profile;
 };
 
+// Where the report goes, before minutes of calibration: a folder, or none yet.
+void checkOutputFolder(const std::string& out) {
+  std::error_code ec;
+  if (out.empty()) throw std::invalid_argument("plsa diagnose: --out is empty; name the report's folder");
+  if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
+    throw std::invalid_argument("plsa diagnose: --out " + out + " exists and is not a folder");
+}
+
 void runDiagnose(DiagnoseArgs& a) {
   std::vector<std::string> inputs = a.real;
   inputs.push_back(a.sim);
+  inputs.push_back(a.can_profile);
   for (const char* name : diagnose::kDiagnosisFiles)
     refuseOverwritingInputs((std::filesystem::path(a.out) / name).string(), "--out", inputs, "plsa diagnose");
+  checkOutputFolder(a.out);
   const sim::SimConfig config = sim::loadSimConfig(a.sim);
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
   a.columns.pressures = a.pressures.size() == 1 && a.pressures[0] == "none" ? std::vector<std::string>{} : a.pressures;
@@ -162,7 +174,7 @@ void addDiagnoseCommand(CLI::App& app) {
   c->add_option("--margin", a->options.margin, "An effect must shrink the held-out gap by this many noise floors")
       ->check(kNonNegative);
   c->add_option("--heldout-fraction", a->options.heldout_fraction, "With one run: the share held out at its end")
-      ->check(CLI::Range(0.05, 0.95));
+      ->check(finiteNumber() & CLI::Range(0.05, 0.95));
   c->add_option("--threads", a->options.threads, "Candidates calibrated in parallel")->check(CLI::Range(1, 64));
   c->add_flag(
       "--no-identified-reference", [a](std::int64_t n) { a->options.identified_reference = n == 0; },

@@ -120,7 +120,9 @@ void runIdentify(IdentifyArgs& a) {
   o.progress = [](const std::string& line) { std::fprintf(stderr, "plsa identify: %s\n", line.c_str()); };
   std::vector<std::string> required = a.inputs;
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
-  refuseOverwritingInputs(a.out, "--out", a.logs, "plsa identify");
+  std::vector<std::string> read = a.logs;
+  read.push_back(a.can_profile);
+  refuseOverwritingInputs(a.out, "--out", read, "plsa identify");
   const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
   if (a.structure == "paper") {  // the peers the demo and generalise score plsa against
     const auto progress = o.progress;
@@ -252,7 +254,7 @@ std::string describeSimulation(const DioPwlObfModel& model, const eval::Simulati
 
 void runValidate(const ValidateArgs& a) {
   for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}})
-    refuseOverwritingInputs(out, option, {a.model, a.log}, "plsa validate");
+    refuseOverwritingInputs(out, option, {a.model, a.log, a.can_profile}, "plsa validate");
   if (a.csv != kStandardOutput) refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
   if (a.json == kStandardOutput && a.csv == kStandardOutput)
     throw std::invalid_argument("plsa validate: --json and --csv cannot both be '-' (standard output)");
@@ -328,14 +330,17 @@ void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option("--rho-refinement", a->options.clustering.refine_on_rho,
                  "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
                  "off: the paper's FKcM alone");
-  id->add_option("--fuzziness", a->options.clustering.fuzziness, "FKcM fuzziness m > 1");
+  id->add_option("--fuzziness", a->options.clustering.fuzziness, "FKcM fuzziness m > 1")
+      ->check(finiteNumber() & CLI::Range(1.0 + 1e-9, 100.0));
   id->add_option("--window-poles-below", a->options.window_poles_below,
                  "An output with fewer usable step poles than --poles: local windows' poles are tried with its "
-                 "steps' when the steps' model scores below this held-out fit % (default 0; 100: always)");
+                 "steps' when the steps' model scores below this held-out fit % (default 0; 100: always)")
+      ->check(finiteNumber(true));
   id->add_option("--second-order-windows-below", a->options.second_order_windows_below,
                  "An output without steps takes its poles from local windows: the windows' second-order poles are "
                  "tried too when the first-order poles' model scores below this held-out fit % (default 100: always; "
-                 "-inf: never, as the paper)");
+                 "-inf: never, as the paper)")
+      ->check(finiteNumber(true));
   id->add_option("--levels", a->options.quantile_levels,
                  "Levels per input when the logs have no staircase (quantile grid); 0 (default): " +
                      identify::IdentifyOptions::autoQuantileRule())
@@ -401,18 +406,18 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
                  "input (0.3: a full neighbour cuts a chamber's level by 30%), tried by cross-validation; '0' alone "
                  "couples none")
       ->delimiter(',')
-      ->check(CLI::Range(0.0, 0.95));
+      ->check(finiteNumber() & CLI::Range(0.0, 0.95));
   id->add_option("--play-threshold", a->options.play_threshold_candidates,
                  "Candidate levels the play channels count from, as fractions of the largest training input (a "
                  "chamber's opening pressure), tried against zero by cross-validation; '0' alone counts from zero")
       ->delimiter(',')
-      ->check(CLI::Range(0.0, 0.95));
+      ->check(finiteNumber() & CLI::Range(0.0, 0.95));
   id->add_option("--play-softening", a->options.play_softening_candidates,
                  "Candidate softenings of the play channels' level, x - s x^2 above the threshold, as fractions of "
                  "the top level above it (0.2: the top level cut by 20%), tried against none with each threshold; "
                  "input-side structures only; default none")
       ->delimiter(',')
-      ->check(CLI::Range(0.0, 0.49));
+      ->check(finiteNumber() & CLI::Range(0.0, 0.49));
   id->add_option("--refine-play", a->options.play_refine_evaluations,
                  "At most this many cross-validated fits spent refining the chosen threshold, coupling, softening "
                  "and play channel size together (NLopt BOBYQA from the choice; the stages that ran); kept if the "
@@ -478,7 +483,9 @@ void addValidateCommand(CLI::App& app) {
   va->add_option("--log", v->log, "Validation log: CSV, or an LCM event log (known by its content, any name)")
       ->required()
       ->check(CLI::ExistingFile);
-  va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")->delimiter(',');
+  va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1000000));
   va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
   va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
   addLogFormatOptions(va, v->channel, v->can_profile);

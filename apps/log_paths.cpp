@@ -31,7 +31,10 @@ std::vector<std::string> logPaths(const std::vector<std::string>& paths, const s
   }
   std::map<fs::path, std::string> seen;
   for (const auto& f : files) {
-    const auto [at, fresh] = seen.emplace(fs::weakly_canonical(f), f);
+    std::error_code ec;  // a pipe (/dev/stdin, <(...)) has no canonical path: itself
+    fs::path canonical = fs::weakly_canonical(f, ec);
+    if (ec) canonical = fs::absolute(f);
+    const auto [at, fresh] = seen.emplace(canonical, f);
     if (!fresh)
       throw std::invalid_argument(tool + ": " + f + " is given twice" +
                                   (at->second == f ? std::string() : " (also as " + at->second + ")") +

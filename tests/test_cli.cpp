@@ -151,6 +151,12 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   // A wrong command line is a usage error (2), not a failure of the tool (1).
   EXPECT_EQ(run(validate + " --no-such-option"), 2);
   EXPECT_EQ(run(validate + " --horizons forty"), 2);
+  EXPECT_EQ(run(validate + " --horizons 0"), 2);
+  // "nan" passes a range check (its comparisons are all false): refused by name.
+  EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --fuzziness nan --out " + file("x.json")), 2);
+  EXPECT_NE(err_.find("'nan' is not a finite number"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --play-coupling 0.1,nan --out " + file("x.json")), 2);
+  EXPECT_NE(err_.find("'nan' is not a finite number"), std::string::npos) << err_;
   EXPECT_EQ(run("validate --help"), 0);
   EXPECT_NE(slurp(file("stdout.txt")).find("--channel TEXT=PLSA_STATE"), std::string::npos) << "defaults in --help";
 }
@@ -319,8 +325,8 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,477"), 1);
   EXPECT_NE(err_.find("j1.csv: 480 samples are too few to score horizon 477 after ARX's 4 lags"), std::string::npos)
       << err_;
-  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 0"), 1);
-  EXPECT_NE(err_.find("crossval: horizons must be >= 1, got 0"), std::string::npos) << err_;
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 0"), 2);  // a usage error
+  EXPECT_NE(err_.find("--horizons"), std::string::npos) << err_;
   fs::create_directories(file("empty"));
   EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
   EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, .candump, LCM event logs by content, or candump "

@@ -1,6 +1,7 @@
 // The tools against hostile files, the CAN tools and bus logs: named errors, nothing overwritten.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -93,6 +94,24 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
   EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --csv " + file("link.csv")), 1);
   EXPECT_NE(err_.find("is the input " + file("j.csv")), std::string::npos) << err_;
   EXPECT_EQ(run("simulate --config " + file("m.json") + " --experiment joystick --out " + file("m.json")), 1);
+  // The signal map a log is decoded with is an input too.
+  ASSERT_EQ(run("can-profile --out " + file("profile.json")), 0) << err_;
+  EXPECT_EQ(run("convert --in " + file("j.csv") + " --can-profile " + file("profile.json") + " --out " +
+                file("profile.json")),
+            1);
+  EXPECT_NE(err_.find("plsa never writes over what it reads"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --can-profile " + file("profile.json") + " --out " +
+                file("profile.json")),
+            1);
+  EXPECT_NE(err_.find("plsa never writes over what it reads"), std::string::npos) << err_;
+  // A partition the data cannot determine: refused at once, not hours of solves.
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --levels 12 --out " + file("x12.json")), 1);
+  EXPECT_NE(err_.find("coefficients per output (regions x inputs x poles), more than the 1680 samples can determine"),
+            std::string::npos)
+      << err_;
+  // A report folder that is a file: refused before any calibration.
+  EXPECT_EQ(run("diagnose --sim " + file("m.json") + " --real " + file("j.csv") + " --out " + file("m.json")), 1);
+  EXPECT_NE(err_.find("--out " + file("m.json") + " exists and is not a folder"), std::string::npos) << err_;
   EXPECT_EQ(slurp(file("j.csv")), log_before);
   EXPECT_EQ(slurp(file("m.json")), model_before);
 
@@ -198,4 +217,41 @@ TEST_F(Cli, CanProfilesGoBetweenJsonAndDbc) {
             1);
   EXPECT_NE(err_.find("bad.dbc:2: message 'pressure_sensor', signal 'p': starts at bit 3"), std::string::npos) << err_;
   EXPECT_EQ(run("can-profile --in " + file("plsa.dbc") + " --out " + file("plsa.dbc")), 1);  // never over an input
+}
+
+// A log from a pipe, as shells hand one (/dev/stdin, <(...)); a device that
+// is no log refused before it is read; a constant output named.
+TEST_F(Cli, ValidateReadsALogFromAPipe) {
+  ASSERT_EQ(run("simulate --experiment joystick --duration 20 --seed 2 --out " + file("j.csv")), 0) << err_;
+  std::ofstream(file("m.json")) << smallModelJson(0.1);
+  const std::string piped = "cat " + file("j.csv") + " | " + exe_ + " validate --model " + file("m.json") +
+                            " --log /dev/stdin --horizons 40 > " + file("out.txt") + " 2> " + file("err.txt");
+  EXPECT_EQ(WEXITSTATUS(std::system(piped.c_str())), 0) << slurp(file("err.txt"));
+  EXPECT_NE(slurp(file("out.txt")).find("bend_deg"), std::string::npos) << slurp(file("out.txt"));
+
+  EXPECT_EQ(run("convert --in /dev/zero --out " + file("zero.csv")), 1);
+  EXPECT_NE(err_.find("convert: /dev/zero: not a log file"), std::string::npos) << err_;
+  EXPECT_FALSE(fs::exists(file("zero.csv")));
+
+  {  // bend_deg held at 5 deg throughout
+    std::ifstream in(file("j.csv"));
+    std::ofstream out(file("still.csv"));
+    int bend = -1;
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> cells;
+      std::stringstream ss(line);
+      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+      if (bend < 0) {
+        bend = static_cast<int>(std::find(cells.begin(), cells.end(), "bend_deg") - cells.begin());
+        ASSERT_LT(bend, static_cast<int>(cells.size()));
+      } else {
+        cells[static_cast<std::size_t>(bend)] = "5";
+      }
+      for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
+      out << "\n";
+    }
+  }
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("still.csv") + " --horizons 40"), 1);
+  EXPECT_NE(err_.find("still.csv: output 'bend_deg' is constant over the scored samples"), std::string::npos) << err_;
 }

@@ -93,6 +93,9 @@ TEST_F(CsvLogTest, ByteOrderMarkCutLastLineBinaryAndEndlessLines) {
       << partial.warnings[0];
   EXPECT_TRUE(plsa::io::readCsvLog(write("time_s,y\n0,1\n")).warnings.empty());
   expectError(std::string("time_s,y\n0,\0\n", 12), ":2: NUL byte");
+  // Lines ended by CR alone read as one line: said, not "no header line".
+  expectError("time_s,y\r0,1\r0.1,2\r", ":1: a carriage return inside the line: lines end in CR alone");
+  EXPECT_EQ(plsa::io::readCsvLog(write("time_s,y\r\n0,1\r\n0.1,2\r\n")).samples(), 2);  // CR LF is fine
   expectError("time_s,y\n" + std::string(plsa::io::kMaxCsvLineBytes + 10, '1'), ":2: line longer than 1 MiB");
 }
 

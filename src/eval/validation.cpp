@@ -366,6 +366,10 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     OutputValidation ov;
     ov.name = model.outputs[static_cast<std::size_t>(o)];
     ov.measured = y.col(o);
+    const auto scored = ov.measured.tail(u.rows() - res.scored_from);
+    if (!(scored.maxCoeff() > scored.minCoeff()))
+      throw std::invalid_argument(log.source + ": output '" + ov.name + "' is constant over the scored samples (from " +
+                                  std::to_string(res.scored_from + 1) + "); a fit against it is undefined");
     for (int k : horizons) {
       const AlignedPrediction p = scoredPart(pred[static_cast<std::size_t>(o)].at(k), res.scored_from);
       ov.fit_k[k] = fitOf(ov.measured, p);

@@ -177,6 +177,8 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
     if (lineno == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
     const std::string t = trim(line);
     if (t.empty()) continue;
+    if (t.find('\r') != std::string::npos)
+      fail(path, lineno, "a carriage return inside the line: lines end in CR alone (convert them to LF or CR LF)");
     if (t[0] == '#') {
       readCommentLine(t, log);
       continue;

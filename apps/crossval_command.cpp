@@ -224,8 +224,8 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--refine-play", a->options.play_refine_evaluations,
                 "Fits spent refining threshold, coupling, softening and band together, as in identify; default 0")
       ->check(CLI::Range(0, 10000));
-  c->add_option("--arx-na", a->arx_na, "ARX output lags");
-  c->add_option("--arx-nb", a->arx_nb, "ARX input lags");
+  c->add_option("--arx-na", a->arx_na, "ARX output lags")->check(CLI::Range(0, 64));
+  c->add_option("--arx-nb", a->arx_nb, "ARX input lags")->check(CLI::Range(1, 64));
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
   addLogFormatOptions(c, a->channel, a->can_profile);
   c->callback([a] { runCrossval(*a); });

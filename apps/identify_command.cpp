@@ -301,8 +301,10 @@ CLI::Validator secondsValidator(const std::string& example) {
   return CLI::Validator(
       [example](std::string& v) {
         double x = NAN;
-        return parseNonNegative(v, x) ? std::string()
-                                      : "'" + v + "' is not a time constant in seconds (e.g. " + example + ")";
+        // Above a day a pole is 1 to rounding at any sample time plsa reads.
+        return parseNonNegative(v, x) && x <= 86400.0
+                   ? std::string()
+                   : "'" + v + "' is not a time constant in seconds up to a day (e.g. " + example + ")";
       },
       "SECONDS");
 }

@@ -137,6 +137,14 @@ TEST(SignalMap, RefusesAmbiguousProfilesAndWarnsOfUnguardedOnes) {
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1, "gain": 2})")).find("unknown key"),
             std::string::npos);
   EXPECT_NE(errorOf(R"({"profile": "t", "profile": "u", "messages": []})").find("given twice"), std::string::npos);
+  // Fields of the wrong type or missing are named, not nlohmann's words; a map of no messages is no map.
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1, "signed": 1})"))
+                .find("signal 'a': 'signed' must be true or false"),
+            std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 0, "scale": 1})")).find("'bits' must be in 8..32"),
+            std::string::npos);
+  EXPECT_NE(errorOf("{}").find("missing field 'profile'"), std::string::npos) << errorOf("{}");
+  EXPECT_NE(errorOf(R"({"profile": "t", "messages": []})").find("no messages"), std::string::npos);
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1e400})")).find("not valid JSON"),
             std::string::npos);
 

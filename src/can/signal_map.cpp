@@ -68,6 +68,7 @@ const MessageLayout& SignalMap::message(const std::string& name) const {
 }
 
 void SignalMap::validate() const {
+  if (messages.empty()) throw std::invalid_argument("signal map '" + profile + "': no messages");
   for (auto at = messages.begin(); at != messages.end(); ++at) {
     const MessageLayout& m = *at;
     const std::string where = "signal map '" + profile + "', message '" + m.name + "': ";
@@ -114,10 +115,28 @@ long long integerField(const nlohmann::json& j, const char* key, long long lo, l
   if (!v) throw std::invalid_argument(where + "missing field '" + key + "'");
   if (!v->is_number_integer()) throw std::invalid_argument(where + "'" + key + "' must be an integer");
   const bool is_unsigned = v->is_number_unsigned();
-  if (is_unsigned ? v->get<unsigned long long>() > static_cast<unsigned long long>(hi)
+  if (is_unsigned ? (v->get<unsigned long long>() > static_cast<unsigned long long>(hi) ||
+                     (lo > 0 && v->get<unsigned long long>() < static_cast<unsigned long long>(lo)))
                   : (v->get<long long>() < lo || v->get<long long>() > hi))
     throw std::invalid_argument(where + "'" + key + "' must be in " + std::to_string(lo) + ".." + std::to_string(hi));
   return is_unsigned ? static_cast<long long>(v->get<unsigned long long>()) : v->get<long long>();
+}
+
+// A string field (`fallback` when absent, required when null), named when it is another type.
+std::string textField(const nlohmann::json& j, const char* key, const std::string& where,
+                      const char* fallback = nullptr) {
+  if (!j.contains(key)) {
+    if (!fallback) throw std::invalid_argument(where + "missing field '" + key + "'");
+    return fallback;
+  }
+  if (!j.at(key).is_string()) throw std::invalid_argument(where + "'" + key + "' must be a string");
+  return j.at(key).get<std::string>();
+}
+
+bool flagField(const nlohmann::json& j, const char* key, bool fallback, const std::string& where) {
+  if (!j.contains(key)) return fallback;
+  if (!j.at(key).is_boolean()) throw std::invalid_argument(where + "'" + key + "' must be true or false");
+  return j.at(key).get<bool>();
 }
 
 }  // namespace
@@ -129,14 +148,15 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
   try {
     if (!j.is_object()) throw std::invalid_argument("the top level must be an object");
     io::requireKnownKeys(j, {"profile", "messages"}, "", source);
-    map.profile = j.at("profile").get<std::string>();
+    map.profile = textField(j, "profile", "");
+    if (!j.contains("messages")) throw std::invalid_argument("missing field 'messages'");
     const json& messages = j.at("messages");
     if (!messages.is_array() || messages.size() > kMaxMessages)
       throw std::invalid_argument("'messages' must be an array of at most " + std::to_string(kMaxMessages));
     for (const auto& jm : messages) {
       if (!jm.is_object()) throw std::invalid_argument("each of 'messages' must be an object");
       MessageLayout m;
-      m.name = jm.at("name").get<std::string>();
+      m.name = textField(jm, "name", "a message: ");
       const std::string where = "message '" + m.name + "': ";
       io::requireKnownKeys(jm, {"name", "id", "dlc", "counter_byte", "checksum_byte", "signals"},
                            "messages[" + m.name + "].", source);
@@ -145,6 +165,7 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
       m.dlc = static_cast<int>(integerField(jm, "dlc", 0, 8, where));
       m.counter_byte = static_cast<int>(integerField(jm, "counter_byte", -1, 7, where, &none));
       m.checksum_byte = static_cast<int>(integerField(jm, "checksum_byte", -1, 7, where, &none));
+      if (!jm.contains("signals")) throw std::invalid_argument(where + "missing field 'signals'");
       const json& signals = jm.at("signals");
       if (!signals.is_array() || signals.size() > static_cast<std::size_t>(MessageLayout::kMaxSignals))
         throw std::invalid_argument(where + "'signals' must be an array of at most " +
@@ -152,19 +173,20 @@ SignalMap signalMapFromJson(const std::string& text, const std::string& source) 
       for (const auto& js : signals) {
         if (!js.is_object()) throw std::invalid_argument(where + "each signal must be an object");
         Signal s;
-        s.name = js.at("name").get<std::string>();
+        s.name = textField(js, "name", where + "a signal: ");
         const std::string at = where + "signal '" + s.name + "': ";
         io::requireKnownKeys(js, {"name", "byte", "bits", "endian", "signed", "scale", "offset", "unit"},
                              "messages[" + m.name + "].signals[" + s.name + "].", source);
         s.byte = static_cast<int>(integerField(js, "byte", 0, 7, at));
         s.bits = static_cast<int>(integerField(js, "bits", 8, 32, at));
-        const std::string endian = js.value("endian", "little");
+        const std::string endian = textField(js, "endian", at, "little");
         if (endian != "little" && endian != "big") throw std::invalid_argument(at + "endian must be 'little' or 'big'");
         s.little_endian = endian == "little";
-        s.is_signed = js.value("signed", false);
+        s.is_signed = flagField(js, "signed", false, at);
+        if (!js.contains("scale")) throw std::invalid_argument(at + "missing field 'scale'");
         s.scale = io::finiteNumber(js.at("scale"), at + "scale", source);
         s.offset = js.contains("offset") ? io::finiteNumber(js.at("offset"), at + "offset", source) : 0.0;
-        s.unit = js.value("unit", "");
+        s.unit = textField(js, "unit", at, "");
         m.signals.push_back(s);
       }
       map.messages.push_back(std::move(m));

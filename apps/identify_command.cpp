@@ -386,9 +386,11 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
               const bool slope = !item.empty() && item.back() == 'u';
               const std::string number = slope ? item.substr(0, item.size() - 1) : item;
               double v = NAN;
-              if (!parseNonNegative(number, v))
-                throw CLI::ValidationError("--play",
-                                           "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u)");
+              // A band wider than the input's whole range never moves: at most 1 (or 1u).
+              if (!parseNonNegative(number, v) || v > 1.0)
+                throw CLI::ValidationError("--play", "'" + item +
+                                                         "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u) of at "
+                                                         "most 1");
               set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
             }
             a->options.play_candidates.push_back(set);

@@ -394,6 +394,11 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'-0.1u' is not a width"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --play 1e308u --out " +
+                file("m.json")),
+            2);  // a band wider than the input's range never moves
+  EXPECT_NE(err_.find("'1e308u' is not a width (e.g. 0.1) or a slope (e.g. 0.12u) of at most 1"), std::string::npos)
+      << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") +
                 " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " + file("m.json")),
             0);

@@ -11,6 +11,7 @@
 #include <tuple>
 #include <utility>
 
+#include "plsa/core/number_text.hpp"
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/io/standard_columns.hpp"
 #include "plsa/predict/sensor_yaw.hpp"
@@ -66,9 +67,9 @@ namespace {
 Eigen::Index checkedRegistration(const DioPwlObfModel& model, const SimulationStart& start, Eigen::Index rows) {
   const Eigen::Index n = yawRegistrationSamples(model, start);
   if (n > 0)
-    PLSA_CHECK(n < rows, "simulateModel: the yaw registration window (" + std::to_string(start.yaw_registration_s) +
-                             " s, " + std::to_string(n) + " samples) leaves nothing of the " + std::to_string(rows) +
-                             "-sample record to simulate");
+    PLSA_CHECK(n < rows, "the yaw registration window (" + significantDigits(start.yaw_registration_s, 4) + " s, " +
+                             std::to_string(n) + " samples) leaves nothing of the " + std::to_string(rows) +
+                             "-sample record to simulate: give a longer log, or a shorter --yaw-registration");
   return n;
 }
 

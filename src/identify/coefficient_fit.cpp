@@ -347,7 +347,10 @@ Eigen::VectorXd solveOutput(DioPwlObfModel& model, CoefficientSums::Group& total
     Gs += G[static_cast<std::size_t>(l)];
     hs += h[static_cast<std::size_t>(l)];
   }
-  PLSA_CHECK(Gs.trace() > 0, "fitCoefficients: the inputs never move, nothing to fit");
+  PLSA_CHECK(std::isfinite(Gs.trace()),
+             "fitCoefficients: the regressors are not finite (an input, or an option scaled by one, beyond range)");
+  PLSA_CHECK(Gs.trace() > 0,
+             "fitCoefficients: the regressors are all zero: no training sample in this fit, or inputs that never move");
   const double scale = Gs.trace() / n;
   Gs.diagonal().array() += o.ridge * scale;
   Eigen::VectorXd global;

@@ -360,3 +360,40 @@ TEST(Pipeline, AnOutputWithoutUsableFitsTakesTheOtherOutputsPoles) {
     EXPECT_NE(std::string(e.what()).find("rejected:"), std::string::npos) << e.what();
   }
 }
+
+// Five chambers moving at random (two segments, say): more than an
+// interpolated grid takes. Automatic scheduling keeps switched cells and
+// says why; asked for the interpolated grid, the error names the option.
+TEST(Pipeline, MoreInputsThanAnInterpolatedGridTakesKeepSwitchedCells) {
+  const int inputs = 5;
+  const Eigen::Index n = 9600;
+  std::vector<std::string> columns = {"time_s"}, names;
+  for (int j = 1; j <= inputs; ++j) names.push_back("p_" + std::to_string(j));
+  columns.insert(columns.end(), names.begin(), names.end());
+  columns.push_back("y");
+  io::Log log = blankLog("five_chambers.csv", columns, n);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> level(0.0, 0.4);
+  std::vector<double> u(inputs, 0.0);
+  double y = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k % 160 == 0)
+      for (auto& v : u) v = level(rng);
+    double drive = 0.0;
+    for (int j = 0; j < inputs; ++j) drive += (j + 1) * u[static_cast<std::size_t>(j)];
+    y = 0.95 * y + 0.05 * drive;
+    log.data(k, 0) = static_cast<double>(k) * kDt;
+    for (int j = 0; j < inputs; ++j) log.data(k, j + 1) = u[static_cast<std::size_t>(j)];
+    log.data(k, inputs + 1) = y;
+  }
+  IdentifyOptions o = partitionOnly(names, {"y"});
+  o.scheduling = SchedulingChoice::kAuto;
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({log}, o, &rep);
+  EXPECT_EQ(m.partition.scheduling(), Scheduling::kSwitched);
+  EXPECT_TRUE(std::any_of(rep.lines.begin(), rep.lines.end(), [](const std::string& l) {
+    return l.find("interpolated scheduling takes at most 4 scheduling inputs, and 5 inputs move") != std::string::npos;
+  }));
+  o.scheduling = SchedulingChoice::kInterpolated;
+  test_fixtures::expectThrowContaining([&] { identifyModel({log}, o); }, "use --scheduling switched");
+}

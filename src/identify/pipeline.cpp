@@ -410,6 +410,7 @@ void IdentificationRun::buildPartitions() {
   if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
   if (o.scheduling != SchedulingChoice::kInterpolated) schedulings.push_back(false);
   for (const bool interpolated : schedulings) addPartition(interpolated, grid);
+  PLSA_CHECK(!partitions.empty(), "identify: no partition could be built");
   top_level = std::max(1e-12, all_u.maxCoeff());
 }
 
@@ -495,6 +496,15 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
       sched.push_back(in_i);
       bps.push_back(b);
     }
+  }
+  if (interpolated && sched.size() > static_cast<std::size_t>(PwlPartition::kMaxInterpolatedInputs)) {
+    const std::string why = "interpolated scheduling takes at most " +
+                            std::to_string(PwlPartition::kMaxInterpolatedInputs) + " scheduling inputs, and " +
+                            std::to_string(sched.size()) + " inputs move";
+    if (o.scheduling != SchedulingChoice::kAuto)
+      throw std::invalid_argument("identify: " + why + "; use --scheduling switched");
+    say("[4/5] " + why + ": switched cells only (input-side scheduling needs the interpolated grid)");
+    return;
   }
   partitions.push_back(interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
                                     : PwlPartition(sched, bps, o.direction_split));

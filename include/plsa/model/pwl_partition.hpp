@@ -39,6 +39,8 @@ class PwlPartition {
   /// Most cells a partition may have (a grid of 1024 x 1024 nodes): each holds
   /// a coefficient block, and the predictor a filter bank per node.
   static constexpr int kMaxRegions = 1 << 20;
+  /// Most inputs an interpolated partition schedules on (2^4 corners a sample, ScheduleBlend).
+  static constexpr int kMaxInterpolatedInputs = 4;
 
   PwlPartition() = default;
 
@@ -46,7 +48,8 @@ class PwlPartition {
   /// `inputs[s]`; outside the outer nodes the nearest node's coefficients hold.
   static PwlPartition interpolated(std::vector<int> inputs, std::vector<std::vector<double>> levels,
                                    bool direction_split = false, double direction_threshold = 1e-3) {
-    PLSA_CHECK(inputs.size() <= 4, "PwlPartition: interpolated scheduling takes at most 4 inputs");
+    PLSA_CHECK(inputs.size() <= static_cast<std::size_t>(kMaxInterpolatedInputs),
+               "PwlPartition: interpolated scheduling takes at most 4 inputs");
     for (const auto& l : levels) PLSA_CHECK(!l.empty(), "PwlPartition: every interpolated input needs a level");
     // Nodes are stored as "breakpoints"; a node's cell is its index.
     PwlPartition p(std::move(inputs), std::move(levels), direction_split, direction_threshold);

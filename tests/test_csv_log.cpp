@@ -96,6 +96,17 @@ TEST_F(CsvLogTest, ByteOrderMarkCutLastLineBinaryAndEndlessLines) {
   // Lines ended by CR alone read as one line: said, not "no header line".
   expectError("time_s,y\r0,1\r0.1,2\r", ":1: a carriage return inside the line: lines end in CR alone");
   EXPECT_EQ(plsa::io::readCsvLog(write("time_s,y\r\n0,1\r\n0.1,2\r\n")).samples(), 2);  // CR LF is fine
+  // Quoted header names (spreadsheets, pandas) read as the names; a missing one lists those there are.
+  plsa::io::CsvReadOptions needs_u;
+  needs_u.required = {"u"};
+  EXPECT_EQ(plsa::io::readCsvLog(write("\"time_s\",\"u\"\n0,1\n0.1,2\n"), needs_u).columns[1], "u");
+  try {
+    plsa::io::readCsvLog(write("time_s,y\n0,1\n"), needs_u);
+    ADD_FAILURE() << "a missing column was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("header has no column 'u' (it has: time_s, y)"), std::string::npos)
+        << e.what();
+  }
   expectError("time_s,y\n" + std::string(plsa::io::kMaxCsvLineBytes + 10, '1'), ":2: line longer than 1 MiB");
 }
 

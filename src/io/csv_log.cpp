@@ -120,8 +120,10 @@ void readCommentLine(const std::string& t, Log& log) {
 
 // The header: every column named once, the required ones present; returns
 // the time column's index, or -1 when none is checked.
-int readHeader(const std::vector<std::string>& fields, const std::string& path, std::size_t lineno,
+int readHeader(std::vector<std::string> fields, const std::string& path, std::size_t lineno,
                const CsvReadOptions& options, Log& log) {
+  for (auto& f : fields)  // "name", as spreadsheets and pandas quote it
+    if (f.size() >= 2 && f.front() == '"' && f.back() == '"') f = trim(f.substr(1, f.size() - 2));
   for (std::size_t i = 0; i < fields.size(); ++i) {
     if (fields[i].empty()) fail(path, lineno, "header column " + std::to_string(i + 1) + " has no name");
     if (std::find(fields.begin(), fields.begin() + static_cast<long>(i), fields[i]) !=
@@ -129,8 +131,11 @@ int readHeader(const std::vector<std::string>& fields, const std::string& path, 
       fail(path, lineno, "header names column '" + fields[i] + "' twice");
   }
   log.columns = fields;
+  std::string names;
+  for (const auto& f : fields) names += (names.empty() ? "" : ", ") + f;
+  if (names.size() > 300) names = names.substr(0, 300) + ", ...";
   for (const auto& r : options.required)
-    if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "'");
+    if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "' (it has: " + names + ")");
   if (!options.time_column.empty() && log.hasColumn(options.time_column)) return log.columnIndex(options.time_column);
   return -1;
 }

@@ -67,12 +67,12 @@ Eigen::MatrixXd commandsOf(const io::Log& log, const RunColumns& c, double max_p
   return u.cwiseMax(0.0);
 }
 
-// Outputs and pressures: finite, no gross outlier (a glitch would swamp the
-// gap every calibration minimises), and outputs that move.
 bool hasPressures(const io::Log& log, const RunColumns& c) {
   return !c.pressures.empty() && log.hasColumn(c.pressures[0]);  // all or none (checkColumns)
 }
 
+// Outputs and pressures: finite, no gross outlier (a glitch would swamp the
+// gap every calibration minimises), and outputs that move.
 void checkMeasured(const io::Log& log, const RunColumns& c, const std::string& where) {
   std::vector<std::string> measured = c.outputs;
   if (hasPressures(log, c)) measured.insert(measured.end(), c.pressures.begin(), c.pressures.end());

@@ -83,7 +83,7 @@ class StrictJsonCheck {
     return p;
   }
 
-  const std::string& source_;
+  std::string source_;
   int depth_ = 0;
   std::vector<std::set<std::string>> seen_;  // keys of each open object
   std::vector<std::string> path_;            // the key being read at each open object

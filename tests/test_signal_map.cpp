@@ -100,7 +100,8 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
     "signals": [{"name": "a", "byte": 0, "bits": 16, "scale": 1}]}]})")
                 .find("'dlc' must be an integer"),
             std::string::npos);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": -3, "bits": 16, "scale": 1})")).find("'byte' must be in 0..7"),
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": -3, "bits": 16, "scale": 1})"))
+                .find("'byte' must be an integer in 0..7"),
             std::string::npos);
 }
 
@@ -141,7 +142,8 @@ TEST(SignalMap, RefusesAmbiguousProfilesAndWarnsOfUnguardedOnes) {
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1, "signed": 1})"))
                 .find("signal 'a': 'signed' must be true or false"),
             std::string::npos);
-  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 0, "scale": 1})")).find("'bits' must be in 8..32"),
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 0, "scale": 1})"))
+                .find("'bits' must be an integer in 8..32"),
             std::string::npos);
   EXPECT_NE(errorOf("{}").find("missing field 'profile'"), std::string::npos) << errorOf("{}");
   EXPECT_NE(errorOf(R"({"profile": "t", "messages": []})").find("no messages"), std::string::npos);

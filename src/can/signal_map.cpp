@@ -107,19 +107,13 @@ void SignalMap::validate() const {
 
 namespace {
 
-// An integer field in [lo, hi]; rejects floats, strings and out-of-range
-// values before any conversion (a huge float cast to an integer is UB).
+// An integer field in [lo, hi] (io::integerIn: floats, strings and
+// out-of-range values refused before any conversion); `fallback` when absent.
 long long integerField(const nlohmann::json& j, const char* key, long long lo, long long hi, const std::string& where,
                        const nlohmann::json* fallback = nullptr) {
   const nlohmann::json* v = j.contains(key) ? &j.at(key) : fallback;
   if (!v) throw std::invalid_argument(where + "missing field '" + key + "'");
-  if (!v->is_number_integer()) throw std::invalid_argument(where + "'" + key + "' must be an integer");
-  const bool is_unsigned = v->is_number_unsigned();
-  if (is_unsigned ? (v->get<unsigned long long>() > static_cast<unsigned long long>(hi) ||
-                     (lo > 0 && v->get<unsigned long long>() < static_cast<unsigned long long>(lo)))
-                  : (v->get<long long>() < lo || v->get<long long>() > hi))
-    throw std::invalid_argument(where + "'" + key + "' must be in " + std::to_string(lo) + ".." + std::to_string(hi));
-  return is_unsigned ? static_cast<long long>(v->get<unsigned long long>()) : v->get<long long>();
+  return io::integerIn(*v, lo, hi, key, where.substr(0, where.size() - 2));  // `where` ends in ": "
 }
 
 // A string field (`fallback` when absent, required when null), named when it is another type.

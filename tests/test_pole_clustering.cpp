@@ -82,3 +82,40 @@ TEST(PoleClustering, FuzzyCMeansCentresWithoutPolesStayFinite) {
   for (const C& c : r.centres) EXPECT_EQ(c, C(0.9, 0.0));
   EXPECT_TRUE(std::isfinite(r.rho));
 }
+
+// Local poles of noise-free data nearly coincide. FKcM's minimax is
+// degenerate there: COBYLA spun for minutes inside its linear subproblem on
+// a probe's 114 poles (these: 112 within 5e-8 of 0.8172426) and left centres at the
+// stability bound (rho 0.0136, and 0.97 on another log). Now one constraint per group of
+// near-identical poles, centres no pole weighs stay put, and a worse step is
+// refused: every centre near the poles, rho as small as fuzzy c-means'.
+TEST(PoleClustering, NearlyCoincidentPolesKeepEveryCentreOnThem) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> jitter(-2.5e-8, 2.5e-8);
+  std::vector<C> probe = {C(0.8160118, 0.0), C(0.8172412, 0.0)};
+  for (int i = 0; i < 112; ++i) probe.emplace_back(0.8172426 + jitter(rng), 0.0);
+  std::vector<std::vector<C>> sets = {probe};
+  for (double spread : {1e-2, 1e-4, 1e-6, 1e-8})
+    for (double centre : {-0.3, 0.5, 0.7, 0.97}) {
+      std::vector<C> s;
+      for (int i = 0; i < 40; ++i) s.emplace_back(centre + spread * (jitter(rng) / 2.5e-8), 0.0);
+      sets.push_back(s);
+    }
+  for (int pairs : {0, 1})
+    for (const auto& poles : sets) {
+      ClusteringOptions o;
+      o.complex_pairs = pairs;
+      const auto r = fkcmClustering(poles, o);
+      o.complex_pairs = 0;
+      o.centres = 5 - 2 * pairs;  // fuzzy c-means' real centres against FKcM's
+      const double fcm = fuzzyCMeansClustering(poles, o).rho;
+      EXPECT_LE(r.rho, std::max(1e-9, 1.0001 * fcm)) << "pairs " << pairs << " poles near " << poles.back().real();
+      for (const C& c : r.centres) {
+        if (c.imag() != 0.0) continue;  // a pair asked for on real poles stays near its start
+        double nearest = 1.0;
+        for (const C& p : poles) nearest = std::min(nearest, poleDistance(p, c));
+        EXPECT_LT(nearest, 0.5) << "pairs " << pairs << ": centre " << c << " far from every pole near "
+                                << poles.back();
+      }
+    }
+}

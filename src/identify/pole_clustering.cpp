@@ -119,11 +119,57 @@ std::vector<std::vector<double>> memberships(const std::vector<std::vector<doubl
   return mu;
 }
 
+// Poles closer than this (Kolmogorov distance) to one kept before them set
+// the same constraint to within it: the minimax keeps one of each group.
+constexpr double kSamePole = 1e-6;
+
+// One of each group of near-identical poles. Near-identical constraints are
+// degenerate for COBYLA's linear subproblem, which can spin inside it (no
+// evaluation counted, so maxeval never stops it): 111 poles within 2e-7 of
+// each other held it for four minutes. The max over the poles moves by less than kSamePole.
+std::vector<C> distinctPoles(const std::vector<C>& poles) {
+  std::vector<C> kept;
+  for (const C& p : poles)
+    if (std::none_of(kept.begin(), kept.end(), [&](C q) { return poleDistance(p, q) < kSamePole; })) kept.push_back(p);
+  return kept;
+}
+
+// The minimax's variables: the centres' entries listed in `free` (the rest
+// stay at `centres`' values), then the epigraph variable t.
 struct EpigraphData {
   const Layout* L;
   const std::vector<C>* poles;
   const std::vector<std::vector<double>>* mum;  // mu^m
+  std::vector<double> centres;
+  std::vector<std::size_t> free;
 };
+
+std::vector<double> centresOf(const EpigraphData& e, const double* x) {
+  std::vector<double> v = e.centres;
+  for (std::size_t j = 0; j < e.free.size(); ++j) v[e.free[j]] = x[j];
+  return v;
+}
+
+// Every entry free, or (with memberships) all but those of centres no pole
+// weighs: the fuzzy sum does not depend on them, and a centre free to drift
+// there ends wherever the optimiser's exploration left it (at the stability
+// bound, 0.9995, on noise-free first-order data).
+std::vector<std::size_t> freeEntries(const Layout& L, const std::vector<std::vector<double>>* mum) {
+  std::vector<std::size_t> free;
+  double total = 0.0;
+  if (mum)
+    for (const auto& row : *mum)
+      for (double w : row) total += w;
+  for (int i = 0; i < L.clusters(); ++i) {
+    double weight = 0.0;
+    if (mum)
+      for (double w : (*mum)[static_cast<std::size_t>(i)]) weight += w;
+    if (mum && weight <= 1e-14 * total) continue;
+    const int first = i < L.reals ? i : L.reals + 2 * (i - L.reals), count = i < L.reals ? 1 : 2;
+    for (int j = 0; j < count; ++j) free.push_back(static_cast<std::size_t>(first + j));
+  }
+  return free;
+}
 
 double epigraphObjective(unsigned n, const double* x, double* grad, void*) {
   if (grad) {
@@ -136,7 +182,7 @@ double epigraphObjective(unsigned n, const double* x, double* grad, void*) {
 // g_k = sum_i mu_ik^m d(z_k, v_i) - t <= 0 for every identified pole k.
 void epigraphConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
   const auto* e = static_cast<const EpigraphData*>(data);
-  const std::vector<double> v(x, x + n - 1);
+  const std::vector<double> v = centresOf(*e, x);
   for (unsigned k = 0; k < m; ++k) {
     double s = 0.0;
     for (int i = 0; i < e->L->clusters(); ++i)
@@ -150,7 +196,7 @@ void epigraphConstraints(unsigned m, double* result, unsigned n, const double* x
 // Kolmogorov criterion that FKcM's fuzzy sum stands in for.
 void logRhoConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
   const auto* e = static_cast<const EpigraphData*>(data);
-  const std::vector<double> v(x, x + n - 1);
+  const std::vector<double> v = centresOf(*e, x);
   for (unsigned k = 0; k < m; ++k) {
     double s = 0.0;
     for (const C& c : expand(*e->L, v)) s += std::log(std::max(poleDistance((*e->poles)[k], c), 1e-300));
@@ -159,33 +205,35 @@ void logRhoConstraints(unsigned m, double* result, unsigned n, const double* x, 
   if (grad) std::fill(grad, grad + static_cast<std::size_t>(m) * n, 0.0);  // COBYLA ignores gradients
 }
 
-// min t over (centres, t) subject to constraint(k) <= t for every pole,
-// with COBYLA from (x, t0); returns the centres it ends on (x when COBYLA stops on round-off there).
+// min t over (the free centre entries, t) subject to constraint(k) <= t for
+// every pole, with COBYLA from (data.centres, t0); returns the centres it
+// ends on (its best point when it stops on round-off).
 std::vector<double> epigraphMinimax(nlopt::mfunc constraints, EpigraphData& data, const std::vector<double>& lo,
-                                    const std::vector<double>& hi, const std::vector<double>& x, double t0,
-                                    double t_lower, double tol, double xtol, double* t_end) {
-  const auto n = static_cast<unsigned>(x.size() + 1);
+                                    const std::vector<double>& hi, double t0, double t_lower, double tol, double xtol) {
+  const auto n = static_cast<unsigned>(data.free.size() + 1);
   nlopt::opt opt(nlopt::LN_COBYLA, n);
-  std::vector<double> lb = lo, ub = hi;
+  std::vector<double> lb, ub, z;
+  for (std::size_t j : data.free) {
+    lb.push_back(lo[j]);
+    ub.push_back(hi[j]);
+    z.push_back(data.centres[j]);
+  }
   lb.push_back(t_lower);
   ub.push_back(HUGE_VAL);
+  z.push_back(t0);
   opt.set_lower_bounds(lb);
   opt.set_upper_bounds(ub);
   opt.set_min_objective(epigraphObjective, nullptr);
   opt.add_inequality_mconstraint(constraints, &data, std::vector<double>(data.poles->size(), tol));
   opt.set_xtol_abs(xtol);
   opt.set_maxeval(4000);
-  std::vector<double> z = x;
-  z.push_back(t0);
   double f = t0;
   try {
     opt.optimize(z, f);
   } catch (const nlopt::roundoff_limited&) {
     // COBYLA stopped on round-off: z holds its best point, which is what we want.
   }
-  if (t_end) *t_end = f;
-  z.pop_back();
-  return z;
+  return centresOf(data, z.data());
 }
 
 ClusteringResult finish(std::string method, const Layout& L, const std::vector<double>& x, const std::vector<C>& poles,
@@ -203,35 +251,54 @@ double rhoOf(const Layout& L, const std::vector<double>& x, const std::vector<C>
   return decayRate(expand(L, x), poles);
 }
 
+// max_k sum_i mu_ik^m d(z_k, v_i): FKcM's criterion at centres x.
+double largestWeightedSum(const Layout& L, const std::vector<double>& x, const std::vector<C>& poles,
+                          const std::vector<std::vector<double>>& mum) {
+  double worst = 0.0;
+  for (std::size_t k = 0; k < poles.size(); ++k) {
+    double s = 0.0;
+    for (int i = 0; i < L.clusters(); ++i)
+      s += mum[static_cast<std::size_t>(i)][k] * clusterDistance(L, x, i, poles[k]);
+    worst = std::max(worst, s);
+  }
+  return worst;
+}
+
+// FKcM's centre update: memberships from the distances to the centres x,
+// then min over the centres of the criterion in epigraph form. A minimax
+// whose answer is worse than x (COBYLA can end on a worse point than it
+// started from) leaves x where it is. Writes the criterion it ends on to *objective.
+std::vector<double> fkcmStep(const Layout& L, const std::vector<double>& x, const std::vector<C>& poles,
+                             const std::vector<double>& lo, const std::vector<double>& hi, double fuzziness,
+                             double* objective) {
+  std::vector<std::vector<double>> d(static_cast<std::size_t>(L.clusters()), std::vector<double>(poles.size()));
+  for (int i = 0; i < L.clusters(); ++i)
+    for (std::size_t k = 0; k < poles.size(); ++k)
+      d[static_cast<std::size_t>(i)][k] = clusterDistance(L, x, i, poles[k]);
+  std::vector<std::vector<double>> mum = memberships(d, fuzziness);
+  for (auto& row : mum)
+    for (double& v : row) v = std::pow(v, fuzziness);
+  const double start = largestWeightedSum(L, x, poles, mum);
+  EpigraphData data{&L, &poles, &mum, x, freeEntries(L, &mum)};
+  const std::vector<double> z = epigraphMinimax(epigraphConstraints, data, lo, hi, start, 0.0, 1e-10, 1e-9);
+  const double end = largestWeightedSum(L, z, poles, mum);
+  *objective = std::min(start, end);
+  return end <= start ? z : x;
+}
+
 }  // namespace
 
-ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOptions& o) {
-  checkPoles(poles);
+ClusteringResult fkcmClustering(const std::vector<C>& all_poles, const ClusteringOptions& o) {
+  checkPoles(all_poles);
   const Layout L = layoutOf(o);
-  std::vector<double> x = initialCentres(L, poles);
+  const std::vector<C> poles = distinctPoles(all_poles);
+  std::vector<double> x = initialCentres(L, all_poles);
   std::vector<double> lo, hi;
   bounds(L, lo, hi);
   double objective = 0.0;
   int it = 0;
   for (; it < o.max_iterations; ++it) {
-    std::vector<std::vector<double>> d(static_cast<std::size_t>(L.clusters()), std::vector<double>(poles.size()));
-    for (int i = 0; i < L.clusters(); ++i)
-      for (std::size_t k = 0; k < poles.size(); ++k)
-        d[static_cast<std::size_t>(i)][k] = clusterDistance(L, x, i, poles[k]);
-    std::vector<std::vector<double>> mum = memberships(d, o.fuzziness);
-    for (auto& row : mum)
-      for (double& v : row) v = std::pow(v, o.fuzziness);
-    // Centre update: min t s.t. sum_i mu_ik^m d(z_k, v_i) <= t (epigraph of the max).
-    EpigraphData data{&L, &poles, &mum};
-    double worst = 0.0;
-    for (std::size_t k = 0; k < poles.size(); ++k) {
-      double s = 0.0;
-      for (int i = 0; i < L.clusters(); ++i)
-        s += mum[static_cast<std::size_t>(i)][k] * d[static_cast<std::size_t>(i)][k];
-      worst = std::max(worst, s);
-    }
-    const std::vector<double> z =
-        epigraphMinimax(epigraphConstraints, data, lo, hi, x, worst, 0.0, 1e-10, 1e-9, &objective);
+    const std::vector<double> z = fkcmStep(L, x, poles, lo, hi, o.fuzziness, &objective);
     double moved = 0.0;
     for (std::size_t i = 0; i < x.size(); ++i) moved = std::max(moved, std::abs(z[i] - x[i]));
     x = z;
@@ -243,14 +310,13 @@ ClusteringResult fkcmClustering(const std::vector<C>& poles, const ClusteringOpt
   if (o.refine_on_rho) {
     // The fuzzy sum stands in for the Kolmogorov criterion max_k prod_i d(z_k, v_i),
     // i.e. rho: a last minimax on it (epigraph of log rho) from FKcM's centres,
-    // kept only where it lowers rho.
-    EpigraphData data{&L, &poles, nullptr};
-    const std::vector<double> z =
-        epigraphMinimax(logRhoConstraints, data, lo, hi, x, std::log(std::max(rhoOf(L, x, poles), 1e-300)), -HUGE_VAL,
-                        1e-9, 1e-10, nullptr);
-    if (rhoOf(L, z, poles) < rhoOf(L, x, poles)) x = z;
+    // kept only where it lowers rho over every identified pole.
+    EpigraphData data{&L, &poles, nullptr, x, freeEntries(L, nullptr)};
+    const std::vector<double> z = epigraphMinimax(
+        logRhoConstraints, data, lo, hi, std::log(std::max(rhoOf(L, x, poles), 1e-300)), -HUGE_VAL, 1e-9, 1e-10);
+    if (rhoOf(L, z, all_poles) < rhoOf(L, x, all_poles)) x = z;
   }
-  return finish(o.refine_on_rho ? "FKcM+rho" : "FKcM", L, x, poles, objective, it);
+  return finish(o.refine_on_rho ? "FKcM+rho" : "FKcM", L, x, all_poles, objective, it);
 }
 
 ClusteringResult fuzzyCMeansClustering(const std::vector<C>& poles, const ClusteringOptions& o) {

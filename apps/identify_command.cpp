@@ -454,7 +454,7 @@ void addDriftAndValidationOptions(CLI::App* id, const std::shared_ptr<IdentifyAr
                  "Score the structure search's candidates on at most this many samples: on longer logs, windows of "
                  "about 100 s spread evenly over them; the local fits, poles, partition and the final fit still use "
                  "every sample (default 32000, 6.7 min at 80 Hz; 0: search on every sample)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   id->add_flag("!--keep-outliers", a->options.refuse_outliers,
                "Fit samples that lie more than 50 times the width of their column's 1-99% band from its median "
                "(by default such a glitch is an error naming its row)");

@@ -165,5 +165,35 @@ TEST(CandumpLog, TheRegistryKnowsItByContentAndTheProfileDecidesTheIds) {
   EXPECT_THROW(read(text, moved), std::runtime_error);
 }
 
+// A signal whose scale is coarser than its column's whole span would write a
+// varying column as one or two levels (commands under 0.5 bar at a scale of -1
+// all became 0): refused, naming the signal, its step and the column's span.
+TEST(CandumpLog, ASignalTooCoarseForItsColumnIsRefused) {
+  io::Log log;
+  log.source = "run.csv";
+  log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3"};
+  log.data.setZero(20, 7);
+  for (Eigen::Index r = 0; r < 20; ++r) {
+    log.data(r, 0) = 0.0125 * static_cast<double>(r);
+    log.data(r, 1) = 0.02 * static_cast<double>(r);  // 0 .. 0.38 bar
+    log.data(r, 4) = 0.01 * static_cast<double>(r);
+  }
+  const std::string path = ::testing::TempDir() + "coarse.candump";
+  writeCandumpLog(path, log, defaultSignalMap());  // the default's 1e-5 bar steps carry it
+  for (double scale : {-1.0, 1e308, 0.5}) {
+    SignalMap coarse = defaultSignalMap();
+    for (auto& m : coarse.messages)
+      if (m.name == "valve_command") m.signals[0].scale = scale;
+    try {
+      writeCandumpLog(path, log, coarse);
+      ADD_FAILURE() << "scale " << scale << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("valve_command.setpoint_1 steps by"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("cmd_1 of run.csv spans only 0.38"), std::string::npos) << e.what();
+    }
+  }
+  std::remove(path.c_str());
+}
+
 }  // namespace
 }  // namespace plsa::can

@@ -412,6 +412,12 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             2);
   EXPECT_NE(err_.find("'1e300' is not a time constant in seconds up to a day"), std::string::npos) << err_;
+  // The bound in a few digits (CLI11's own check printed the largest double's 309).
+  EXPECT_EQ(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --search-samples -1 --out " +
+                file("m.json")),
+            2);
+  EXPECT_NE(err_.find("'-1' is not a finite number at least 0"), std::string::npos) << err_;
+  EXPECT_LT(err_.size(), 300u) << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") +
                 " --inputs p_1 --outputs bend_deg --output-frame tip_cartesian "
                 "--out " +

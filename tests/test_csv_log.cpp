@@ -70,6 +70,8 @@ TEST_F(CsvLogTest, RejectsMalformedFilesWithLineAndReason) {
   expectError("time_s,y\n0,1\n0.1,abc\n", ":3: column 'y': 'abc' is not a number");
   expectError("time_s,y\n0,1\n0.1,nan\n", ":3: column 'y': value 'nan' is not finite");
   expectError("time_s,y\n0,1\n0.1,\n", ":3: column 'y': '' is not a number");
+  expectError("time_s,y\n0,1\n0.1,0x10\n", ":3: column 'y': '0x10' is not a decimal number");
+  expectError("time_s,y\n0,1\n0.1,-0X1p3\n", ":3: column 'y': '-0X1p3' is not a decimal number");
   expectError("time_s,y\n0,1\n0.2,1\n0.1,1\n", ":4: time 0.1 is not after");
   expectError("time_s,y\n0,1\n0,1\n", ":3: time 0 is not after");
   expectError("time_s,y,y\n0,1,1\n", ":1: header names column 'y' twice");

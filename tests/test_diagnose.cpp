@@ -138,6 +138,9 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   bad = log;
   bad.data(20, 2) = 3.0;  // psi, say, not bar
   EXPECT_NE(errorOf(bad).find("check --input-scale"), std::string::npos) << errorOf(bad);
+  bad.data(20, 2) = 1e308;  // named in a few digits, not 309
+  EXPECT_NE(errorOf(bad).find("input 2 = 1e+308 bar at row 21 is outside 0..0.4 bar"), std::string::npos)
+      << errorOf(bad);
   bad = log;
   bad.data(5, 4) = INFINITY;
   EXPECT_NE(errorOf(bad).find("column 'bend_deg' has NaN or Inf"), std::string::npos) << errorOf(bad);

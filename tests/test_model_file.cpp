@@ -379,6 +379,9 @@ std::vector<FieldCase> fieldCases() {
       {
           {"a fallback from -3", false, [](J& j) { j["regions"][1]["fallback_from"] = -3; },
            "regions[1].fallback_from"},
+          {"a fallback from a region it does not have", false,
+           [](J& j) { j["regions"][1]["fallback_from"] = static_cast<int>(j["regions"].size()); },
+           "regions[1].fallback_from"},
           {"a negative sample count", false, [](J& j) { j["regions"][0]["samples"] = -1; }, "regions[0].samples"},
           {"a note that is a number", false, [](J& j) { j["regions"][0]["note"] = 5; }, "regions[0].note"},
       }});

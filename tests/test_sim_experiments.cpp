@@ -160,8 +160,11 @@ TEST(SimExperiments, RefusesTimesThatCannotBeBuiltByName) {
   o.joystick_bandwidth_hz = 0;
   expectRefusal("joystick", o, "joystick_bandwidth_hz must be above 0 and at most half the sample rate");
   o = {};
-  o.hold_s = 1e6;  // 28 holds: 2.8e7 s
-  expectRefusal("staircase1", o, "above the 10000000 one experiment holds");
+  o.hold_s = 1e6;  // 28 holds and 2 s of rest: the whole staircase named, not where it stopped
+  expectRefusal("staircase1", o, "staircase1: 2.8e+07 s at 80 Hz is 2.24e+09 samples, above the 10000000 one");
+  expectRefusal("grid2", o,
+                "grid2: longer than the 10000000 samples one experiment holds (34.7 h at 80 Hz): it passes them "
+                "within its first 1e+06 s");
   o = {};
   o.sample_rate_hz = 1e6;  // the default 60 s joystick, at a rate no rig samples at
   expectRefusal("joystick", o, "joystick: 101 s at 1e+06 Hz is 1.01e+08 samples");

@@ -309,6 +309,29 @@ io::Log readCandumpLog(std::istream& in, const std::string& source, const Signal
   return log;
 }
 
+namespace {
+
+// A signal whose resolution (|scale| per bit) is coarser than its column's
+// whole span would write a varying column as one or two values (a scale of
+// -1 bar for commands under 0.5 bar wrote every one as 0): refused.
+void checkResolution(const std::string& path, const io::Log& log, const MessageLayout& m,
+                     const std::vector<int>& columns) {
+  for (std::size_t s = 0; s < columns.size(); ++s) {
+    const auto column = log.data.col(columns[s]);
+    const double span = column.maxCoeff() - column.minCoeff(), step = std::abs(m.signals[s].scale);
+    if (span > 0.0 && step > span) {
+      std::ostringstream msg;
+      msg.precision(6);
+      msg << path << ": " << m.name << "." << m.signals[s].name << " steps by " << step << " (its scale) but "
+          << log.columns[static_cast<std::size_t>(columns[s])] << " of " << log.source << " spans only " << span
+          << ": every value would be written as one or two levels; use a finer scale in the signal map";
+      throw std::invalid_argument(msg.str());
+    }
+  }
+}
+
+}  // namespace
+
 void writeCandumpLog(const std::string& path, const io::Log& log, const SignalMap& map) {
   std::vector<MappedMessage> messages = mappedMessages(map);
   std::vector<std::vector<int>> columns;  // per message written: the log's column of each signal
@@ -325,6 +348,7 @@ void writeCandumpLog(const std::string& path, const io::Log& log, const SignalMa
                                   " lacks some");
     }
   }
+  for (std::size_t k = 0; k < written.size(); ++k) checkResolution(path, log, *written[k]->layout, columns[k]);
   const int time = log.columnIndex(io::standard_columns::kTime);
   std::string text;
   std::array<std::uint8_t, 3> counter{};

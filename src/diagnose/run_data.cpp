@@ -1,4 +1,5 @@
 #include "plsa/diagnose/run_data.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/io/standard_columns.hpp"
@@ -60,9 +61,9 @@ Eigen::MatrixXd commandsOf(const io::Log& log, const RunColumns& c, double max_p
         throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " is not finite at row " +
                                     std::to_string(i + 1));
       if (v < -1e-9 || v > max_pressure_bar * 1.5 + 1e-9)
-        throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " = " + std::to_string(v) +
+        throw std::invalid_argument(where + "input " + std::to_string(j + 1) + " = " + significantDigits(v, 6) +
                                     " bar at row " + std::to_string(i + 1) + " is outside 0.." +
-                                    std::to_string(max_pressure_bar) + " bar (check --input-scale)");
+                                    significantDigits(max_pressure_bar, 6) + " bar (check --input-scale)");
     }
   return u.cwiseMax(0.0);
 }

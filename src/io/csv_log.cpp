@@ -153,6 +153,8 @@ void readRow(const std::vector<std::string>& fields, const std::string& path, st
     const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
     if (f.empty() || end != f.c_str() + f.size())
       fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
+    if (f.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16: a hex-coded column misread
+      fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a decimal number");
     if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
     values.push_back(v);
   }

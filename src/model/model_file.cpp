@@ -349,8 +349,9 @@ class ModelReader {
       RegionFit fit;
       fit.samples =
           static_cast<int>(io::integerIn(at(regions[r], "samples", path), 0, INT32_MAX, path + "samples", source_));
-      fit.fallback_from = static_cast<int>(
-          io::integerIn(at(regions[r], "fallback_from", path), -2, INT32_MAX, path + "fallback_from", source_));
+      fit.fallback_from =
+          static_cast<int>(io::integerIn(at(regions[r], "fallback_from", path), -2,
+                                         static_cast<long long>(regions.size()) - 1, path + "fallback_from", source_));
       fit.note = string(at(regions[r], "note", path), path + "note");
       std::vector<Eigen::VectorXd> coefs;
       for (const auto& c : array(at(regions[r], "coefficients", path), path + "coefficients")) {

@@ -31,7 +31,7 @@ class CommandWriter {
  public:
   CommandWriter(const char* name, double rate) : name_(name), rate_(rate) {}
   void hold(const Eigen::RowVector3d& cmd, double seconds) {
-    requireSamples(name_, static_cast<double>(rows_.size()) + seconds * rate_, rate_);
+    requireRoom(static_cast<double>(rows_.size()) + seconds * rate_);
     const auto n = static_cast<Eigen::Index>(std::lround(seconds * rate_));
     for (Eigen::Index k = 0; k < n; ++k) rows_.push_back(cmd);
   }
@@ -50,6 +50,18 @@ class CommandWriter {
   }
 
  private:
+  // The experiments whose length is not checked up front stop here, part way.
+  void requireRoom(double samples) const {
+    if (samples <= static_cast<double>(kMaxExperimentSamples)) return;
+    char msg[240];
+    std::snprintf(msg, sizeof msg,
+                  "%s: longer than the %lld samples one experiment holds (%.1f h at %g Hz): it passes them within "
+                  "its first %.4g s; split it into several runs",
+                  name_, static_cast<long long>(kMaxExperimentSamples),
+                  static_cast<double>(kMaxExperimentSamples) / rate_ / 3600.0, rate_, samples / rate_);
+    throw std::invalid_argument(msg);
+  }
+
   const char* name_;
   double rate_;
   std::vector<Eigen::RowVector3d> rows_;
@@ -77,6 +89,8 @@ Experiment staircaseExperiment(const ExperimentOptions& o) {
   PLSA_CHECK(o.staircase_steps >= 1, "staircase: need at least one step");
   PLSA_CHECK(o.staircase_max_bar > 0, "staircase: staircase_max_bar must be positive");
   const int c = chamberIndex(o.staircase_chamber);
+  requireSamples("staircase1", (o.initial_rest_s + 2.0 * o.staircase_steps * o.hold_s) * o.sample_rate_hz,
+                 o.sample_rate_hz);
   CommandWriter w("staircase1", o.sample_rate_hz);
   Eigen::RowVector3d cmd = Eigen::RowVector3d::Zero();
   w.hold(cmd, o.initial_rest_s);

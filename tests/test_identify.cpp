@@ -94,6 +94,40 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   expectThrowContaining([&] { identifyModel({train}, o); }, "progress interval");
 }
 
+// Noise-free first-order data: every schedule lag scores the same to rounding
+// (100.00), and such a tie keeps the shortest (none), whatever order the lags
+// are listed in (it kept 0.8 s, the last, on a probe's log).
+TEST(Pipeline, ScheduleLagsThatTieKeepNone) {
+  io::Log log;
+  log.source = "first_order.csv";
+  log.columns = {"time_s", "u_1", "y_1"};
+  log.data.setZero(3000, 3);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> level(0.0, 0.4), hold(2.0, 5.0);
+  double u = 0.0, y = 0.0, next_step = 1.0;
+  for (Eigen::Index k = 0; k < log.data.rows(); ++k) {
+    const double t = 0.1 * static_cast<double>(k);
+    if (t >= next_step) {
+      u = level(rng);
+      next_step = t + hold(rng);
+    }
+    log.data.row(k) << t, u, y;
+    y = 0.8172 * y + 0.1828 * u;
+  }
+  IdentifyOptions o;
+  o.inputs = {"u_1"};
+  o.outputs = {"y_1"};
+  o.schedule_lag_candidates = {0.8, 0.1, 0.4};
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({log}, o, &rep);
+  EXPECT_EQ(m.schedule_lag_s, 0.0);
+  ASSERT_EQ(rep.schedule_lag_scores.size(), 4u);
+  for (std::size_t i = 1; i < rep.schedule_lag_scores.size(); ++i) {
+    EXPECT_GT(rep.schedule_lag_scores[i].first, rep.schedule_lag_scores[i - 1].first) << "tried shortest first";
+    EXPECT_NEAR(rep.schedule_lag_scores[i].second, rep.schedule_lag_scores[0].second, 0.01) << "a tie";
+  }
+}
+
 // All effects on, the paper's protocol as `plsa demo` runs it (seed 1). The
 // level-growing, coupled play band and the rising start must hold their
 // gain over the paper's configuration (measured 93.8/94.3 at 40 steps and

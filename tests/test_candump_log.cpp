@@ -180,6 +180,11 @@ TEST(CandumpLog, ASignalTooCoarseForItsColumnIsRefused) {
   }
   const std::string path = ::testing::TempDir() + "coarse.candump";
   writeCandumpLog(path, log, defaultSignalMap());  // the default's 1e-5 bar steps carry it
+  SignalMap steady = defaultSignalMap();           // a column moving under 1 mbar is steady: its noise may go
+  for (auto& m : steady.messages)
+    if (m.name == "valve_command") m.signals[1].scale = 0.01;
+  for (Eigen::Index r = 0; r < 20; ++r) log.data(r, 2) = 0.2 + 4e-5 * static_cast<double>(r % 3);
+  writeCandumpLog(path, log, steady);
   for (double scale : {-1.0, 1e308, 0.5}) {
     SignalMap coarse = defaultSignalMap();
     for (auto& m : coarse.messages)

@@ -313,13 +313,17 @@ namespace {
 
 // A signal whose resolution (|scale| per bit) is coarser than its column's
 // whole span would write a varying column as one or two values (a scale of
-// -1 bar for commands under 0.5 bar wrote every one as 0): refused.
+// -1 bar for commands under 0.5 bar wrote every one as 0): refused. A column
+// that moves less than kSteadySpan (bar or deg: 1 mbar, 0.001 deg) is
+// steady, and its noise may be lost.
+constexpr double kSteadySpan = 1e-3;
+
 void checkResolution(const std::string& path, const io::Log& log, const MessageLayout& m,
                      const std::vector<int>& columns) {
   for (std::size_t s = 0; s < columns.size(); ++s) {
     const auto column = log.data.col(columns[s]);
     const double span = column.maxCoeff() - column.minCoeff(), step = std::abs(m.signals[s].scale);
-    if (span > 0.0 && step > span) {
+    if (span > kSteadySpan && step > span) {
       std::ostringstream msg;
       msg.precision(6);
       msg << path << ": " << m.name << "." << m.signals[s].name << " steps by " << step << " (its scale) but "

@@ -1,7 +1,8 @@
 // Identification where some signals are weak: outputs too weak for their
 // step fits or for any fit (the partition still follows the design, the
 // poles come from windows or from the other outputs), and an input that
-// only reads noise (left out of a quantile grid).
+// only reads noise (left out of a quantile grid); and pressures logged in
+// another unit than bar.
 #include "plsa/identify/baselines.hpp"
 #include "support/identify_fixtures.hpp"
 
@@ -142,6 +143,42 @@ TEST(Pipeline, OneWeakOutputKeepsTheStaircasePartition) {
   ASSERT_NE(line, rep.lines.end());
   EXPECT_NE(line->find("no usable step responses for weak:"), std::string::npos) << *line;
   expectStaircaseSplits(m, rep);
+}
+
+// The same staircase logged in MPa or kPa instead of bar: a step is a change
+// above a fraction of the reference's top level, so it is cut into the same
+// steps, gives the same poles and splits at the same levels in its unit (an
+// absolute 5 mbar read MPa's 0.005 steps as noise: one segment, no staircase).
+TEST(Pipeline, PressuresInAnyUnitAreCutIntoTheSameSteps) {
+  const io::Log in_bar = staircaseLog(Weakness::kOneWeak);
+  const IdentifyOptions o = partitionOnly({"p_1"}, {"strong", "weak"});
+  IdentifyReport bar;
+  const DioPwlObfModel m_bar = identifyModel({in_bar}, o, &bar);
+  ASSERT_GT(bar.segments, 10);
+  for (const double unit : {0.1, 100.0}) {
+    io::Log log = in_bar;
+    log.data.col(1) *= unit;  // cmd_1
+    log.data.col(2) *= unit;  // p_1
+    IdentifyReport rep;
+    const DioPwlObfModel m = identifyModel({log}, o, &rep);
+    EXPECT_EQ(rep.segments, bar.segments) << unit;
+    EXPECT_TRUE(rep.staircase) << unit;
+    ASSERT_EQ(m.partition.breakpoints().size(), 1u);
+    const auto &b = m.partition.breakpoints()[0], &b_bar = m_bar.partition.breakpoints()[0];
+    ASSERT_EQ(b.size(), b_bar.size()) << unit;
+    for (std::size_t i = 0; i < b.size(); ++i) EXPECT_NEAR(b[i], unit * b_bar[i], 1e-9 * unit) << unit;
+    ASSERT_EQ(rep.pairs.size(), bar.pairs.size());
+    for (std::size_t i = 0; i < rep.pairs.size(); ++i) {
+      // The same set (its order may differ; the noise-level output's
+      // second-order window fits round differently, by about 1e-4).
+      auto poles = rep.pairs[i].chosen.centres, poles_bar = bar.pairs[i].chosen.centres;
+      ASSERT_EQ(poles.size(), poles_bar.size()) << unit;
+      const auto by_real = [](std::complex<double> a, std::complex<double> b) { return a.real() < b.real(); };
+      std::sort(poles.begin(), poles.end(), by_real);
+      std::sort(poles_bar.begin(), poles_bar.end(), by_real);
+      for (std::size_t k = 0; k < poles.size(); ++k) EXPECT_NEAR(std::abs(poles[k] - poles_bar[k]), 0.0, 1e-3) << unit;
+    }
+  }
 }
 
 // Both outputs too weak for any step's fit (a nearly straight segment, as the

@@ -151,6 +151,7 @@ struct IdentificationRun {
   void beginScoring(std::string stage, std::size_t count);
   void applyStructure(const Structure& st);
   void applyPlay(const std::vector<PlayChannel>& set);
+  void stepResolution();
   void say(const std::string& line);
   PairPoles& pairAt(int in_i, int out_i);
 
@@ -165,6 +166,7 @@ struct IdentificationRun {
   double dt = 0.0;
   OutputFrame frame = OutputFrame::kAsLogged;
   Eigen::Index total = 0, min_len = 0;
+  double step = 0.0;  ///< a reference change above this is a step (stepResolution)
   int ni = 0, no = 0;
   Eigen::MatrixXd all_ref, all_u;
   // Every log's inputs, outputs and times while the search runs on windows

@@ -153,6 +153,10 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(o.search_max_samples >= 0, "identify: the search's sample size must be >= 0 (0: every sample)");
   PLSA_CHECK(std::isfinite(o.search_window_s) && o.search_window_s > 0 && o.search_window_s < 1e9,
              "identify: the search's windows must last a positive, finite number of seconds");
+  PLSA_CHECK(std::isfinite(o.step_threshold) && o.step_threshold > 0,
+             "identify: the step threshold must be a positive, finite reference change");
+  PLSA_CHECK(std::isfinite(o.step_threshold_share) && o.step_threshold_share > 0 && o.step_threshold_share < 1,
+             "identify: the step threshold's share must be a fraction of the references' largest level in (0, 1)");
   PLSA_CHECK(!std::isnan(o.window_poles_below), "identify: window_poles_below is NaN");
   PLSA_CHECK(!std::isnan(o.second_order_windows_below), "identify: second_order_windows_below is NaN");
   checkOption(o.pole_method);
@@ -222,6 +226,19 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   ni = static_cast<int>(o.inputs.size());
   no = static_cast<int>(o.outputs.size());
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
+  stepResolution();
+}
+
+// The reference change that counts as a step, in the logs' units:
+// step_threshold, or step_threshold_share of the references' largest level
+// when that is smaller, so that a log in MPa, whose 0.005 MPa steps an
+// absolute 0.005 would read as still, is cut where the same log in bar is.
+void IdentificationRun::stepResolution() {
+  double top = 0.0;
+  for (const auto& r : Ref)
+    if (r.size() > 0) top = std::max(top, r.cwiseAbs().maxCoeff());
+  PLSA_CHECK(std::isfinite(top), "identify: a reference column holds a value that is not finite");
+  step = std::max(std::min(o.step_threshold, o.step_threshold_share * top), std::numeric_limits<double>::min());
 }
 
 // Steps 1-2: local data sets and local LTI fits: the steps first, then local
@@ -252,7 +269,7 @@ void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
 void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
   rep.segments = 0;
   for (std::size_t r = 0; r < logs.size(); ++r) {
-    for (const LocalDataSet& seg : segmentSteps(Ref[r], o.step_threshold, min_len)) {
+    for (const LocalDataSet& seg : segmentSteps(Ref[r], step, min_len)) {
       ++rep.segments;
       const Eigen::Index n = seg.end - seg.begin;
       for (int out_i = 0; out_i < no; ++out_i) {
@@ -418,7 +435,7 @@ void IdentificationRun::buildPartitions() {
 // no designed levels.
 IdentificationRun::GridPlan IdentificationRun::gridPlan() const {
   GridPlan grid;
-  grid.levels = referenceLevels(all_ref, o.step_threshold, min_len);
+  grid.levels = referenceLevels(all_ref, step, min_len);
   // A designed staircase holds a few reference levels; measured data that
   // merely pauses holds hundreds: that is no grid, use quantiles instead.
   constexpr std::size_t kMaxDesignedLevels = 8;
@@ -444,7 +461,7 @@ std::vector<int> IdentificationRun::quantileInputs() const {
   const double widest = spread.empty() ? 0.0 : *std::max_element(spread.begin(), spread.end());
   std::vector<int> inputs;
   for (int in_i = 0; in_i < ni; ++in_i)
-    if (spread[static_cast<std::size_t>(in_i)] > std::max(o.step_threshold, 0.05 * widest)) inputs.push_back(in_i);
+    if (spread[static_cast<std::size_t>(in_i)] > std::max(step, 0.05 * widest)) inputs.push_back(in_i);
   return inputs;
 }
 
@@ -476,7 +493,7 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
   for (int in_i = 0; in_i < ni && grid.designed; ++in_i) {
     std::vector<double> lv;
     for (double l : grid.levels[static_cast<std::size_t>(in_i)])
-      if (l > o.step_threshold) lv.push_back(l);  // the vented level is not a reference pressure
+      if (l > step) lv.push_back(l);  // the vented level is not a reference pressure
     if (lv.size() >= 2) {
       sched.push_back(in_i);
       bps.push_back(interpolated ? lv : midpoints(lv));

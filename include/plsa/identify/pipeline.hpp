@@ -142,7 +142,11 @@ struct IdentifyOptions {
   /// DioPwlObfModel::schedule_side) or "auto" (all three tried, chosen by
   /// blocked cross-validation; input side only without a direction split).
   SchedulingChoice scheduling = SchedulingChoice::kAuto;
-  double step_threshold = 0.005;                    ///< a reference change above this is a step
+  /// A reference change above step_threshold (in the logs' units: 5 mbar
+  /// in bar) is a step, or above step_threshold_share of the references'
+  /// largest level when that is smaller (a log in MPa is cut as in bar).
+  double step_threshold = 0.005;
+  double step_threshold_share = 0.025;
   double max_gap_factor = io::kToleratedGapFactor;  ///< tolerated sample-time gap (dropped samples)
   /// Refuse training data with a gross outlier (grossOutlier()); false fits them as they are.
   bool refuse_outliers = true;

@@ -146,9 +146,10 @@ TEST(Pipeline, OneWeakOutputKeepsTheStaircasePartition) {
 }
 
 // The same staircase logged in MPa or kPa instead of bar: a step is a change
-// above a fraction of the reference's top level, so it is cut into the same
-// steps, gives the same poles and splits at the same levels in its unit (an
-// absolute 5 mbar read MPa's 0.005 steps as noise: one segment, no staircase).
+// above 0.005 or 2.5% of the reference's top level, whichever is smaller, so
+// it is cut into the same steps, gives the same poles and splits at the same
+// levels in its unit (an absolute 0.005 missed MPa's 0.005 steps: 6 segments
+// of the 14 here).
 TEST(Pipeline, PressuresInAnyUnitAreCutIntoTheSameSteps) {
   const io::Log in_bar = staircaseLog(Weakness::kOneWeak);
   const IdentifyOptions o = partitionOnly({"p_1"}, {"strong", "weak"});

@@ -3,10 +3,15 @@
 # (Debian's packages visible, as its numpy and pytest), then the Python tests
 # against the installed package. Exit 77 (skipped, reason printed) when PyPI
 # cannot be reached for the build backend.
-#   pip_install.sh <source dir> <python3>
+#   pip_install.sh <source dir> <python3> [NAME=VALUE...]
+# Each NAME=VALUE is a CMake definition for the package's build (passed to
+# scikit-build-core as cmake.define.NAME), e.g. a compiler launcher.
 set -euo pipefail
 src=$1
 python=$2
+shift 2
+defines=()
+for d in "$@"; do defines+=("--config-settings=cmake.define.$d"); done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 "$python" -m venv --system-site-packages "$work/venv"
@@ -17,7 +22,7 @@ if ! "${pip[@]}" install "scikit-build-core>=0.10" "pybind11>=2.10" > "$work/bac
   tail -n 3 "$work/backend.log"
   exit 77
 fi
-"${pip[@]}" install --no-build-isolation "$src"
+"${pip[@]}" install --no-build-isolation "${defines[@]}" "$src"
 cd "$work"  # away from the source tree, so `import plsa` finds the installed package
 unset PYTHONPATH
 "$work/venv/bin/python" -c 'import plsa, plsa_lcm, sys; print("installed", plsa.__version__, "at", plsa.__file__)'

@@ -233,10 +233,14 @@ void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<i
 std::string describeSimulation(const DioPwlObfModel& model, const eval::SimulationStart& s,
                                const std::vector<eval::SimulationDeparture>& departures, nlohmann::json& j) {
   const bool registered = eval::yawRegistrationSamples(model, s) > 0;
-  std::string start = model.output_level.empty() ? "first measured sample"
-                      : registered               ? "model output level, sensor yaw registered on the first " +
-                                         seconds(s.yaw_registration_s) + " s (not scored)"
-                                   : "model output level";
+  std::string start =
+      model.output_level.empty() ? "first measured sample"
+      : registered
+          ? "model output level, sensor yaw registered on the " +
+                (s.settle_s > 0 ? seconds(s.yaw_registration_s) + " s after the first " + seconds(s.settle_s) + " s"
+                                : "first " + seconds(s.yaw_registration_s) + " s") +
+                " (not scored)"
+          : "model output level";
   const double yaw_rate = eval::carriedYawRate(model, s);
   if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
   j["simulation_start"] = start;
@@ -271,6 +275,8 @@ void runValidate(const ValidateArgs& a) {
   const std::vector<eval::SimulationDeparture> departures = eval::simulationDepartures(v);
   for (const std::string& w : eval::simulationWarnings(departures))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
+  for (const std::string& w : eval::unsettledStartWarnings(v.unsettled_starts))
+    std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
   nlohmann::json j;
   printFits(table, v, a.horizons, j);
   j["model"] = a.model;
@@ -280,7 +286,11 @@ void runValidate(const ValidateArgs& a) {
       "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
       "deviation; every fit, rms and std over the same samples (scored_samples)";
   const std::string start = describeSimulation(model, a.start, departures, j);
-  std::fprintf(table, "(sim from the %s)\n", start.c_str());
+  j["scored_samples"]["settle_s"] = a.start.settle_s;
+  j["simulation_unsettled_starts"] = nlohmann::json::array();
+  for (const eval::UnsettledStart& t : v.unsettled_starts)
+    j["simulation_unsettled_starts"].push_back(
+        {{"output", t.output}, {"later_s", t.later_s}, {"rms_error", t.rms_error}, {"rms_later", t.rms_later}});
   if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
   if (!a.csv.empty()) io::writeCsvLog(a.csv, eval::predictionLog(v));
 }
@@ -305,6 +315,17 @@ CLI::Validator secondsValidator(const std::string& example) {
         return parseNonNegative(v, x) && x <= 86400.0
                    ? std::string()
                    : "'" + v + "' is not a time constant in seconds up to a day (e.g. " + example + ")";
+      },
+      "SECONDS");
+}
+
+// Accepts a duration in seconds >= 0; the error quotes the value and an example.
+CLI::Validator durationValidator(const std::string& example) {
+  return CLI::Validator(
+      [example](std::string& v) {
+        double x = NAN;
+        return parseNonNegative(v, x) ? std::string()
+                                      : "'" + v + "' is not a duration in seconds >= 0 (e.g. " + example + ")";
       },
       "SECONDS");
 }
@@ -498,13 +519,12 @@ void addValidateCommand(CLI::App& app) {
                  "registered, as the predictor does (the simulation turned by it, the k-step predictions' increments "
                  "from the window's end on; every column is scored after it) (default 5); 0 carries the training "
                  "run's yaw")
-      ->check(CLI::Validator(
-          [](std::string& t) {
-            double x = NAN;
-            return parseNonNegative(t, x) ? std::string()
-                                          : "'" + t + "' is not a duration in seconds >= 0 (e.g. 5, or 0 for none)";
-          },
-          "SECONDS"));
+      ->check(durationValidator("5, or 0 for none"));
+  va->add_option("--settle", v->start.settle_s,
+                 "seconds at the log's start left out of every score, for a log that does not start at rest (the "
+                 "simulation starts settled at the first sample's inputs; it and the predictions run through them) "
+                 "(default 0)")
+      ->check(durationValidator("10"));
   va->add_flag("!--no-drift", v->start.carry_training_drift,
                "tip_cartesian models with a training_output_drift: simulate without the sensor yaw drift the training "
                "run showed (by default the simulation turns at that rate over the log)");

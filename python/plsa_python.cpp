@@ -64,8 +64,11 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
   return plsa::identify::identifyModel(read, o);
 }
 
-py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons) {
-  const plsa::eval::ValidationResult v = plsa::eval::validateModel(model, plsa::io::readLog(log), horizons);
+py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, const std::vector<int>& horizons,
+                  double settle_s) {
+  plsa::eval::SimulationStart start;
+  start.settle_s = settle_s;
+  const plsa::eval::ValidationResult v = plsa::eval::validateModel(model, plsa::io::readLog(log), horizons, start);
   const std::vector<plsa::eval::SimulationDeparture> departures = plsa::eval::simulationDepartures(v);
   py::dict result;
   for (const plsa::eval::OutputValidation& o : v.outputs) {
@@ -84,6 +87,11 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
       if (d.output == o.name)
         entry["sim_departure"] = py::dict(py::arg("farthest") = d.farthest, py::arg("share_of_width") = d.share,
                                           py::arg("first_time_s") = d.first_time_s);
+    entry["unsettled_start"] = py::none();
+    for (const plsa::eval::UnsettledStart& t : v.unsettled_starts)
+      if (t.output == o.name)
+        entry["unsettled_start"] = py::dict(py::arg("later_s") = t.later_s, py::arg("rms_error") = t.rms_error,
+                                            py::arg("rms_later") = t.rms_later);
     result[py::str(o.name)] = entry;
   }
   return result;
@@ -293,9 +301,12 @@ void bindTools(py::module_& m) {
         py::arg("progress") = py::none(),
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
+        py::arg("settle_s") = 0.0,
         "Fits (%) and rms errors of a model on a CSV log, with what was scored: {output: {fit: {horizon: %}, "
         "fit_sim, rms, rms_sim, sim_error_kept: {horizon: share}, measured, predicted: {horizon: array}, simulated, "
-        "scored_from, sim_departure}}; "
+        "scored_from, sim_departure, unsettled_start}}; settle_s: seconds at the log's start left out of the "
+        "scores (a log not recorded from rest); unsettled_start, when not None, says what the log's start costs the "
+        "simulation: its rms error rms_error, and rms_later when started and scored later_s seconds into the log; "
         "the arrays span the log (NaN where a horizon has no prediction), fits count samples from scored_from on; "
         "sim_departure is None, or how far the free simulation leaves the measured range (farthest, "
         "share_of_width, first_time_s) when it does by more than half its width");

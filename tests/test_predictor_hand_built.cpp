@@ -558,3 +558,34 @@ TEST(SensorYawTurn, StaysTheCosineAndSineOfItsAngleOverALongRun) {
   EXPECT_EQ(off.turn().cos, 1.0);
   EXPECT_EQ(off.turn().sin, 0.0);
 }
+
+// A registration after a delay (validation's settling time) reads only the
+// window after it: what the tip did before, however far off, is not in the
+// offset; before the window ends only the drift turns.
+TEST(SensorYawTurn, RegistersOnTheWindowAfterItsDelay) {
+  constexpr int kDelay = 300, kWindow = 200;
+  constexpr double kDrift = 1e-4, kYaw = 0.3;
+  SensorYaw yaw;
+  yaw.configure(kWindow, kDrift, kDelay);
+  yaw.restart();
+  for (int k = 0; k < kDelay + kWindow + 50; ++k) {
+    const double t = 0.01 * k, model = t - kDrift * k;  // the sensor kYaw ahead of the drift-turned model
+    // In the delay the measured tip points elsewhere (the log's unsettled start).
+    const double measured = k < kDelay ? t + 2.0 : t + kYaw;
+    EXPECT_EQ(yaw.registering(), k < kDelay + kWindow) << k;
+    yaw.add(10.0 * std::cos(model), 10.0 * std::sin(model), 10.0 * std::cos(measured), 10.0 * std::sin(measured));
+    if (k < kDelay + kWindow - 1) {
+      EXPECT_EQ(yaw.offset(), 0.0) << k;
+      EXPECT_NEAR(yaw.angle(), kDrift * k, 1e-15) << k;
+    }
+  }
+  EXPECT_NEAR(yaw.offset(), kYaw, 1e-9);
+  SensorYaw at_once;  // no delay: the unsettled start would be in the offset
+  at_once.configure(kDelay + kWindow, kDrift);
+  at_once.restart();
+  for (int k = 0; k < kDelay + kWindow; ++k) {
+    const double t = 0.01 * k, model = t - kDrift * k, measured = k < kDelay ? t + 2.0 : t + kYaw;
+    at_once.add(10.0 * std::cos(model), 10.0 * std::sin(model), 10.0 * std::cos(measured), 10.0 * std::sin(measured));
+  }
+  EXPECT_GT(std::abs(at_once.offset() - kYaw), 0.5);
+}

@@ -5,6 +5,7 @@
 #include "plsa/eval/dio_prediction.hpp"
 #include "plsa/eval/model_regressors.hpp"
 #include "plsa/eval/validation.hpp"
+#include "support/hand_built_models.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
@@ -348,4 +349,97 @@ TEST(Validation, TheSimulationErrorKeptSaysWhenAKStepPredictionLosesToTheSimulat
     }
   }
   EXPECT_TRUE(std::isnan(eval::simulationErrorKept(truth, truth, 0, h))) << "no error: nothing to keep";
+}
+
+// A log that does not start at rest: the simulation starts settled at its
+// first inputs, so the actuator's motion at the log's start is an error the
+// model did not make. It is named, with the settling time that leaves it out
+// of the scores; a log recorded from rest, noise and all, is not named.
+TEST(Validation, NamesALogThatDoesNotStartAtRestAndSettlesIt) {
+  hand_built::Spec spec;  // an input-side model with an output level: the simulation from the inputs alone
+  spec.poles = {{0.995, 0.0}, {0.98, 0.0}};  // a 2.5 s mode
+  spec.side = ScheduleSide::kInput;
+  spec.grid = hand_built::Grid::kLevels;
+  spec.levels = {{0.0, 0.6}};
+  DioPwlObfModel m = hand_built::build(spec);
+  m.output_level = {1.0};
+  const Eigen::Index T = 8000, hold = 400;  // 100 s at 80 Hz, a level every 5 s
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> level(0.0, 0.6);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  Eigen::MatrixXd u(T, 1);
+  for (Eigen::Index k = 0; k < T; k += hold) u.col(0).segment(k, hold).setConstant(k == 0 ? 0.0 : level(rng));
+  u.col(0).segment(hold, hold).setConstant(0.6);  // a full step at 5 s
+  const Eigen::VectorXd truth = eval::modelTip(m, u, eval::modelIncrements(m, u)).col(0);
+  io::Log from_rest;
+  from_rest.source = "from_rest.csv";
+  from_rest.columns = {"time_s", "u1", "y1"};
+  from_rest.data.resize(T, 3);
+  for (Eigen::Index k = 0; k < T; ++k)
+    from_rest.data.row(k) << static_cast<double>(k) * m.sample_time_s, u(k, 0), truth(k) + noise(rng);
+  const eval::ValidationResult rest = eval::validateModel(m, from_rest, {40});
+  EXPECT_TRUE(rest.unsettled_starts.empty());
+  EXPECT_GT(rest.outputs[0].fit_sim, 95.0);
+  // The same run logged from 0.1 s after the step on: the mode still moves.
+  io::Log moving = from_rest;
+  moving.source = "moving.csv";
+  moving.data = from_rest.data.bottomRows(T - hold - 8);
+  const eval::ValidationResult v = eval::validateModel(m, moving, {40});
+  ASSERT_EQ(v.unsettled_starts.size(), 1u);
+  const eval::UnsettledStart& t = v.unsettled_starts[0];
+  EXPECT_EQ(t.output, "y1");
+  EXPECT_EQ(t.later_s, 5.0);
+  EXPECT_DOUBLE_EQ(t.rms_error, v.outputs[0].rms_sim);
+  EXPECT_LT(t.rms_later, 0.8 * t.rms_error);
+  const std::vector<std::string> w = eval::unsettledStartWarnings(v.unsettled_starts);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("may not start at rest"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("--settle 5 "), std::string::npos) << w[0];
+  // Settled for 15 s (three of the mode's time constants past the 5 s):
+  // scored from there on, nothing named, the fits up.
+  eval::SimulationStart settled;
+  settled.settle_s = 15.0;
+  const eval::ValidationResult s = eval::validateModel(m, moving, {40}, settled);
+  EXPECT_EQ(s.scored_from, 1200);
+  EXPECT_TRUE(s.unsettled_starts.empty());
+  EXPECT_GT(s.outputs[0].fit_sim, v.outputs[0].fit_sim + 5.0);
+  EXPECT_GT(s.outputs[0].fit_sim, 95.0);
+  EXPECT_GT(s.outputs[0].fit_k.at(40), v.outputs[0].fit_k.at(40));
+  for (const double bad : {-1.0, std::nan(""), 1e6}) {
+    settled.settle_s = bad;
+    expectThrowContaining([&] { eval::validateModel(m, moving, {40}, settled); }, "settling time");
+  }
+}
+
+// A model without an output level simulates from the measured sample it
+// starts at: an unsettled start leaves it a lasting offset, and the settling
+// time restarts it from the measured sample at its end.
+TEST(Validation, SettlingRestartsASimulationFromTheMeasuredSample) {
+  DioPwlObfModel m = knownModel();
+  const Eigen::Index T = 4000;
+  Eigen::MatrixXd u(T, 1);
+  for (Eigen::Index k = 0; k < T; ++k) u(k, 0) = (k / 200) % 2 == 0 ? 0.2 : 0.8;
+  const Eigen::VectorXd dy = eval::modelIncrements(m, u).col(0);
+  io::Log log;
+  log.source = "moving.csv";
+  log.columns = {"time_s", "u", "y"};
+  log.data.resize(T, 3);
+  double y = 0.0;
+  for (Eigen::Index k = 0; k < T; ++k) {
+    y += k > 0 ? dy(k) : 0.0;
+    log.data.row(k) << static_cast<double>(k) * m.sample_time_s, u(k, 0), y;
+  }
+  log.data = log.data.bottomRows(T - 202).eval();  // 2 samples after a step: the filters still move
+  const eval::ValidationResult v = eval::validateModel(m, log, {1});
+  EXPECT_LT(v.outputs[0].fit_sim, 90.0) << "the unsettled start's offset";
+  ASSERT_EQ(v.unsettled_starts.size(), 1u) << "named: started later, the offset is gone";
+  EXPECT_LT(v.unsettled_starts[0].rms_later, 1e-6);
+  eval::SimulationStart settled;
+  settled.settle_s = 2.0;  // 160 samples: the 0.9 and 0.7 modes gone to 1e-7
+  const eval::ValidationResult s = eval::validateModel(m, log, {1}, settled);
+  EXPECT_EQ(s.scored_from, 161) << "the first simulated sample after the one it restarts from";
+  EXPECT_GT(s.outputs[0].fit_sim, 99.99);
+  const Eigen::VectorXd cut_dy = eval::modelIncrements(m, log.columnsOf({"u"})).col(0);
+  EXPECT_NEAR(s.outputs[0].simulated(161), log.data(160, 2) + cut_dy(161), 1e-12)
+      << "restarted from the measured sample at 2 s";
 }

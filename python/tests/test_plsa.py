@@ -45,6 +45,32 @@ def test_identified_model_predicts_the_validation_run(model, runs, tmp_path):
         assert np.array_equal(a[name]["predicted"][40], b[name]["predicted"][40], equal_nan=True)
 
 
+def test_validate_names_a_log_that_does_not_start_at_rest(model, runs, tmp_path):
+    """The validation run logged from 10 s in, where the actuator moves: its
+    start counts against the simulation; validate names it, and settling
+    leaves it out of the scores."""
+    lines = runs[1].read_text().splitlines()
+    header = [l for l in lines if l.startswith("#")]
+    rows = [l for l in lines if not l.startswith("#")]
+    moving = tmp_path / "moving.csv"
+    moving.write_text("\n".join(header + rows[:1] + rows[1 + 800 :]) + "\n")
+    v = plsa.validate(model, str(moving), horizons=[40])
+    named = {n: v[n]["unsettled_start"] for n in model.outputs if v[n]["unsettled_start"] is not None}
+    assert named, v
+    for n, u in named.items():
+        assert u["rms_error"] == pytest.approx(v[n]["rms_sim"], rel=1e-12)
+        assert u["rms_later"] < 0.8 * u["rms_error"]
+    later = max(u["later_s"] for u in named.values())
+    settled = plsa.validate(model, str(moving), horizons=[40], settle_s=later)
+    for n in named:
+        assert settled[n]["scored_from"] >= round(later * 80)
+        assert settled[n]["fit_sim"] > v[n]["fit_sim"] + 5.0, (settled[n]["fit_sim"], v[n]["fit_sim"])
+    from_rest = plsa.validate(model, str(runs[1]), horizons=[40])
+    assert all(from_rest[n]["unsettled_start"] is None for n in model.outputs)
+    with pytest.raises(ValueError, match="settling time"):
+        plsa.validate(model, str(moving), horizons=[40], settle_s=-1.0)
+
+
 def nrmse_fit(y, yhat):
     return 100.0 * (1.0 - np.linalg.norm(y - yhat) / np.linalg.norm(y - y.mean()))
 

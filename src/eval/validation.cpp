@@ -27,6 +27,12 @@ Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const Simulatio
   return std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
 }
 
+Eigen::Index settleSamples(const DioPwlObfModel& model, const SimulationStart& start) {
+  PLSA_CHECK(std::isfinite(start.settle_s) && start.settle_s >= 0,
+             "SimulationStart: the settling time must be finite and >= 0 s, got " + std::to_string(start.settle_s));
+  return static_cast<Eigen::Index>(std::ceil(start.settle_s / model.sample_time_s - 1e-9));
+}
+
 double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start) {
   // Only a registration anchors the turn on the new run; carrying the
   // training yaw carries its sensor state, drift included, unchanged.
@@ -48,7 +54,8 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
              "trackSensorYaw: the model's tip does not match the record");
   SensorYaw yaw;
   yaw.configure(static_cast<int>(yawRegistrationSamples(model, start)),
-                carriedYawRate(model, start) * kRadPerDeg * model.sample_time_s);
+                carriedYawRate(model, start) * kRadPerDeg * model.sample_time_s,
+                static_cast<long>(settleSamples(model, start)));
   yaw.restart();
   SensorYawTrack track;
   track.angle.resize(ym.rows());
@@ -63,13 +70,17 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
 namespace {
 
 // The yaw registration's samples (yawRegistrationSamples), checked to leave
-// something of a `rows`-sample record to simulate.
+// something of a `rows`-sample record to simulate after them and the
+// settling time.
 Eigen::Index checkedRegistration(const DioPwlObfModel& model, const SimulationStart& start, Eigen::Index rows) {
-  const Eigen::Index n = yawRegistrationSamples(model, start);
+  const Eigen::Index n = yawRegistrationSamples(model, start), settle = settleSamples(model, start);
+  const std::string after = settle > 0 ? " after " + std::to_string(settle) + " settling samples" : "";
   if (n > 0)
-    PLSA_CHECK(n < rows, "the yaw registration window (" + significantDigits(start.yaw_registration_s, 4) + " s, " +
-                             std::to_string(n) + " samples) leaves nothing of the " + std::to_string(rows) +
-                             "-sample record to simulate: give a longer log, or a shorter --yaw-registration");
+    PLSA_CHECK(settle + n < rows, "the yaw registration window (" + significantDigits(start.yaw_registration_s, 4) +
+                                      " s, " + std::to_string(n) + " samples)" + after + " leaves nothing of the " +
+                                      std::to_string(rows) +
+                                      "-sample record to simulate: give a longer log, or a shorter "
+                                      "--yaw-registration or --settle");
   return n;
 }
 
@@ -97,7 +108,7 @@ std::vector<AlignedPrediction> simulatedTip(const DioPwlObfModel& model, Eigen::
     level.col(0) = c * x - s * level.col(1);
     level.col(1) = s * x + c * level.col(1);
   }
-  const Eigen::Index first = n > 0 ? n : 1;
+  const Eigen::Index first = n > 0 ? settleSamples(model, start) + n : 1;
   std::vector<AlignedPrediction> out;
   for (int o = 0; o < model.outputCount(); ++o) {
     AlignedPrediction p;
@@ -118,8 +129,14 @@ std::vector<AlignedPrediction> simulateModel(const DioPwlObfModel& model, const 
              "simulateModel: the record does not match the model's outputs");
   const Eigen::Index n = yawRegistrationSamples(model, start);  // refuses a window that is not a duration
   std::vector<AlignedPrediction> out;
-  if (model.output_level.empty()) {
-    for (int o = 0; o < model.outputCount(); ++o) out.push_back(simulate(y.col(o), dy.col(o)));
+  if (model.output_level.empty()) {  // from the measured sample after the settling time
+    const Eigen::Index settle = settleSamples(model, start), rows = y.rows() - settle;
+    PLSA_CHECK(rows >= 2, "simulateModel: the settling time leaves fewer than two samples");
+    for (int o = 0; o < model.outputCount(); ++o) {
+      AlignedPrediction p = simulate(y.col(o).tail(rows), dy.col(o).tail(rows));
+      p.first += settle;
+      out.push_back(std::move(p));
+    }
     return out;
   }
   PLSA_CHECK(u.rows() >= 2, "simulateModel: need at least two samples");
@@ -331,11 +348,52 @@ AlignedPrediction scoredPart(const AlignedPrediction& p, Eigen::Index from) {
   return {from, p.values.tail(p.values.size() - skip)};
 }
 
+// ValidationResult::unsettled_starts: the validated simulations (`pred`'s
+// key 0, scored from `scored_from`) against the same started kLater_s later,
+// each over the samples it would be scored on.
+constexpr double kLater_s = 5.0, kLaterGain = 0.2, kLaterShareOfSpread = 0.02;
+std::vector<UnsettledStart> unsettledStartsOf(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                              const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
+                                              const SimulationStart& start, Eigen::Index scored_from,
+                                              const std::vector<std::map<int, AlignedPrediction>>& pred) {
+  SimulationStart later = start;
+  later.settle_s = start.settle_s + kLater_s;
+  const Eigen::Index rows = u.rows();
+  // Too short to tell: the later start must leave most of the log to score.
+  if (settleSamples(model, later) + yawRegistrationSamples(model, later) > rows / 2) return {};
+  const auto sims = predictOutputs(model, u, y, {}, true, dy, later);
+  std::vector<UnsettledStart> out;
+  for (int o = 0; o < model.outputCount(); ++o) {
+    const AlignedPrediction &now = pred[static_cast<std::size_t>(o)].at(0),
+                            &then = sims[static_cast<std::size_t>(o)].at(0);
+    const Eigen::Index then_from = std::max({then.first, settleSamples(model, later), scored_from});
+    const double rms_now = rmsErrorOf(y.col(o), scoredPart(now, scored_from)),
+                 rms_then = rmsErrorOf(y.col(o), scoredPart(then, then_from));
+    const double spread = spreadOf(y.col(o).tail(rows - scored_from));
+    if (!(rms_then <= (1.0 - kLaterGain) * rms_now) || !(rms_now - rms_then > kLaterShareOfSpread * spread)) continue;
+    out.push_back({model.outputs[static_cast<std::size_t>(o)], later.settle_s, rms_now, rms_then});
+  }
+  return out;
+}
+
+// A settling time that is a duration and leaves a fit's two samples, else
+// an error naming the log.
+void requireSettlingTime(const DioPwlObfModel& model, const SimulationStart& start, const io::Log& log) {
+  if (!std::isfinite(start.settle_s) || start.settle_s < 0)
+    throw std::invalid_argument(log.source + ": settling time " + std::to_string(start.settle_s) +
+                                " s must be finite and >= 0");
+  if (settleSamples(model, start) > log.samples() - 2)
+    throw std::invalid_argument(log.source + ": settling time " + significantDigits(start.settle_s, 4) + " s is " +
+                                std::to_string(settleSamples(model, start)) + " samples of the log's " +
+                                std::to_string(log.samples()) + "; a fit needs 2 after it: give a longer log");
+}
+
 }  // namespace
 
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start) {
   requireHorizons(horizons, "validate");
+  requireSettlingTime(model, start, log);
   // A log at another rate would be scored on the wrong time scale without a word.
   if (log.hasColumn(io::standard_columns::kTime)) {
     const double dt = io::checkedSampleTime(log, io::standard_columns::kTime, io::kToleratedGapFactor);
@@ -351,17 +409,20 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
                                   " (a fit needs 2); give a longer log or a shorter horizon");
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
-  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, start);
+  const Eigen::MatrixXd dy = modelIncrements(model, u);
+  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, dy, start);
   ValidationResult res;
   res.time = log.hasColumn(io::standard_columns::kTime) ? log.column(io::standard_columns::kTime)
                                                         : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.outside_training = inputsOutsideTraining(model, u);
-  // One window for every score: from the first sample every prediction covers.
-  res.scored_from = scoringStart(pred);
+  // One window for every score: from the first sample every prediction
+  // covers, after the settling time asked for.
+  res.scored_from = std::max(scoringStart(pred), settleSamples(model, start));
   if (u.rows() - res.scored_from < 2)
     throw std::invalid_argument(log.source + ": " + std::to_string(u.rows()) + " samples leave " +
                                 std::to_string(std::max<Eigen::Index>(0, u.rows() - res.scored_from)) +
-                                " to score after the longest horizon and the simulation's start (sample " +
+                                " to score after the longest horizon, the simulation's start and the settling time "
+                                "(sample " +
                                 std::to_string(res.scored_from) + "); a fit needs 2: give a longer log");
   for (int o = 0; o < model.outputCount(); ++o) {
     OutputValidation ov;
@@ -389,6 +450,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     for (int k : horizons) ov.sim_error_kept[k] = simulationErrorKept(ov.measured, ov.simulated, res.scored_from, k);
     res.outputs.push_back(std::move(ov));
   }
+  res.unsettled_starts = unsettledStartsOf(model, u, y, dy, start, res.scored_from, pred);
   return res;
 }
 
@@ -458,6 +520,17 @@ std::vector<std::string> simulationWarnings(const std::vector<SimulationDepartur
                   formatted("%.4g", d.farthest) + " (" + formatted("%.0f", 100 * d.share) +
                   "% of its width), first at t = " + formatted("%.4g", d.first_time_s) +
                   " s: the model departs from this run; do not trust its long-horizon predictions here");
+  return out;
+}
+
+std::vector<std::string> unsettledStartWarnings(const std::vector<UnsettledStart>& starts) {
+  std::vector<std::string> out;
+  for (const UnsettledStart& t : starts)
+    out.push_back("the free simulation of " + t.output + " is off by " + formatted("%.4g", t.rms_error) + " rms, by " +
+                  formatted("%.4g", t.rms_later) + " when started and scored " + formatted("%.3g", t.later_s) +
+                  " s into the log: the log may not start at rest (the simulation starts settled at its first "
+                  "inputs), and that start counts against the model; --settle " +
+                  formatted("%.3g", t.later_s) + " leaves it out of the scores");
   return out;
 }
 

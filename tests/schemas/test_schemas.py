@@ -353,6 +353,28 @@ def test_validate_fits(demo, out):
     assert_refused("validate-fits", broken(doc, without("simulation_start")), "no 'simulation_start'")
     assert_refused("validate-fits", broken(doc, setting(1.0, "outputs", output, "fit_k_sim")), "a key 'fit_k_sim'")
     assert_refused("validate-fits", broken(doc, without("outputs", output, "rms_sim")), "an output without 'rms_sim'")
+    assert doc["simulation_unsettled_starts"] == [], "the demo's run starts at rest"
+    # The same run logged from 10 s in, where the actuator moves: its start named.
+    lines = (demo / "validate_joystick.csv").read_text().splitlines()
+    rows = [l for l in lines if not l.startswith("#")]
+    moving = out / "moving.csv"
+    moving.write_text("\n".join(rows[:1] + rows[1 + 800 :]) + "\n")
+    run("validate", "--model", demo / "model.json", "--log", moving, "--json", out / "moving.json")
+    doc = load(out / "moving.json")
+    assert_valid("validate-fits", doc, "plsa validate --json on a log not from rest")
+    assert doc["simulation_unsettled_starts"], doc
+    assert doc["scored_samples"]["settle_s"] == 0
+    assert_refused("validate-fits", broken(doc, without("simulation_unsettled_starts", 0, "later_s")),
+                   "an unsettled start without 'later_s'")
+    later = max(u["later_s"] for u in doc["simulation_unsettled_starts"])
+    run("validate", "--model", demo / "model.json", "--log", moving, "--json", out / "settled.json",
+        "--settle", later)
+    settled = load(out / "settled.json")
+    assert_valid("validate-fits", settled, "plsa validate --settle --json")
+    assert settled["scored_samples"]["settle_s"] == later
+    assert settled["scored_samples"]["first"] >= round(later * 80)
+    for u in doc["simulation_unsettled_starts"]:
+        assert settled["outputs"][u["output"]]["rms_sim"] < u["rms_error"]
 
 
 @needs_cli

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,24 @@ struct InputsOutsideTraining {
   double any_beyond_grid = 0.0;    ///< share of rows with some input beyond its grid
 };
 
+/// What a log's first seconds cost an output's free simulation. The
+/// simulation starts settled at the first sample's inputs, so a log that
+/// does not start at rest shows an error at its start that is the log's, not
+/// the model's, and it can last (a yaw registered on it turns the whole run;
+/// a model without an output level keeps the offset it starts with). Started
+/// and scored `later_s` seconds into the log (SimulationStart::settle_s), the
+/// simulation is off by `rms_later` instead of `rms_error`.
+struct UnsettledStart {
+  std::string output;
+  double later_s = 0.0;    ///< the settling time of the later start
+  double rms_error = 0.0;  ///< the validated simulation's rms error, output units
+  double rms_later = 0.0;  ///< the later-started one's, over the samples it is scored on
+};
+
+/// One sentence per unsettled start, for a user: what it is and the
+/// settling time (`plsa validate --settle`) that leaves it out.
+std::vector<std::string> unsettledStartWarnings(const std::vector<UnsettledStart>& starts);
+
 /// Every fit and rms error, at every horizon and in simulation, is computed
 /// on the same samples: from `scored_from` (the first sample every
 /// prediction covers: the longest horizon, or the end of the simulation's
@@ -56,6 +75,11 @@ struct ValidationResult {
   Eigen::VectorXd time;
   Eigen::Index scored_from = 0;
   InputsOutsideTraining outside_training;  ///< samples with an input outside its training range
+  /// The outputs whose simulation, started and scored 5 s later than
+  /// settle_s, has at most 0.8 times the rms error (and less by 2% of the
+  /// output's standard deviation); empty when none has or the log is too
+  /// short to tell (the later start past half of it).
+  std::vector<UnsettledStart> unsettled_starts;
 };
 
 /// InputsOutsideTraining of `u` (one column per model input).
@@ -104,6 +128,17 @@ struct SimulationStart {
   /// (docs/identification.md, 'Sensor drift carried'). Needs a registration
   /// to anchor the turn. false: simulate the drift-free model.
   bool carry_training_drift = true;
+  /// Seconds at the run's start left out of every score, for a run that
+  /// does not start at rest: the simulation starts settled at the first
+  /// sample's inputs (from the model's output level or the first measured
+  /// sample), so a run recorded while the actuator still moved shows an error
+  /// at its start that is the log's, not the model's (validateModel names
+  /// it: ValidationResult::unsettled_starts). The predictions still run through them; a yaw registration takes
+  /// the window after them; a model without an output level, which
+  /// simulates from a measured sample, starts from the one at their end (an
+  /// unsettled start would leave it a lasting offset). 0: score from the
+  /// first sample every prediction covers.
+  double settle_s = 0.0;
 };
 
 /// The sensor's yaw over a record as the predictor follows it from the
@@ -127,6 +162,11 @@ Eigen::MatrixXd modelTip(const DioPwlObfModel& model, const Eigen::MatrixXd& u, 
 /// is > 0, else the window's samples, at least one. Throws for a window that
 /// is negative or not finite.
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start);
+
+/// The samples at a run's start SimulationStart::settle_s leaves out of the
+/// scores (a yaw registration starts after them). Throws for a settling time
+/// that is negative or not finite.
+Eigen::Index settleSamples(const DioPwlObfModel& model, const SimulationStart& start);
 
 /// The sensor yaw rate (deg/s) simulateModel turns the tip at: the model's
 /// training steering drift when `start` carries it and registers the yaw
@@ -180,7 +220,8 @@ std::vector<std::string> simulationWarnings(const std::vector<SimulationDepartur
 
 /// Throws naming the missing column, the bad or repeated horizon, a registration
 /// window as long as the log, a time gap, or a sample time (from `time_s`, when
-/// the log has it) 2% or more off the model's.
+/// the log has it) 2% or more off the model's, or a settle_s that is negative,
+/// not finite or leaves fewer than 2 samples to score.
 ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, const std::vector<int>& horizons,
                                const SimulationStart& start = {});
 

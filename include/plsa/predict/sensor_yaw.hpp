@@ -30,9 +30,12 @@ inline int yawRegistrationWindow(double seconds, double sample_time) noexcept {
 class SensorYaw {
  public:
   /// Registers over `window` samples from each start (0: never, no turn at
-  /// all), turning the model's tip `drift_per_sample` rad per sample from the start.
-  void configure(int window, double drift_per_sample) noexcept {
+  /// all), turning the model's tip `drift_per_sample` rad per sample from the
+  /// start; `delay` samples after the start first (a run that does not start
+  /// at rest: validation's SimulationStart::settle_s), turned by the drift alone.
+  void configure(int window, double drift_per_sample, long delay = 0) noexcept {
     window_ = window;
+    delay_ = delay > 0 ? delay : 0;
     drift_ = drift_per_sample;
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
   }
@@ -43,17 +46,19 @@ class SensorYaw {
     turn_ = {1.0, 0.0};
   }
   /// Whether add() reads the model's tip (the window is still open).
-  bool registering() const noexcept { return samples_ < window_; }
+  bool registering() const noexcept { return window_ > 0 && samples_ < delay_ + window_; }
   /// The next sample: the model's tip (level_x, level_y), in its frame, and
   /// the measured one. Once the window is full the offset is set.
   void add(double level_x, double level_y, double x, double y) noexcept {
     const double k = static_cast<double>(samples_++);
-    if (samples_ > window_) return advanceTurn();
+    if (window_ == 0 || samples_ > delay_ + window_) return advanceTurn();
     const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
-    cross_ += tx * y - ty * x;
-    dot_ += tx * x + ty * y;
-    if (samples_ < window_) {
+    if (samples_ > delay_) {
+      cross_ += tx * y - ty * x;
+      dot_ += tx * x + ty * y;
+    }
+    if (samples_ < delay_ + window_) {
       turn_ = {c, s};  // the drift's turn alone (no offset yet): angle()
       return;
     }
@@ -90,6 +95,7 @@ class SensorYaw {
   }
 
   int window_ = 0;
+  long delay_ = 0;
   double drift_ = 0.0;
   Turn step_, turn_;
   double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0;

@@ -367,8 +367,10 @@ def test_validate_fits(demo, out):
     assert_refused("validate-fits", broken(doc, without("simulation_unsettled_starts", 0, "later_s")),
                    "an unsettled start without 'later_s'")
     later = max(u["later_s"] for u in doc["simulation_unsettled_starts"])
-    run("validate", "--model", demo / "model.json", "--log", moving, "--json", out / "settled.json",
-        "--settle", later)
+    r = run("validate", "--model", demo / "model.json", "--log", moving, "--json", out / "settled.json",
+            "--settle", later)
+    said = f"(sim from the model output level, sensor yaw registered on the 5 s after the first {later:g} s"
+    assert said in r.stdout, r.stdout
     settled = load(out / "settled.json")
     assert_valid("validate-fits", settled, "plsa validate --settle --json")
     assert settled["scored_samples"]["settle_s"] == later

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <map>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -133,11 +132,11 @@ struct SimulationStart {
   /// sample's inputs (from the model's output level or the first measured
   /// sample), so a run recorded while the actuator still moved shows an error
   /// at its start that is the log's, not the model's (validateModel names
-  /// it: ValidationResult::unsettled_starts). The predictions still run through them; a yaw registration takes
-  /// the window after them; a model without an output level, which
-  /// simulates from a measured sample, starts from the one at their end (an
-  /// unsettled start would leave it a lasting offset). 0: score from the
-  /// first sample every prediction covers.
+  /// it: ValidationResult::unsettled_starts). The predictions still run
+  /// through them; a yaw registration takes the window after them; a model
+  /// without an output level, which simulates from a measured sample, starts
+  /// from the one at their end (an unsettled start would leave it a lasting
+  /// offset). 0: score from the first sample every prediction covers.
   double settle_s = 0.0;
 };
 

@@ -348,44 +348,40 @@ AlignedPrediction scoredPart(const AlignedPrediction& p, Eigen::Index from) {
   return {from, p.values.tail(p.values.size() - skip)};
 }
 
-// ValidationResult::unsettled_starts: the validated simulations (`pred`'s
-// key 0, scored from `scored_from`) against the same started kLater_s later,
-// each over the samples it would be scored on.
+// ValidationResult::unsettled_starts: the validated simulations (their rms
+// error and spread in `scored`, from `scored_from` on) against the same
+// started kLater_s later, over the samples it would be scored on.
 constexpr double kLater_s = 5.0, kLaterGain = 0.2, kLaterShareOfSpread = 0.02;
 std::vector<UnsettledStart> unsettledStartsOf(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                               const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                               const SimulationStart& start, Eigen::Index scored_from,
-                                              const std::vector<std::map<int, AlignedPrediction>>& pred) {
+                                              const std::vector<OutputValidation>& scored) {
   SimulationStart later = start;
   later.settle_s = start.settle_s + kLater_s;
-  const Eigen::Index rows = u.rows();
+  const Eigen::Index settle = settleSamples(model, later), later_from = std::max(settle, scored_from);
   // Too short to tell: the later start must leave most of the log to score.
-  if (settleSamples(model, later) + yawRegistrationSamples(model, later) > rows / 2) return {};
+  if (settle + yawRegistrationSamples(model, later) > u.rows() / 2) return {};
   const auto sims = predictOutputs(model, u, y, {}, true, dy, later);
   std::vector<UnsettledStart> out;
-  for (int o = 0; o < model.outputCount(); ++o) {
-    const AlignedPrediction &now = pred[static_cast<std::size_t>(o)].at(0),
-                            &then = sims[static_cast<std::size_t>(o)].at(0);
-    const Eigen::Index then_from = std::max({then.first, settleSamples(model, later), scored_from});
-    const double rms_now = rmsErrorOf(y.col(o), scoredPart(now, scored_from)),
-                 rms_then = rmsErrorOf(y.col(o), scoredPart(then, then_from));
-    const double spread = spreadOf(y.col(o).tail(rows - scored_from));
-    if (!(rms_then <= (1.0 - kLaterGain) * rms_now) || !(rms_now - rms_then > kLaterShareOfSpread * spread)) continue;
-    out.push_back({model.outputs[static_cast<std::size_t>(o)], later.settle_s, rms_now, rms_then});
+  for (std::size_t o = 0; o < scored.size(); ++o) {
+    const AlignedPrediction& then = sims[o].at(0);
+    const double rms_now = scored[o].rms_sim, rms_then = rmsErrorOf(y.col(static_cast<Eigen::Index>(o)),
+                                                                    scoredPart(then, std::max(then.first, later_from)));
+    if (!(rms_then <= (1.0 - kLaterGain) * rms_now) || !(rms_now - rms_then > kLaterShareOfSpread * scored[o].spread))
+      continue;
+    out.push_back({scored[o].name, later.settle_s, rms_now, rms_then});
   }
   return out;
 }
 
-// A settling time that is a duration and leaves a fit's two samples, else
-// an error naming the log.
+// A settling time that is a duration (settleSamples refuses one that is
+// not) and leaves a fit's two samples, else an error naming the log.
 void requireSettlingTime(const DioPwlObfModel& model, const SimulationStart& start, const io::Log& log) {
-  if (!std::isfinite(start.settle_s) || start.settle_s < 0)
-    throw std::invalid_argument(log.source + ": settling time " + std::to_string(start.settle_s) +
-                                " s must be finite and >= 0");
-  if (settleSamples(model, start) > log.samples() - 2)
+  const Eigen::Index settle = settleSamples(model, start);
+  if (settle > log.samples() - 2)
     throw std::invalid_argument(log.source + ": settling time " + significantDigits(start.settle_s, 4) + " s is " +
-                                std::to_string(settleSamples(model, start)) + " samples of the log's " +
-                                std::to_string(log.samples()) + "; a fit needs 2 after it: give a longer log");
+                                std::to_string(settle) + " samples of the log's " + std::to_string(log.samples()) +
+                                "; a fit needs 2 after it: give a longer log");
 }
 
 }  // namespace
@@ -450,7 +446,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     for (int k : horizons) ov.sim_error_kept[k] = simulationErrorKept(ov.measured, ov.simulated, res.scored_from, k);
     res.outputs.push_back(std::move(ov));
   }
-  res.unsettled_starts = unsettledStartsOf(model, u, y, dy, start, res.scored_from, pred);
+  res.unsettled_starts = unsettledStartsOf(model, u, y, dy, start, res.scored_from, res.outputs);
   return res;
 }
 

@@ -356,6 +356,28 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
   EXPECT_LT(weightSum(d.final_params), -0.1) << "and still in the kept model";
 }
 
+// A sensor mounted turned about the segment's axis: every reading's
+// steering off by a constant, which the sensor-bias candidate's mount yaw
+// takes (its spread start reads it off the residual: the turn that best maps
+// the simulated bending vector onto the measured one).
+TEST(Diagnose, AMountYawIsFound) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.setEffectEnabled("sensor_bias", true);
+  auto& b = truth.sensor_bias;
+  b.tilt_deg = b.yaw_drift_deg_per_s = 0.0;
+  b.yaw_deg = -9.0;
+  DiagnoseOptions o = quick();
+  o.candidates = {"sensor_bias"};
+  const Diagnosis d =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 51), recorded(truth, 30, 52)}, o);
+  ASSERT_EQ(d.selected, std::vector<std::string>{"sensor_bias"}) << d.verdict;
+  double yaw = 0.0;
+  for (const auto& [name, value] : d.final_params)
+    if (name == "sensor_bias.yaw_deg") yaw = value;
+  EXPECT_NEAR(yaw, -9.0, 1.0);
+  EXPECT_LT(d.gap_after.percent(), 0.3 * d.recalibrated_round1.percent()) << d.verdict;
+}
+
 TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
   // A periodic wobble of the steering output that no candidate makes and
   // the nominal physics cannot absorb.

@@ -206,6 +206,7 @@ TEST(SimKinematics, StepReadingIsTheMeasuredBendingVector) {
     c.sensor.noise_deg = sensor == Sensor::kNoise ? 0.05 : 0.0;
     c.sensor_bias.enabled = sensor == Sensor::kBias || sensor == Sensor::kWalkingBias;
     if (sensor == Sensor::kWalkingBias) c.sensor_bias.formulation = "random_walk";
+    if (sensor == Sensor::kBias || sensor == Sensor::kWalkingBias) c.sensor_bias.yaw_deg = 7.0;
     if (sensor == Sensor::kExactPast90) c.geometry.length_m *= 6.0;
     const bool exact = sensor == Sensor::kExact || sensor == Sensor::kExactPast90;
     Actuator by_step(c, 7), by_reading(c, 7);
@@ -436,6 +437,21 @@ TEST(SimEffects, WeightedPrandtlIshlinskiisSignTurnsTheLoopAndFixedBandsLeaveRem
   const Loop fixed_play = loopOf(0.5, 1.0), fixed_stop = loopOf(-0.5, 1.0);
   EXPECT_GT(fixed_play.vented, 0.2) << fixed_play.vented;
   EXPECT_LT(fixed_stop.vented, -0.2) << fixed_stop.vented;
+}
+
+TEST(SimEffects, SensorMountYawTurnsTheReading) {
+  SimConfig c = only("sensor_bias");
+  c.sensor_bias.tilt_deg = 0.0;
+  c.sensor.noise_deg = 0.0;
+  SimConfig turned = c;
+  turned.sensor_bias.yaw_deg = 12.0;
+  Actuator a(c, 1), b(turned, 1);
+  const auto ra = hold(a, {0.25, 0.05, 0}, 10.0), rb = hold(b, {0.25, 0.05, 0}, 10.0);
+  for (std::size_t k : {std::size_t{79}, std::size_t{799}}) {
+    EXPECT_NEAR(rb[k].bend_deg, ra[k].bend_deg, 1e-9);
+    EXPECT_NEAR(rb[k].steer_deg - ra[k].steer_deg, 12.0, 1e-9) << "the drift adds to the mount's yaw";
+    EXPECT_GT(ra[k].bend_deg, 5.0);
+  }
 }
 
 TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {

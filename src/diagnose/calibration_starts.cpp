@@ -6,7 +6,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
+
 #include "plsa/core/parallel_for.hpp"
+#include "plsa/model/output_frame.hpp"  // kRadPerDeg
 
 namespace plsa::diagnose {
 namespace {
@@ -33,27 +36,41 @@ void setNeutral(sim::SimConfig& c, const std::string& effect) {
   if (effect == "creep") c.creep.fraction = 0.0;
   if (effect == "sensor_bias") {
     auto& b = c.sensor_bias;
-    b.tilt_deg = b.yaw_drift_deg_per_s = b.offset_x_deg = b.offset_y_deg = b.drift_x_deg_per_s = b.drift_y_deg_per_s =
-        0.0;
+    b.tilt_deg = b.yaw_deg = b.yaw_drift_deg_per_s = b.offset_x_deg = b.offset_y_deg = b.drift_x_deg_per_s =
+        b.drift_y_deg_per_s = 0.0;
   }
 }
 
-// A sensor-bias start read off the residual: per bending-vector component,
-// the least-squares offset and drift of (real - simulated) over time.
+// A sensor-bias start read off the residual: the mount's yaw that turns the
+// simulated bending vector onto the measured one best (least squares, within
+// its range), then per bending-vector component the least-squares offset and
+// drift of what remains over time.
 sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& train) {
   setNeutral(c, "sensor_bias");
+  std::vector<SimTrace> traces;
+  double across = 0.0, along = 0.0;  // sums of sim x measured and sim . measured
+  for (const auto& run : train) {
+    traces.push_back(simulateRun(c, run));
+    const Eigen::MatrixXd& s = traces.back().outputs;
+    across += (s.col(0).array() * run.outputs.col(1).array() - s.col(1).array() * run.outputs.col(0).array()).sum();
+    along += (s.array() * run.outputs.array()).sum();
+  }
+  auto& b = c.sensor_bias;
+  const double yaw = std::clamp(std::atan2(across, along) / kRadPerDeg, -30.0, 30.0);
+  b.yaw_deg = std::isfinite(yaw) ? yaw : 0.0;
+  const Eigen::Rotation2Dd turn(b.yaw_deg * kRadPerDeg);
   Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d atb = Eigen::Matrix2d::Zero();  // columns: x, y
-  for (const auto& run : train) {
-    const SimTrace t = simulateRun(c, run);
+  for (std::size_t r = 0; r < train.size(); ++r) {
+    const RunData& run = train[r];
     for (Eigen::Index i = 0; i < run.samples(); ++i) {
       const Eigen::Vector2d a(1.0, static_cast<double>(i + 1) * run.sample_time_s);
+      const Eigen::Vector2d turned = turn * traces[r].outputs.row(i).transpose();
       ata += a * a.transpose();
-      atb += a * (run.outputs.row(i) - t.outputs.row(i));
+      atb += a * (run.outputs.row(i) - turned.transpose());
     }
   }
   const Eigen::Matrix2d sol = ata.ldlt().solve(atb);
-  auto& b = c.sensor_bias;
   b.offset_x_deg = std::clamp(sol(0, 0), -10.0, 10.0);
   b.offset_y_deg = std::clamp(sol(0, 1), -10.0, 10.0);
   b.drift_x_deg_per_s = std::clamp(sol(1, 0), -0.2, 0.2);

@@ -226,13 +226,13 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   bendToward(target, sum_p);
 }
 
-// The yaw the sensor reads at this sample (deg): its steady drift, or one
-// step of its random walk (one draw).
+// The yaw the sensor reads at this sample (deg): its mount's yaw plus its
+// steady drift, or plus one step of its random walk (one draw).
 double Actuator::sensorYawDeg() {
   const auto& b = config_.sensor_bias;
-  if (!random_walk_bias_) return b.yaw_drift_deg_per_s * time_s_;
+  if (!random_walk_bias_) return b.yaw_deg + b.yaw_drift_deg_per_s * time_s_;
   yaw_walk_deg_ += std::abs(b.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / config_.sample_rate_hz) * normal_(rng_);
-  return yaw_walk_deg_;
+  return b.yaw_deg + yaw_walk_deg_;
 }
 
 ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {

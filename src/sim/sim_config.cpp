@@ -57,6 +57,7 @@ std::vector<Field> fields(SimConfig& c) {
       {"creep", {"fraction", &c.creep.fraction, 0.0, 0.5, ""}},
       {"creep", {"time_constant_s", &c.creep.time_constant_s, 0.1, 200.0, "s"}},
       {"sensor_bias", {"tilt_deg", &c.sensor_bias.tilt_deg, -15.0, 15.0, "deg"}},
+      {"sensor_bias", {"yaw_deg", &c.sensor_bias.yaw_deg, -30.0, 30.0, "deg"}},
       {"sensor_bias", {"yaw_drift_deg_per_s", &c.sensor_bias.yaw_drift_deg_per_s, -1.0, 1.0, "deg/s"}},
       {"sensor_bias", {"offset_x_deg", &c.sensor_bias.offset_x_deg, -10.0, 10.0, "deg"}},
       {"sensor_bias", {"offset_y_deg", &c.sensor_bias.offset_y_deg, -10.0, 10.0, "deg"}},

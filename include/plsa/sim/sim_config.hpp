@@ -137,6 +137,9 @@ struct SimConfig {
     /// "linear_drift" | "random_walk": yaw wanders (steps of |yaw drift| sqrt(dt) x 3) instead of drifting steadily.
     std::string formulation = "linear_drift";
     double tilt_deg = 1.5;  ///< mount misalignment
+    /// The mount turned about the segment's axis: a constant yaw of the
+    /// reading, the drift adding to it; 0 by default.
+    double yaw_deg = 0.0;
     double yaw_drift_deg_per_s = 0.02;
     /// A zero error and a linear drift of each bending-vector component
     /// (bend cos steer, bend sin steer), as an uncalibrated or warming

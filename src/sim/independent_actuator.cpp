@@ -332,8 +332,10 @@ Eigen::Vector2d IndependentActuator::measured(const Eigen::Vector2d& bend_rad) {
   }
   const double o = ph_.sensor_offset_deg;
   if (ph_.sensor_bias == "scale_offset") {
+    // Turned on its mount, one axis's gain off by 6%: no candidate's mount
+    // yaw and no actuator gain makes the ellipse.
     const double a = 3.0 * kDeg;
-    v = 1.06 * (Eigen::Rotation2Dd(a).toRotationMatrix() * v) + o * wander_;
+    v = Eigen::Vector2d(1.06, 1.0).asDiagonal() * (Eigen::Rotation2Dd(a).toRotationMatrix() * v) + o * wander_;
   } else if (ph_.sensor_bias == "warm_up") {
     v += o * (1.0 - std::exp(-t_ / 20.0)) * wander_;
   } else if (ph_.sensor_bias == "wandering") {

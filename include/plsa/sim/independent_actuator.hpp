@@ -76,10 +76,10 @@ struct IndependentPhysics {
   std::string creep;
   double creep_fraction = 0.1;
   double creep_time_s = 6.0;
-  /// sensor bias: "scale_offset" (gain and alignment error plus a constant
-  /// offset of the bending vector), "warm_up" (an offset settling in with
-  /// time constant 20 s), "wandering" (a random-walk offset); strength:
-  /// the offset (deg).
+  /// sensor bias: "scale_offset" (one sensor axis's gain 1.06, a 3 deg
+  /// alignment error and a constant offset of the bending vector),
+  /// "warm_up" (an offset settling in with time constant 20 s), "wandering"
+  /// (a random-walk offset); strength: the offset (deg).
   std::string sensor_bias;
   double sensor_offset_deg = 1.5;
   /// The offset's direction in the bending plane (deg), a property of the

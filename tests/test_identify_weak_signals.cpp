@@ -170,14 +170,19 @@ TEST(Pipeline, PressuresInAnyUnitAreCutIntoTheSameSteps) {
     for (std::size_t i = 0; i < b.size(); ++i) EXPECT_NEAR(b[i], unit * b_bar[i], 1e-9 * unit) << unit;
     ASSERT_EQ(rep.pairs.size(), bar.pairs.size());
     for (std::size_t i = 0; i < rep.pairs.size(); ++i) {
-      // The same set (its order may differ; the noise-level output's
-      // second-order window fits round differently, by about 1e-4).
+      // The same set (its order may differ). The strong output's poles come
+      // from the steps alike in every unit; the noise-level output's from
+      // second-order window fits, which round differently: by about 1e-4 on
+      // one host, 1.5e-3 on another (cut into other steps, 0.014 apart).
       auto poles = rep.pairs[i].chosen.centres, poles_bar = bar.pairs[i].chosen.centres;
       ASSERT_EQ(poles.size(), poles_bar.size()) << unit;
+      ASSERT_EQ(rep.pairs[i].output, bar.pairs[i].output);
+      const bool weak = rep.pairs[i].output == 1;
       const auto by_real = [](std::complex<double> a, std::complex<double> b) { return a.real() < b.real(); };
       std::sort(poles.begin(), poles.end(), by_real);
       std::sort(poles_bar.begin(), poles_bar.end(), by_real);
-      for (std::size_t k = 0; k < poles.size(); ++k) EXPECT_NEAR(std::abs(poles[k] - poles_bar[k]), 0.0, 1e-3) << unit;
+      for (std::size_t k = 0; k < poles.size(); ++k)
+        EXPECT_NEAR(std::abs(poles[k] - poles_bar[k]), 0.0, weak ? 5e-3 : 1e-9) << unit << (weak ? " weak" : " strong");
     }
   }
 }

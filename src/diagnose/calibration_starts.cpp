@@ -41,6 +41,11 @@ void setNeutral(sim::SimConfig& c, const std::string& effect) {
   }
 }
 
+// Each of an effect's parameters into its range (the simulator's parameter table).
+void clampToRanges(sim::SimConfig& c, const std::string& effect) {
+  for (const sim::ParamRef& p : c.parameters(effect)) *p.value = std::clamp(*p.value, p.lower, p.upper);
+}
+
 // A sensor-bias start read off the residual: the mount's yaw that turns the
 // simulated bending vector onto the measured one best (least squares, within
 // its range), then per bending-vector component the least-squares offset and
@@ -56,8 +61,9 @@ sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& tr
     along += (s.array() * run.outputs.array()).sum();
   }
   auto& b = c.sensor_bias;
-  const double yaw = std::clamp(std::atan2(across, along) / kRadPerDeg, -30.0, 30.0);
-  b.yaw_deg = std::isfinite(yaw) ? yaw : 0.0;
+  b.yaw_deg = std::atan2(across, along) / kRadPerDeg;
+  clampToRanges(c, "sensor_bias");
+  if (!std::isfinite(b.yaw_deg)) b.yaw_deg = 0.0;
   const Eigen::Rotation2Dd turn(b.yaw_deg * kRadPerDeg);
   Eigen::Matrix2d ata = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d atb = Eigen::Matrix2d::Zero();  // columns: x, y
@@ -71,10 +77,9 @@ sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& tr
     }
   }
   const Eigen::Matrix2d sol = ata.ldlt().solve(atb);
-  b.offset_x_deg = std::clamp(sol(0, 0), -10.0, 10.0);
-  b.offset_y_deg = std::clamp(sol(0, 1), -10.0, 10.0);
-  b.drift_x_deg_per_s = std::clamp(sol(1, 0), -0.2, 0.2);
-  b.drift_y_deg_per_s = std::clamp(sol(1, 1), -0.2, 0.2);
+  b.offset_x_deg = sol(0, 0), b.offset_y_deg = sol(0, 1);
+  b.drift_x_deg_per_s = sol(1, 0), b.drift_y_deg_per_s = sol(1, 1);
+  clampToRanges(c, "sensor_bias");
   return c;
 }
 

@@ -17,7 +17,7 @@ namespace plsa::can {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& why) {
+[[noreturn]] void rejectLine(const std::string& source, std::size_t line, const std::string& why) {
   throw std::runtime_error(source + ":" + std::to_string(line) + ": " + why);
 }
 
@@ -42,7 +42,7 @@ double timeStamp(const std::string& field, const std::string& source, std::size_
     return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
   };
   if (!shaped || !digits(whole) || !digits(part.substr(0, part.size() - 1)) || whole.size() > 12)
-    fail(source, line, "time stamp '" + field + "' is not (seconds.fraction) as candump writes it");
+    rejectLine(source, line, "time stamp '" + field + "' is not (seconds.fraction) as candump writes it");
   return std::strtod(field.substr(1, field.size() - 2).c_str(), nullptr);
 }
 
@@ -51,7 +51,7 @@ void frameField(const std::string& field, CandumpLine& out, const std::string& s
   const auto hash = field.find('#');
   const std::string id = field.substr(0, hash);
   if (hash == std::string::npos || !allHex(id) || (id.size() != 3 && id.size() != 8))
-    fail(source, line, "frame '" + field + "' is not id#data (3 or 8 hex digits of id)");
+    rejectLine(source, line, "frame '" + field + "' is not id#data (3 or 8 hex digits of id)");
   std::string data = field.substr(hash + 1);
   if (id.size() == 8) {
     out.kind = CandumpLine::Kind::kExtended;
@@ -68,14 +68,14 @@ void frameField(const std::string& field, CandumpLine& out, const std::string& s
   const auto dlc_suffix = data.find('_');  // len8_dlc: "..._9" for a DLC above 8
   if (dlc_suffix != std::string::npos) {
     if (dlc_suffix + 2 != data.size() || hexDigit(data.back()) < 9)
-      fail(source, line, "frame '" + field + "' has a bad DLC suffix");
+      rejectLine(source, line, "frame '" + field + "' has a bad DLC suffix");
     data.resize(dlc_suffix);
   }
   if (data.size() % 2 != 0 || data.size() > 16 || (!data.empty() && !allHex(data)))
-    fail(source, line, "frame '" + field + "' has data that is not 0 to 8 bytes of hex");
+    rejectLine(source, line, "frame '" + field + "' has data that is not 0 to 8 bytes of hex");
   out.kind = CandumpLine::Kind::kClassic;
   out.frame.id = static_cast<std::uint32_t>(std::strtoul(id.c_str(), nullptr, 16));
-  if (out.frame.id > 0x7FF) fail(source, line, "frame '" + field + "': a standard id is at most 7FF");
+  if (out.frame.id > 0x7FF) rejectLine(source, line, "frame '" + field + "': a standard id is at most 7FF");
   out.frame.dlc = static_cast<std::uint8_t>(data.size() / 2);
   for (std::size_t k = 0; k < out.frame.dlc; ++k)
     out.frame.data[k] = static_cast<std::uint8_t>(hexDigit(data[2 * k]) * 16 + hexDigit(data[2 * k + 1]));
@@ -143,7 +143,8 @@ void decodeLine(const CandumpLine& l, std::vector<MappedMessage>& messages, Tall
     }
     if (status == DecodeStatus::kCounterGap) ++tally.gaps[m.layout->name];
     if (!m.times.empty() && l.time_s < m.times.back())
-      fail(source, line, "a " + m.layout->name + " frame older than the one before it (each message in time order)");
+      rejectLine(source, line,
+                 "a " + m.layout->name + " frame older than the one before it (each message in time order)");
     m.times.push_back(l.time_s);
     m.values.push_back(v);
     return;
@@ -244,7 +245,7 @@ CandumpLine parseCandumpLine(const std::string& line, const std::string& source,
   const std::vector<std::string> fields = fieldsOf(line);
   // candump -l / -L: "(time) interface frame", optionally a direction flag (R/T) after it.
   if (fields.size() < 3 || fields.size() > 4 || (fields.size() == 4 && fields[3] != "R" && fields[3] != "T"))
-    fail(source, line_number, "not a candump log line '(time) interface id#data'");
+    rejectLine(source, line_number, "not a candump log line '(time) interface id#data'");
   CandumpLine out;
   out.time_s = timeStamp(fields[0], source, line_number);
   out.interface = fields[1];
@@ -287,14 +288,14 @@ io::Log readCandumpLog(std::istream& in, const std::string& source, const Signal
     while (in.get(c) && c != '\n') {
       any = true;
       if (line.size() >= kMaxCandumpLineBytes)
-        fail(source, number, "line longer than " + std::to_string(kMaxCandumpLineBytes) + " bytes");
+        rejectLine(source, number, "line longer than " + std::to_string(kMaxCandumpLineBytes) + " bytes");
       line.push_back(c);
     }
     if (!any && !in) break;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
     if (++tally.lines > kMaxCandumpFrames)
-      fail(source, number, "more than " + std::to_string(kMaxCandumpFrames) + " frames; split the log");
+      rejectLine(source, number, "more than " + std::to_string(kMaxCandumpFrames) + " frames; split the log");
     const CandumpLine l = parseCandumpLine(line, source, number);
     if (tally.interfaces.size() < 16) tally.interfaces.insert(l.interface);
     decodeLine(l, messages, tally, source, number);

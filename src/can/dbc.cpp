@@ -19,14 +19,15 @@ constexpr std::size_t kMaxDbcLineBytes = 4096;
 // The id of the pseudo-message DBC editors keep unassigned signals in.
 constexpr unsigned long long kIndependentSignals = 0xC0000000ull;
 
-[[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& why) {
+[[noreturn]] void rejectDbcLine(const std::string& source, std::size_t line, const std::string& why) {
   throw std::invalid_argument(source + ":" + std::to_string(line) + ": " + why);
 }
 
 double number(const std::string& text, const std::string& what, const std::string& source, std::size_t line) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) fail(source, line, what + " '" + text + "' is not a number");
+  if (text.empty() || *end != '\0' || !std::isfinite(v))
+    rejectDbcLine(source, line, what + " '" + text + "' is not a number");
   return v;
 }
 
@@ -75,12 +76,14 @@ SignalLine parseSignal(const std::string& text, const std::string& source, std::
       R"re(^\s*SG_\s+(\w+)\s*(M|m\d+)?\s*:\s*(\d+)\s*\|\s*(\d+)\s*@\s*([01])\s*([+-])\s*\(\s*([^,\s]+)\s*,\s*([^)\s]+)\s*\)\s*\[\s*([^|\s]*)\s*\|\s*([^\]\s]*)\s*\]\s*"([^"]*)"\s*(.*)$)re");
   std::smatch m;
   if (!std::regex_match(text, m, sg))
-    fail(source, line,
-         "not a DBC signal line (SG_ name : start|length@order sign (scale,offset) [min|max] \"unit\" receivers)");
+    rejectDbcLine(
+        source, line,
+        "not a DBC signal line (SG_ name : start|length@order sign (scale,offset) [min|max] \"unit\" receivers)");
   SignalLine s;
   s.name = m[1];
   s.mux = m[2];
-  if (m[3].length() > 4 || m[4].length() > 4) fail(source, line, "signal '" + s.name + "': start or length too large");
+  if (m[3].length() > 4 || m[4].length() > 4)
+    rejectDbcLine(source, line, "signal '" + s.name + "': start or length too large");
   s.start = std::stoi(m[3]);
   s.length = std::stoi(m[4]);
   s.little_endian = m[5] == "1";
@@ -88,29 +91,33 @@ SignalLine parseSignal(const std::string& text, const std::string& source, std::
   s.scale = number(m[7], "signal '" + s.name + "': scale", source, line);
   s.offset = number(m[8], "signal '" + s.name + "': offset", source, line);
   s.unit = m[11];
-  if (!printableUtf8(s.unit)) fail(source, line, "signal '" + s.name + "': the unit is not printable UTF-8 text");
+  if (!printableUtf8(s.unit))
+    rejectDbcLine(source, line, "signal '" + s.name + "': the unit is not printable UTF-8 text");
   return s;
 }
 
 // A DBC signal as plsa's byte-aligned one (or the message's counter or checksum).
 void addSignal(const SignalLine& d, MessageLayout& m, const std::string& source, std::size_t line) {
   const std::string at = "message '" + m.name + "', signal '" + d.name + "': ";
-  if (!d.mux.empty()) fail(source, line, at + "multiplexed signals are not read (plsa's maps have fixed layouts)");
+  if (!d.mux.empty())
+    rejectDbcLine(source, line, at + "multiplexed signals are not read (plsa's maps have fixed layouts)");
   if (d.length != 8 && d.length != 16 && d.length != 32)
-    fail(source, line, at + std::to_string(d.length) + " bits; plsa reads 8-, 16- and 32-bit signals");
+    rejectDbcLine(source, line, at + std::to_string(d.length) + " bits; plsa reads 8-, 16- and 32-bit signals");
   // Intel: the start bit is the lowest bit; Motorola: the highest bit of the first byte.
   if (d.little_endian ? d.start % 8 != 0 : d.start % 8 != 7)
-    fail(source, line,
-         at + "starts at bit " + std::to_string(d.start) + ", not on a byte (plsa's signals are byte-aligned)");
+    rejectDbcLine(
+        source, line,
+        at + "starts at bit " + std::to_string(d.start) + ", not on a byte (plsa's signals are byte-aligned)");
   const int byte = d.start / 8;
   if (d.name == "counter" || d.name == "checksum") {
     if (d.length != 8 || d.is_signed || d.scale != 1.0 || d.offset != 0.0)
-      fail(source, line, at + "a counter or checksum is one unsigned byte, scale 1, offset 0");
+      rejectDbcLine(source, line, at + "a counter or checksum is one unsigned byte, scale 1, offset 0");
     (d.name == "counter" ? m.counter_byte : m.checksum_byte) = byte;
     return;
   }
   if (m.signals.size() >= static_cast<std::size_t>(MessageLayout::kMaxSignals))
-    fail(source, line, at + "more than " + std::to_string(MessageLayout::kMaxSignals) + " signals in one message");
+    rejectDbcLine(source, line,
+                  at + "more than " + std::to_string(MessageLayout::kMaxSignals) + " signals in one message");
   Signal s;
   s.name = d.name;
   s.byte = byte;
@@ -158,7 +165,7 @@ SignalMap signalMapFromDbc(const std::string& text, const std::string& source, c
   bool in_string = false, skipping = false, in_message = false;
   std::set<std::pair<unsigned long long, std::string>> floats;
   for (std::size_t number = 1; std::getline(lines, line); ++number) {
-    if (line.size() > kMaxDbcLineBytes) fail(source, number, "line longer than 4096 bytes");
+    if (line.size() > kMaxDbcLineBytes) rejectDbcLine(source, number, "line longer than 4096 bytes");
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const bool was_in_string = in_string;
     if (togglesQuote(line)) in_string = !in_string;
@@ -168,27 +175,29 @@ SignalMap signalMapFromDbc(const std::string& text, const std::string& source, c
     words >> keyword;
     std::smatch m;
     if (keyword == "BO_") {
-      if (!std::regex_match(line, m, bo)) fail(source, number, "not a DBC message line (BO_ id name: dlc sender)");
-      if (m[1].length() > 10) fail(source, number, "message id '" + m[1].str() + "' too large");
+      if (!std::regex_match(line, m, bo))
+        rejectDbcLine(source, number, "not a DBC message line (BO_ id name: dlc sender)");
+      if (m[1].length() > 10) rejectDbcLine(source, number, "message id '" + m[1].str() + "' too large");
       const unsigned long long id = std::stoull(m[1]);
       skipping = id == kIndependentSignals;
       in_message = !skipping;
       if (skipping) continue;
       if (id > 0x7FF)
-        fail(source, number,
-             "message '" + m[2].str() + "': id " + m[1].str() + " is not an 11-bit one (extended ids are not read)");
+        rejectDbcLine(
+            source, number,
+            "message '" + m[2].str() + "': id " + m[1].str() + " is not an 11-bit one (extended ids are not read)");
       if (map.messages.size() >= kMaxMessages)
-        fail(source, number, "more than " + std::to_string(kMaxMessages) + " messages");
+        rejectDbcLine(source, number, "more than " + std::to_string(kMaxMessages) + " messages");
       MessageLayout message;
       message.name = m[2];
       message.id = static_cast<std::uint32_t>(id);
       if (m[3].length() > 2 || std::stoi(m[3]) > 8)
-        fail(source, number, "message '" + message.name + "': dlc " + m[3].str() + " (classic CAN: 0..8)");
+        rejectDbcLine(source, number, "message '" + message.name + "': dlc " + m[3].str() + " (classic CAN: 0..8)");
       message.dlc = std::stoi(m[3]);
       map.messages.push_back(message);
     } else if (keyword == "SG_") {
       if (skipping) continue;
-      if (!in_message) fail(source, number, "a signal outside any message");
+      if (!in_message) rejectDbcLine(source, number, "a signal outside any message");
       addSignal(parseSignal(line, source, number), map.messages.back(), source, number);
     } else if (keyword == "SIG_VALTYPE_") {
       if (std::regex_match(line, m, valtype) && m[3] != "0" && m[1].length() <= 10)

@@ -5,11 +5,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "angles.hpp"
+
 namespace plsa::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
 // Prandtl-Ishlinskii formulation: this many play operators, widths spread to 2x.
 constexpr int kPiOperators = 5;
 

@@ -6,12 +6,11 @@
 #include <stdexcept>
 
 #include "plsa/core/check.hpp"
+#include "angles.hpp"
 
 namespace plsa::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
 constexpr double kSubstep_s = 0.0005;
 constexpr int kPreisachLevels = 10;  // 55 relays per chamber
 

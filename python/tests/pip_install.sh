@@ -6,6 +6,8 @@
 #   pip_install.sh <source dir> <python3> [NAME=VALUE...]
 # Each NAME=VALUE is a CMake definition for the package's build (passed to
 # scikit-build-core as cmake.define.NAME), e.g. a compiler launcher.
+# PLSA_PIP_BUILD_DIR, if set: the package's build directory (made afresh,
+# removed at the end; default: scikit-build-core's temporary one).
 set -euo pipefail
 src=$1
 python=$2
@@ -13,7 +15,12 @@ shift 2
 defines=()
 for d in "$@"; do defines+=("--config-settings=cmake.define.$d"); done
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+build_dir=${PLSA_PIP_BUILD_DIR:-}
+if [ -n "$build_dir" ]; then
+  rm -rf "$build_dir"
+  defines+=("--config-settings=build-dir=$build_dir")
+fi
+trap 'rm -rf "$work" ${build_dir:+"$build_dir"}' EXIT
 "$python" -m venv --system-site-packages "$work/venv"
 pip=("$work/venv/bin/pip" --disable-pip-version-check --no-input --quiet)
 # The build backend from PyPI first, so a network failure reads as one.

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "angles.hpp"
+#include "plsa/core/angle_units.hpp"
 
 namespace plsa::sim {
 namespace {
@@ -23,8 +23,8 @@ double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
 void anglesFromRotation(const Eigen::Matrix3d& b_a_g, double& bend_deg, double& steer_deg) {
   // (5): theta_d = acos(<e_x, B_A_G e_Z>); (6): phi = atan2(<e_x, R e_Y>, <e_x, R e_X>).
   const double c = std::clamp(b_a_g(0, 2), -1.0, 1.0);
-  bend_deg = std::acos(c) / kDeg;
-  steer_deg = std::atan2(b_a_g(0, 1), b_a_g(0, 0)) / kDeg;
+  bend_deg = std::acos(c) / kRadPerDeg;
+  steer_deg = std::atan2(b_a_g(0, 1), b_a_g(0, 0)) / kRadPerDeg;
 }
 
 Subspace configurationSubspace(const SimConfig::Geometry& g, double steer_deg) {
@@ -83,10 +83,10 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   two_rate_creep_ = config_.creep.formulation == "two_rate";
   random_walk_bias_ = config_.sensor_bias.formulation == "random_walk";
   smooth_deadzone_ = config_.deadzone.formulation == "smooth";
-  const double tilt = config_.sensor_bias.enabled ? config_.sensor_bias.tilt_deg * kDeg : 0.0;
+  const double tilt = config_.sensor_bias.enabled ? config_.sensor_bias.tilt_deg * kRadPerDeg : 0.0;
   tilted_x_axis_ = {std::cos(tilt - kPi / 2.0), -std::sin(tilt - kPi / 2.0)};
   for (std::size_t i = 0; i < 3; ++i) {
-    const double dir = config_.geometry.bend_direction_deg[i] * kDeg;
+    const double dir = config_.geometry.bend_direction_deg[i] * kRadPerDeg;
     bend_direction_[i] = {std::cos(dir), std::sin(dir)};
   }
 }
@@ -243,14 +243,15 @@ ActuatorSample Actuator::measure(const std::array<double, 3>& cmd) {
   s.pressure_bar = pressure_;
   const double theta = bend_.norm();
   const double phi = theta > 1e-12 ? std::atan2(bend_.y(), bend_.x()) : 0.0;
-  s.true_bend_deg = theta / kDeg;
-  s.true_steer_deg = phi / kDeg;
+  s.true_bend_deg = theta / kRadPerDeg;
+  s.true_steer_deg = phi / kRadPerDeg;
   // Tip frame (Webster & Jones): Rz(phi) Ry(theta) Rz(-phi); the sensor's x axis is the tip normal.
   Eigen::Matrix3d g_r_b = rotZ(phi) * rotY(theta) * rotZ(-phi) * rotY(-kPi / 2.0);
-  if (c.sensor_bias.enabled) g_r_b = rotZ(sensorYawDeg() * kDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kDeg);
+  if (c.sensor_bias.enabled)
+    g_r_b = rotZ(sensorYawDeg() * kRadPerDeg) * g_r_b * rotY(c.sensor_bias.tilt_deg * kRadPerDeg);
   if (c.sensor.noise_deg > 0.0) {
     const Eigen::Vector3d w(normal_(rng_), normal_(rng_), normal_(rng_));
-    const double sigma = c.sensor.noise_deg * kDeg;
+    const double sigma = c.sensor.noise_deg * kRadPerDeg;
     g_r_b = Eigen::AngleAxisd(sigma * w.norm(), w.normalized()).toRotationMatrix() * g_r_b;
   }
   s.sensor_rotation = g_r_b.transpose();
@@ -274,7 +275,7 @@ Eigen::Vector2d Actuator::bendingWithoutNoise() {
   const double theta = bend_.norm();
   const double cp = theta > 1e-12 ? bend_.x() / theta : 1.0, sp = theta > 1e-12 ? bend_.y() / theta : 0.0;
   const bool bias = c.sensor_bias.enabled;
-  const double yaw = bias ? sensorYawDeg() * kDeg : 0.0;
+  const double yaw = bias ? sensorYawDeg() * kRadPerDeg : 0.0;
   Eigen::Vector3d x(tilted_x_axis_[0], 0.0, tilted_x_axis_[1]);                  // Ry(tilt - pi/2) e_x
   x = Eigen::Vector3d(cp * x.x() + sp * x.y(), cp * x.y() - sp * x.x(), x.z());  // Rz(-phi)
   const double ct = std::cos(theta), st = std::sin(theta);
@@ -284,7 +285,8 @@ Eigen::Vector2d Actuator::bendingWithoutNoise() {
   x = Eigen::Vector3d(cy * x.x() - sy * x.y(), sy * x.x() + cy * x.y(), x.z());  // Rz(yaw)
   const double across = std::sqrt(x.x() * x.x() + x.y() * x.y());                // a unit vector: no overflow to guard
   Eigen::Vector2d bending = Eigen::Vector2d::Zero();
-  if (across > 0.0) bending = std::acos(std::clamp(x.z(), -1.0, 1.0)) / kDeg / across * Eigen::Vector2d(x.x(), x.y());
+  if (across > 0.0)
+    bending = std::acos(std::clamp(x.z(), -1.0, 1.0)) / kRadPerDeg / across * Eigen::Vector2d(x.x(), x.y());
   if (bias) {
     const auto& b = c.sensor_bias;
     bending +=
@@ -295,11 +297,11 @@ Eigen::Vector2d Actuator::bendingWithoutNoise() {
 
 void Actuator::addBendingOffset(double& bend_deg, double& steer_deg) const {
   const auto& b = config_.sensor_bias;
-  const double x = bend_deg * std::cos(steer_deg * kDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
-  const double y = bend_deg * std::sin(steer_deg * kDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
+  const double x = bend_deg * std::cos(steer_deg * kRadPerDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
+  const double y = bend_deg * std::sin(steer_deg * kRadPerDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
   if (x == 0.0 && y == 0.0 && bend_deg == 0.0) return;
   bend_deg = std::hypot(x, y);
-  steer_deg = std::atan2(y, x) / kDeg;
+  steer_deg = std::atan2(y, x) / kRadPerDeg;
 }
 
 std::array<double, 3> Actuator::advance(const std::array<double, 3>& command_bar) {
@@ -323,7 +325,7 @@ BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar) {
   BendingReading r;
   r.pressure_bar = pressure_;
   if (config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled && bend_.norm() < 0.5 * kPi) {
-    r.bending_deg = bend_ / kDeg;
+    r.bending_deg = bend_ / kRadPerDeg;
     return r;
   }
   if (config_.sensor.noise_deg == 0.0) {

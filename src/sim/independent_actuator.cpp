@@ -5,8 +5,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/core/check.hpp"
-#include "angles.hpp"
 
 namespace plsa::sim {
 namespace {
@@ -287,13 +287,13 @@ void IndependentActuator::bendToward(const Eigen::Vector2d& target, double sum_p
   auto accel = [&](const Eigen::Vector2d& x, const Eigen::Vector2d& v) {
     Eigen::Vector2d spring = x;
     if (ph.stiffening == "duffing") {
-      const double theta0 = 20.0 * kDeg;
+      const double theta0 = 20.0 * kRadPerDeg;
       spring *= 1.0 + ph.stiffening_strength * x.squaredNorm() / (theta0 * theta0);
     }
     if (ph.stiffening == "limiting_stretch") {
       // Gent-like: the stiffness diverges as the bend nears a limiting angle
       // of 40 deg / sqrt(strength) (capped at 10x just short of it).
-      const double theta0 = 40.0 * kDeg;
+      const double theta0 = 40.0 * kRadPerDeg;
       spring /= 1.0 - std::min(0.9, ph.stiffening_strength * x.squaredNorm() / (theta0 * theta0));
     }
     return Eigen::Vector2d(omega * omega * (target - spring) - 2.0 * ph.damping_ratio * omega * v);
@@ -314,7 +314,7 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
   for (std::size_t i = 0; i < 3; ++i) {
     double s = hysteretic(i, strain[i], dt);
     s += creepOf(i, s, dt);
-    const double dir = ph_.bend_direction_deg[i] * kDeg;
+    const double dir = ph_.bend_direction_deg[i] * kRadPerDeg;
     target += lever * s * Eigen::Vector2d(std::cos(dir), std::sin(dir));
   }
   bendToward(target, sum_p, dt);
@@ -322,7 +322,7 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
 }
 
 Eigen::Vector2d IndependentActuator::measured(const Eigen::Vector2d& bend_rad) {
-  Eigen::Vector2d v = bend_rad / kDeg;
+  Eigen::Vector2d v = bend_rad / kRadPerDeg;
   if (ph_.hysteresis == "backlash") {
     const double b = 10.0 * ph_.hysteresis_strength;
     const Eigen::Vector2d d = v - backlash_out_;
@@ -333,7 +333,7 @@ Eigen::Vector2d IndependentActuator::measured(const Eigen::Vector2d& bend_rad) {
   if (ph_.sensor_bias == "scale_offset") {
     // Turned on its mount, one axis's gain off by 6%: no candidate's mount
     // yaw and no actuator gain makes the ellipse.
-    const double a = 3.0 * kDeg;
+    const double a = 3.0 * kRadPerDeg;
     v = Eigen::Vector2d(1.06, 1.0).asDiagonal() * (Eigen::Rotation2Dd(a).toRotationMatrix() * v) + o * wander_;
   } else if (ph_.sensor_bias == "warm_up") {
     v += o * (1.0 - std::exp(-t_ / 20.0)) * wander_;

@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/core/check.hpp"
 
 namespace plsa {
@@ -28,8 +29,6 @@ inline OutputFrame outputFrameFromString(const std::string& s) {
   if (s == "tip_cartesian") return OutputFrame::kTipCartesian;
   throw std::invalid_argument("output frame '" + s + "': expected as_logged or tip_cartesian");
 }
-
-inline constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 
 /// Bending and steering angles (deg) to the tip direction's components (deg).
 inline void tipComponents(double bend_deg, double steer_deg, double& x, double& y) noexcept {

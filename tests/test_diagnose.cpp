@@ -315,6 +315,22 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
   EXPECT_EQ(d.confidence, "none");
   EXPECT_EQ(d.verdict.find("misses something"), std::string::npos) << "the gap is at the noise floor";
+
+  // Both coarser steps were tried, coarsest first; with a tolerance between
+  // what they moved the gap by, the calibrations take the half step.
+  ASSERT_EQ(d.calibration_step_trials.size(), 2u);
+  const auto [coarse, moved_coarse] = d.calibration_step_trials[0];
+  const auto [half, moved_half] = d.calibration_step_trials[1];
+  EXPECT_EQ(coarse, o.calibration_step_s);
+  EXPECT_EQ(half, o.calibration_step_s / 2.0);
+  ASSERT_LT(moved_half, moved_coarse) << "the finer step stays nearer the configured one";
+  o.coarse_step_tolerance = 0.5 * (moved_half + moved_coarse) / d.noise.percent();
+  o.candidates = {"deadzone"};
+  const Diagnosis h =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, o);
+  EXPECT_EQ(h.calibration_step_s, half);
+  EXPECT_EQ(h.calibration_step_trials, d.calibration_step_trials);
+  EXPECT_EQ(nlohmann::json::parse(toJson(h))["calibration_step_trials"][1]["step_s"], half);
 }
 
 // Hysteresis whose loop is steeper on unloading, with a remanent strain

@@ -152,15 +152,34 @@ CalibrationResult calibrateAtStep(const sim::SimConfig& start, const std::vector
   return r;
 }
 
-// The coarser calibration step when, on the calibrated nominal physics, it
-// moves the training gap by at most the tolerance; otherwise 0.
-double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const SelectionContext& x,
-                       const Gap& noise) {
+// The coarser calibration step: `calibration_step_s`, else half of it (while
+// above the configured step), the first that moves the calibrated training
+// gap by at most the tolerance; 0 when neither does. `tried`: each step tried,
+// coarsest first, and how far it moved the gap (points).
+double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const SelectionContext& x, const Gap& noise,
+                       std::vector<std::pair<double, double>>& tried) {
   const DiagnoseOptions& o = x.o;
-  if (!(o.calibration_step_s > calibrated.internal_step_s)) return 0.0;
-  const sim::SimConfig coarse = atLeastStep(calibrated, o.calibration_step_s);
-  const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
-  return moved <= o.coarse_step_tolerance * noise.percent() ? o.calibration_step_s : 0.0;
+  for (double step : {o.calibration_step_s, o.calibration_step_s / 2.0}) {
+    if (!(step > 1.5 * calibrated.internal_step_s)) break;
+    const sim::SimConfig coarse = atLeastStep(calibrated, step);
+    const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
+    tried.emplace_back(step, moved);
+    if (moved <= o.coarse_step_tolerance * noise.percent()) return step;
+  }
+  return 0.0;
+}
+
+// The progress line naming the calibrations' step and why.
+std::string calibrationStepLine(const Diagnosis& d, const DiagnoseOptions& o) {
+  std::string s = "plsa diagnose: candidates calibrated at a " + significantDigits(1e3 * d.calibration_step_s, 3) +
+                  " ms internal step";
+  if (d.calibration_step_trials.empty()) return s;
+  s += " (on the calibrated nominal physics";
+  for (const auto& [step, moved] : d.calibration_step_trials)
+    s += ", " + significantDigits(1e3 * step, 3) + " ms moves the training gap by " + significantDigits(moved, 2) +
+         " points";
+  return s + "; the tolerance " + significantDigits(o.coarse_step_tolerance * d.noise.percent(), 2) + ", " +
+         significantDigits(o.coarse_step_tolerance, 3) + " noise floors; every gap is measured at the configured step)";
 }
 
 // Calibration modules: the nominal physics, the kept effects, then `extra` if given.
@@ -472,14 +491,9 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   else
     d.reference.note = "not computed (switched off: --no-identified-reference)";
   const CalibratedState base = calibrateBaseline(simulator, x, d);
-  x.step_s = calibrationStep(base.config, base.train, x, d.noise);
+  x.step_s = calibrationStep(base.config, base.train, x, d.noise, d.calibration_step_trials);
   d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;
-  say(o, "plsa diagnose: candidates calibrated at a " + significantDigits(1e3 * d.calibration_step_s, 3) +
-             " ms internal step" +
-             (x.step_s > 0.0
-                  ? " (moves the calibrated training gap by under " + significantDigits(o.coarse_step_tolerance, 3) +
-                        " noise floors; every gap is measured at the configured step)"
-                  : ""));
+  say(o, calibrationStepLine(d, o));
   CalibratedState current = base;
   std::vector<std::string> selected;
   for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)

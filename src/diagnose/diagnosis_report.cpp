@@ -110,6 +110,9 @@ std::string toJson(const Diagnosis& d) {
   j["nominal_params"] = paramsJson(d.nominal_params);
   j["nominal_evaluations"] = d.nominal_evaluations;
   j["calibration_step_s"] = d.calibration_step_s;
+  j["calibration_step_trials"] = nlohmann::json::array();
+  for (const auto& [step, moved] : d.calibration_step_trials)
+    j["calibration_step_trials"].push_back({{"step_s", step}, {"training_gap_moved_points", moved}});
   const auto candidate = [&](const CandidateResult& c) { return candidateJson(c, d.noise); };
   j["ranking"] = arrayOf(d.ranking, candidate);
   j["later_rounds"] = arrayOf(d.later_rounds, candidate);

@@ -47,10 +47,11 @@ struct DiagnoseOptions {
   /// point while running about four times fewer steps.
   double screen_step_s = 0.004;
   /// The candidates', the bar's and the polish's calibrations run at this
-  /// internal step too when accuracy allows: when, on the calibrated
-  /// nominal physics, it moves the training gap by at most
-  /// `coarse_step_tolerance` noise floors (0: always the configured step).
-  /// Every gap reported and compared is measured at the configured step.
+  /// internal step, or at half of it, when accuracy allows: the coarsest of
+  /// the two that, on the calibrated nominal physics, moves the training gap
+  /// by at most `coarse_step_tolerance` noise floors (neither: the
+  /// configured step; 0: always the configured step). Every gap reported and
+  /// compared is measured at the configured step.
   double calibration_step_s = 0.004;
   double coarse_step_tolerance = 0.1;
   int max_selected = 3;
@@ -90,8 +91,11 @@ struct Diagnosis {
   Gap noise;                      ///< noise floor of the held-out data, same measure
   IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
-  int nominal_evaluations = 0;           ///< simulator runs the nominal calibration spent (grid and every start)
-  double calibration_step_s = 0.0;       ///< the internal step the candidates were calibrated at
+  int nominal_evaluations = 0;      ///< simulator runs the nominal calibration spent (grid and every start)
+  double calibration_step_s = 0.0;  ///< the internal step the candidates were calibrated at
+  /// The coarser steps tried for the calibrations, coarsest first, and how
+  /// far each moved the calibrated nominal physics' training gap (points).
+  std::vector<std::pair<double, double>> calibration_step_trials;
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
   std::vector<std::string> selected;

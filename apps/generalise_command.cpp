@@ -313,7 +313,7 @@ void printSummary(const nlohmann::json& s) {
   std::printf(
       "  plsa's 80-step fit is below its simulation's on %d row outputs; the simulation error kept over 80 samples\n"
       "  is under 0.5 on %d of them, and at least 0.5 on %d of the other %d (a k-step prediction restarts from the\n"
-      "  measured output and carries the model's error there: validate's 'error kept', docs/identification.md)\n",
+      "  measured output and carries the model's error there: validate's 'error kept', docs/validation.md)\n",
       a.at("outputs").get<int>(), a.at("with_error_kept_under_half").get<int>(),
       a.at("other_with_error_kept_over_half").get<int>(), a.at("other_outputs").get<int>());
 }

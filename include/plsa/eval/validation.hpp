@@ -114,7 +114,7 @@ struct SimulationStart {
   /// rotation of the predicted onto the measured tip components over them),
   /// at least one sample when > 0; the simulation is scored after them. A
   /// window, not the first sample: one sample registers the model's own error
-  /// at the starting state with the yaw (docs/identification.md, 'Simulation
+  /// at the starting state with the yaw (docs/validation.md, 'Simulation
   /// start: yaw registration').
   /// 0: carry the training yaw. Only tip_cartesian models with an
   /// output_level use it.
@@ -124,7 +124,7 @@ struct SimulationStart {
   /// fitted with that drift taken out, and a new run's sensor drifts on (as a
   /// gyro's bias does). On the simulator the training estimate (0.0245 deg/s)
   /// is 4x nearer a new run's true rate (0.02) than no drift is
-  /// (docs/identification.md, 'Sensor drift carried'). Needs a registration
+  /// (docs/validation.md, 'Simulation start: yaw registration'). Needs a registration
   /// to anchor the turn. false: simulate the drift-free model.
   bool carry_training_drift = true;
   /// Seconds at the run's start left out of every score, for a run that

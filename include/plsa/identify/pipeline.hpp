@@ -203,7 +203,7 @@ struct IdentifyOptions {
   /// cut by 20%, less below it), tried with each threshold above, every
   /// growing set and none. Empty (default): linear levels. Input-side
   /// structures only (see play_refine_evaluations). Not chosen by default:
-  /// docs/identification.md, 'Opt-in: softening and joint refinement'.
+  /// docs/identification.md, 'Joint refinement'.
   std::vector<double> play_softening_candidates;
   /// Then, if > 0, at most this many held-out scores spent refining the
   /// chosen threshold, coupling, softening and the chosen channels' size

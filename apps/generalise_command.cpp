@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include "plsa/core/angle_units.hpp"
 #include "plsa/eval/comparison.hpp"
 #include "plsa/identify/baselines.hpp"
 #include "plsa/core/text_file.hpp"
@@ -125,8 +126,8 @@ io::Log recordFromRest(const sim::IndependentPhysics& physics, const sim::Experi
   for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
     const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
     if (s.bending_deg.norm() > kStraightDeg) {
-      const double turn = std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * kRadPerDeg,
-                                         2.0 * 3.14159265358979323846);
+      const double turn =
+          std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * kRadPerDeg, 2.0 * kPi);
       steer += turn / kRadPerDeg;
     }
     log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),

@@ -8,6 +8,7 @@
 #include <map>
 #include <set>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/sim/independent_actuator.hpp"
 #include "plsa/sim/sim_config.hpp"
 
@@ -100,7 +101,7 @@ TEST(IndependentActuator, ASensorOffsetsDirectionIsSharedByEveryRunWhenSet) {
   const Eigen::Vector2d one = restingOffset(1), other = restingOffset(2);
   EXPECT_NEAR((one - other).norm(), 0.0, 1e-9);
   EXPECT_NEAR(one.norm(), 2.0, 0.05);
-  EXPECT_NEAR(std::atan2(one.y(), one.x()) * 180.0 / 3.14159265358979323846, 120.0, 1.0);
+  EXPECT_NEAR(std::atan2(one.y(), one.x()) * 180.0 / plsa::kPi, 120.0, 1.0);
   p.sensor_offset_direction_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_GT((restingOffset(1) - restingOffset(2)).norm(), 0.1);
   p.sensor_offset_direction_deg = 400.0;

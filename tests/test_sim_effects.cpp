@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "support/sim_probes.hpp"
@@ -348,7 +349,6 @@ TEST(SimEffects, StiffeningsStaticShareHoldsTheBendBack) {
 // theta^2) equals the plain spring's bend (radians), a Duffing spring; the
 // pressure-grown stiffness is off here (per_bar 0), and h = 0 is the plain law.
 TEST(SimEffects, StiffeningsBendHardeningIsADuffingSpring) {
-  const double kDeg = 3.14159265358979323846 / 180.0;
   SimConfig plain = only("stiffening");
   plain.stiffening.formulation = "power";
   plain.stiffening.per_bar = 0.0;
@@ -356,8 +356,9 @@ TEST(SimEffects, StiffeningsBendHardeningIsADuffingSpring) {
   duffing.stiffening.per_rad2 = 8.0;
   Actuator a(plain, 1), b(duffing, 1), off(allOff(), 1);
   for (double p : {0.15, 0.35}) {
-    const double free = settled(a, {p, 0, 0}, 6.0) * kDeg, held = settled(b, {p, 0, 0}, 6.0) * kDeg;
-    EXPECT_NEAR(free, settled(off, {p, 0, 0}, 6.0) * kDeg, 1e-3 * free);
+    const double free = settled(a, {p, 0, 0}, 6.0) * plsa::kRadPerDeg,
+                 held = settled(b, {p, 0, 0}, 6.0) * plsa::kRadPerDeg;
+    EXPECT_NEAR(free, settled(off, {p, 0, 0}, 6.0) * plsa::kRadPerDeg, 1e-3 * free);
     EXPECT_LT(held, 0.97 * free) << p;
     EXPECT_NEAR(held * (1.0 + 8.0 * held * held), free, 0.01 * free) << p;
   }
@@ -413,7 +414,7 @@ Loop loopOf(double weight, double fixed_band_share) {
   // Signed: along the direction chamber 1 bends the segment (a strain below
   // rest bends it the other way).
   auto along = [&](const ActuatorSample& s) {
-    return s.true_bend_deg * std::cos((s.true_steer_deg - up.true_steer_deg) * 3.14159265358979323846 / 180.0);
+    return s.true_bend_deg * std::cos((s.true_steer_deg - up.true_steer_deg) * plsa::kPi / 180.0);
   };
   Loop l{};
   l.up = along(up);

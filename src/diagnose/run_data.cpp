@@ -1,4 +1,5 @@
 #include "plsa/diagnose/run_data.hpp"
+#include "plsa/core/angle_units.hpp"
 #include "plsa/core/number_text.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/io/csv_log.hpp"
@@ -13,7 +14,7 @@ namespace plsa::diagnose {
 Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::VectorXd& steer_deg) {
   Eigen::MatrixXd v(bend_deg.size(), 2);
   for (Eigen::Index i = 0; i < bend_deg.size(); ++i) {
-    const double s = steer_deg(i) * M_PI / 180.0;
+    const double s = steer_deg(i) * kPi / 180.0;
     v(i, 0) = bend_deg(i) * std::cos(s);
     v(i, 1) = bend_deg(i) * std::sin(s);
   }

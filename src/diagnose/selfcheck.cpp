@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/sim/independent_actuator.hpp"
 #include "plsa/io/standard_columns.hpp"
@@ -289,7 +290,7 @@ void saveRuns(const std::vector<RunData>& runs, const std::string& dir, const st
     for (Eigen::Index i = 0; i < r.samples(); ++i) {
       log.data(i, 0) = static_cast<double>(i) * r.sample_time_s;
       log.data(i, 7) = r.outputs.row(i).norm();
-      log.data(i, 8) = std::atan2(r.outputs(i, 1), r.outputs(i, 0)) * 180.0 / M_PI;
+      log.data(i, 8) = std::atan2(r.outputs(i, 1), r.outputs(i, 0)) * 180.0 / kPi;
     }
     log.data.middleCols(1, 3) = r.commands;
     log.data.middleCols(4, 3) = r.pressures;

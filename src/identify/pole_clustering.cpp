@@ -7,6 +7,7 @@
 
 #include <nlopt.hpp>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/core/check.hpp"
 #include "plsa/obf/decay_rate.hpp"
 
@@ -73,7 +74,7 @@ void bounds(const Layout& L, std::vector<double>& lo, std::vector<double>& hi) {
     const auto b = static_cast<std::size_t>(L.reals + 2 * p);
     lo[b] = 0.0;
     lo[b + 1] = 1e-3;
-    hi[b + 1] = M_PI - 1e-3;
+    hi[b + 1] = kPi - 1e-3;
   }
 }
 
@@ -92,7 +93,7 @@ std::vector<double> initialCentres(const Layout& L, const std::vector<C>& poles)
   for (int p = 0; p < L.pairs; ++p) {
     const C c = byImag[static_cast<std::size_t>(p) % byImag.size()];
     x.push_back(std::min(std::abs(c), kMaxModulus));
-    x.push_back(std::clamp(std::abs(std::arg(c)), 0.05, M_PI - 0.05));
+    x.push_back(std::clamp(std::abs(std::arg(c)), 0.05, kPi - 0.05));
   }
   return x;
 }

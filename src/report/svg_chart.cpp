@@ -6,6 +6,8 @@
 #include <functional>
 #include <sstream>
 
+#include "plsa/core/angle_units.hpp"
+
 namespace plsa::report {
 namespace {
 
@@ -204,7 +206,7 @@ std::string poleMap(const std::string& title, const std::vector<PoleGroup>& grou
   o << "<path fill=\"none\" stroke=\"#888\" d=\"";
   bool pen = false;
   for (int i = 0; i <= 720; ++i) {
-    const double a = i * M_PI / 360;
+    const double a = i * kPi / 360;
     const double re = std::cos(a), im = std::sin(a);
     const bool in = re >= cx - half && re <= cx + half && std::abs(im) <= half;
     if (!in) {

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/core/check.hpp"
 #include "plsa/io/standard_columns.hpp"
 
@@ -206,7 +207,7 @@ Experiment joystickExperiment(const ExperimentOptions& o) {
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> n01;
   // Two passes of a critically damped second-order low-pass on white noise.
-  const double wn = 2.0 * M_PI * o.joystick_bandwidth_hz / o.sample_rate_hz;
+  const double wn = 2.0 * kPi * o.joystick_bandwidth_hz / o.sample_rate_hz;
   const double alpha = 1.0 - std::exp(-wn);
   Eigen::MatrixXd traj = Eigen::MatrixXd::Zero(n, 3);
   for (int ch = 0; ch < 2; ++ch) {

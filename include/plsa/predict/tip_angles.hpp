@@ -53,7 +53,7 @@ inline void tipAnglesFromComponents(int horizon, const SteeringReference& refere
   PLSA_DEBUG_ASSERT(out.cols() == 2 && out.rows() >= horizon && turn != nullptr && bend != nullptr);
   if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, reference.cos, reference.sin, turn, bend))
     return tipAnglesRowByRow(horizon, reference, out);
-  constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;  // a product per row, not a division
+  constexpr double kDegPerRad = 180.0 / kPi;  // a product per row, not a division
   double steer = reference.deg;
   for (int h = 0; h < horizon; ++h) {
     steer += turn[h] * kDegPerRad;

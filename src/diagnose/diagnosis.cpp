@@ -160,7 +160,7 @@ double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const
                        std::vector<std::pair<double, double>>& tried) {
   const DiagnoseOptions& o = x.o;
   for (double step : {o.calibration_step_s, o.calibration_step_s / 2.0}) {
-    if (!(step > 1.5 * calibrated.internal_step_s)) break;
+    if (!(step > calibrated.internal_step_s)) break;
     const sim::SimConfig coarse = atLeastStep(calibrated, step);
     const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
     tried.emplace_back(step, moved);

@@ -120,7 +120,7 @@ FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std:
   const DioPwlObfModel paper = identifyModel(train, paperConfiguration(o));
   // The global linear OBF and ARX are fitted to the same outputs as the model: less any drift it took out.
   const BaselineData training = baselineData(model, f.report, train);
-  const DioPwlObfModel linear = globalLinearOf(model, training.U, training.Y);
+  const DioPwlObfModel linear = globalLinearOf(model, training);
   const eval::ArxModel arx = eval::ArxModel::fit(training.U, training.Y, a.arx_na, a.arx_nb);
   const Eigen::MatrixXd uv = logs[hold].columnsOf(a.inputs), yv = logs[hold].columnsOf(a.outputs);
   f.predictions = {

@@ -92,7 +92,7 @@ DemoModels identifyModels(const io::Log& train, const OutputFolder& path) {
   m.paper = identifyModel({train}, paperConfiguration(io_));
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
   const BaselineData training = baselineData(m.model, m.report, {train});
-  m.linear = globalLinearOf(m.model, training.U, training.Y);
+  m.linear = globalLinearOf(m.model, training);
   m.arx = eval::ArxModel::fit(training.U, training.Y, 4, 4);
   saveModel(path("model.json"), m.model);
   // The baselines that are DIO models too, so that `plsa validate` can re-score them.

@@ -158,7 +158,7 @@ nlohmann::json scoreModels(const io::Log& train, const io::Log& val, const io::L
   const DioPwlObfModel model = identify::identifyModel({train}, o, &report);
   const DioPwlObfModel paper = identify::identifyModel({train}, identify::paperConfiguration(o));
   const identify::BaselineData training = identify::baselineData(model, report, {train});
-  const DioPwlObfModel linear = identify::globalLinearOf(model, training.U, training.Y);
+  const DioPwlObfModel linear = identify::globalLinearOf(model, training);
   const eval::ArxModel arx = eval::ArxModel::fit(training.U, training.Y, 4, 4);
   const Eigen::MatrixXd Uv = val.columnsOf(model.inputs), Yv = val.columnsOf(model.outputs);
   beyond_grid = eval::inputsOutsideTraining(model, Uv).any_beyond_grid;

@@ -133,7 +133,7 @@ void runIdentify(IdentifyArgs& a) {
   DioPwlObfModel model = identifyModel(logs, o, &report);
   if (a.structure == "global-linear") {  // plsa's poles and play, one region, refitted on the logs
     const BaselineData b = baselineData(model, report, logs);
-    model = globalLinearOf(model, b.U, b.Y);
+    model = globalLinearOf(model, b);
     o.progress(
         "global linear OBF: the poles and play channels chosen above, one region, no schedule lag, "
         "coefficients refitted on the logs");
@@ -457,6 +457,10 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
         "than one standard error over folds and outputs; '0' alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
+  addChoice(id, "--slow-pole-form", a->options.slow_pole_form,
+            "tied (default): the slow pole carries a fitted fraction of each bank's own response through a "
+            "first-order lag, one fraction for the model with tip_cartesian (what creeps keeps the tip's "
+            "direction), one per output otherwise; free: its coefficients fitted freely per bank and output");
 }
 
 // identify's output drift, cross-validation layout and outlier check.

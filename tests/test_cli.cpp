@@ -407,6 +407,10 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             0);
   EXPECT_NE(err_.find("'slow' is not a time constant in seconds up to a day (e.g. 5)"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --slow-pole-form loose --out " + file("m.json")),
+            2);
+  EXPECT_NE(err_.find("--slow-pole-form: loose not in {tied,free}"), std::string::npos) << err_;
   // A pole of 1e300 s is 1 to rounding: refused as an option, not after the whole identification.
   EXPECT_EQ(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --slow-pole 1e300 --out " +
                 file("m.json")),

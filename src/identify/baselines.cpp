@@ -32,18 +32,22 @@ BaselineData baselineData(const DioPwlObfModel& m, const IdentifyReport& report,
     time.push_back(log.column(io::standard_columns::kTime));
   }
   if (report.drift_taken_out) b.Y = removeOutputDrift(b.Y, time, report.output_drift);
+  b.slow_mode = report.slow_pole_tie;
   return b;
 }
 
-DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const std::vector<Eigen::MatrixXd>& U,
-                              const std::vector<Eigen::MatrixXd>& Y) {
+DioPwlObfModel globalLinearOf(const DioPwlObfModel& m, const BaselineData& training) {
+  const std::vector<Eigen::MatrixXd>& U = training.U;
+  const std::vector<Eigen::MatrixXd>& Y = training.Y;
   DioPwlObfModel g = m;
   // One region: both sides are the same linear model. An input-side model's
   // baseline keeps the side so that it is simulated the same way (from its level).
   const bool input_side = m.schedule_side == ScheduleSide::kInput;
   g.partition = input_side ? PwlPartition::interpolated({}, {}) : PwlPartition::single();
   g.schedule_lag_s = 0.0;
-  fitCoefficients(g, U, Y);
+  CoefficientFitOptions fit;
+  fit.slow_mode = training.slow_mode;
+  fitCoefficients(g, U, Y, fit);
   if (input_side && !m.output_level.empty()) fitOutputLevel(g, U, Y);
   return g;
 }

@@ -5,6 +5,7 @@
 
 #include "plsa/core/parallel_for.hpp"
 #include "plsa/identify/lower_gram.hpp"
+#include "plsa/identify/slow_mode_tie.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -433,6 +434,52 @@ CoefficientFitReport fallBack(DioPwlObfModel& model, const std::vector<bool>& ow
   return report;
 }
 
+// The solve behind solveCoefficients on summed terms, in the model's coordinates.
+CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& total, bool joint,
+                                const CoefficientFitOptions& o) {
+  const int R = model.partition.regionCount();
+  const int ny = model.outputCount();
+  model.output_level.clear();  // it belongs to the old coefficients
+  model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
+  model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
+  const std::vector<bool> own = regionsWithOwnFit(model, total.count, o);
+  std::vector<Eigen::VectorXd> global(static_cast<std::size_t>(ny));
+  for (int out = 0; out < ny; ++out)
+    global[static_cast<std::size_t>(out)] = solveOutput(model, total, out, joint, own, o);
+  return fallBack(model, own, global);
+}
+
+// Most solves a tied slow pole's fit alternates with its fractions.
+constexpr int kRegionalSweeps = 20;
+
+// A tied slow pole: the fractions from the blended problem, then, alternating
+// with them, the solve in the coordinates of the model without the slow
+// pole, mapped back.
+CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Group& total,
+                               const CoefficientFitOptions& o) {
+  TiedSlowMode tie = tiedSlowMode(model, o.slow_mode.pole);
+  std::vector<double> alpha = fitSlowFraction(tie, total, o.slow_mode.shared, o.ridge);
+  CoefficientFitReport report;
+  for (int sweep = 0;; ++sweep) {
+    CoefficientSums::Group reduced = reducedGroup(tie, total, alpha);
+    report = solveGroup(tie.fast, reduced, true, o);
+    if (sweep + 1 >= kRegionalSweeps) break;
+    const std::vector<double> next = refitSlowFraction(tie, total, tie.fast, o.slow_mode.shared);
+    const bool settled = slowFractionSettled(alpha, next);
+    alpha = next;
+    if (settled) break;
+  }
+  model.output_level.clear();
+  model.region_fits = tie.fast.region_fits;
+  model.coefficients = tie.fast.coefficients;
+  for (std::size_t o_i = 0; o_i < alpha.size(); ++o_i) {
+    const Eigen::MatrixXd M = tie.blocks[o_i].at(alpha[o_i]);
+    for (auto& region : model.coefficients) region[o_i] = M * region[o_i];
+  }
+  report.slow_fraction = alpha;
+  return report;
+}
+
 }  // namespace
 
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
@@ -447,14 +494,8 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
       static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
       "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
-  model.output_level.clear();  // it belongs to the old coefficients
-  model.coefficients.assign(static_cast<std::size_t>(R), std::vector<Eigen::VectorXd>(static_cast<std::size_t>(ny)));
-  model.region_fits.assign(static_cast<std::size_t>(R), RegionFit{});
-  const std::vector<bool> own = regionsWithOwnFit(model, total.count, o);
-  std::vector<Eigen::VectorXd> global(static_cast<std::size_t>(ny));
-  for (int out = 0; out < ny; ++out)
-    global[static_cast<std::size_t>(out)] = solveOutput(model, total, out, joint, own, o);
-  return fallBack(model, own, global);
+  if (o.slow_mode.pole != 0.0) return solveTied(model, total, o);
+  return solveGroup(model, total, joint, o);
 }
 
 void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,

@@ -157,6 +157,8 @@ struct IdentificationRun {
 
   const IdentifyOptions& o;
   IdentifyReport& rep;
+  /// The coefficient fit's options: the caller's, and a tied slow pole while one is scored or kept.
+  CoefficientFitOptions fit_options;
   Clock::time_point last_line;
 
   // The data: per log inputs, outputs as logged and in the model's frame,

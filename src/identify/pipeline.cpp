@@ -105,7 +105,7 @@ DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOpt
 }
 
 IdentificationRun::IdentificationRun(const IdentifyOptions& options, IdentifyReport& report)
-    : o(options), rep(report), last_line(Clock::now()) {}
+    : o(options), rep(report), fit_options(options.coefficients), last_line(Clock::now()) {}
 
 // The paper's Table I, then plsa's structure search: each stage a function.
 DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {

@@ -138,11 +138,11 @@ IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
     for (const Eigen::VectorXi& rows : fold_rows)
       ff.W[f].push_back((rows.array() != static_cast<int>(f)).cast<double>().matrix());
     if (drift_per_fold) {
-      ff.TY[f] = removeOutputDrift(ff.TY[f], times,
-                                   estimateOutputDrift(model, U, ff.TY[f], times, o.coefficients, 3, ff.W[f]));
-      fitCoefficients(ff.fit[f], U, ff.TY[f], o.coefficients, ff.W[f]);
+      ff.TY[f] =
+          removeOutputDrift(ff.TY[f], times, estimateOutputDrift(model, U, ff.TY[f], times, fit_options, 3, ff.W[f]));
+      fitCoefficients(ff.fit[f], U, ff.TY[f], fit_options, ff.W[f]);
     } else {
-      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), o.coefficients);
+      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), fit_options);
     }
   }
   for (std::size_t r = 0; r < U.size(); ++r) {
@@ -210,8 +210,8 @@ double IdentificationRun::crossValidatedContiguous(Score what) {
         TY.push_back(FY[b]);
         TT.push_back(BT[b]);
       }
-    if (drift_per_fold) TY = removeOutputDrift(TY, TT, estimateOutputDrift(model, TU, TY, TT, o.coefficients));
-    fitCoefficients(model, TU, TY, o.coefficients);
+    if (drift_per_fold) TY = removeOutputDrift(TY, TT, estimateOutputDrift(model, TU, TY, TT, fit_options));
+    fitCoefficients(model, TU, TY, fit_options);
     if (what == Score::kSimulation) fitOutputLevel(model, TU, TY);
     for (std::size_t b = 0; b < BU.size(); ++b) {
       if (fold_of[b] != f || BU[b].rows() <= o.play_selection_horizon) continue;
@@ -366,7 +366,7 @@ void IdentificationRun::searchOutputDrift() {
     rep.drift_scores = {without, with};
     rep.drift_gain = eval::pairedGain(fold_scores, without_scores);
     const auto [gain, se] = rep.drift_gain;
-    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, o.coefficients);
+    const OutputDrift drift = estimateOutputDrift(model, U, Y, times, fit_options);
     std::string s = "[5/5] sensor drift over the training run: ";
     for (std::size_t oi = 0; oi < drift.rate.size(); ++oi)
       if (frame != OutputFrame::kTipCartesian || oi == 1)
@@ -396,22 +396,28 @@ void IdentificationRun::searchOutputDrift() {
   }
 }
 
-// A slow pole in every bank, on an input-side model, scored on simulation.
-// The best time constant is kept only if its held-out gain over none exceeds
-// one standard error of that gain across folds and outputs (the one-standard-
-// error rule: the simpler model unless the richer one is clearly better).
+// A slow pole in every bank, on an input-side model, scored on simulation;
+// tied (the default), its coefficients carry a fitted fraction of each
+// bank's own response (slow_mode_tie.hpp). The best time constant is kept
+// only if its held-out gain over none exceeds one standard error of that
+// gain across folds and outputs (the one-standard-error rule: the simpler
+// model unless the richer one is clearly better).
 void IdentificationRun::searchSlowPole() {
   if (model.schedule_side != ScheduleSide::kInput || o.slow_pole_candidates.empty()) return;
   const std::vector<std::vector<PoleSet>> base_poles = model.poles;
+  const bool tied = o.slow_pole_form == SlowPoleForm::kTied;
   auto withSlowPole = [&](double tau) {
     model.poles = base_poles;
+    fit_options.slow_mode = {};
     if (tau <= 0) return;
+    const double pole = std::exp(-dt / tau);
     for (auto& row : model.poles)
       for (PoleSet& ps : row) {
         std::vector<std::complex<double>> p = ps.poles();
-        p.emplace_back(std::exp(-dt / tau), 0.0);
+        p.emplace_back(pole, 0.0);
         ps = PoleSet(p);
       }
+    if (tied) fit_options.slow_mode = {pole, model.output_frame == OutputFrame::kTipCartesian};
   };
   beginScoring("slow poles",
                1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(), o.slow_pole_candidates.end(),
@@ -437,7 +443,9 @@ void IdentificationRun::searchSlowPole() {
   rep.slow_pole_gain = {gain, se};
   const bool keep = best_tau > 0 && gain > se;
   withSlowPole(keep ? best_tau : 0.0);
-  std::string s = "[5/5] slow pole in every bank (scored on held-out simulation): ";
+  rep.slow_pole_tie = fit_options.slow_mode;
+  std::string s = std::string("[5/5] slow pole in every bank (") + optionName(o.slow_pole_form) +
+                  ", scored on held-out simulation): ";
   s += keep ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
             : std::string("none kept");
   if (best_tau > 0) {
@@ -453,7 +461,7 @@ void IdentificationRun::searchSlowPole() {
 
 // The chosen structure fitted on all the training data.
 DioPwlObfModel IdentificationRun::fitFinal() {
-  rep.coefficients = fitCoefficients(model, U, Yfit, o.coefficients);
+  rep.coefficients = fitCoefficients(model, U, Yfit, fit_options);
   // An input-side model's level is a function of its inputs: simulate from it.
   if (model.schedule_side == ScheduleSide::kInput) fitOutputLevel(model, U, Yfit);
   if (rep.drift_taken_out) {
@@ -462,6 +470,13 @@ DioPwlObfModel IdentificationRun::fitFinal() {
   }
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
+  rep.slow_pole_fraction = rep.coefficients.slow_fraction;
+  if (!rep.slow_pole_fraction.empty()) {
+    std::string f = "[5/5] the tied slow pole carries a fraction of each bank's response:";
+    for (std::size_t k = 0; k < rep.slow_pole_fraction.size(); ++k)
+      f += " " + o.outputs[k] + " " + formatNumber(rep.slow_pole_fraction[k]);
+    say(f);
+  }
   for (const auto& n : rep.coefficients.notes) say("      " + n);
   model.validate();
   return model;

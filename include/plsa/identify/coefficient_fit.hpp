@@ -14,16 +14,28 @@
 
 namespace plsa::identify {
 
+/// Input side: the slow pole every bank carries besides its own, its
+/// coefficients tied to the rest (slow_mode_tie.hpp); pole 0: none tied, every
+/// coefficient free.
+struct SlowModeTie {
+  double pole = 0.0;
+  bool shared = true;  ///< one fraction for every output, else one per output
+};
+
 struct CoefficientFitOptions {
   double ridge = 1e-6;           ///< on the global solution, relative to the regressors' scale
   double pull_to_global = 1e-2;  ///< ridge of each region toward the global solution (relative)
   int min_samples_per_parameter = 4;
+  SlowModeTie slow_mode;
 };
 
 struct CoefficientFitReport {
   int regions_fitted = 0;
   int regions_fallback = 0;
   std::vector<std::string> notes;  ///< one line per fallback region, in words
+  /// With a tied slow pole: the fraction of the response that creeps, per
+  /// output (all equal when shared); empty otherwise.
+  std::vector<double> slow_fraction;
 };
 
 /// Per-sample weights of the least-squares terms, one vector per record

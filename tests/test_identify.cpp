@@ -188,6 +188,7 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   o.play_candidates = {{0.0}};
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
+  o.slow_pole_candidates = {};  // a slow pole's decay would outlast the hold below
   o.scheduling = SchedulingChoice::kInputSide;
   const DioPwlObfModel input_side = identifyModel({train}, o);
   ASSERT_EQ(input_side.schedule_side, ScheduleSide::kInput);

@@ -94,7 +94,8 @@ std::vector<BenchModel> identifiedModels(std::uint64_t seed, void (*say)(const s
   one.output_frame = OutputFrame::kAsLogged;
   add("1 chamber", identifyModel({stairs}, one));
   // The paper's structure: switched, no play, no lag, angles as logged.
-  add("paper's structure", identifyModel({grid}, paperConfiguration(IdentifyOptions{})));
+  const IdentifyOptions defaults;
+  add("paper's structure", identifyModel({grid}, paperConfiguration(defaults)));
   return out;
 }
 

@@ -449,32 +449,68 @@ CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& t
   return fallBack(model, own, global);
 }
 
-// Most solves a tied slow pole's fit alternates with its fractions.
-constexpr int kRegionalSweeps = 20;
+// The tied fit at fractions alpha: the coefficients solved in the
+// coordinates of the model without the slow poles (into tie.fast), and the
+// data misfit of the coefficients they map to, sum c'Jc - 2 c'Jh over outputs.
+double solveAt(TiedSlowMode& tie, const CoefficientSums::Group& total, const SlowFractions& alpha,
+               const CoefficientFitOptions& o, CoefficientFitReport& report) {
+  CoefficientSums::Group reduced = reducedGroup(tie, total, alpha);
+  report = solveGroup(tie.fast, reduced, true, o);
+  const int R = tie.fast.partition.regionCount();
+  double misfit = 0.0;
+  for (std::size_t out = 0; out < alpha.size(); ++out) {
+    const Eigen::MatrixXd M = tie.blocks[out].at(alpha[out]);
+    const Eigen::VectorXd cf = tie.fast.stackedCoefficients(static_cast<int>(out));
+    Eigen::VectorXd c(R * M.rows());
+    for (int l = 0; l < R; ++l) c.segment(l * M.rows(), M.rows()) = M * cf.segment(l * M.cols(), M.cols());
+    misfit += c.dot(total.J[out] * c) - 2.0 * c.dot(total.Jh[out]);
+  }
+  return misfit;
+}
 
-// A tied slow pole: the fractions from the blended problem, then, alternating
-// with them, the solve in the coordinates of the model without the slow
-// pole, mapped back.
+// Most Gauss-Newton steps a tied fit takes on its fractions.
+constexpr int kFractionSteps = 20;
+
+// Tied slow poles by variable projection: for given fractions the
+// coefficients are one least-squares solve (solveAt); the fractions start at
+// the blended problem's (fitSlowFraction) and take Gauss-Newton steps on the
+// full problem (gaussNewtonFractions), each halved up to four times while it
+// raises the misfit. Mapped back onto the model's banks.
 CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Group& total,
                                const CoefficientFitOptions& o) {
-  TiedSlowMode tie = tiedSlowMode(model, o.slow_mode.pole);
-  std::vector<double> alpha = fitSlowFraction(tie, total, o.slow_mode.shared, o.ridge);
+  TiedSlowMode tie = tiedSlowMode(model, o.slow_mode.poles);
+  SlowFractions alpha = fitSlowFraction(tie, total, o.slow_mode.shared, o.ridge);
   CoefficientFitReport report;
-  for (int sweep = 0;; ++sweep) {
-    CoefficientSums::Group reduced = reducedGroup(tie, total, alpha);
-    report = solveGroup(tie.fast, reduced, true, o);
-    if (sweep + 1 >= kRegionalSweeps) break;
-    const std::vector<double> next = refitSlowFraction(tie, total, tie.fast, o.slow_mode.shared);
-    const bool settled = slowFractionSettled(alpha, next);
-    alpha = next;
-    if (settled) break;
+  double misfit = solveAt(tie, total, alpha, o, report);
+  for (int step = 0; step < kFractionSteps; ++step) {
+    const SlowFractions target = gaussNewtonFractions(tie, total, tie.fast, alpha, o.slow_mode.shared);
+    const DioPwlObfModel at_alpha = tie.fast;
+    const CoefficientFitReport report_at_alpha = report;
+    bool taken = false;
+    for (double t = 1.0; t >= 1.0 / 16 && !taken; t /= 2) {
+      SlowFractions next = alpha;
+      for (std::size_t out = 0; out < next.size(); ++out) next[out] += t * (target[out] - alpha[out]);
+      const double f = solveAt(tie, total, next, o, report);
+      if (f <= misfit + 1e-12 * std::abs(misfit)) {
+        taken = true;
+        misfit = std::min(misfit, f);
+        const bool settled = slowFractionSettled(alpha, next);
+        alpha = next;
+        if (settled) step = kFractionSteps;
+      }
+    }
+    if (!taken) {  // no step lowers the misfit: the fractions stand
+      tie.fast = at_alpha;
+      report = report_at_alpha;
+      break;
+    }
   }
   model.output_level.clear();
   model.region_fits = tie.fast.region_fits;
   model.coefficients = tie.fast.coefficients;
-  for (std::size_t o_i = 0; o_i < alpha.size(); ++o_i) {
-    const Eigen::MatrixXd M = tie.blocks[o_i].at(alpha[o_i]);
-    for (auto& region : model.coefficients) region[o_i] = M * region[o_i];
+  for (std::size_t out = 0; out < alpha.size(); ++out) {
+    const Eigen::MatrixXd M = tie.blocks[out].at(alpha[out]);
+    for (auto& region : model.coefficients) region[out] = M * region[out];
   }
   report.slow_fraction = alpha;
   return report;
@@ -494,7 +530,7 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
       static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
       "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
-  if (o.slow_mode.pole != 0.0) return solveTied(model, total, o);
+  if (!o.slow_mode.poles.empty()) return solveTied(model, total, o);
   return solveGroup(model, total, joint, o);
 }
 

@@ -25,6 +25,10 @@ inline std::string formatNumber(double v) { return significantDigits(v, 6); }
 
 /// A fit score in a progress line (percent): two decimals, -477.21.
 inline std::string scoreText(double v) { return fixedDecimals(v, 2); }
+/// Each output's paired gain of held-out terms a over b, "name gain +- se"
+/// joined by commas (the terms alternate by output within each fold).
+std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
+                           const std::vector<std::string>& outputs);
 
 struct IdentificationRun {
   using Clock = std::chrono::steady_clock;
@@ -129,7 +133,19 @@ struct IdentificationRun {
   void searchThreshold();
   void refineJointly();  // joint_refinement.cpp
   void searchOutputDrift();
-  void searchSlowPole();
+  void searchSlowPole();  // slow_pole_search.cpp
+  struct SlowPoleTrial {
+    double tau = 0.0;           ///< s; 0: none scored
+    double score = -INFINITY;   ///< held-out simulation fit
+    std::vector<double> terms;  ///< its held-out terms (fold_scores)
+  };
+  SlowPoleTrial bestSlowPoleBeside(const std::vector<double>& kept, const std::vector<double>& taus,
+                                   std::vector<std::pair<double, double>>& scores);
+  bool judgeSlowPole(const SlowPoleTrial& best, const std::vector<double>& base, std::pair<double, double>& gain,
+                     std::string& line) const;
+  void searchSecondSlowPole(const std::vector<double>& taus, const SlowPoleTrial& first);
+  void setSlowPoles(const std::vector<double>& taus);
+  std::string slowFractionLine() const;
   void restoreAllData();  // search_sample.cpp
   DioPwlObfModel fitFinal();
 
@@ -199,6 +215,7 @@ struct IdentificationRun {
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
   std::vector<double> fold_scores;  ///< the last held-out score's terms, per fold (or block) and output
+  std::vector<std::vector<PoleSet>> poles_before_slow;  ///< the banks' poles before the slow pole search
   Scoring scoring;
 
   // The best choice so far.

@@ -20,55 +20,69 @@ namespace {
 constexpr int kImpulseLength = 2000;
 constexpr int kMaxSweeps = 100;
 
-// The bank's poles less one copy of `pole`.
-PoleSet withoutPole(const PoleSet& bank, double pole, const std::string& where) {
+// The bank's poles less one copy of each of `slow`.
+PoleSet withoutPoles(const PoleSet& bank, const std::vector<double>& slow, const std::string& where) {
   std::vector<std::complex<double>> p = bank.poles();
-  const auto at = std::find_if(p.begin(), p.end(), [&](std::complex<double> z) {
-    return std::abs(z - std::complex<double>(pole, 0.0)) <= 1e-12;
-  });
-  PLSA_CHECK(at != p.end(),
-             "tiedSlowMode: the bank " + where + " does not carry the slow pole " + significantDigits(pole, 6));
-  p.erase(at);
-  PLSA_CHECK(!p.empty(), "tiedSlowMode: the bank " + where + " has no pole besides the slow one");
+  for (double pole : slow) {
+    const auto at = std::find_if(p.begin(), p.end(), [&](std::complex<double> z) {
+      return std::abs(z - std::complex<double>(pole, 0.0)) <= 1e-12;
+    });
+    PLSA_CHECK(at != p.end(),
+               "tiedSlowMode: the bank " + where + " does not carry the slow pole " + significantDigits(pole, 6));
+    p.erase(at);
+  }
+  PLSA_CHECK(!p.empty(), "tiedSlowMode: the bank " + where + " has no pole besides the slow ones");
   return PoleSet(p);
 }
 
-// One bank's A and K: its basis functions b_i on `fast`, and (1 - p)/(q - p) b_i,
-// written on the basis of `slow` (the same poles and p) by least squares on
-// their impulse responses, which they fit exactly.
-TiedBlock tiedBank(const PoleSet& fast, const PoleSet& slow, double p, const std::string& where) {
+// The response of the first-order lag (1 - p)/(q - p) to each basis function
+// whose impulse response H holds (row k: time k + 1): the lag's output at
+// time t takes the basis function's at t - 1, which is row t - 2.
+Eigen::MatrixXd laggedResponse(const Eigen::MatrixXd& H, double p) {
+  Eigen::MatrixXd L(H.rows(), H.cols());
+  Eigen::RowVectorXd z = Eigen::RowVectorXd::Zero(H.cols()), before = z;
+  for (Eigen::Index k = 0; k < H.rows(); ++k) {
+    z = p * z + (1.0 - p) * before;
+    L.row(k) = z;
+    before = H.row(k);
+  }
+  return L;
+}
+
+// One bank's A and K_m: its basis functions b_i on `fast`, and
+// (1 - p_m)/(q - p_m) b_i, written on the basis of `slow` (the same poles and
+// every p_m) by least squares on their impulse responses, which they fit
+// exactly.
+TiedBlock tiedBank(const PoleSet& fast, const PoleSet& slow, const std::vector<double>& poles,
+                   const std::string& where) {
   const Eigen::MatrixXd Hf = ObfBank<>(fast).impulseResponse(kImpulseLength);
   const Eigen::MatrixXd Hs = ObfBank<>(slow).impulseResponse(kImpulseLength);
-  // Row k is the response at time k + 1; the lag's output at time t takes the
-  // basis function's at t - 1, which is row t - 2.
-  Eigen::MatrixXd Lf(Hf.rows(), Hf.cols());
-  Eigen::RowVectorXd z = Eigen::RowVectorXd::Zero(Hf.cols()), before = z;
-  for (Eigen::Index k = 0; k < Hf.rows(); ++k) {
-    z = p * z + (1.0 - p) * before;
-    Lf.row(k) = z;
-    before = Hf.row(k);
-  }
   const auto qr = Hs.colPivHouseholderQr();
-  TiedBlock b{qr.solve(Hf), qr.solve(Lf)};
-  const double miss = std::max((Hs * b.A - Hf).norm() / Hf.norm(), (Hs * b.K - Lf).norm() / Lf.norm());
+  TiedBlock b{qr.solve(Hf), {}};
+  double miss = (Hs * b.A - Hf).norm() / Hf.norm();
+  for (double p : poles) {
+    const Eigen::MatrixXd L = laggedResponse(Hf, p);
+    b.K.push_back(qr.solve(L));
+    miss = std::max(miss, (Hs * b.K.back() - L).norm() / L.norm());
+  }
   PLSA_CHECK(miss <= 1e-8, "tiedSlowMode: the bank " + where + " does not represent its lagged response (relative " +
                                "residual " + significantDigits(miss, 3) + ")");
   return b;
 }
 
 // Output o's block: its banks in regressor order (input, then play channel).
-TiedBlock outputBlock(const DioPwlObfModel& model, const DioPwlObfModel& fast, int o, double pole) {
+TiedBlock outputBlock(const DioPwlObfModel& model, const DioPwlObfModel& fast, int o,
+                      const std::vector<double>& poles) {
   const auto oo = static_cast<std::size_t>(o);
-  TiedBlock b{Eigen::MatrixXd::Zero(model.regressorSize(o), fast.regressorSize(o)),
-              Eigen::MatrixXd::Zero(model.regressorSize(o), fast.regressorSize(o))};
+  const auto zero = [&] { return Eigen::MatrixXd::Zero(model.regressorSize(o), fast.regressorSize(o)); };
+  TiedBlock b{zero(), std::vector<Eigen::MatrixXd>(poles.size(), zero())};
   Eigen::Index rs = 0, rf = 0;
   for (std::size_t j = 0; j < model.poles[oo].size(); ++j) {
     const TiedBlock bank =
-        tiedBank(fast.poles[oo][j], model.poles[oo][j], pole, model.inputs[j] + " -> " + model.outputs[oo]);
-    const int channels = j < model.shaping.play.size() ? static_cast<int>(model.shaping.play[j].size()) : 1;
-    for (int ch = 0; ch < channels; ++ch) {
+        tiedBank(fast.poles[oo][j], model.poles[oo][j], poles, model.inputs[j] + " -> " + model.outputs[oo]);
+    for (int copy = 0; copy < model.bankCopies(j); ++copy) {
       b.A.block(rs, rf, bank.A.rows(), bank.A.cols()) = bank.A;
-      b.K.block(rs, rf, bank.K.rows(), bank.K.cols()) = bank.K;
+      for (std::size_t m = 0; m < poles.size(); ++m) b.K[m].block(rs, rf, bank.A.rows(), bank.A.cols()) = bank.K[m];
       rs += bank.A.rows();
       rf += bank.A.cols();
     }
@@ -78,8 +92,13 @@ TiedBlock outputBlock(const DioPwlObfModel& model, const DioPwlObfModel& fast, i
 
 }  // namespace
 
-TiedSlowMode tiedSlowMode(const DioPwlObfModel& model, double pole) {
-  PLSA_CHECK(std::isfinite(pole) && pole > 0 && pole < 1, "tiedSlowMode: the slow pole must lie in (0, 1)");
+TiedSlowMode tiedSlowMode(const DioPwlObfModel& model, const std::vector<double>& poles) {
+  PLSA_CHECK(!poles.empty(), "tiedSlowMode: no slow pole to tie");
+  for (std::size_t m = 0; m < poles.size(); ++m) {
+    PLSA_CHECK(std::isfinite(poles[m]) && poles[m] > 0 && poles[m] < 1,
+               "tiedSlowMode: the slow poles must lie in (0, 1)");
+    for (std::size_t n = 0; n < m; ++n) PLSA_CHECK(poles[n] != poles[m], "tiedSlowMode: the slow poles must differ");
+  }
   PLSA_CHECK(model.schedule_side == ScheduleSide::kInput, "tiedSlowMode: a tied slow pole needs input-side scheduling");
   TiedSlowMode tie{model, {}};
   tie.fast.coefficients.clear();
@@ -87,16 +106,16 @@ TiedSlowMode tiedSlowMode(const DioPwlObfModel& model, double pole) {
   tie.fast.output_level.clear();
   for (std::size_t o = 0; o < model.poles.size(); ++o)
     for (std::size_t j = 0; j < model.poles[o].size(); ++j)
-      tie.fast.poles[o][j] = withoutPole(model.poles[o][j], pole, model.inputs[j] + " -> " + model.outputs[o]);
-  for (int o = 0; o < model.outputCount(); ++o) tie.blocks.push_back(outputBlock(model, tie.fast, o, pole));
+      tie.fast.poles[o][j] = withoutPoles(model.poles[o][j], poles, model.inputs[j] + " -> " + model.outputs[o]);
+  for (int o = 0; o < model.outputCount(); ++o) tie.blocks.push_back(outputBlock(model, tie.fast, o, poles));
   return tie;
 }
 
 CoefficientSums::Group reducedGroup(const TiedSlowMode& tie, const CoefficientSums::Group& total,
-                                    const std::vector<double>& alpha) {
+                                    const SlowFractions& alpha) {
   const int R = tie.fast.partition.regionCount();
   const std::size_t ny = tie.blocks.size();
-  PLSA_CHECK(alpha.size() == ny && total.J.size() == ny, "reducedGroup: need one fraction and one sum per output");
+  PLSA_CHECK(alpha.size() == ny && total.J.size() == ny, "reducedGroup: need one fraction set and one sum per output");
   CoefficientSums::Group g;
   g.count = total.count;
   g.G.resize(ny);
@@ -127,40 +146,72 @@ CoefficientSums::Group reducedGroup(const TiedSlowMode& tie, const CoefficientSu
 
 namespace {
 
-// One sweep's step for output o at fraction alpha: the blended coefficients'
-// least-squares terms for the fraction, numerator and denominator.
-std::pair<double, double> fractionTerms(const TiedBlock& b, const Eigen::MatrixXd& Gs, const Eigen::VectorXd& hs,
-                                        double alpha, double ridge) {
-  const Eigen::MatrixXd M = b.at(alpha);
-  Eigen::MatrixXd G = M.transpose() * Gs * M;
-  if (!(G.trace() > 0)) return {0.0, 0.0};
-  G.diagonal().array() += ridge * G.trace() / static_cast<double>(G.rows());
-  const Eigen::VectorXd c = G.ldlt().solve(M.transpose() * hs);
-  const Eigen::VectorXd ce = b.A * c, ck = b.K * c;
-  const double den = ck.dot(Gs * ck);
-  if (!(den > 1e-12 * ce.dot(Gs * ce))) return {0.0, 0.0};  // no slow content to fit a fraction to
-  return {ck.dot(hs - Gs * ce), den};
+// The least-squares terms of one output's fractions, N alpha = b, given its
+// coefficients' fast part ce and each slow pole's lagged part ck[m] under the
+// normal matrix G and right-hand side h; zero where there is no slow content.
+struct FractionTerms {
+  Eigen::MatrixXd N;
+  Eigen::VectorXd b;
+};
+
+FractionTerms fractionTerms(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, const Eigen::VectorXd& ce,
+                            const std::vector<Eigen::VectorXd>& ck) {
+  const auto m = static_cast<Eigen::Index>(ck.size());
+  FractionTerms t{Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m)};
+  std::vector<Eigen::VectorXd> Gck;
+  for (const Eigen::VectorXd& k : ck) Gck.push_back(G * k);
+  const Eigen::VectorXd r = h - G * ce;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    t.b(i) = ck[static_cast<std::size_t>(i)].dot(r);
+    for (Eigen::Index j = 0; j < m; ++j)
+      t.N(i, j) = ck[static_cast<std::size_t>(i)].dot(Gck[static_cast<std::size_t>(j)]);
+  }
+  if (!(t.N.trace() > 1e-12 * ce.dot(G * ce))) return {Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m)};
+  return t;
 }
 
-// Each output's fraction from its (numerator, denominator), or one from their
-// sums when shared; 0 where there is no slow content.
-std::vector<double> fractionsOf(const std::vector<std::pair<double, double>>& terms, bool shared) {
-  std::vector<double> alpha;
-  double num = 0.0, den = 0.0;
-  for (const auto& [n, d] : terms) {
-    alpha.push_back(d > 0 ? n / d : 0.0);
-    num += n;
-    den += d;
+// The fractions of N alpha = b; 0 without slow content. A relative ridge of
+// 1e-10 keeps two slow poles whose lagged parts are nearly alike solvable.
+Eigen::VectorXd solveFractions(const FractionTerms& t) {
+  if (!(t.N.trace() > 0)) return Eigen::VectorXd::Zero(t.b.size());
+  Eigen::MatrixXd N = t.N;
+  N.diagonal().array() += 1e-10 * t.N.trace() / static_cast<double>(N.rows());
+  return N.ldlt().solve(t.b);
+}
+
+// Each output's fractions from its terms, or one set from their sums when shared.
+SlowFractions fractionsOf(const std::vector<FractionTerms>& terms, bool shared) {
+  SlowFractions alpha;
+  FractionTerms sum{Eigen::MatrixXd::Zero(terms.front().N.rows(), terms.front().N.cols()),
+                    Eigen::VectorXd::Zero(terms.front().b.size())};
+  for (const FractionTerms& t : terms) {
+    alpha.push_back(solveFractions(t));
+    sum.N += t.N;
+    sum.b += t.b;
   }
-  if (shared) std::fill(alpha.begin(), alpha.end(), den > 0 ? num / den : 0.0);
-  for (double a : alpha) PLSA_CHECK(std::isfinite(a), "fitSlowFraction: the slow fraction is not finite");
+  if (shared) std::fill(alpha.begin(), alpha.end(), solveFractions(sum));
+  for (const Eigen::VectorXd& a : alpha) PLSA_CHECK(a.allFinite(), "fitSlowFraction: the slow fraction is not finite");
   return alpha;
+}
+
+// The blended problem's step for one output at fractions alpha: the
+// coefficients every node shares, then the fractions' terms given them.
+FractionTerms blendedTerms(const TiedBlock& b, const Eigen::MatrixXd& Gs, const Eigen::VectorXd& hs,
+                           const Eigen::VectorXd& alpha, double ridge) {
+  const Eigen::MatrixXd M = b.at(alpha);
+  Eigen::MatrixXd G = M.transpose() * Gs * M;
+  const auto m = static_cast<Eigen::Index>(b.K.size());
+  if (!(G.trace() > 0)) return {Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m)};
+  G.diagonal().array() += ridge * G.trace() / static_cast<double>(G.rows());
+  const Eigen::VectorXd c = G.ldlt().solve(M.transpose() * hs);
+  std::vector<Eigen::VectorXd> ck;
+  for (const Eigen::MatrixXd& K : b.K) ck.push_back(K * c);
+  return fractionTerms(Gs, hs, b.A * c, ck);
 }
 
 }  // namespace
 
-std::vector<double> fitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total, bool shared,
-                                    double ridge) {
+SlowFractions fitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total, bool shared, double ridge) {
   const int R = tie.fast.partition.regionCount();
   const std::size_t ny = tie.blocks.size();
   // The blended problem: every node's coefficients equal.
@@ -175,11 +226,11 @@ std::vector<double> fitSlowFraction(const TiedSlowMode& tie, const CoefficientSu
       for (int c = 0; c < R; ++c) Gs[o] += total.J[o].block(a * ws, c * ws, ws, ws);
     }
   }
-  std::vector<double> alpha(ny, 0.0);
+  SlowFractions alpha(ny, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(tie.blocks.front().K.size())));
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
-    std::vector<std::pair<double, double>> terms;
-    for (std::size_t o = 0; o < ny; ++o) terms.push_back(fractionTerms(tie.blocks[o], Gs[o], hs[o], alpha[o], ridge));
-    const std::vector<double> next = fractionsOf(terms, shared);
+    std::vector<FractionTerms> terms;
+    for (std::size_t o = 0; o < ny; ++o) terms.push_back(blendedTerms(tie.blocks[o], Gs[o], hs[o], alpha[o], ridge));
+    const SlowFractions next = fractionsOf(terms, shared);
     const bool settled = slowFractionSettled(alpha, next);
     alpha = next;
     if (settled) break;
@@ -187,33 +238,58 @@ std::vector<double> fitSlowFraction(const TiedSlowMode& tie, const CoefficientSu
   return alpha;
 }
 
-std::vector<double> refitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total,
-                                      const DioPwlObfModel& fast, bool shared) {
-  const int R = tie.fast.partition.regionCount();
-  std::vector<std::pair<double, double>> terms;
-  for (std::size_t o = 0; o < tie.blocks.size(); ++o) {
-    const TiedBlock& b = tie.blocks[o];
-    const Eigen::Index ws = b.A.rows(), wf = b.A.cols();
-    const Eigen::VectorXd c = fast.stackedCoefficients(static_cast<int>(o));
-    Eigen::VectorXd ce(R * ws), ck(R * ws);
-    for (int l = 0; l < R; ++l) {
-      ce.segment(l * ws, ws) = b.A * c.segment(l * wf, wf);
-      ck.segment(l * ws, ws) = b.K * c.segment(l * wf, wf);
-    }
-    const Eigen::VectorXd Jck = total.J[o] * ck;
-    const double den = ck.dot(Jck);
-    terms.emplace_back(den > 1e-12 * ce.dot(total.J[o] * ce)
-                           ? std::pair<double, double>{ck.dot(total.Jh[o]) - ce.dot(Jck), den}
-                           : std::pair<double, double>{0.0, 0.0});
-  }
-  return fractionsOf(terms, shared);
+namespace {
+
+// Each region's coefficients of `c` (stacked, width M.cols() each) through M.
+Eigen::VectorXd throughBlock(const Eigen::MatrixXd& M, const Eigen::VectorXd& c, int regions) {
+  Eigen::VectorXd v(regions * M.rows());
+  for (int l = 0; l < regions; ++l) v.segment(l * M.rows(), M.rows()) = M * c.segment(l * M.cols(), M.cols());
+  return v;
 }
 
-bool slowFractionSettled(const std::vector<double>& before, const std::vector<double>& after) {
+// Each region's rows of `X` (height M.rows() each) through M^T.
+Eigen::MatrixXd throughBlockT(const Eigen::MatrixXd& M, const Eigen::MatrixXd& X, int regions) {
+  Eigen::MatrixXd v(regions * M.cols(), X.cols());
+  for (int l = 0; l < regions; ++l)
+    v.middleRows(l * M.cols(), M.cols()) = M.transpose() * X.middleRows(l * M.rows(), M.rows());
+  return v;
+}
+
+}  // namespace
+
+SlowFractions gaussNewtonFractions(const TiedSlowMode& tie, const CoefficientSums::Group& total,
+                                   const DioPwlObfModel& fast, const SlowFractions& alpha, bool shared) {
+  const int R = tie.fast.partition.regionCount();
+  const auto np = static_cast<Eigen::Index>(alpha.front().size());
+  std::vector<FractionTerms> terms;
+  for (std::size_t o = 0; o < tie.blocks.size(); ++o) {
+    const TiedBlock& b = tie.blocks[o];
+    const Eigen::MatrixXd M = b.at(alpha[o]);
+    const Eigen::VectorXd cf = fast.stackedCoefficients(static_cast<int>(o));
+    Eigen::MatrixXd Kc(R * M.rows(), np);  // each fraction's direction in the slow coordinates
+    for (Eigen::Index m = 0; m < np; ++m) Kc.col(m) = throughBlock(b.K[static_cast<std::size_t>(m)], cf, R);
+    const Eigen::VectorXd r = total.Jh[o] - total.J[o] * throughBlock(M, cf, R);
+    const Eigen::MatrixXd JKc = total.J[o] * Kc;
+    // The coefficients' best response to the fractions, projected out.
+    Eigen::MatrixXd Jr = throughBlockT(M, throughBlockT(M, total.J[o], R).transpose(), R);
+    Jr.diagonal().array() += 1e-12 * Jr.trace() / static_cast<double>(Jr.rows());
+    const auto ldlt = Jr.ldlt();
+    const Eigen::MatrixXd B = throughBlockT(M, JKc, R);
+    FractionTerms t{Kc.transpose() * JKc - B.transpose() * ldlt.solve(B),
+                    Kc.transpose() * r - B.transpose() * ldlt.solve(throughBlockT(M, r, R))};
+    if (!(t.N.trace() > 0)) t = {Eigen::MatrixXd::Zero(np, np), Eigen::VectorXd::Zero(np)};
+    terms.push_back(t);
+  }
+  SlowFractions step = fractionsOf(terms, shared);
+  for (std::size_t o = 0; o < step.size(); ++o) step[o] += alpha[o];
+  return step;
+}
+
+bool slowFractionSettled(const SlowFractions& before, const SlowFractions& after) {
   double moved = 0.0, size = 1.0;
   for (std::size_t o = 0; o < after.size(); ++o) {
-    moved = std::max(moved, std::abs(after[o] - before[o]));
-    size = std::max(size, std::abs(after[o]));
+    moved = std::max(moved, (after[o] - before[o]).cwiseAbs().maxCoeff());
+    size = std::max(size, after[o].cwiseAbs().maxCoeff());
   }
   return moved <= 1e-7 * size;
 }

@@ -1,8 +1,9 @@
 // plsa's structure search after the paper's pipeline (identification_run.hpp):
 // scheduling side and play channels, coupling, schedule lag, threshold and
 // softening (threshold_search.cpp), the joint refinement
-// (joint_refinement.cpp), sensor drift and the slow pole, each chosen by
-// cross-validated held-out score; then the final fit.
+// (joint_refinement.cpp), sensor drift and the slow poles
+// (slow_pole_search.cpp), each chosen by cross-validated held-out score; then
+// the final fit.
 #include <algorithm>
 #include <cmath>
 
@@ -331,10 +332,8 @@ void IdentificationRun::searchScheduleLag() {
   say(s);
 }
 
-// Each output's paired gain of a over b, "name gain +- se" joined by commas
-// (the terms alternate by output within each fold).
-static std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
-                                  const std::vector<std::string>& outputs) {
+std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
+                           const std::vector<std::string>& outputs) {
   PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
   std::string s;
   const std::size_t no = outputs.size();
@@ -396,69 +395,6 @@ void IdentificationRun::searchOutputDrift() {
   }
 }
 
-// A slow pole in every bank, on an input-side model, scored on simulation;
-// tied (the default), its coefficients carry a fitted fraction of each
-// bank's own response (slow_mode_tie.hpp). The best time constant is kept
-// only if its held-out gain over none exceeds one standard error of that
-// gain across folds and outputs (the one-standard-error rule: the simpler
-// model unless the richer one is clearly better).
-void IdentificationRun::searchSlowPole() {
-  if (model.schedule_side != ScheduleSide::kInput || o.slow_pole_candidates.empty()) return;
-  const std::vector<std::vector<PoleSet>> base_poles = model.poles;
-  const bool tied = o.slow_pole_form == SlowPoleForm::kTied;
-  auto withSlowPole = [&](double tau) {
-    model.poles = base_poles;
-    fit_options.slow_mode = {};
-    if (tau <= 0) return;
-    const double pole = std::exp(-dt / tau);
-    for (auto& row : model.poles)
-      for (PoleSet& ps : row) {
-        std::vector<std::complex<double>> p = ps.poles();
-        p.emplace_back(pole, 0.0);
-        ps = PoleSet(p);
-      }
-    if (tied) fit_options.slow_mode = {pole, model.output_frame == OutputFrame::kTipCartesian};
-  };
-  beginScoring("slow poles",
-               1 + static_cast<std::size_t>(std::count_if(o.slow_pole_candidates.begin(), o.slow_pole_candidates.end(),
-                                                          [](double tau) { return tau != 0; })));
-  rep.slow_pole_scores.emplace_back(0.0, crossValidated(Score::kSimulation));
-  const std::vector<double> none_scores = fold_scores;
-  double best_tau = 0.0, best_sim = -INFINITY;
-  std::vector<double> best_scores;
-  for (double tau : o.slow_pole_candidates) {
-    PLSA_CHECK(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
-    if (tau == 0) continue;  // none, scored already
-    withSlowPole(tau);
-    const double score = crossValidated(Score::kSimulation);
-    rep.slow_pole_scores.emplace_back(tau, score);
-    if (score > best_sim + 1e-9) {
-      best_sim = score;
-      best_tau = tau;
-      best_scores = fold_scores;
-    }
-  }
-  const auto [gain, se] =
-      best_tau > 0 ? eval::pairedGain(best_scores, none_scores) : std::pair<double, double>{0.0, 0.0};
-  rep.slow_pole_gain = {gain, se};
-  const bool keep = best_tau > 0 && gain > se;
-  withSlowPole(keep ? best_tau : 0.0);
-  rep.slow_pole_tie = fit_options.slow_mode;
-  std::string s = std::string("[5/5] slow pole in every bank (") + optionName(o.slow_pole_form) +
-                  ", scored on held-out simulation): ";
-  s += keep ? "kept " + formatNumber(best_tau) + " s (pole " + formatNumber(std::exp(-dt / best_tau)) + ")"
-            : std::string("none kept");
-  if (best_tau > 0) {
-    s += "; the best, " + formatNumber(best_tau) + " s, gains " + formatNumber(gain) + " +- " + formatNumber(se) +
-         (keep ? "" : ", within one standard error") + " (";
-    s += perOutputGains(best_scores, none_scores, o.outputs) + ")";
-  }
-  s += ". Scores:";
-  for (const auto& [tau, sc] : rep.slow_pole_scores)
-    s += " " + (tau > 0 ? formatNumber(tau) + "s" : std::string("none")) + "->" + scoreText(sc);
-  say(s);
-}
-
 // The chosen structure fitted on all the training data.
 DioPwlObfModel IdentificationRun::fitFinal() {
   rep.coefficients = fitCoefficients(model, U, Yfit, fit_options);
@@ -471,12 +407,7 @@ DioPwlObfModel IdentificationRun::fitFinal() {
   say("[5/5] coefficients: " + std::to_string(rep.coefficients.regions_fitted) + " regions fitted, " +
       std::to_string(rep.coefficients.regions_fallback) + " with too little data took their neighbours'");
   rep.slow_pole_fraction = rep.coefficients.slow_fraction;
-  if (!rep.slow_pole_fraction.empty()) {
-    std::string f = "[5/5] the tied slow pole carries a fraction of each bank's response:";
-    for (std::size_t k = 0; k < rep.slow_pole_fraction.size(); ++k)
-      f += " " + o.outputs[k] + " " + formatNumber(rep.slow_pole_fraction[k]);
-    say(f);
-  }
+  if (!rep.slow_pole_fraction.empty()) say(slowFractionLine());
   for (const auto& n : rep.coefficients.notes) say("      " + n);
   model.validate();
   return model;

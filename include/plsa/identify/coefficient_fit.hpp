@@ -14,12 +14,12 @@
 
 namespace plsa::identify {
 
-/// Input side: the slow pole every bank carries besides its own, its
-/// coefficients tied to the rest (slow_mode_tie.hpp); pole 0: none tied, every
+/// Input side: the slow poles every bank carries besides its own, their
+/// coefficients tied to the rest (slow_mode_tie.hpp); none: every
 /// coefficient free.
 struct SlowModeTie {
-  double pole = 0.0;
-  bool shared = true;  ///< one fraction for every output, else one per output
+  std::vector<double> poles;
+  bool shared = true;  ///< one fraction per slow pole for every output, else one set per output
 };
 
 struct CoefficientFitOptions {
@@ -33,9 +33,9 @@ struct CoefficientFitReport {
   int regions_fitted = 0;
   int regions_fallback = 0;
   std::vector<std::string> notes;  ///< one line per fallback region, in words
-  /// With a tied slow pole: the fraction of the response that creeps, per
-  /// output (all equal when shared); empty otherwise.
-  std::vector<double> slow_fraction;
+  /// With tied slow poles: the fraction of the response that creeps through
+  /// each, [output](slow pole) (all outputs equal when shared); empty otherwise.
+  std::vector<Eigen::VectorXd> slow_fraction;
 };
 
 /// Per-sample weights of the least-squares terms, one vector per record

@@ -242,6 +242,11 @@ struct IdentifyOptions {
   /// (slow_mode_tie.hpp); "free": its coefficients fitted freely per bank and
   /// output.
   SlowPoleForm slow_pole_form = SlowPoleForm::kTied;
+  /// At most this many slow poles (1 or 2): with one kept, each other
+  /// candidate is tried beside it and the best is kept only if its held-out
+  /// simulation gain over the one alone exceeds one standard error (creep
+  /// spread over time scales, a Prony series, needs more than one).
+  int slow_pole_count = 2;
   int play_selection_horizon = 40;  ///< samples ahead scored when choosing the play channels
   int play_selection_folds = 3;     ///< cross-validation folds
   /// How the folds cut the training logs. "interleaved": chunks of
@@ -333,10 +338,17 @@ struct IdentifyReport {
   /// The best slow pole's held-out simulation gain over none, mean and standard
   /// error over folds and outputs; it is kept only if the mean exceeds the error.
   std::pair<double, double> slow_pole_gain{0.0, 0.0};
-  /// A kept tied slow pole: the fraction of the response that creeps, per
-  /// output, in the final fit; empty otherwise.
-  std::vector<double> slow_pole_fraction;
-  /// The kept slow pole's tie (pole 0: none kept, or kept free): what a
+  /// (time constant s, held-out simulation fit) of a second slow pole beside
+  /// the first kept, the first alone (0) first; empty: not tried.
+  std::vector<std::pair<double, double>> second_slow_pole_scores;
+  /// The best second slow pole's gain over the first alone, as slow_pole_gain.
+  std::pair<double, double> second_slow_pole_gain{0.0, 0.0};
+  /// The kept slow poles' time constants (s); empty: none kept.
+  std::vector<double> slow_pole_time_constants_s;
+  /// Kept tied slow poles: the fraction of the response that creeps through
+  /// each, [output](slow pole), in the final fit; empty otherwise.
+  std::vector<Eigen::VectorXd> slow_pole_fraction;
+  /// The kept slow poles' tie (no poles: none kept, or kept free): what a
   /// refit of the model's structure needs (the global linear baseline).
   SlowModeTie slow_pole_tie;
   std::pair<double, double> drift_scores{0.0, 0.0};  ///< held-out simulation fit: as logged, drift taken out

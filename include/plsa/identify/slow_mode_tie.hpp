@@ -1,13 +1,14 @@
-// The slow pole as creep: a fraction alpha of each bank's response follows
-// it again through a first-order lag of the slow pole p,
-//   F(q) B(q) c,   F(q) = 1 + alpha (1 - p) / (q - p),
-// one alpha for the whole model (or one per output). F B c is a strictly
-// proper rational function of the bank's poles and p, so it lies in the span
-// of the bank that carries p besides its own poles: the model file and the
-// predictor are those of a bank with one more pole, only the coefficients are
-// tied, c_slow = (A + alpha K) c. In the tip frame the lag acts alike on both
-// tip components, so what creeps under a held input keeps the direction the
-// fast response gave the tip (docs/identification.md, 'Slow pole').
+// Slow modes as creep: for each slow pole p_m a fraction alpha_m of each
+// bank's response follows it again through a first-order lag,
+//   F(q) B(q) c,   F(q) = 1 + sum_m alpha_m (1 - p_m) / (q - p_m),
+// one set of fractions for the whole model (or one per output). F B c is a
+// strictly proper rational function of the bank's poles and the p_m, so it
+// lies in the span of the bank that carries them besides its own poles: the
+// model file and the predictor are those of a bank with more poles, only the
+// coefficients are tied, c_slow = (A + sum_m alpha_m K_m) c. In the tip frame
+// the lags act alike on both tip components, so what creeps under a held
+// input keeps the direction the fast response gave the tip
+// (docs/identification.md, 'Slow poles').
 #pragma once
 
 #include <vector>
@@ -19,43 +20,52 @@
 
 namespace plsa::identify {
 
+/// The fractions of every output: [output](slow pole).
+using SlowFractions = std::vector<Eigen::VectorXd>;
+
 /// One output's map from a region's coefficients on the banks without the
-/// slow pole (width_fast) to those with it (width_slow): A + alpha K.
+/// slow poles (width_fast) to those with them (width_slow):
+/// A + sum_m alpha_m K_m.
 struct TiedBlock {
-  Eigen::MatrixXd A, K;
-  Eigen::MatrixXd at(double alpha) const { return A + alpha * K; }
+  Eigen::MatrixXd A;
+  std::vector<Eigen::MatrixXd> K;  ///< [slow pole]
+  Eigen::MatrixXd at(const Eigen::VectorXd& alpha) const {
+    Eigen::MatrixXd M = A;
+    for (std::size_t m = 0; m < K.size(); ++m) M += alpha(static_cast<Eigen::Index>(m)) * K[m];
+    return M;
+  }
 };
 
-/// The model without the slow pole, and each output's tied block.
+/// The model without the slow poles, and each output's tied block.
 struct TiedSlowMode {
-  DioPwlObfModel fast;            ///< the model's structure, each bank less one copy of the slow pole
+  DioPwlObfModel fast;            ///< the model's structure, each bank less one copy of each slow pole
   std::vector<TiedBlock> blocks;  ///< [output]
 };
 
-/// Throws std::invalid_argument unless every bank of `model` carries `pole`
-/// (real, in (0, 1)).
-TiedSlowMode tiedSlowMode(const DioPwlObfModel& model, double pole);
+/// Throws std::invalid_argument unless every bank of `model` carries every
+/// one of `poles` (distinct, real, in (0, 1)) besides at least one pole.
+TiedSlowMode tiedSlowMode(const DioPwlObfModel& model, const std::vector<double>& poles);
 
-/// The summed least-squares terms of an input-side model with the slow pole
-/// (full symmetric J), in the coordinates of the model without it at the
-/// fractions `alpha` ([output]).
+/// The summed least-squares terms of an input-side model with the slow poles
+/// (full symmetric J), in the coordinates of the model without them at the
+/// fractions `alpha`.
 CoefficientSums::Group reducedGroup(const TiedSlowMode& tie, const CoefficientSums::Group& total,
-                                    const std::vector<double>& alpha);
+                                    const SlowFractions& alpha);
 
 /// The fractions that fit the blended (all nodes equal) problem best, by
 /// alternating least squares over the coefficients and the fractions: one
-/// for every output when `shared`, else one each. `ridge` as the fit's. A
-/// start for the full problem's (refitSlowFraction).
-std::vector<double> fitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total, bool shared,
-                                    double ridge);
+/// set for every output when `shared`, else one each. `ridge` as the fit's.
+/// A start for the full problem's (gaussNewtonFractions).
+SlowFractions fitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total, bool shared, double ridge);
 
-/// One alternating step on the full (per node) problem: the fractions that
-/// fit best given the coefficients `fast` holds (the model without the slow
-/// pole, as solved at the previous fractions).
-std::vector<double> refitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Group& total,
-                                      const DioPwlObfModel& fast, bool shared);
+/// One Gauss-Newton step of variable projection on the full (per node)
+/// problem from the fractions `alpha`, at the coefficients `fast` holds (the
+/// model without the slow poles, solved at `alpha`): the fractions' least
+/// squares with the coefficients' best response to them projected out.
+SlowFractions gaussNewtonFractions(const TiedSlowMode& tie, const CoefficientSums::Group& total,
+                                   const DioPwlObfModel& fast, const SlowFractions& alpha, bool shared);
 
-/// Whether an alternating step moved the fractions by less than 1e-7 (relative).
-bool slowFractionSettled(const std::vector<double>& before, const std::vector<double>& after);
+/// Whether a step moved the fractions by less than 1e-7 (relative).
+bool slowFractionSettled(const SlowFractions& before, const SlowFractions& after);
 
 }  // namespace plsa::identify

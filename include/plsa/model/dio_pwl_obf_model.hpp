@@ -100,11 +100,15 @@ struct DioPwlObfModel {
     return c;
   }
   int outputCount() const { return static_cast<int>(outputs.size()); }
+  /// Copies of input `input`'s bank in an output's regressor: one per play
+  /// channel, or one when the model has no play channels.
+  int bankCopies(std::size_t input) const {
+    return input < shaping.play.size() ? static_cast<int>(shaping.play[input].size()) : 1;
+  }
   int regressorSize(int output) const {
     int n = 0;
     for (std::size_t j = 0; j < poles[static_cast<std::size_t>(output)].size(); ++j)
-      n += poles[static_cast<std::size_t>(output)][j].size() *
-           (j < shaping.play.size() ? static_cast<int>(shaping.play[j].size()) : 1);
+      n += poles[static_cast<std::size_t>(output)][j].size() * bankCopies(j);
     return n;
   }
 

@@ -461,6 +461,9 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
             "tied (default): the slow pole carries a fitted fraction of each bank's own response through a "
             "first-order lag, one fraction for the model with tip_cartesian (what creeps keeps the tip's "
             "direction), one per output otherwise; free: its coefficients fitted freely per bank and output");
+  addChoice(id, "--slow-fraction-fit", a->options.slow_fraction_fit,
+            "level (default): the tied fractions fitted on the output increments, then stepped on the training "
+            "runs' simulated level, keeping what simulates them best; increments: on the increments alone");
   id->add_option("--slow-pole-count", a->options.slow_pole_count,
                  "At most this many slow poles: with one kept, each other --slow-pole candidate is tried beside "
                  "it and the best kept only if its simulation gains more than one standard error over the one "

@@ -7,6 +7,8 @@ trains and the joystick run validates. Each configuration is `plsa identify`
 with its defaults but one candidate family left out ('0' alone, or off), so
 a knob that cross-validation keeps but that does not pay on the held-out
 joystick run shows up as a row where leaving it out fits better.
+"fractions on increments" fits the tied slow fractions on the output
+increments alone instead of stepping them on the simulated level.
 
 Usage: bench/knob_ablation.py --runs DIR [--plsa build/apps/plsa]
        [--jobs 2] [--json OUT] [--keep DIR] [--only NAME ...]
@@ -34,6 +36,7 @@ CONFIGURATIONS = {
     "no schedule lag": ["--schedule-lag", "0"],
     "no slow pole": ["--slow-pole", "0"],
     "no output drift": ["--output-drift", "off"],
+    "fractions on increments": ["--slow-fraction-fit", "increments"],
 }
 OUTPUTS = ("bend_deg", "steer_deg")
 FITS = ("fit_k40", "fit_k80", "fit_sim")
@@ -94,7 +97,7 @@ def unchanged_by(config, chosen):
         return chosen.get("play_threshold", 0.0) == 0.0
     if config == "no schedule lag":
         return chosen.get("schedule_lag_s", 0.0) == 0.0
-    if config == "no slow pole":
+    if config in ("no slow pole", "fractions on increments"):
         return chosen["slow_pole"] in ("none kept", "not searched")
     if config == "no output drift":
         return "training_output_drift" not in chosen
@@ -118,7 +121,7 @@ def summary(results, configs):
         rows = results[c]
         n = len(rows)
         mean = [sum(r["fits"][i] for r in rows.values()) / n for i in range(6)]
-        line = "%-18s %5.1f / %5.1f / %6.1f   %5.1f / %5.1f / %6.1f" % ((c,) + tuple(mean))
+        line = "%-24s %5.1f / %5.1f / %6.1f   %5.1f / %5.1f / %6.1f" % ((c,) + tuple(mean))
         if c != "defaults":
             delta = {k: sum(rows[k]["fits"]) / 6 - sum(base[k]["fits"]) / 6 for k in rows}
             better = sorted(k for k, d in delta.items() if d > 1.0)
@@ -127,7 +130,7 @@ def summary(results, configs):
             line += "   left out: better in %d rows, worse in %d (of %d; %d already without it)" % (
                 len(better), len(worse), n, same)
             if better:
-                line += "\n" + " " * 20 + "better: " + ", ".join("%s %+.1f" % (k, delta[k]) for k in better)
+                line += "\n" + " " * 26 + "better: " + ", ".join("%s %+.1f" % (k, delta[k]) for k in better)
         lines.append(line)
     return "\n".join(lines)
 

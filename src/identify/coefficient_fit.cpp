@@ -5,7 +5,7 @@
 
 #include "plsa/core/parallel_for.hpp"
 #include "plsa/identify/lower_gram.hpp"
-#include "plsa/identify/slow_mode_tie.hpp"
+#include "tied_solve.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -272,7 +272,8 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
     accumulateStreamed(model, U[r], Ym[r], weights.empty() ? nullptr : &weights[r], nullptr, sums);
   }
-  return solveCoefficients(model, sums, -1, o);
+  const LevelRecords records{U, Ym, weights};
+  return solveCoefficients(model, sums, -1, o, &records);
 }
 
 namespace {
@@ -434,7 +435,8 @@ CoefficientFitReport fallBack(DioPwlObfModel& model, const std::vector<bool>& ow
   return report;
 }
 
-// The solve behind solveCoefficients on summed terms, in the model's coordinates.
+}  // namespace
+
 CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& total, bool joint,
                                 const CoefficientFitOptions& o) {
   const int R = model.partition.regionCount();
@@ -449,77 +451,8 @@ CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& t
   return fallBack(model, own, global);
 }
 
-// The tied fit at fractions alpha: the coefficients solved in the
-// coordinates of the model without the slow poles (into tie.fast), and the
-// data misfit of the coefficients they map to, sum c'Jc - 2 c'Jh over outputs.
-double solveAt(TiedSlowMode& tie, const CoefficientSums::Group& total, const SlowFractions& alpha,
-               const CoefficientFitOptions& o, CoefficientFitReport& report) {
-  CoefficientSums::Group reduced = reducedGroup(tie, total, alpha);
-  report = solveGroup(tie.fast, reduced, true, o);
-  const int R = tie.fast.partition.regionCount();
-  double misfit = 0.0;
-  for (std::size_t out = 0; out < alpha.size(); ++out) {
-    const Eigen::MatrixXd M = tie.blocks[out].at(alpha[out]);
-    const Eigen::VectorXd cf = tie.fast.stackedCoefficients(static_cast<int>(out));
-    Eigen::VectorXd c(R * M.rows());
-    for (int l = 0; l < R; ++l) c.segment(l * M.rows(), M.rows()) = M * cf.segment(l * M.cols(), M.cols());
-    misfit += c.dot(total.J[out] * c) - 2.0 * c.dot(total.Jh[out]);
-  }
-  return misfit;
-}
-
-// Most Gauss-Newton steps a tied fit takes on its fractions.
-constexpr int kFractionSteps = 20;
-
-// Tied slow poles by variable projection: for given fractions the
-// coefficients are one least-squares solve (solveAt); the fractions start at
-// the blended problem's (fitSlowFraction) and take Gauss-Newton steps on the
-// full problem (gaussNewtonFractions), each halved up to four times while it
-// raises the misfit. Mapped back onto the model's banks.
-CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Group& total,
-                               const CoefficientFitOptions& o) {
-  TiedSlowMode tie = tiedSlowMode(model, o.slow_mode.poles);
-  SlowFractions alpha = fitSlowFraction(tie, total, o.slow_mode.shared, o.ridge);
-  CoefficientFitReport report;
-  double misfit = solveAt(tie, total, alpha, o, report);
-  for (int step = 0; step < kFractionSteps; ++step) {
-    const SlowFractions target = gaussNewtonFractions(tie, total, tie.fast, alpha, o.slow_mode.shared);
-    const DioPwlObfModel at_alpha = tie.fast;
-    const CoefficientFitReport report_at_alpha = report;
-    bool taken = false;
-    for (double t = 1.0; t >= 1.0 / 16 && !taken; t /= 2) {
-      SlowFractions next = alpha;
-      for (std::size_t out = 0; out < next.size(); ++out) next[out] += t * (target[out] - alpha[out]);
-      const double f = solveAt(tie, total, next, o, report);
-      if (f <= misfit + 1e-12 * std::abs(misfit)) {
-        taken = true;
-        misfit = std::min(misfit, f);
-        const bool settled = slowFractionSettled(alpha, next);
-        alpha = next;
-        if (settled) step = kFractionSteps;
-      }
-    }
-    if (!taken) {  // no step lowers the misfit: the fractions stand
-      tie.fast = at_alpha;
-      report = report_at_alpha;
-      break;
-    }
-  }
-  model.output_level.clear();
-  model.region_fits = tie.fast.region_fits;
-  model.coefficients = tie.fast.coefficients;
-  for (std::size_t out = 0; out < alpha.size(); ++out) {
-    const Eigen::MatrixXd M = tie.blocks[out].at(alpha[out]);
-    for (auto& region : model.coefficients) region[out] = M * region[out];
-  }
-  report.slow_fraction = alpha;
-  return report;
-}
-
-}  // namespace
-
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
-                                       const CoefficientFitOptions& o) {
+                                       const CoefficientFitOptions& o, const LevelRecords* levels) {
   PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
              "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
   const int R = model.partition.regionCount();
@@ -530,7 +463,7 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
       static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
       "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
-  if (!o.slow_mode.poles.empty()) return solveTied(model, total, o);
+  if (!o.slow_mode.poles.empty()) return solveTied(model, total, o, levels);
   return solveGroup(model, total, joint, o);
 }
 

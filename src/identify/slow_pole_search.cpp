@@ -30,7 +30,8 @@ void IdentificationRun::setSlowPoles(const std::vector<double>& taus) {
       ps = PoleSet(p);
     }
   if (o.slow_pole_form == SlowPoleForm::kTied)
-    fit_options.slow_mode = {slow, model.output_frame == OutputFrame::kTipCartesian};
+    fit_options.slow_mode = {slow, model.output_frame == OutputFrame::kTipCartesian,
+                             o.slow_fraction_fit == SlowFractionFit::kLevel};
 }
 
 // Each of `taus` added to the slow poles `kept`, scored on held-out

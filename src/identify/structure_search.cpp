@@ -135,6 +135,9 @@ IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
   FoldFits ff{std::vector<DioPwlObfModel>(folds, model), std::vector<SampleWeights>(folds),
               std::vector<std::vector<Eigen::MatrixXd>>(folds, FYlog),
               std::vector<std::vector<Eigen::MatrixXd>>(folds)};
+  const std::vector<Eigen::MatrixXd> FYm = fit_options.slow_mode.fractions_on_levels
+                                              ? toModelFrame(model.output_frame, FYlog)
+                                              : std::vector<Eigen::MatrixXd>{};
   for (std::size_t f = 0; f < folds; ++f) {
     for (const Eigen::VectorXi& rows : fold_rows)
       ff.W[f].push_back((rows.array() != static_cast<int>(f)).cast<double>().matrix());
@@ -143,7 +146,8 @@ IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
           removeOutputDrift(ff.TY[f], times, estimateOutputDrift(model, U, ff.TY[f], times, fit_options, 3, ff.W[f]));
       fitCoefficients(ff.fit[f], U, ff.TY[f], fit_options, ff.W[f]);
     } else {
-      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), fit_options);
+      const LevelRecords records{U, FYm, ff.W[f]};
+      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), fit_options, &records);
     }
   }
   for (std::size_t r = 0; r < U.size(); ++r) {

@@ -20,6 +20,9 @@ namespace plsa::identify {
 struct SlowModeTie {
   std::vector<double> poles;
   bool shared = true;  ///< one fraction per slow pole for every output, else one set per output
+  /// Then choose the fractions by the training records' simulated level
+  /// (slow_fraction_levels.hpp), where the fit is given its records.
+  bool fractions_on_levels = false;
 };
 
 struct CoefficientFitOptions {
@@ -79,10 +82,22 @@ CoefficientSums coefficientSums(const DioPwlObfModel& model, const std::vector<E
                                 const std::vector<Eigen::MatrixXd>& Y, const std::vector<Eigen::VectorXi>& group,
                                 int groups);
 
+/// The training records behind a fit, for what sums cannot give: the
+/// simulated level a tied fit's fractions are chosen on
+/// (SlowModeTie::fractions_on_levels). Y in the model's output frame;
+/// weights as fitCoefficients' (empty: every sample once).
+struct LevelRecords {
+  const std::vector<Eigen::MatrixXd>& U;
+  const std::vector<Eigen::MatrixXd>& Y;
+  const SampleWeights& weights;
+};
+
 /// fitCoefficients from sums made for the model's current structure, leaving
-/// out group `leave_out` (-1: none).
+/// out group `leave_out` (-1: none). `levels`: the records the sums were
+/// made from, weighted as the fit (group `leave_out` out), or null.
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
-                                       const CoefficientFitOptions& options = {});
+                                       const CoefficientFitOptions& options = {},
+                                       const LevelRecords* levels = nullptr);
 
 /// Input-side models: output_level as the (weighted) mean of y - modelLevels
 /// over the training samples, so that free simulation needs no measured start.

@@ -43,6 +43,8 @@ enum class OutputDriftChoice { kAuto, kOn, kOff };
 enum class CvLayout { kInterleaved, kContiguous };
 /// How the slow pole's coefficients are fitted (IdentifyOptions::slow_pole_form).
 enum class SlowPoleForm { kTied, kFree };
+/// What the tied slow fractions are fitted on (IdentifyOptions::slow_fraction_fit).
+enum class SlowFractionFit { kLevel, kIncrements };
 
 /// The spellings of an option's values, as the command line, the reports and
 /// the docs use them, and the option's name in messages.
@@ -77,6 +79,12 @@ struct OptionSpelling<SlowPoleForm> {
   static constexpr const char* what = "slow pole form";
   static constexpr std::array<std::pair<SlowPoleForm, const char*>, 2> values{
       {{SlowPoleForm::kTied, "tied"}, {SlowPoleForm::kFree, "free"}}};
+};
+template <>
+struct OptionSpelling<SlowFractionFit> {
+  static constexpr const char* what = "slow fraction fit";
+  static constexpr std::array<std::pair<SlowFractionFit, const char*>, 2> values{
+      {{SlowFractionFit::kLevel, "level"}, {SlowFractionFit::kIncrements, "increments"}}};
 };
 template <>
 struct OptionSpelling<CvLayout> {
@@ -242,6 +250,11 @@ struct IdentifyOptions {
   /// (slow_mode_tie.hpp); "free": its coefficients fitted freely per bank and
   /// output.
   SlowPoleForm slow_pole_form = SlowPoleForm::kTied;
+  /// Tied: "level" (default) fits the fractions on the output increments,
+  /// then steps them on the training runs' simulated level, keeping what
+  /// simulates the training runs best (slow_fraction_levels.hpp);
+  /// "increments": on the increments alone.
+  SlowFractionFit slow_fraction_fit = SlowFractionFit::kLevel;
   /// At most this many slow poles (1 or 2): with one kept, each other
   /// candidate is tried beside it and the best is kept only if its held-out
   /// simulation gain over the one alone exceeds one standard error (creep

@@ -65,6 +65,12 @@ SlowFractions fitSlowFraction(const TiedSlowMode& tie, const CoefficientSums::Gr
 SlowFractions gaussNewtonFractions(const TiedSlowMode& tie, const CoefficientSums::Group& total,
                                    const DioPwlObfModel& fast, const SlowFractions& alpha, bool shared);
 
+/// The data misfit of the tied coefficients at the fractions `alpha`,
+/// sum over outputs of c'Jc - 2 c'Jh, where c is each region's coefficients
+/// in `fast` (the model without the slow poles) mapped through the tie.
+double tiedMisfit(const TiedSlowMode& tie, const CoefficientSums::Group& total, const DioPwlObfModel& fast,
+                  const SlowFractions& alpha);
+
 /// Whether a step moved the fractions by less than 1e-7 (relative).
 bool slowFractionSettled(const SlowFractions& before, const SlowFractions& after);
 

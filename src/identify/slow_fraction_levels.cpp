@@ -61,8 +61,9 @@ void accumulateRecord(const std::vector<Eigen::MatrixXd>& level, const Eigen::Ma
 
 LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfModel& structure,
                                     const SlowFractions& alpha, const LevelRecords& records, bool shared) {
-  PLSA_CHECK(records.U.size() == records.Y.size() && (records.weights.empty() || records.weights.size() == records.U.size()),
-             "levelFractionStep: need one output and weight record per input record");
+  PLSA_CHECK(
+      records.U.size() == records.Y.size() && (records.weights.empty() || records.weights.size() == records.U.size()),
+      "levelFractionStep: need one output and weight record per input record");
   const std::vector<DioPwlObfModel> models = directionModels(tie, structure, alpha);
   const auto ny = static_cast<Eigen::Index>(alpha.size()), np = static_cast<Eigen::Index>(alpha.front().size());
   const Eigen::Index fractions = shared ? np : np * ny;
@@ -84,7 +85,8 @@ LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfMode
   N.diagonal().head(fractions).array() += 1e-9 * N.topLeftCorner(fractions, fractions).trace() / fractions;
   const Eigen::VectorXd delta = N.ldlt().solve(n.b).head(fractions);
   if (!delta.allFinite()) return step;
-  for (Eigen::Index o = 0; o < ny; ++o) step.alpha[static_cast<std::size_t>(o)] += delta.segment(shared ? 0 : o * np, np);
+  for (Eigen::Index o = 0; o < ny; ++o)
+    step.alpha[static_cast<std::size_t>(o)] += delta.segment(shared ? 0 : o * np, np);
   return step;
 }
 

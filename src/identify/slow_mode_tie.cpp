@@ -290,7 +290,8 @@ double tiedMisfit(const TiedSlowMode& tie, const CoefficientSums::Group& total, 
   const int R = fast.partition.regionCount();
   double misfit = 0.0;
   for (std::size_t o = 0; o < alpha.size(); ++o) {
-    const Eigen::VectorXd c = throughBlock(tie.blocks[o].at(alpha[o]), fast.stackedCoefficients(static_cast<int>(o)), R);
+    const Eigen::VectorXd c =
+        throughBlock(tie.blocks[o].at(alpha[o]), fast.stackedCoefficients(static_cast<int>(o)), R);
     misfit += c.dot(total.J[o] * c) - 2.0 * c.dot(total.Jh[o]);
   }
   return misfit;

@@ -96,8 +96,7 @@ struct LevelRecords {
 /// out group `leave_out` (-1: none). `levels`: the records the sums were
 /// made from, weighted as the fit (group `leave_out` out), or null.
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
-                                       const CoefficientFitOptions& options = {},
-                                       const LevelRecords* levels = nullptr);
+                                       const CoefficientFitOptions& options = {}, const LevelRecords* levels = nullptr);
 
 /// Input-side models: output_level as the (weighted) mean of y - modelLevels
 /// over the training samples, so that free simulation needs no measured start.

@@ -309,32 +309,38 @@ void modelRegressors(const DioPwlObfModel& model, const Eigen::MatrixXd& u, Mode
   fillRegressors(out, model, u);
 }
 
-Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
-  PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(model.outputCount()),
-             "modelIncrements: the regressors were made for another model");
+namespace {
+
+// Input side: each coefficient set's increments of output o into its dy's
+// rows from `row0`, from the chunk's live tiles (all of phi when none are
+// marked). Each tile is read once for every set while it is in cache; each
+// set's sums are the same as alone.
+void inputSideIncrements(const ModelRegressors& reg, int o, Eigen::Index width,
+                         const std::vector<Eigen::VectorXd>& coefficients, std::vector<Eigen::MatrixXd*>& dy,
+                         Eigen::Index row0) {
+  const auto oo = static_cast<std::size_t>(o);
   const auto T = static_cast<Eigen::Index>(reg.schedule.size());
-  Eigen::MatrixXd dy(T, model.outputCount());
-  if (model.schedule_side == ScheduleSide::kInput) {
-    const Eigen::Index tile = ModelRegressors::kTileRows;
-    for (int o = 0; o < model.outputCount(); ++o) {
-      const auto oo = static_cast<std::size_t>(o);
-      const Eigen::VectorXd c = model.stackedCoefficients(o);
-      if (reg.live.empty()) {
-        dy.col(o) = reg.phi[oo] * c;
-        continue;
-      }
-      const Eigen::Index width = model.regressorSize(o);
-      dy.col(o).setZero();
-      for (Eigen::Index t = 0; t < reg.live[oo].rows(); ++t)
-        for (Eigen::Index r = 0; r < reg.live[oo].cols(); ++r)
-          if (reg.live[oo](t, r)) {
-            const Eigen::Index rows = std::min(tile, T - t * tile);
-            dy.col(o).segment(t * tile, rows).noalias() +=
-                reg.phi[oo].block(t * tile, r * width, rows, width) * c.segment(r * width, width);
-          }
-    }
-    return dy;
+  if (reg.live.empty()) {
+    for (std::size_t m = 0; m < coefficients.size(); ++m)
+      dy[m]->col(o).segment(row0, T).noalias() = reg.phi[oo] * coefficients[m];
+    return;
   }
+  const Eigen::Index tile = ModelRegressors::kTileRows;
+  for (Eigen::MatrixXd* d : dy) d->col(o).segment(row0, T).setZero();
+  for (Eigen::Index t = 0; t < reg.live[oo].rows(); ++t)
+    for (Eigen::Index r = 0; r < reg.live[oo].cols(); ++r)
+      if (reg.live[oo](t, r)) {
+        const Eigen::Index rows = std::min(tile, T - t * tile);
+        const auto block = reg.phi[oo].block(t * tile, r * width, rows, width);
+        for (std::size_t m = 0; m < coefficients.size(); ++m)
+          dy[m]->col(o).segment(row0 + t * tile, rows).noalias() += block * coefficients[m].segment(r * width, width);
+      }
+}
+
+// Output side: the model's increments into dy's rows from `row0`.
+void outputSideIncrements(const DioPwlObfModel& model, const ModelRegressors& reg, Eigen::MatrixXd& dy,
+                          Eigen::Index row0) {
+  const auto T = static_cast<Eigen::Index>(reg.schedule.size());
   for (Eigen::Index k = 0; k < T; ++k) {
     const ScheduleBlend& b = reg.schedule[static_cast<std::size_t>(k)];
     for (int o = 0; o < model.outputCount(); ++o) {
@@ -343,9 +349,46 @@ Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegresso
         v += b.weight[static_cast<std::size_t>(m)] *
              reg.phi[static_cast<std::size_t>(o)].row(k).dot(model.coefficients[static_cast<std::size_t>(
                  b.region[static_cast<std::size_t>(m)])][static_cast<std::size_t>(o)]);
-      dy(k, o) = v;
+      dy(row0 + k, o) = v;
     }
   }
+}
+
+// Every model's increments over the chunk into its dy's rows from the
+// chunk's first row; the models differ only in their coefficients, whose
+// stacked form (input side) is given per output.
+void chunkIncrements(const std::vector<const DioPwlObfModel*>& models,
+                     const std::vector<std::vector<Eigen::VectorXd>>& stacked, const ModelRegressors& reg,
+                     std::vector<Eigen::MatrixXd*>& dy, Eigen::Index row0) {
+  const DioPwlObfModel& first = *models.front();
+  PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(first.outputCount()),
+             "modelIncrements: the regressors were made for another model");
+  if (first.schedule_side == ScheduleSide::kInput) {
+    for (int o = 0; o < first.outputCount(); ++o)
+      inputSideIncrements(reg, o, first.regressorSize(o), stacked[static_cast<std::size_t>(o)], dy, row0);
+    return;
+  }
+  for (std::size_t m = 0; m < models.size(); ++m) outputSideIncrements(*models[m], reg, *dy[m], row0);
+}
+
+// Input side: each output's stacked coefficients of every model ([output][model]).
+std::vector<std::vector<Eigen::VectorXd>> stackedCoefficients(const std::vector<const DioPwlObfModel*>& models) {
+  std::vector<std::vector<Eigen::VectorXd>> stacked;
+  if (models.front()->schedule_side != ScheduleSide::kInput) return stacked;
+  for (int o = 0; o < models.front()->outputCount(); ++o) {
+    stacked.emplace_back();
+    for (const DioPwlObfModel* m : models) stacked.back().push_back(m->stackedCoefficients(o));
+  }
+  return stacked;
+}
+
+}  // namespace
+
+Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegressors& reg) {
+  const std::vector<const DioPwlObfModel*> one{&model};
+  Eigen::MatrixXd dy(static_cast<Eigen::Index>(reg.schedule.size()), model.outputCount());
+  std::vector<Eigen::MatrixXd*> out{&dy};
+  chunkIncrements(one, stackedCoefficients(one), reg, out, 0);
   return dy;
 }
 
@@ -359,12 +402,14 @@ std::vector<Eigen::MatrixXd> modelIncrements(const std::vector<DioPwlObfModel>& 
     PLSA_CHECK(u.cols() == m.inputCount(), "modelIncrements: the record has " + std::to_string(u.cols()) +
                                                " inputs, the model " + std::to_string(m.inputCount()));
   std::vector<Eigen::MatrixXd> dy(models.size(), Eigen::MatrixXd(u.rows(), models.front().outputCount()));
+  std::vector<Eigen::MatrixXd*> out;
+  for (Eigen::MatrixXd& d : dy) out.push_back(&d);
+  std::vector<const DioPwlObfModel*> each;
+  for (const DioPwlObfModel& m : models) each.push_back(&m);
+  const std::vector<std::vector<Eigen::VectorXd>> stacked = stackedCoefficients(each);
   RegressorStream stream(models.front(), u);
   ModelRegressors chunk;
-  while (stream.next(chunk))
-    for (std::size_t m = 0; m < models.size(); ++m)
-      dy[m].middleRows(chunk.first_row, static_cast<Eigen::Index>(chunk.schedule.size())) =
-          modelIncrements(models[m], chunk);
+  while (stream.next(chunk)) chunkIncrements(each, stacked, chunk, out, chunk.first_row);
   return dy;
 }
 

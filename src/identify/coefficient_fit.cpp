@@ -463,8 +463,31 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
       static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
       "solveCoefficients: the sums were made for another model structure");
   CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
-  if (!o.slow_mode.poles.empty()) return solveTied(model, total, o, levels);
-  return solveGroup(model, total, joint, o);
+  if (o.slow_mode.poles.empty()) return solveGroup(model, total, joint, o);
+  const SampleWeights none;
+  return solveTied({{model, total, levels ? levels->weights : none}}, o, levels ? &levels->U : nullptr,
+                   levels ? &levels->Y : nullptr)
+      .front();
+}
+
+std::vector<CoefficientFitReport> solveFoldCoefficients(std::vector<DioPwlObfModel>& fits, const CoefficientSums& sums,
+                                                        const CoefficientFitOptions& o, const FoldRecords& folds) {
+  PLSA_CHECK(!fits.empty() && fits.size() <= sums.groups.size() && folds.weights.size() == fits.size(),
+             "solveFoldCoefficients: need a model and a weight set per fold, at most one fold per group of the sums");
+  std::vector<CoefficientFitReport> reports;
+  if (o.slow_mode.poles.empty()) {
+    for (std::size_t f = 0; f < fits.size(); ++f)
+      reports.push_back(solveCoefficients(fits[f], sums, static_cast<int>(f), o));
+    return reports;
+  }
+  const bool joint = fits.front().partition.scheduling() == Scheduling::kInterpolated ||
+                     fits.front().schedule_side == ScheduleSide::kInput;
+  std::vector<CoefficientSums::Group> totals;
+  for (std::size_t f = 0; f < fits.size(); ++f)
+    totals.push_back(summedGroups(fits[f], sums, static_cast<int>(f), joint));
+  std::vector<TiedFit> tied;
+  for (std::size_t f = 0; f < fits.size(); ++f) tied.push_back({fits[f], totals[f], folds.weights[f]});
+  return solveTied(tied, o, &folds.U, &folds.Y);
 }
 
 void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U,

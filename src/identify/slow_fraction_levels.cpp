@@ -17,14 +17,14 @@ DioPwlObfModel mappedThrough(const DioPwlObfModel& structure, const TiedSlowMode
   return m;
 }
 
-// The model at the fractions first, then one per slow pole: each region's
-// coefficients through K_m alone, whose simulated level is that pole's
-// direction.
-std::vector<DioPwlObfModel> directionModels(const TiedSlowMode& tie, const DioPwlObfModel& structure,
-                                            const SlowFractions& alpha) {
+// The model at the fractions first, then, when `directions`, one per slow
+// pole: each region's coefficients through K_m alone, whose simulated level
+// is that pole's direction.
+std::vector<DioPwlObfModel> levelModels(const TiedSlowMode& tie, const DioPwlObfModel& structure,
+                                        const SlowFractions& alpha, bool directions) {
   std::vector<DioPwlObfModel> models{
       mappedThrough(structure, tie, [&](std::size_t out) { return tie.blocks[out].at(alpha[out]); })};
-  for (std::size_t m = 0; m < tie.blocks.front().K.size(); ++m)
+  for (std::size_t m = 0; directions && m < tie.blocks.front().K.size(); ++m)
     models.push_back(mappedThrough(structure, tie, [&](std::size_t out) { return tie.blocks[out].K[m]; }));
   return models;
 }
@@ -57,29 +57,17 @@ void accumulateRecord(const std::vector<Eigen::MatrixXd>& level, const Eigen::Ma
   }
 }
 
-}  // namespace
-
-LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfModel& structure,
-                                    const SlowFractions& alpha, const LevelRecords& records, bool shared) {
-  PLSA_CHECK(
-      records.U.size() == records.Y.size() && (records.weights.empty() || records.weights.size() == records.U.size()),
-      "levelFractionStep: need one output and weight record per input record");
-  const std::vector<DioPwlObfModel> models = directionModels(tie, structure, alpha);
+// The step from a fit's normals: each output's level eliminated for the
+// misfit, then the fractions' least squares (none when only the misfit was
+// asked: no direction was simulated).
+LevelFractionStep stepFrom(LevelNormals& n, const SlowFractions& alpha, Eigen::Index fractions, bool shared) {
   const auto ny = static_cast<Eigen::Index>(alpha.size()), np = static_cast<Eigen::Index>(alpha.front().size());
-  const Eigen::Index fractions = shared ? np : np * ny;
-  LevelNormals n{Eigen::MatrixXd::Zero(fractions + ny, fractions + ny), Eigen::VectorXd::Zero(fractions + ny)};
-  for (std::size_t r = 0; r < records.U.size(); ++r) {
-    if (records.U[r].rows() == 0) continue;
-    const std::vector<Eigen::MatrixXd> dy = eval::modelIncrements(models, records.U[r]);
-    std::vector<Eigen::MatrixXd> level;
-    for (std::size_t j = 0; j < models.size(); ++j) level.push_back(eval::modelLevels(models[j], records.U[r], dy[j]));
-    accumulateRecord(level, records.Y[r], records.weights.empty() ? nullptr : &records.weights[r], shared, n);
-  }
   LevelFractionStep step{alpha, n.ee};
   for (Eigen::Index o = 0; o < ny; ++o) {
     const double c = n.N(fractions + o, fractions + o);
     if (c > 0) step.misfit -= n.b(fractions + o) * n.b(fractions + o) / c;
   }
+  if (fractions == 0) return step;
   Eigen::MatrixXd N = n.N.selfadjointView<Eigen::Lower>();
   if (!(N.topLeftCorner(fractions, fractions).trace() > 0)) return step;
   N.diagonal().head(fractions).array() += 1e-9 * N.topLeftCorner(fractions, fractions).trace() / fractions;
@@ -88,6 +76,50 @@ LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfMode
   for (Eigen::Index o = 0; o < ny; ++o)
     step.alpha[static_cast<std::size_t>(o)] += delta.segment(shared ? 0 : o * np, np);
   return step;
+}
+
+}  // namespace
+
+std::vector<LevelFractionStep> levelFractionSteps(const DioPwlObfModel& structure,
+                                                  const std::vector<LevelFractionQuery>& queries,
+                                                  const std::vector<Eigen::MatrixXd>& U,
+                                                  const std::vector<Eigen::MatrixXd>& Y, bool shared) {
+  PLSA_CHECK(U.size() == Y.size(), "levelFractionSteps: need one output record per input record");
+  std::vector<DioPwlObfModel> models;  // every query's, one after another
+  std::vector<std::size_t> first;
+  std::vector<LevelNormals> normals;
+  std::vector<Eigen::Index> fractions;
+  for (const LevelFractionQuery& q : queries) {
+    PLSA_CHECK(q.weights.empty() || q.weights.size() == U.size(),
+               "levelFractionSteps: need one weight record per input record");
+    std::vector<DioPwlObfModel> own = levelModels(q.tie, structure, q.alpha, q.step);
+    const auto ny = static_cast<Eigen::Index>(q.alpha.size()), np = static_cast<Eigen::Index>(own.size()) - 1;
+    fractions.push_back(shared ? np : np * ny);
+    normals.push_back({Eigen::MatrixXd::Zero(fractions.back() + ny, fractions.back() + ny),
+                       Eigen::VectorXd::Zero(fractions.back() + ny)});
+    first.push_back(models.size());
+    for (DioPwlObfModel& m : own) models.push_back(std::move(m));
+  }
+  first.push_back(models.size());
+  for (std::size_t r = 0; r < U.size(); ++r) {
+    if (U[r].rows() == 0) continue;
+    const std::vector<Eigen::MatrixXd> dy = eval::modelIncrements(models, U[r]);
+    for (std::size_t q = 0; q < queries.size(); ++q) {
+      std::vector<Eigen::MatrixXd> level;
+      for (std::size_t j = first[q]; j < first[q + 1]; ++j) level.push_back(eval::modelLevels(models[j], U[r], dy[j]));
+      const SampleWeights& w = queries[q].weights;
+      accumulateRecord(level, Y[r], w.empty() ? nullptr : &w[r], shared, normals[q]);
+    }
+  }
+  std::vector<LevelFractionStep> steps;
+  for (std::size_t q = 0; q < queries.size(); ++q)
+    steps.push_back(stepFrom(normals[q], queries[q].alpha, fractions[q], shared));
+  return steps;
+}
+
+LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfModel& structure,
+                                    const SlowFractions& alpha, const LevelRecords& records, bool shared) {
+  return levelFractionSteps(structure, {{tie, alpha, records.weights, true}}, records.U, records.Y, shared).front();
 }
 
 }  // namespace plsa::identify

@@ -145,11 +145,9 @@ IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
       ff.TY[f] =
           removeOutputDrift(ff.TY[f], times, estimateOutputDrift(model, U, ff.TY[f], times, fit_options, 3, ff.W[f]));
       fitCoefficients(ff.fit[f], U, ff.TY[f], fit_options, ff.W[f]);
-    } else {
-      const LevelRecords records{U, FYm, ff.W[f]};
-      solveCoefficients(ff.fit[f], sums, static_cast<int>(f), fit_options, &records);
     }
   }
+  if (!drift_per_fold) solveFoldCoefficients(ff.fit, sums, fit_options, {U, FYm, ff.W});
   for (std::size_t r = 0; r < U.size(); ++r) {
     std::vector<Eigen::MatrixXd> per_fold = eval::modelIncrements(ff.fit, U[r]);
     for (std::size_t f = 0; f < folds; ++f) ff.dy[f].push_back(std::move(per_fold[f]));

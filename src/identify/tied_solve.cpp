@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "plsa/core/check.hpp"
 #include "plsa/identify/slow_fraction_levels.hpp"
 #include "plsa/identify/slow_mode_tie.hpp"
 #include "tied_solve.hpp"
@@ -65,41 +66,61 @@ SlowFractions fractionsOnIncrements(TiedSlowMode& tie, const CoefficientSums::Gr
 // coefficients' solve at its fractions.
 constexpr int kLevelRounds = 3;
 
-// From the increments' fractions, steps on the training records' simulated
-// level, the coefficients solved again after each; the fractions whose
-// simulated level fits the records best are kept (the increments' own when
-// no step improves on them). Leaves tie.fast and `report` solved at them.
-SlowFractions fractionsOnLevels(TiedSlowMode& tie, const DioPwlObfModel& structure, const CoefficientSums::Group& total,
-                                SlowFractions alpha, const CoefficientFitOptions& o, const LevelRecords& records,
-                                CoefficientFitReport& report) {
+// One tied fit through the level rounds: where it is, and the best fractions
+// so far with what was solved at them.
+struct LevelSearch {
+  TiedSlowMode& tie;
+  const CoefficientSums::Group& total;
+  const SampleWeights& weights;
+  CoefficientFitReport& report;
+  SlowFractions alpha;
   struct Kept {
     SlowFractions alpha;
     DioPwlObfModel fast;
     CoefficientFitReport report;
     double misfit;
-  } best{alpha, tie.fast, report, std::numeric_limits<double>::infinity()};
+  } best;
+  bool done = false;
+};
+
+// From the increments' fractions, steps on the training records' simulated
+// level, the coefficients solved again after each; the fractions whose
+// simulated level fits the records best are kept (the increments' own when
+// no step improves on them). Every fit still stepping is simulated in the
+// same pass (levelFractionSteps); the last round asks the misfit alone.
+// Leaves each tie.fast and report solved at the fractions kept.
+void fractionsOnLevels(std::vector<LevelSearch>& fits, const DioPwlObfModel& structure, const CoefficientFitOptions& o,
+                       const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& Y) {
   for (int round = 0; round < kLevelRounds; ++round) {
-    const LevelFractionStep step = levelFractionStep(tie, structure, alpha, records, o.slow_mode.shared);
-    if (!(step.misfit < best.misfit)) break;
-    best = {alpha, tie.fast, report, step.misfit};
-    if (round + 1 == kLevelRounds || slowFractionSettled(alpha, step.alpha)) break;
-    alpha = step.alpha;
-    solveAt(tie, total, alpha, o, report);
+    std::vector<LevelFractionQuery> queries;
+    std::vector<LevelSearch*> asked;
+    for (LevelSearch& f : fits)
+      if (!f.done) {
+        queries.push_back({f.tie, f.alpha, f.weights, round + 1 < kLevelRounds});
+        asked.push_back(&f);
+      }
+    if (asked.empty()) break;
+    const std::vector<LevelFractionStep> steps = levelFractionSteps(structure, queries, U, Y, o.slow_mode.shared);
+    for (std::size_t i = 0; i < asked.size(); ++i) {
+      LevelSearch& f = *asked[i];
+      f.done = !(steps[i].misfit < f.best.misfit);
+      if (f.done) continue;
+      f.best = {f.alpha, f.tie.fast, f.report, steps[i].misfit};
+      f.done = round + 1 == kLevelRounds || slowFractionSettled(f.alpha, steps[i].alpha);
+      if (f.done) continue;
+      f.alpha = steps[i].alpha;
+      solveAt(f.tie, f.total, f.alpha, o, f.report);
+    }
   }
-  tie.fast = std::move(best.fast);
-  report = std::move(best.report);
-  return best.alpha;
+  for (LevelSearch& f : fits) {
+    f.tie.fast = std::move(f.best.fast);
+    f.report = std::move(f.best.report);
+    f.alpha = std::move(f.best.alpha);
+  }
 }
 
-}  // namespace
-
-CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Group& total,
-                               const CoefficientFitOptions& o, const LevelRecords* levels) {
-  TiedSlowMode tie = tiedSlowMode(model, o.slow_mode.poles);
-  CoefficientFitReport report;
-  SlowFractions alpha = fractionsOnIncrements(tie, total, o, report);
-  if (levels && o.slow_mode.fractions_on_levels)
-    alpha = fractionsOnLevels(tie, model, total, std::move(alpha), o, *levels, report);
+// The model's coefficients from the tie's fast ones at fractions alpha.
+void mapOntoBanks(DioPwlObfModel& model, const TiedSlowMode& tie, const SlowFractions& alpha) {
   model.output_level.clear();
   model.region_fits = tie.fast.region_fits;
   model.coefficients = tie.fast.coefficients;
@@ -107,8 +128,38 @@ CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Gro
     const Eigen::MatrixXd M = tie.blocks[out].at(alpha[out]);
     for (auto& region : model.coefficients) region[out] = M * region[out];
   }
-  report.slow_fraction = alpha;
-  return report;
+}
+
+}  // namespace
+
+std::vector<CoefficientFitReport> solveTied(const std::vector<TiedFit>& fits, const CoefficientFitOptions& o,
+                                            const std::vector<Eigen::MatrixXd>* U,
+                                            const std::vector<Eigen::MatrixXd>* Y) {
+  PLSA_CHECK(!fits.empty() && (U == nullptr) == (Y == nullptr), "solveTied: need fits, and both records or neither");
+  std::vector<TiedSlowMode> ties;
+  std::vector<CoefficientFitReport> reports(fits.size());
+  std::vector<SlowFractions> alpha;
+  for (std::size_t i = 0; i < fits.size(); ++i) {
+    ties.push_back(tiedSlowMode(fits[i].model, o.slow_mode.poles));
+    alpha.push_back(fractionsOnIncrements(ties.back(), fits[i].total, o, reports[i]));
+  }
+  if (U && o.slow_mode.fractions_on_levels) {
+    std::vector<LevelSearch> searches;
+    for (std::size_t i = 0; i < fits.size(); ++i)
+      searches.push_back({ties[i],
+                          fits[i].total,
+                          fits[i].weights,
+                          reports[i],
+                          alpha[i],
+                          {alpha[i], ties[i].fast, reports[i], std::numeric_limits<double>::infinity()}});
+    fractionsOnLevels(searches, fits.front().model, o, *U, *Y);
+    for (std::size_t i = 0; i < fits.size(); ++i) alpha[i] = searches[i].alpha;
+  }
+  for (std::size_t i = 0; i < fits.size(); ++i) {
+    mapOntoBanks(fits[i].model, ties[i], alpha[i]);
+    reports[i].slow_fraction = alpha[i];
+  }
+  return reports;
 }
 
 }  // namespace plsa::identify

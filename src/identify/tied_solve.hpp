@@ -11,10 +11,21 @@ namespace plsa::identify {
 CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& total, bool joint,
                                 const CoefficientFitOptions& o);
 
-/// The fit with the slow poles' coefficients tied (options.slow_mode):
-/// fractions on the increments, then, when asked and `levels` is given, on
-/// the simulated level; mapped back onto the model's banks.
-CoefficientFitReport solveTied(DioPwlObfModel& model, const CoefficientSums::Group& total,
-                               const CoefficientFitOptions& o, const LevelRecords* levels);
+/// One fit for solveTied: the model it solves into (its structure with the
+/// slow poles), its summed terms, and its weights over the level records
+/// (empty: every sample once).
+struct TiedFit {
+  DioPwlObfModel& model;
+  const CoefficientSums::Group& total;
+  const SampleWeights& weights;
+};
+
+/// Fits of one structure with the slow poles' coefficients tied
+/// (options.slow_mode): fractions on the increments, then, when asked and the
+/// records U and Y (model frame) are given, on the simulated level, every fit
+/// simulated in the same pass; mapped back onto the models' banks.
+std::vector<CoefficientFitReport> solveTied(const std::vector<TiedFit>& fits, const CoefficientFitOptions& o,
+                                            const std::vector<Eigen::MatrixXd>* U,
+                                            const std::vector<Eigen::MatrixXd>* Y);
 
 }  // namespace plsa::identify

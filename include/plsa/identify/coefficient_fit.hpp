@@ -98,6 +98,22 @@ struct LevelRecords {
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
                                        const CoefficientFitOptions& options = {}, const LevelRecords* levels = nullptr);
 
+/// The records behind cross-validation's fold fits: Y in the model's output
+/// frame, and each fold's weights (its own group's samples weighted 0).
+struct FoldRecords {
+  const std::vector<Eigen::MatrixXd>& U;
+  const std::vector<Eigen::MatrixXd>& Y;
+  const std::vector<SampleWeights>& weights;
+};
+
+/// solveCoefficients for every fold at once: fits[f] (the model's current
+/// structure) leaves out group f of the sums (groups past the last fold are
+/// in every fit: a search window's warm-up). The same fits as one call per
+/// fold, but tied slow fractions fitted on the level (SlowModeTie::
+/// fractions_on_levels) simulate every fold in one pass per round.
+std::vector<CoefficientFitReport> solveFoldCoefficients(std::vector<DioPwlObfModel>& fits, const CoefficientSums& sums,
+                                                        const CoefficientFitOptions& options, const FoldRecords& folds);
+
 /// Input-side models: output_level as the (weighted) mean of y - modelLevels
 /// over the training samples, so that free simulation needs no measured start.
 /// `increments`, when given, are modelIncrements(model, U[r]) for every record.

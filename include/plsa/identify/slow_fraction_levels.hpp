@@ -29,4 +29,23 @@ struct LevelFractionStep {
 LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfModel& structure,
                                     const SlowFractions& alpha, const LevelRecords& records, bool shared);
 
+/// One fit's part in levelFractionSteps: its tie (tie.fast solved at
+/// `alpha`), its weights over the records (empty: every sample once), and
+/// whether the step is wanted or the misfit alone (which simulates one model
+/// instead of one per slow pole more).
+struct LevelFractionQuery {
+  const TiedSlowMode& tie;
+  SlowFractions alpha;
+  const SampleWeights& weights;
+  bool step = true;
+};
+
+/// levelFractionStep for several fits of the one structure on the same
+/// records, U and Y (model frame), as cross-validation's folds are: every
+/// fit's models simulated in one pass, so the regressors are made once.
+std::vector<LevelFractionStep> levelFractionSteps(const DioPwlObfModel& structure,
+                                                  const std::vector<LevelFractionQuery>& queries,
+                                                  const std::vector<Eigen::MatrixXd>& U,
+                                                  const std::vector<Eigen::MatrixXd>& Y, bool shared);
+
 }  // namespace plsa::identify

@@ -135,6 +135,26 @@ def summary(results, configs):
     return "\n".join(lines)
 
 
+def markdown_table(results, configs):
+    """docs/generalisation.md's table: per configuration the rows whose defaults kept the knob (the rows
+    it can change), the mean change of each fit there against the defaults, and the rows whose mean of
+    the six fits moves by more than a point either way."""
+    lines = ["| configuration | `identify` option | rows it can change | change of the fits against the defaults "
+             "| rows better / worse than the defaults |", "| --- | --- | --- | --- | --- |"]
+    base = results["defaults"]
+    for c in configs[1:]:
+        kept = [k for k, r in results[c].items() if not r.get("same_as_defaults")]
+        if not kept:
+            continue
+        change = [sum(results[c][k]["fits"][i] - base[k]["fits"][i] for k in kept) / len(kept) for i in range(6)]
+        delta = [sum(results[c][k]["fits"]) / 6 - sum(base[k]["fits"]) / 6 for k in kept]
+        fits = " / ".join("%+.1f" % x for x in change[:3]) + ", " + " / ".join("%+.1f" % x for x in change[3:])
+        lines.append("| %s | `%s` | %d | %s | %d / %d |" % (
+            c, " ".join(CONFIGURATIONS[c]), len(kept), fits,
+            sum(1 for d in delta if d > 1.0), sum(1 for d in delta if d < -1.0)))
+    return "\n".join(lines)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", required=True, help="plsa generalise --save-runs directory")
@@ -163,6 +183,8 @@ def main():
         run_jobs(pool, a.plsa, workdir, jobs, results)
     print("%d rows; mean held-out fit, bending then steering (40 / 80 steps / simulated)" % len(rows))
     print(summary(results, configs))
+    print()
+    print(markdown_table(results, configs))
     if a.json:
         tmp = a.json + ".tmp"
         with open(tmp, "w") as f:

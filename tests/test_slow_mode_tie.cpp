@@ -252,48 +252,74 @@ TEST(SlowModeTie, LevelFitSimulatesTheTrainingRecordBetterWhenTheTieIsInexact) {
   EXPECT_LT(simulationMisfit(on_level), 0.9 * simulationMisfit(on_increments));
 }
 
-// Cross-validation solves its folds together (solveFoldCoefficients): the
-// level rounds simulate every fold in one pass, the last round the misfit
-// alone. Each fold's fit is the one it gets alone, to the bit, and the level
-// step moved the fractions off the increments' (the inexact tie above).
-TEST(SlowModeTie, FoldFitsSolvedTogetherAreEachFoldsOwnFit) {
+namespace {
+
+// Three folds of 400-sample chunks over a record of an inexact tie (two
+// slow poles fitted with one), the first 500 samples a fourth group every
+// fold fits (a search window's warm-up).
+struct FoldCase {
+  std::vector<Eigen::MatrixXd> U, Y;
+  CoefficientSums sums;
+  std::vector<SampleWeights> W;
+};
+FoldCase foldCase() {
   const std::vector<double> slow = {kSlow, kSlower};
   const DioPwlObfModel truth =
       tiedTruth(tiedSlowMode(slowModel(slow), slow), {Eigen::Vector2d(0.3, 0.2), Eigen::Vector2d(-0.1, 0.25)}, 9, slow);
   const Record train = recordOf(truth, 13);
-  const std::vector<Eigen::MatrixXd> U{train.u}, Y{train.y};
-  // Three folds of 400-sample chunks; the first 500 samples a fourth group
-  // every fold fits (a search window's warm-up).
+  FoldCase c{{train.u}, {train.y}, {}, std::vector<SampleWeights>(3)};
   Eigen::VectorXi group(train.u.rows());
   for (Eigen::Index k = 0; k < group.size(); ++k) group(k) = k < 500 ? 3 : static_cast<int>((k / 400) % 3);
-  const CoefficientSums sums = coefficientSums(slowModel(), U, Y, {group}, 4);
-  std::vector<SampleWeights> W(3);
-  for (int f = 0; f < 3; ++f) W[static_cast<std::size_t>(f)] = {(group.array() != f).cast<double>().matrix()};
+  c.sums = coefficientSums(slowModel(), c.U, c.Y, {group}, 4);
+  for (int f = 0; f < 3; ++f) c.W[static_cast<std::size_t>(f)] = {(group.array() != f).cast<double>().matrix()};
+  return c;
+}
+
+}  // namespace
+
+// Cross-validation solves its folds together (solveFoldCoefficients): the
+// level rounds simulate every fold in one pass, the last round the misfit
+// alone. Each fold's fit is the one it gets alone, to the bit, per-output
+// and shared fractions, and the level step moved the fractions off the
+// increments' (the tie is inexact).
+TEST(SlowModeTie, FoldFitsSolvedTogetherAreEachFoldsOwnFit) {
+  const FoldCase c = foldCase();
+  for (const bool shared : {false, true}) {
+    CoefficientFitOptions o;
+    o.slow_mode = {{kSlow}, shared, true};
+    std::vector<DioPwlObfModel> together(3, slowModel());
+    const std::vector<CoefficientFitReport> reports = solveFoldCoefficients(together, c.sums, o, {c.U, c.Y, c.W});
+    ASSERT_EQ(reports.size(), 3u);
+    for (int f = 0; f < 3; ++f) {
+      const auto ff = static_cast<std::size_t>(f);
+      DioPwlObfModel alone = slowModel();
+      const LevelRecords records{c.U, c.Y, c.W[ff]};
+      const CoefficientFitReport r = solveCoefficients(alone, c.sums, f, o, &records);
+      for (std::size_t region = 0; region < alone.coefficients.size(); ++region)
+        for (std::size_t out = 0; out < 2; ++out)
+          EXPECT_EQ(together[ff].coefficients[region][out], alone.coefficients[region][out]) << "fold " << f;
+      for (std::size_t out = 0; out < 2; ++out) EXPECT_EQ(reports[ff].slow_fraction[out], r.slow_fraction[out]);
+      o.slow_mode.fractions_on_levels = false;
+      DioPwlObfModel increments = slowModel();
+      const CoefficientFitReport inc = solveCoefficients(increments, c.sums, f, o);
+      o.slow_mode.fractions_on_levels = true;
+      EXPECT_GT((inc.slow_fraction[0] - r.slow_fraction[0]).norm() + (inc.slow_fraction[1] - r.slow_fraction[1]).norm(),
+                1e-4)
+          << "fold " << f << (shared ? ", shared" : "");
+    }
+    EXPECT_THROW(solveFoldCoefficients(together, c.sums, o, {c.U, c.Y, std::vector<SampleWeights>(2)}),
+                 std::invalid_argument);
+  }
+  std::vector<DioPwlObfModel> mixed{slowModel(), slowModel({kSlow, kSlower}), slowModel()};
   CoefficientFitOptions o;
   o.slow_mode = {{kSlow}, false, true};
-  std::vector<DioPwlObfModel> together(3, slowModel());
-  const std::vector<CoefficientFitReport> reports = solveFoldCoefficients(together, sums, o, {U, Y, W});
-  ASSERT_EQ(reports.size(), 3u);
-  for (int f = 0; f < 3; ++f) {
-    const auto ff = static_cast<std::size_t>(f);
-    DioPwlObfModel alone = slowModel();
-    const LevelRecords records{U, Y, W[ff]};
-    const CoefficientFitReport r = solveCoefficients(alone, sums, f, o, &records);
-    for (std::size_t region = 0; region < alone.coefficients.size(); ++region)
-      for (std::size_t out = 0; out < 2; ++out)
-        EXPECT_EQ(together[ff].coefficients[region][out], alone.coefficients[region][out]) << "fold " << f;
-    for (std::size_t out = 0; out < 2; ++out) EXPECT_EQ(reports[ff].slow_fraction[out], r.slow_fraction[out]);
-    o.slow_mode.fractions_on_levels = false;
-    DioPwlObfModel increments = slowModel();
-    const CoefficientFitReport inc = solveCoefficients(increments, sums, f, o);
-    o.slow_mode.fractions_on_levels = true;
-    EXPECT_GT((inc.slow_fraction[0] - r.slow_fraction[0]).norm() + (inc.slow_fraction[1] - r.slow_fraction[1]).norm(),
-              1e-4)
-        << "fold " << f;
-  }
-  EXPECT_THROW(solveFoldCoefficients(together, sums, o, {U, Y, std::vector<SampleWeights>(2)}), std::invalid_argument);
-  // A misfit-only query gives the misfit of the step's query, and no step;
-  // a query answered among others is answered as alone.
+  EXPECT_THROW(solveFoldCoefficients(mixed, c.sums, o, {c.U, c.Y, c.W}), std::invalid_argument);
+}
+
+// A misfit-only query gives the misfit of the step's query and no step; a
+// query answered among others is answered as alone.
+TEST(SlowModeTie, LevelStepsAnsweredTogetherAreAnsweredAsAlone) {
+  const FoldCase c = foldCase();
   TiedSlowMode tie = tiedSlowMode(slowModel(), {kSlow});
   std::mt19937 rng(5);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -301,13 +327,20 @@ TEST(SlowModeTie, FoldFitsSolvedTogetherAreEachFoldsOwnFit) {
   for (auto& region : tie.fast.coefficients)
     for (std::size_t out = 0; out < 2; ++out)
       region[out] = Eigen::VectorXd::NullaryExpr(tie.fast.regressorSize(static_cast<int>(out)), [&] { return g(rng); });
-  const SlowFractions at = reports[0].slow_fraction;
-  const std::vector<LevelFractionStep> steps = levelFractionSteps(
-      slowModel(), {{tie, at, W[0], true}, {tie, at, W[0], false}, {tie, at, W[1], true}}, U, Y, false);
-  ASSERT_EQ(steps.size(), 3u);
-  EXPECT_EQ(steps[0].misfit, steps[1].misfit);
-  EXPECT_EQ(steps[1].alpha[0], at[0]);
-  EXPECT_EQ(steps[2].alpha[0], levelFractionStep(tie, slowModel(), at, {U, Y, W[1]}, false).alpha[0]);
+  const SlowFractions at = {fraction(0.05), fraction(-0.02)};
+  for (const bool shared : {false, true}) {
+    const std::vector<LevelFractionStep> steps = levelFractionSteps(
+        slowModel(), {{tie, at, c.W[0], true}, {tie, at, c.W[0], false}, {tie, at, c.W[1], true}}, c.U, c.Y, shared);
+    ASSERT_EQ(steps.size(), 3u);
+    EXPECT_EQ(steps[0].misfit, steps[1].misfit);
+    EXPECT_NE(steps[0].alpha[0], at[0]);
+    EXPECT_EQ(steps[1].alpha[0], at[0]);
+    EXPECT_EQ(steps[1].alpha[1], at[1]);
+    const LevelFractionStep alone = levelFractionStep(tie, slowModel(), at, {c.U, c.Y, c.W[1]}, shared);
+    EXPECT_EQ(steps[2].misfit, alone.misfit);
+    for (std::size_t out = 0; out < 2; ++out) EXPECT_EQ(steps[2].alpha[out], alone.alpha[out]);
+  }
+  EXPECT_TRUE(levelFractionSteps(slowModel(), {}, c.U, c.Y, false).empty());
 }
 
 // Creep (15%, 8 s) is far slower than the grid's step responses, so the

@@ -316,7 +316,7 @@ namespace {
 // marked). Each tile is read once for every set while it is in cache; each
 // set's sums are the same as alone.
 void inputSideIncrements(const ModelRegressors& reg, int o, Eigen::Index width,
-                         const std::vector<Eigen::VectorXd>& coefficients, std::vector<Eigen::MatrixXd*>& dy,
+                         const std::vector<Eigen::VectorXd>& coefficients, const std::vector<Eigen::MatrixXd*>& dy,
                          Eigen::Index row0) {
   const auto oo = static_cast<std::size_t>(o);
   const auto T = static_cast<Eigen::Index>(reg.schedule.size());
@@ -359,10 +359,11 @@ void outputSideIncrements(const DioPwlObfModel& model, const ModelRegressors& re
 // stacked form (input side) is given per output.
 void chunkIncrements(const std::vector<const DioPwlObfModel*>& models,
                      const std::vector<std::vector<Eigen::VectorXd>>& stacked, const ModelRegressors& reg,
-                     std::vector<Eigen::MatrixXd*>& dy, Eigen::Index row0) {
+                     const std::vector<Eigen::MatrixXd*>& dy, Eigen::Index row0) {
   const DioPwlObfModel& first = *models.front();
-  PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(first.outputCount()),
-             "modelIncrements: the regressors were made for another model");
+  for (const DioPwlObfModel* m : models)
+    PLSA_CHECK(reg.phi.size() == static_cast<std::size_t>(m->outputCount()),
+               "modelIncrements: the regressors were made for another model");
   if (first.schedule_side == ScheduleSide::kInput) {
     for (int o = 0; o < first.outputCount(); ++o)
       inputSideIncrements(reg, o, first.regressorSize(o), stacked[static_cast<std::size_t>(o)], dy, row0);
@@ -372,7 +373,7 @@ void chunkIncrements(const std::vector<const DioPwlObfModel*>& models,
 }
 
 // Input side: each output's stacked coefficients of every model ([output][model]).
-std::vector<std::vector<Eigen::VectorXd>> stackedCoefficients(const std::vector<const DioPwlObfModel*>& models) {
+std::vector<std::vector<Eigen::VectorXd>> coefficientsPerOutput(const std::vector<const DioPwlObfModel*>& models) {
   std::vector<std::vector<Eigen::VectorXd>> stacked;
   if (models.front()->schedule_side != ScheduleSide::kInput) return stacked;
   for (int o = 0; o < models.front()->outputCount(); ++o) {
@@ -388,7 +389,7 @@ Eigen::MatrixXd modelIncrements(const DioPwlObfModel& model, const ModelRegresso
   const std::vector<const DioPwlObfModel*> one{&model};
   Eigen::MatrixXd dy(static_cast<Eigen::Index>(reg.schedule.size()), model.outputCount());
   std::vector<Eigen::MatrixXd*> out{&dy};
-  chunkIncrements(one, stackedCoefficients(one), reg, out, 0);
+  chunkIncrements(one, coefficientsPerOutput(one), reg, out, 0);
   return dy;
 }
 
@@ -406,7 +407,7 @@ std::vector<Eigen::MatrixXd> modelIncrements(const std::vector<DioPwlObfModel>& 
   for (Eigen::MatrixXd& d : dy) out.push_back(&d);
   std::vector<const DioPwlObfModel*> each;
   for (const DioPwlObfModel& m : models) each.push_back(&m);
-  const std::vector<std::vector<Eigen::VectorXd>> stacked = stackedCoefficients(each);
+  const std::vector<std::vector<Eigen::VectorXd>> stacked = coefficientsPerOutput(each);
   RegressorStream stream(models.front(), u);
   ModelRegressors chunk;
   while (stream.next(chunk)) chunkIncrements(each, stacked, chunk, out, chunk.first_row);

@@ -451,17 +451,41 @@ CoefficientFitReport solveGroup(DioPwlObfModel& model, CoefficientSums::Group& t
   return fallBack(model, own, global);
 }
 
+namespace {
+
+// Interpolated and input-side structures solve one joint problem per output.
+bool jointProblem(const DioPwlObfModel& model) {
+  return model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
+}
+
+void checkSumsFit(const DioPwlObfModel& model, const CoefficientSums& sums, const char* who) {
+  PLSA_CHECK(static_cast<int>(sums.groups.front().count.size()) == model.partition.regionCount() &&
+                 static_cast<int>(sums.groups.front().J.size()) == model.outputCount(),
+             std::string(who) + ": the sums were made for another model structure");
+}
+
+// Fold fits share one structure: the regressors are made from the first.
+void checkSameStructure(const std::vector<DioPwlObfModel>& fits) {
+  const DioPwlObfModel& a = fits.front();
+  for (std::size_t f = 1; f < fits.size(); ++f) {
+    const DioPwlObfModel& b = fits[f];
+    bool same = b.inputCount() == a.inputCount() && b.outputCount() == a.outputCount() &&
+                b.schedule_side == a.schedule_side && b.partition.scheduling() == a.partition.scheduling() &&
+                b.partition.regionCount() == a.partition.regionCount();
+    for (int o = 0; same && o < a.outputCount(); ++o) same = b.regressorSize(o) == a.regressorSize(o);
+    PLSA_CHECK(same,
+               "solveFoldCoefficients: fold " + std::to_string(f) + "'s model has another structure than fold 0's");
+  }
+}
+
+}  // namespace
+
 CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientSums& sums, int leave_out,
                                        const CoefficientFitOptions& o, const LevelRecords* levels) {
   PLSA_CHECK(!sums.groups.empty() && leave_out >= -1 && leave_out < static_cast<int>(sums.groups.size()),
              "solveCoefficients: group to leave out must be -1 or one of the sums' groups");
-  const int R = model.partition.regionCount();
-  const int ny = model.outputCount();
-  const bool joint =
-      model.partition.scheduling() == Scheduling::kInterpolated || model.schedule_side == ScheduleSide::kInput;
-  PLSA_CHECK(
-      static_cast<int>(sums.groups.front().count.size()) == R && static_cast<int>(sums.groups.front().J.size()) == ny,
-      "solveCoefficients: the sums were made for another model structure");
+  checkSumsFit(model, sums, "solveCoefficients");
+  const bool joint = jointProblem(model);
   CoefficientSums::Group total = summedGroups(model, sums, leave_out, joint);
   if (o.slow_mode.poles.empty()) return solveGroup(model, total, joint, o);
   const SampleWeights none;
@@ -473,15 +497,18 @@ CoefficientFitReport solveCoefficients(DioPwlObfModel& model, const CoefficientS
 std::vector<CoefficientFitReport> solveFoldCoefficients(std::vector<DioPwlObfModel>& fits, const CoefficientSums& sums,
                                                         const CoefficientFitOptions& o, const FoldRecords& folds) {
   PLSA_CHECK(!fits.empty() && fits.size() <= sums.groups.size() && folds.weights.size() == fits.size(),
-             "solveFoldCoefficients: need a model and a weight set per fold, at most one fold per group of the sums");
+             "solveFoldCoefficients: " + std::to_string(fits.size()) + " fold models, " +
+                 std::to_string(folds.weights.size()) + " weight sets and " + std::to_string(sums.groups.size()) +
+                 " groups of sums: need a model and a weight set per fold, at most one fold per group");
+  checkSameStructure(fits);
+  checkSumsFit(fits.front(), sums, "solveFoldCoefficients");
   std::vector<CoefficientFitReport> reports;
   if (o.slow_mode.poles.empty()) {
     for (std::size_t f = 0; f < fits.size(); ++f)
       reports.push_back(solveCoefficients(fits[f], sums, static_cast<int>(f), o));
     return reports;
   }
-  const bool joint = fits.front().partition.scheduling() == Scheduling::kInterpolated ||
-                     fits.front().schedule_side == ScheduleSide::kInput;
+  const bool joint = jointProblem(fits.front());
   std::vector<CoefficientSums::Group> totals;
   for (std::size_t f = 0; f < fits.size(); ++f)
     totals.push_back(summedGroups(fits[f], sums, static_cast<int>(f), joint));

@@ -60,7 +60,7 @@ void accumulateRecord(const std::vector<Eigen::MatrixXd>& level, const Eigen::Ma
 // The step from a fit's normals: each output's level eliminated for the
 // misfit, then the fractions' least squares (none when only the misfit was
 // asked: no direction was simulated).
-LevelFractionStep stepFrom(LevelNormals& n, const SlowFractions& alpha, Eigen::Index fractions, bool shared) {
+LevelFractionStep stepFrom(const LevelNormals& n, const SlowFractions& alpha, Eigen::Index fractions, bool shared) {
   const auto ny = static_cast<Eigen::Index>(alpha.size()), np = static_cast<Eigen::Index>(alpha.front().size());
   LevelFractionStep step{alpha, n.ee};
   for (Eigen::Index o = 0; o < ny; ++o) {
@@ -85,6 +85,7 @@ std::vector<LevelFractionStep> levelFractionSteps(const DioPwlObfModel& structur
                                                   const std::vector<Eigen::MatrixXd>& U,
                                                   const std::vector<Eigen::MatrixXd>& Y, bool shared) {
   PLSA_CHECK(U.size() == Y.size(), "levelFractionSteps: need one output record per input record");
+  if (queries.empty()) return {};
   std::vector<DioPwlObfModel> models;  // every query's, one after another
   std::vector<std::size_t> first;
   std::vector<LevelNormals> normals;

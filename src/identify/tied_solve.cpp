@@ -132,7 +132,7 @@ void mapOntoBanks(DioPwlObfModel& model, const TiedSlowMode& tie, const SlowFrac
 
 }  // namespace
 
-std::vector<CoefficientFitReport> solveTied(const std::vector<TiedFit>& fits, const CoefficientFitOptions& o,
+std::vector<CoefficientFitReport> solveTied(std::vector<TiedFit> fits, const CoefficientFitOptions& o,
                                             const std::vector<Eigen::MatrixXd>* U,
                                             const std::vector<Eigen::MatrixXd>* Y) {
   PLSA_CHECK(!fits.empty() && (U == nullptr) == (Y == nullptr), "solveTied: need fits, and both records or neither");

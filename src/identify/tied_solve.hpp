@@ -24,7 +24,7 @@ struct TiedFit {
 /// (options.slow_mode): fractions on the increments, then, when asked and the
 /// records U and Y (model frame) are given, on the simulated level, every fit
 /// simulated in the same pass; mapped back onto the models' banks.
-std::vector<CoefficientFitReport> solveTied(const std::vector<TiedFit>& fits, const CoefficientFitOptions& o,
+std::vector<CoefficientFitReport> solveTied(std::vector<TiedFit> fits, const CoefficientFitOptions& o,
                                             const std::vector<Eigen::MatrixXd>* U,
                                             const std::vector<Eigen::MatrixXd>* Y);
 

@@ -31,8 +31,8 @@ LevelFractionStep levelFractionStep(const TiedSlowMode& tie, const DioPwlObfMode
 
 /// One fit's part in levelFractionSteps: its tie (tie.fast solved at
 /// `alpha`), its weights over the records (empty: every sample once), and
-/// whether the step is wanted or the misfit alone (which simulates one model
-/// instead of one per slow pole more).
+/// whether the step is wanted or the misfit alone (the misfit needs the model
+/// at the fractions simulated, the step one more model per slow pole).
 struct LevelFractionQuery {
   const TiedSlowMode& tie;
   SlowFractions alpha;

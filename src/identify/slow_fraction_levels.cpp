@@ -61,7 +61,8 @@ void accumulateRecord(const std::vector<Eigen::MatrixXd>& level, const Eigen::Ma
 // misfit, then the fractions' least squares (none when only the misfit was
 // asked: no direction was simulated).
 LevelFractionStep stepFrom(const LevelNormals& n, const SlowFractions& alpha, Eigen::Index fractions, bool shared) {
-  const auto ny = static_cast<Eigen::Index>(alpha.size()), np = static_cast<Eigen::Index>(alpha.front().size());
+  const auto ny = static_cast<Eigen::Index>(alpha.size());
+  const Eigen::Index np = shared ? fractions : fractions / ny;  // the directions simulated
   LevelFractionStep step{alpha, n.ee};
   for (Eigen::Index o = 0; o < ny; ++o) {
     const double c = n.N(fractions + o, fractions + o);

@@ -276,29 +276,44 @@ double effectSize(sim::IndependentPhysics truth, const Eigen::MatrixXd& commands
   return 100.0 * std::sqrt((with.outputs - without.outputs).squaredNorm() / std::max(1e-12, spread));
 }
 
-// A case's runs as logs `plsa diagnose` reads (angles, as a tip sensor gives them).
-void saveRuns(const std::vector<RunData>& runs, const std::string& dir, const std::string& case_name) {
+// A run as a tip sensor's logger writes it (angles, time from the first
+// sample): what --save-runs writes and what the case is diagnosed from.
+io::Log caseLog(const RunData& r, const std::string& case_name, const std::string& part) {
+  io::Log log;
+  log.source = case_name + " (" + part + ")";
+  log.columns = io::standard_columns::recorded();
+  log.metadata["source"] = "plsa diagnose-selfcheck, case " + case_name;
+  log.data.resize(r.samples(), 9);
+  for (Eigen::Index i = 0; i < r.samples(); ++i) {
+    log.data(i, 0) = static_cast<double>(i) * r.sample_time_s;
+    log.data(i, 7) = r.outputs.row(i).norm();
+    log.data(i, 8) = std::atan2(r.outputs(i, 1), r.outputs(i, 0)) * 180.0 / kPi;
+  }
+  log.data.middleCols(1, 3) = r.commands;
+  log.data.middleCols(4, 3) = r.pressures;
+  return log;
+}
+
+// The case's runs as `plsa diagnose` reads them from those logs (the
+// angles back to the bending vector, the sample time from the time column,
+// how each run started detected from its data), so that a case saved with
+// --save-runs and diagnosed by the command gets the self-check's figures:
+// the calibrations' paths depend on the readings' last digits
+// (docs/diagnosis.md, 'How firm a case's figures are').
+std::vector<RunData> asLogged(const std::vector<io::Log>& logs) {
+  std::vector<RunData> runs;
+  for (const io::Log& log : logs) runs.push_back(runFromLog(log, RunColumns{}, allOff().max_pressure_bar));
+  return runs;
+}
+
+void saveRuns(const std::vector<io::Log>& logs, const std::string& dir, const std::string& case_name) {
   std::string stem;
   for (char ch : case_name) stem += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
   const char* part[] = {"train", "heldout"};
-  for (std::size_t k = 0; k < runs.size() && k < 2; ++k) {
-    const RunData& r = runs[k];
-    io::Log log;
-    log.columns = io::standard_columns::recorded();
-    log.metadata["source"] = "plsa diagnose-selfcheck, case " + case_name;
-    log.data.resize(r.samples(), 9);
-    for (Eigen::Index i = 0; i < r.samples(); ++i) {
-      log.data(i, 0) = static_cast<double>(i) * r.sample_time_s;
-      log.data(i, 7) = r.outputs.row(i).norm();
-      log.data(i, 8) = std::atan2(r.outputs(i, 1), r.outputs(i, 0)) * 180.0 / kPi;
-    }
-    log.data.middleCols(1, 3) = r.commands;
-    log.data.middleCols(4, 3) = r.pressures;
-    io::writeCsvLog(dir + "/" + stem + "_" + part[k] + ".csv", log);
-  }
+  for (std::size_t k = 0; k < logs.size() && k < 2; ++k)
+    io::writeCsvLog(dir + "/" + stem + "_" + part[k] + ".csv", logs[k]);
 }
 
-// The training and held-out runs of one case.
 std::vector<RunData> caseRuns(const Spec& spec, const SelfcheckOptions& o, SelfcheckCase& c) {
   std::mt19937_64 rng(spec.seed * 7919 + 13);
   const double rate = sim::SimConfig{}.sample_rate_hz;
@@ -419,8 +434,12 @@ SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
     c.withheld = spec.withheld;
     c.name = caseName(spec, o);
     if (o.log) o.log("selfcheck " + std::to_string(++number) + "/" + std::to_string(specs.size()) + ": " + c.name);
-    const std::vector<RunData> runs = caseRuns(spec, o, c);
-    if (!o.save_runs_dir.empty()) saveRuns(runs, o.save_runs_dir, c.name);
+    const std::vector<RunData> recorded = caseRuns(spec, o, c);
+    std::vector<io::Log> logs;
+    for (std::size_t k = 0; k < recorded.size(); ++k)
+      logs.push_back(caseLog(recorded[k], c.name, k == 0 ? "train" : "held-out"));
+    if (!o.save_runs_dir.empty()) saveRuns(logs, o.save_runs_dir, c.name);
+    const std::vector<RunData> runs = asLogged(logs);
     DiagnoseOptions dopt = o.diagnose;
     dopt.identified_reference = false;  // reported, never used to decide: not what is scored here
     if (!o.verbose)

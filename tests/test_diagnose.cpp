@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "plsa/diagnose/diagnosis.hpp"
+#include "plsa/diagnose/fill_law_estimate.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
 #include "support/headless_chromium.hpp"
 #include "support/sim_probes.hpp"
@@ -412,4 +413,64 @@ TEST(Diagnose, AGapNoCandidateModelsIsSaidSo) {
     EXPECT_NE(d.verdict.find("misses something no candidate models"), std::string::npos) << d.verdict;
   else
     EXPECT_EQ(d.confidence, "qualified") << d.verdict;
+}
+
+namespace {
+
+// A run of `truth` with white noise of `sigma` bar on each logged pressure.
+RunData withPressureNoise(RunData r, double sigma, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  for (Eigen::Index i = 0; i < r.pressures.size(); ++i) r.pressures.data()[i] += noise(rng);
+  return r;
+}
+
+}  // namespace
+
+TEST(FillLaw, ThePressureDependentLagIsReadOffTheLoggedPressures) {
+  // Fill and vent at different rates, a time constant growing with the
+  // pressure, a sub-linear drive and a transport delay: the fit of the
+  // pressures alone recovers them, and the nominal law (one time constant)
+  // is left with a residual several times the noise.
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.setEffectEnabled("pneumatic_lag", true);
+  truth.pneumatic_lag.formulation = "power";
+  auto& lag = truth.pneumatic_lag;
+  lag.fill_time_constant_s = 0.08, lag.vent_time_constant_s = 0.04, lag.exponent = 0.8;
+  lag.pressure_per_bar = 3.0, lag.delay_s = 0.03;
+  const std::vector<RunData> runs = {withPressureNoise(recorded(truth, 40, 21), 0.002, 1)};
+  FillLaw start;
+  start.fill_time_constant_s = start.vent_time_constant_s = truth.pneumatics.time_constant_s;
+  const FillLawEstimate e = fillLawFromPressures(runs, start);
+  ASSERT_TRUE(e.found);
+  // A start for the calibration, not the answer: each within a fifth.
+  EXPECT_NEAR(e.lag.fill_time_constant_s, 0.08, 0.016);
+  EXPECT_NEAR(e.lag.vent_time_constant_s, 0.04, 0.008);
+  EXPECT_NEAR(e.lag.exponent, 0.8, 0.08);
+  EXPECT_NEAR(e.lag.pressure_per_bar, 3.0, 0.6);
+  EXPECT_NEAR(e.lag.delay_s, 0.03, 0.01);
+  EXPECT_LT(e.lag_rms_bar, 0.003) << "the fitted law should leave about the 0.002 bar noise";
+  EXPECT_GT(e.nominal_rms_bar, 2.0 * e.lag_rms_bar);
+  EXPECT_NEAR(pressureMisfit(e.lag, runs), e.lag_rms_bar * e.lag_rms_bar, 1e-12);
+}
+
+TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.pneumatics.time_constant_s = 0.12;
+  const std::vector<RunData> runs = {withPressureNoise(recorded(truth, 40, 22), 0.002, 2)};
+  FillLaw start;  // 0.05 s, far from the truth
+  const FillLawEstimate e = fillLawFromPressures(runs, start);
+  ASSERT_TRUE(e.found);
+  EXPECT_NEAR(e.nominal.fill_time_constant_s, 0.12, 0.012);
+  EXPECT_EQ(e.nominal.vent_time_constant_s, e.nominal.fill_time_constant_s);
+  EXPECT_EQ(e.nominal.exponent, 1.0);
+  EXPECT_LT(e.nominal_rms_bar, 0.003);
+  // The full law has nothing to add: no growth with pressure, no delay to speak of.
+  EXPECT_GT(e.lag_rms_bar, 0.95 * e.nominal_rms_bar);
+  EXPECT_NEAR(e.lag.pressure_per_bar, 0.0, 0.5);
+  EXPECT_LT(e.lag.delay_s, 0.01);
+
+  RunData blind = runs[0];
+  blind.pressures.resize(0, 0);
+  EXPECT_FALSE(fillLawFromPressures({blind}, start).found) << "no pressures logged: nothing to fit";
 }

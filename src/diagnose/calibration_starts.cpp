@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "plsa/diagnose/fill_law_estimate.hpp"
 #include "plsa/core/parallel_for.hpp"
 #include "plsa/model/output_frame.hpp"  // kRadPerDeg
 
@@ -83,6 +84,23 @@ sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& tr
   return c;
 }
 
+// A pneumatic-lag start read off the logged pressures: the flow law fitted
+// to them alone (fill_law_estimate.hpp), its rate limit included (a nominal
+// calibration that mimicked slow filling at high pressure with a low limit
+// would otherwise hold the lag's start back).
+sim::SimConfig lagFromPressures(sim::SimConfig c, const FillLaw& law) {
+  auto& lag = c.pneumatic_lag;
+  lag.fill_time_constant_s = law.fill_time_constant_s;
+  lag.vent_time_constant_s = law.vent_time_constant_s;
+  lag.exponent = law.exponent;
+  lag.pressure_per_bar = law.pressure_per_bar;
+  lag.delay_s = law.delay_s;
+  c.pneumatics.max_rate_bar_per_s = law.max_rate_bar_per_s;
+  clampToRanges(c, "pneumatic_lag");
+  clampToRanges(c, "nominal");
+  return c;
+}
+
 // Starts for the nominal fit taken from the data: the static gain scaled by
 // regressing the measured bending on the simulated one, then a coarse grid
 // of bending frequency, damping and chamber time constant around it, ranked
@@ -90,7 +108,8 @@ sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& tr
 // far basin on physics unlike plsa's defaults, and every candidate was then
 // credited with what moving the nominal physics bought).
 std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const std::vector<RunData>& train,
-                                          const GapOptions& g, std::size_t keep, int& spent) {
+                                          const FillLawEstimate& fill, const GapOptions& g, std::size_t keep,
+                                          int& spent) {
   sim::SimConfig scaled = simulator;
   double num = 0.0, den = 0.0;
   for (const auto& run : train) {
@@ -104,14 +123,21 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
     scaled.elongation.strain_per_bar = std::clamp(scaled.elongation.strain_per_bar * k, 0.01, 5.0);
     scaled.elongation.quadratic = std::clamp(scaled.elongation.quadratic * k, -5.0, 5.0);
   }
+  // The chambers' time constants tried: the simulator's scaled, and with
+  // logged pressures the one (with its rate limit) that fits them.
+  std::vector<std::pair<double, double>> chambers;
+  for (double tc : {0.5, 1.0, 2.5})
+    chambers.emplace_back(scaled.pneumatics.time_constant_s * tc, scaled.pneumatics.max_rate_bar_per_s);
+  if (fill.found) chambers.emplace_back(fill.nominal.fill_time_constant_s, fill.nominal.max_rate_bar_per_s);
   std::vector<std::pair<double, sim::SimConfig>> ranked;
   for (double f : {0.6, 1.0, 1.6})
     for (double z : {0.35, 0.85, 1.8})
-      for (double tc : {0.5, 1.0, 2.5}) {
+      for (const auto& [tc, max_rate] : chambers) {
         sim::SimConfig c = scaled;
         c.bending.natural_freq_hz = std::clamp(c.bending.natural_freq_hz * f, 0.05, 20.0);
         c.bending.damping_ratio = z;
-        c.pneumatics.time_constant_s = std::clamp(c.pneumatics.time_constant_s * tc, 0.005, 2.0);
+        c.pneumatics.time_constant_s = std::clamp(tc, 0.005, 2.0);
+        c.pneumatics.max_rate_bar_per_s = std::clamp(max_rate, 0.05, 100.0);
         try {
           ++spent;
           ranked.emplace_back(measureGap(c, train, g).total, c);
@@ -136,9 +162,10 @@ void enableEffect(sim::SimConfig& c, const std::string& effect, bool flexible) {
 // across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis
 // both loop orientations (plays: the output lags; stops: steeper on
 // unloading, as elastoplastic or Bouc-Wen laws) with bands closing at zero
-// and fixed bands; for sensor bias the residual's offset and drift.
+// and fixed bands; for sensor bias the residual's offset and drift; for
+// the pneumatic lag's power law the fill law of the logged pressures.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train) {
+                                      const std::vector<RunData>& train, const FillLawEstimate& fill) {
   std::vector<sim::SimConfig> spread = {c};
   if (effect == "pneumatic_lag") lagTimesAtNominal(spread[0]);
   for (double u : {0.2, 0.6}) {
@@ -161,6 +188,8 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
         spread.push_back(trial);
       }
   if (effect == "sensor_bias") spread.push_back(biasFromResidual(c, train));
+  if (effect == "pneumatic_lag" && c.pneumatic_lag.formulation == "power" && fill.found)
+    spread.push_back(lagFromPressures(c, fill.lag));
   return spread;
 }
 
@@ -188,14 +217,15 @@ sim::SimConfig neutralStart(sim::SimConfig c, const std::string& effect) {
 // (a stop-type loop moves the static gain). Adds the runs spent to `spent`.
 sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
                                const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                               const CalibrationOptions& o, const Screening& screen, int& spent) {
+                               const FillLawEstimate& fill, const CalibrationOptions& o, const Screening& screen,
+                               int& spent) {
   CalibrationOptions quick = o;
   quick.max_evaluations = screen.evaluations;
   quick.evaluations_per_parameter = 0;
   quick.progress = nullptr;
   double best_gap = INFINITY;
   sim::SimConfig best = c;
-  for (const auto& s : spreadFor(c, effect, train)) {
+  for (const auto& s : spreadFor(c, effect, train, fill)) {
     try {
       if (screen.evaluations <= 0) {
         const double gap = measureGap(s, train, o.gap).total;
@@ -221,9 +251,10 @@ void enableCandidate(sim::SimConfig& c, const std::string& effect, const Diagnos
 // `spent`: the simulator runs of every stage (the gain regression and grid
 // count one per run each).
 CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::vector<RunData>& train,
-                                   const CalibrationOptions& nominal, const DiagnoseOptions& o, int& spent) {
+                                   const FillLawEstimate& fill, const CalibrationOptions& nominal,
+                                   const DiagnoseOptions& o, int& spent) {
   spent = 0;
-  const std::vector<sim::SimConfig> starts = nominalStarts(simulator, train, nominal.gap, 2, spent);
+  const std::vector<sim::SimConfig> starts = nominalStarts(simulator, train, fill, nominal.gap, 2, spent);
   std::vector<CalibrationResult> results(starts.size());
   CalibrationOptions quiet = nominal;
   quiet.progress = nullptr;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "plsa/diagnose/fill_law_estimate.hpp"
 #include "plsa/diagnose/calibration.hpp"
 #include "plsa/diagnose/diagnosis.hpp"
 
@@ -16,9 +17,10 @@ void enableCandidate(sim::SimConfig& c, const std::string& effect, const Diagnos
 
 /// Spread points for an effect (the simulator's own values, points across
 /// each parameter's range, designed hysteresis points, sensor bias from the
-/// residual); the first is the configuration itself.
+/// residual, the pneumatic lag from `fill` when found); the first is the
+/// configuration itself.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train);
+                                      const std::vector<RunData>& train, const FillLawEstimate& fill);
 
 /// The screening stage: a short calibration of `evaluations` simulator runs
 /// from each spread point, with the simulator's internal step at least
@@ -44,13 +46,16 @@ CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, co
 sim::SimConfig neutralStart(sim::SimConfig c, const std::string& effect);
 sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
                                const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                               const CalibrationOptions& o, const Screening& screen, int& spent);
+                               const FillLawEstimate& fill, const CalibrationOptions& o, const Screening& screen,
+                               int& spent);
 
 /// The nominal physics calibrated from the simulator as given and the best
-/// data-derived starts, then restarted from the best; `spent`: the runs of
-/// every stage.
+/// data-derived starts (`fill`: the chambers' time constant and rate limit
+/// from logged pressures, when found), then restarted from the best;
+/// `spent`: the runs of every stage.
 CalibrationResult calibrateNominal(const sim::SimConfig& simulator, const std::vector<RunData>& train,
-                                   const CalibrationOptions& nominal, const DiagnoseOptions& o, int& spent);
+                                   const FillLawEstimate& fill, const CalibrationOptions& nominal,
+                                   const DiagnoseOptions& o, int& spent);
 
 /// The evaluations the largest candidate's calibration may spend.
 int candidateBudget(sim::SimConfig c, const std::vector<std::string>& modules,

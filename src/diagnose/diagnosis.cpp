@@ -139,7 +139,8 @@ struct SelectionContext {
   const RunSplit& runs;
   const DiagnoseOptions& o;
   OutputMap map;
-  double step_s = 0.0;  ///< the internal step calibrations run at (0: as configured)
+  double step_s = 0.0;   ///< the internal step calibrations run at (0: as configured)
+  FillLawEstimate fill;  ///< the chambers' fill law from the training runs' logged pressures
 };
 
 // A calibration at the selection's internal step; the result carries the
@@ -190,6 +191,15 @@ std::vector<std::string> modulesWith(const std::vector<std::string>& selected, c
   return modules;
 }
 
+// The simulator's chambers as a fill law: the start of the fit to the
+// logged pressures.
+FillLaw chambersOf(const sim::SimConfig& c) {
+  FillLaw law;
+  law.fill_time_constant_s = law.vent_time_constant_s = c.pneumatics.time_constant_s;
+  law.max_rate_bar_per_s = c.pneumatics.max_rate_bar_per_s;
+  return law;
+}
+
 // Noise floor, the simulator as given, then the
 // nominal calibration: the baseline every candidate is measured against.
 CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
@@ -208,7 +218,7 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
   nominal_opts.progress = [&](int e, double best) {
     say(o, "  nominal calibration: " + std::to_string(e) + " evaluations, training gap " + pct(100 * std::sqrt(best)));
   };
-  const CalibrationResult base = calibrateNominal(simulator, r.train, nominal_opts, o, d.nominal_evaluations);
+  const CalibrationResult base = calibrateNominal(simulator, r.train, x.fill, nominal_opts, o, d.nominal_evaluations);
   CalibratedState s{base.config, {}, base.train_gap, base.fit, {}};
   s.heldout = measureGap(base.config, r.held, g, &s.fit, false);
   s.where = breakdownFor(base.config, r.held, s.fit, x.map);
@@ -241,7 +251,7 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
     for (const auto& e : remaining) {
       sim::SimConfig c = s.config;
       enableCandidate(c, e, o);
-      points = std::max(points, spreadFor(c, e, x.runs.train).size());
+      points = std::max(points, spreadFor(c, e, x.runs.train, x.fill).size());
     }
     CalibrationOptions screening = o.calibration;
     screening.max_evaluations = screen.evaluations * static_cast<int>(points);
@@ -279,9 +289,9 @@ StartTrial calibrateFromStart(const CalibratedState& s, const std::vector<std::s
   enableCandidate(c, e, o);
   const std::vector<std::string> modules = modulesWith(selected, e);
   StartTrial t;
-  const sim::SimConfig from = start == 0
-                                  ? neutralStart(c, e)
-                                  : bestSpreadStart(c, e, modules, x.runs.train, o.calibration, screen, t.evaluations);
+  const sim::SimConfig from =
+      start == 0 ? neutralStart(c, e)
+                 : bestSpreadStart(c, e, modules, x.runs.train, x.fill, o.calibration, screen, t.evaluations);
   t.calibrated = calibrateAtStep(from, modules, x, o.calibration);
   t.evaluations += t.calibrated.evaluations;
   return t;
@@ -484,7 +494,8 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   const RunSplit split = splitRuns(runs, o);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
-  SelectionContext x{split, o, d.map};
+  SelectionContext x{split, o, d.map, 0.0, {}};
+  x.fill = fillLawFromPressures(split.train, chambersOf(simulator));
   std::future<IdentifiedReference> reference;
   if (o.identified_reference)
     reference = startReference(split, o);

@@ -1,0 +1,46 @@
+// The chambers' fill law read off logged pressures alone: the diagnosis's
+// data-derived starts for the nominal chamber time constant and for the
+// pneumatic lag's calibration (docs/diagnosis.md).
+#pragma once
+
+#include <vector>
+
+#include "plsa/diagnose/run_data.hpp"
+
+namespace plsa::diagnose {
+
+/// The chambers' filling as plsa's simulator steps it (power flow law,
+/// docs/simulator.md): dp/dt = sign(d) 0.1 (|d| / 0.1)^exponent / (tau
+/// exp(per_bar p)), limited to +-max_rate, d the command `delay_s` earlier
+/// less the pressure p, tau the fill or the vent time constant by the sign
+/// of d. The nominal law is exponent 1, per_bar 0, no delay, one tau.
+struct FillLaw {
+  double fill_time_constant_s = 0.05, vent_time_constant_s = 0.05;
+  double exponent = 1.0, pressure_per_bar = 0.0, delay_s = 0.0;
+  double max_rate_bar_per_s = 8.0;
+};
+
+/// Both fits of the logged pressures; `found` is false when the runs log no
+/// pressures or have too few samples.
+struct FillLawEstimate {
+  bool found = false;
+  FillLaw nominal;  ///< one time constant and the rate limit free
+  FillLaw lag;      ///< every parameter free
+  double nominal_rms_bar = 0.0, lag_rms_bar = 0.0;  ///< the fits' pressure residuals
+};
+
+/// The mean squared pressure residual of `law` on the runs: each chamber's
+/// pressure stepped from its first logged value by the law (explicit steps
+/// of at most 5 ms that never overshoot the command), the command before
+/// the run 0 for a run recorded from rest and its first command for a
+/// settled one. Runs without pressures are skipped.
+double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
+
+/// Fits the nominal law from `start` (its time constant and rate limit),
+/// then the full law from that answer and from a pressure-dependent start
+/// (the better kept), by bounded BOBYQA on pressureMisfit, at most
+/// `evaluations` runs of the law each. A data-derived start, not a
+/// calibration: the simulator's other parameters play no part.
+FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations = 150);
+
+}  // namespace plsa::diagnose

@@ -1,0 +1,150 @@
+// The chambers' fill law from logged pressures (fill_law_estimate.hpp).
+#include "plsa/diagnose/fill_law_estimate.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+
+#include <nlopt.hpp>
+
+namespace plsa::diagnose {
+namespace {
+
+constexpr double kDriveUnit = 0.1;  ///< bar: the flow law's reference difference
+constexpr double kMaxFillStep = 0.005;  ///< s: the longest explicit step, as the simulator's default
+constexpr int kMinFillSamples = 50;
+
+/// One chamber's pressure stepped through a run; returns its squared
+/// residual against the logged pressure.
+double chamberMisfit(const FillLaw& law, const RunData& run, Eigen::Index c) {
+  const double t = run.sample_time_s;
+  const int substeps = std::max(1, static_cast<int>(std::ceil(t / kMaxFillStep - 1e-9)));
+  const double h = t / substeps;
+  const double before = run.start == RunStart::kSettled ? run.commands(0, c) : 0.0;
+  double p = run.pressures(0, c), sum = 0.0;
+  for (Eigen::Index i = 0; i + 1 < run.samples(); ++i) {
+    for (int s = 0; s < substeps; ++s) {
+      // A row's command drives the sample time that ends at the row (the
+      // simulator steps, then logs), `delay_s` late.
+      const double at = (static_cast<double>(i) * t + (s + 1) * h - law.delay_s) / t;
+      const Eigen::Index j = static_cast<Eigen::Index>(std::ceil(at - 1e-9));
+      const double cmd = j < 0 ? before : run.commands(std::min(j, run.samples() - 1), c);
+      const double d = cmd - p;
+      if (d == 0.0) continue;
+      double tau = d > 0 ? law.fill_time_constant_s : law.vent_time_constant_s;
+      if (law.pressure_per_bar != 0.0) tau *= std::exp(law.pressure_per_bar * p);
+      const double drive =
+          law.exponent == 1.0 ? d : std::copysign(kDriveUnit * std::pow(std::abs(d) / kDriveUnit, law.exponent), d);
+      const double step = std::clamp(drive / tau, -law.max_rate_bar_per_s, law.max_rate_bar_per_s) * h;
+      p += std::abs(step) < std::abs(d) ? step : d;  // never past the command
+    }
+    const double e = p - run.pressures(i + 1, c);
+    sum += e * e;
+  }
+  return sum;
+}
+
+/// A law's free parameters in [0, 1] each (logarithmic for the time
+/// constants and the rate limit), within the simulator's parameter ranges.
+struct FillAxis {
+  double FillLaw::*field;
+  double lower, upper;
+  bool log;
+  double to01(double v) const {
+    v = std::clamp(v, lower, upper);
+    return log ? std::log(v / lower) / std::log(upper / lower) : (v - lower) / (upper - lower);
+  }
+  double from01(double u) const { return log ? lower * std::pow(upper / lower, u) : lower + u * (upper - lower); }
+};
+
+const FillAxis kFill{&FillLaw::fill_time_constant_s, 0.005, 2.0, true};
+const FillAxis kVent{&FillLaw::vent_time_constant_s, 0.005, 2.0, true};
+const FillAxis kExponent{&FillLaw::exponent, 0.3, 1.0, false};
+const FillAxis kPerBar{&FillLaw::pressure_per_bar, -4.0, 8.0, false};
+const FillAxis kDelay{&FillLaw::delay_s, 0.0, 0.5, false};
+const FillAxis kMaxRate{&FillLaw::max_rate_bar_per_s, 0.05, 100.0, true};
+
+struct FillFit {
+  FillLaw law;
+  double misfit = INFINITY;
+};
+
+/// BOBYQA over `axes` from `start`; `tied` keeps the vent time constant at
+/// the fill one (the nominal law's single time constant).
+FillFit fitAxes(const std::vector<RunData>& runs, const FillLaw& start, const std::vector<FillAxis>& axes, bool tied,
+            int evaluations) {
+  auto lawAt = [&](const double* u) {
+    FillLaw law = start;
+    for (std::size_t k = 0; k < axes.size(); ++k) law.*(axes[k].field) = axes[k].from01(u[k]);
+    if (tied) law.vent_time_constant_s = law.fill_time_constant_s;
+    return law;
+  };
+  std::function<double(const double*)> objective = [&](const double* u) { return pressureMisfit(lawAt(u), runs); };
+  std::vector<double> x(axes.size());
+  for (std::size_t k = 0; k < axes.size(); ++k) x[k] = axes[k].to01(start.*(axes[k].field));
+  nlopt::opt opt(nlopt::LN_BOBYQA, static_cast<unsigned>(axes.size()));
+  opt.set_lower_bounds(std::vector<double>(axes.size(), 0.0));
+  opt.set_upper_bounds(std::vector<double>(axes.size(), 1.0));
+  opt.set_initial_step(std::vector<double>(axes.size(), 0.1));
+  opt.set_maxeval(evaluations);
+  opt.set_ftol_rel(1e-6);
+  opt.set_min_objective(
+      [](unsigned, const double* u, double*, void* f) {
+        const double v = (*static_cast<std::function<double(const double*)>*>(f))(u);
+        return std::isfinite(v) ? v : 1e30;
+      },
+      &objective);
+  double fmin = objective(x.data());
+  try {
+    opt.optimize(x, fmin);
+  } catch (const nlopt::roundoff_limited&) {
+    // The best point seen stands.
+  } catch (const std::runtime_error&) {
+  }
+  return {lawAt(x.data()), pressureMisfit(lawAt(x.data()), runs)};
+}
+
+}  // namespace
+
+double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs) {
+  double sum = 0.0;
+  Eigen::Index n = 0;
+  for (const RunData& run : runs) {
+    if (!run.hasPressures() || run.samples() < 2) continue;
+    for (Eigen::Index c = 0; c < 3; ++c) sum += chamberMisfit(law, run, c);
+    n += 3 * (run.samples() - 1);
+  }
+  return n > 0 ? sum / static_cast<double>(n) : INFINITY;
+}
+
+FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations) {
+  FillLawEstimate e;
+  Eigen::Index samples = 0;
+  for (const RunData& run : runs) {
+    if (!run.hasPressures() || !(run.sample_time_s > 0)) return e;
+    samples += run.samples();
+  }
+  if (samples < kMinFillSamples) return e;
+  FillLaw linear = start;
+  linear.exponent = 1.0, linear.pressure_per_bar = 0.0, linear.delay_s = 0.0;
+  const FillFit nominal = fitAxes(runs, linear, {kFill, kMaxRate}, true, evaluations);
+  // The full law from the nominal answer, and from a pressure-dependent one
+  // (a time constant growing with the pressure is a basin of its own).
+  const std::vector<FillAxis> all = {kFill, kVent, kExponent, kPerBar, kDelay, kMaxRate};
+  FillFit lag = fitAxes(runs, nominal.law, all, false, evaluations);
+  FillLaw growing = nominal.law;
+  growing.pressure_per_bar = 3.0;
+  growing.fill_time_constant_s = growing.vent_time_constant_s = nominal.law.fill_time_constant_s / 2.0;
+  const FillFit other = fitAxes(runs, growing, all, false, evaluations);
+  if (other.misfit < lag.misfit) lag = other;
+  e.found = std::isfinite(nominal.misfit) && std::isfinite(lag.misfit);
+  e.nominal = nominal.law;
+  e.lag = lag.misfit <= nominal.misfit ? lag.law : nominal.law;
+  e.nominal_rms_bar = std::sqrt(nominal.misfit);
+  e.lag_rms_bar = std::sqrt(std::min(lag.misfit, nominal.misfit));
+  return e;
+}
+
+}  // namespace plsa::diagnose

@@ -495,7 +495,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
   SelectionContext x{split, o, d.map, 0.0, {}};
-  x.fill = fillLawFromPressures(split.train, chambersOf(simulator));
+  x.fill = fillLawFromPressures(split.train, chambersOf(simulator), 120, o.threads);
   std::future<IdentifiedReference> reference;
   if (o.identified_reference)
     reference = startReference(split, o);

@@ -9,12 +9,15 @@
 
 #include <nlopt.hpp>
 
+#include "plsa/core/parallel_for.hpp"
+
 namespace plsa::diagnose {
 namespace {
 
-constexpr double kDriveUnit = 0.1;  ///< bar: the flow law's reference difference
+constexpr double kDriveUnit = 0.1;      ///< bar: the flow law's reference difference
 constexpr double kMaxFillStep = 0.005;  ///< s: the longest explicit step, as the simulator's default
 constexpr int kMinFillSamples = 50;
+constexpr Eigen::Index kMaxFillSamples = 4800;  ///< a minute at 80 Hz: the law is well fixed by then
 
 /// One chamber's pressure stepped through a run; returns its squared
 /// residual against the logged pressure.
@@ -74,7 +77,7 @@ struct FillFit {
 /// BOBYQA over `axes` from `start`; `tied` keeps the vent time constant at
 /// the fill one (the nominal law's single time constant).
 FillFit fitAxes(const std::vector<RunData>& runs, const FillLaw& start, const std::vector<FillAxis>& axes, bool tied,
-            int evaluations) {
+                int evaluations) {
   auto lawAt = [&](const double* u) {
     FillLaw law = start;
     for (std::size_t k = 0; k < axes.size(); ++k) law.*(axes[k].field) = axes[k].from01(u[k]);
@@ -101,9 +104,25 @@ FillFit fitAxes(const std::vector<RunData>& runs, const FillLaw& start, const st
     opt.optimize(x, fmin);
   } catch (const nlopt::roundoff_limited&) {
     // The best point seen stands.
-  } catch (const std::runtime_error&) {
-  }
+  } catch (const std::runtime_error&) {}
   return {lawAt(x.data()), pressureMisfit(lawAt(x.data()), runs)};
+}
+
+/// The runs' first kMaxFillSamples samples in all (a run past them cut).
+std::vector<RunData> firstMinute(const std::vector<RunData>& runs) {
+  std::vector<RunData> head;
+  Eigen::Index left = kMaxFillSamples;
+  for (const RunData& run : runs) {
+    if (left < 2) break;
+    RunData r = run;
+    const Eigen::Index n = std::min(run.samples(), left);
+    r.commands = run.commands.topRows(n);
+    r.outputs = run.outputs.topRows(n);
+    r.pressures = run.pressures.topRows(n);
+    head.push_back(std::move(r));
+    left -= n;
+  }
+  return head;
 }
 
 }  // namespace
@@ -119,26 +138,28 @@ double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs) {
   return n > 0 ? sum / static_cast<double>(n) : INFINITY;
 }
 
-FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations) {
+FillLawEstimate fillLawFromPressures(const std::vector<RunData>& all_runs, const FillLaw& start, int evaluations,
+                                     int threads) {
   FillLawEstimate e;
-  Eigen::Index samples = 0;
-  for (const RunData& run : runs) {
+  for (const RunData& run : all_runs)
     if (!run.hasPressures() || !(run.sample_time_s > 0)) return e;
-    samples += run.samples();
-  }
+  const std::vector<RunData> runs = firstMinute(all_runs);
+  Eigen::Index samples = 0;
+  for (const RunData& run : runs) samples += run.samples();
   if (samples < kMinFillSamples) return e;
   FillLaw linear = start;
   linear.exponent = 1.0, linear.pressure_per_bar = 0.0, linear.delay_s = 0.0;
   const FillFit nominal = fitAxes(runs, linear, {kFill, kMaxRate}, true, evaluations);
   // The full law from the nominal answer, and from a pressure-dependent one
   // (a time constant growing with the pressure is a basin of its own).
-  const std::vector<FillAxis> all = {kFill, kVent, kExponent, kPerBar, kDelay, kMaxRate};
-  FillFit lag = fitAxes(runs, nominal.law, all, false, evaluations);
+  const std::vector<FillAxis> every = {kFill, kVent, kExponent, kPerBar, kDelay, kMaxRate};
   FillLaw growing = nominal.law;
   growing.pressure_per_bar = 3.0;
   growing.fill_time_constant_s = growing.vent_time_constant_s = nominal.law.fill_time_constant_s / 2.0;
-  const FillFit other = fitAxes(runs, growing, all, false, evaluations);
-  if (other.misfit < lag.misfit) lag = other;
+  const FillLaw from[2] = {nominal.law, growing};
+  FillFit full[2];
+  parallelFor(2, threads, [&](std::size_t i) { full[i] = fitAxes(runs, from[i], every, false, evaluations); });
+  const FillFit& lag = full[1].misfit < full[0].misfit ? full[1] : full[0];
   e.found = std::isfinite(nominal.misfit) && std::isfinite(lag.misfit);
   e.nominal = nominal.law;
   e.lag = lag.misfit <= nominal.misfit ? lag.law : nominal.law;

@@ -24,8 +24,8 @@ struct FillLaw {
 /// pressures or have too few samples.
 struct FillLawEstimate {
   bool found = false;
-  FillLaw nominal;  ///< one time constant and the rate limit free
-  FillLaw lag;      ///< every parameter free
+  FillLaw nominal;                                  ///< one time constant and the rate limit free
+  FillLaw lag;                                      ///< every parameter free
   double nominal_rms_bar = 0.0, lag_rms_bar = 0.0;  ///< the fits' pressure residuals
 };
 
@@ -38,9 +38,11 @@ double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
 
 /// Fits the nominal law from `start` (its time constant and rate limit),
 /// then the full law from that answer and from a pressure-dependent start
-/// (the better kept), by bounded BOBYQA on pressureMisfit, at most
-/// `evaluations` runs of the law each. A data-derived start, not a
-/// calibration: the simulator's other parameters play no part.
-FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations = 150);
+/// (the better kept; the two on `threads` threads), by bounded BOBYQA on
+/// pressureMisfit over the runs' first minute at 80 Hz (4800 samples in
+/// all), at most `evaluations` runs of the law each. A data-derived start,
+/// not a calibration: the simulator's other parameters play no part.
+FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations = 120,
+                                     int threads = 1);
 
 }  // namespace plsa::diagnose

@@ -114,6 +114,7 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
                     {"single_top1", r.single_top1},
                     {"pair_cases", r.pair_cases},
                     {"pair_top2", r.pair_top2},
+                    {"pair_both_selected", r.pair_both_selected},
                     {"null_cases", r.null_cases},
                     {"null_clean", r.null_clean},
                     {"cases_with_spurious", r.cases_with_spurious},

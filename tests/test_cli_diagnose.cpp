@@ -1,6 +1,7 @@
 // plsa diagnose and diagnose-selfcheck as a user runs them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -96,6 +97,37 @@ TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {
   EXPECT_EQ(j["cases"][1]["formulation"], "hysteresis prandtl_ishlinskii");
   EXPECT_TRUE(j["cases"][2]["selected"].empty()) << "the null case claimed an effect";
   EXPECT_NE(slurp(file("stdout.txt")).find("confusion matrix"), std::string::npos);
+}
+
+TEST_F(Cli, SelfcheckCountsPairsByTheirRankingAndByWhatWasSelected) {
+  // The eight pairs on short runs and small budgets (a couple of seconds): the
+  // summary's pair counts are those of the cases it lists, read from round 1's
+  // top two and from the selection.
+  const int rc =
+      run("diagnose-selfcheck --effects creep --seeds 1 --null 0 --train-s 10 --heldout-s 10 --evaluations 20 "
+          "--evaluations-per-parameter 0 --screen-evaluations 0 --out " +
+          file("pairs.json"));
+  ASSERT_TRUE(rc == 0 || rc == 1) << err_;
+  const auto j = nlohmann::json::parse(slurp(file("pairs.json")));
+  int pairs = 0, top2 = 0, selected = 0;
+  for (const auto& c : j["cases"]) {
+    const auto& w = c["withheld"];
+    if (w.size() != 2) continue;
+    ++pairs;
+    auto among = [&](const nlohmann::json& list) {
+      int n = 0;
+      for (const auto& e : w) n += std::find(list.begin(), list.end(), e) != list.end();
+      return n == 2;
+    };
+    top2 += among(c["top2"]);
+    selected += among(c["selected"]);
+  }
+  EXPECT_EQ(pairs, 8);
+  EXPECT_EQ(j["summary"]["pair_cases"], pairs);
+  EXPECT_EQ(j["summary"]["pair_top2"], top2);
+  EXPECT_EQ(j["summary"]["pair_both_selected"], selected);
+  EXPECT_NE(slurp(file("stdout.txt")).find("pairs with both effects selected: " + std::to_string(selected) + "/8"),
+            std::string::npos);
 }
 
 TEST_F(Cli, IndependentSelfcheckCasesAreSavedForDiagnoseAndScored) {

@@ -2,7 +2,6 @@
 #include "plsa/diagnose/fill_law_estimate.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
@@ -15,7 +14,7 @@ namespace plsa::diagnose {
 namespace {
 
 constexpr double kDriveUnit = 0.1;      ///< bar: the flow law's reference difference
-constexpr double kMaxFillStep = 0.005;  ///< s: the longest explicit step, as the simulator's default
+constexpr double kMaxFillStep = 0.005;  ///< s: the longest explicit step (calibrations run at 4 ms where they can)
 constexpr int kMinFillSamples = 50;
 constexpr Eigen::Index kMaxFillSamples = 4800;  ///< a minute at 80 Hz: the law is well fixed by then
 

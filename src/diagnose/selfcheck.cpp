@@ -159,9 +159,11 @@ std::string SelfcheckResult::summary() const {
   std::snprintf(line, sizeof line,
                 "single cases with a calibrated gap over twice the noise floor: %d/%d, the withheld effect named "
                 "first in %d of them; true-effect shrink of the gap above the noise floor, median over the %d cases "
-                "(single or pair) with such a gap: %s; verdicts: %d uncertain, %d qualified\n",
+                "(single or pair) with such a gap: %s; pairs with both effects selected: %d/%d; verdicts: %d "
+                "uncertain, %d qualified\n",
                 gap_single_cases, single_cases, gap_single_top1, cases_above_noise,
-                roundedPercent(median_true_shrink_above_noise).c_str(), uncertain, qualified);
+                roundedPercent(median_true_shrink_above_noise).c_str(), pair_both_selected, pair_cases, uncertain,
+                qualified);
   o << line;
   return o.str();
 }
@@ -387,6 +389,7 @@ void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, Selfcheck
     c.pass = both;
     ++res.pair_cases;
     res.pair_top2 += both;
+    res.pair_both_selected += std::count_if(d.selected.begin(), d.selected.end(), withheld) == 2;
     shrinks.push_back(c.true_effect_shrink);
   } else {
     c.pass = d.selected.empty();

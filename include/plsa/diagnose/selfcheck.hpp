@@ -85,6 +85,10 @@ struct SelfcheckResult {
   /// close), and how many of them named the withheld effect first. Reported
   /// beside the targets, which count every case.
   int gap_single_cases = 0, gap_single_top1 = 0;
+  /// Pairs whose diagnosis selected both withheld effects (reported beside
+  /// pair_top2, which reads round 1's ranking: a pair can be named in full
+  /// with a third effect second in round 1).
+  int pair_both_selected = 0;
   int uncertain = 0, qualified = 0;  ///< verdicts with that confidence
   double min_true_shrink = 0, median_true_shrink = 0;
   /// Median true_effect_shrink_above_noise over the cases where it is

@@ -104,19 +104,23 @@ FillFit fitAxes(const std::vector<RunData>& runs, const FillLaw& start, const st
   } catch (const nlopt::roundoff_limited&) {
     // The best point seen stands.
   } catch (const std::runtime_error&) {}
-  return {lawAt(x.data()), pressureMisfit(lawAt(x.data()), runs)};
+  const FillLaw law = lawAt(x.data());
+  return {law, pressureMisfit(law, runs)};
 }
 
-/// The runs' first kMaxFillSamples samples in all (a run past them cut).
+/// The runs' first kMaxFillSamples samples in all (a run past them cut),
+/// with what the fit reads: commands, pressures, sample time and start.
 std::vector<RunData> firstMinute(const std::vector<RunData>& runs) {
   std::vector<RunData> head;
   Eigen::Index left = kMaxFillSamples;
   for (const RunData& run : runs) {
     if (left < 2) break;
-    RunData r = run;
     const Eigen::Index n = std::min(run.samples(), left);
+    RunData r;
+    r.name = run.name;
+    r.sample_time_s = run.sample_time_s;
+    r.start = run.start;
     r.commands = run.commands.topRows(n);
-    r.outputs = run.outputs.topRows(n);
     r.pressures = run.pressures.topRows(n);
     head.push_back(std::move(r));
     left -= n;

@@ -283,6 +283,24 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
   EXPECT_EQ(p.predict(41, Eigen::MatrixXd(0, 1), out), PredictorStatus::kBadShape);
   EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Zero(4, 2), out), PredictorStatus::kBadShape);
   EXPECT_EQ(p.predict(5, Eigen::MatrixXd::Constant(4, 1, nan), out), PredictorStatus::kNotFinite);
+  // One bad entry among finite ones, at either end and in the middle of a
+  // plan long enough for the vector sum; the largest finite values pass.
+  for (const double bad : {nan, inf, -inf})
+    for (const int row : {0, 7, 38}) {
+      Eigen::MatrixXd plan = Eigen::MatrixXd::Constant(39, 1, 0.3);
+      plan(row, 0) = bad;
+      EXPECT_EQ(p.predict(40, plan, out), PredictorStatus::kNotFinite) << bad << " at row " << row;
+    }
+  Eigen::MatrixXd extreme = Eigen::MatrixXd::Constant(39, 1, 0.3);
+  extreme(3, 0) = std::numeric_limits<double>::max();
+  extreme(4, 0) = -std::numeric_limits<double>::max();
+  extreme(5, 0) = -0.0;
+  extreme(6, 0) = std::numeric_limits<double>::denorm_min();
+  EXPECT_EQ(p.predict(40, extreme, out), PredictorStatus::kOk);
+  // A plan that is a block of a larger matrix is read in its own rows only.
+  Eigen::MatrixXd wider = Eigen::MatrixXd::Constant(41, 1, nan);
+  wider.middleRows(1, 39).setConstant(0.3);
+  EXPECT_EQ(p.predict(40, wider.middleRows(1, 39), out), PredictorStatus::kOk);
   // A gap (more than 2.5 sample times): restarted at rest, the prediction is the sample itself.
   EXPECT_EQ(p.update((t + 3) * kDt, one(0.45), one(7.0)), PredictorStatus::kTimeGap);
   ASSERT_EQ(p.predict(40, Eigen::MatrixXd(0, 1), out), PredictorStatus::kOk);

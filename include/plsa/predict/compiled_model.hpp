@@ -150,10 +150,14 @@ struct CompiledModel {
 };
 
 /// The scheduling inputs' lag, one sample on: its next value from `lagged`
-/// toward u; once within rounding of u it is u, so a held input settles the
-/// schedule exactly (and the predictor takes its held path).
+/// toward u. A planned prediction steps it so (no branch on its one-step
+/// chain); the predictor's own state takes lagTowards.
+inline double lagStep(double lagged, double u, double pole) noexcept { return pole * lagged + (1.0 - pole) * u; }
+
+/// lagStep, and once within rounding of u it is u, so a held input settles
+/// the schedule exactly (and the predictor takes its held path).
 inline double lagTowards(double lagged, double u, double pole) noexcept {
-  const double next = pole * lagged + (1.0 - pole) * u;
+  const double next = lagStep(lagged, u, pole);
   const double scale = std::abs(u) > 1e-3 ? std::abs(u) : 1e-3;
   return std::abs(next - u) <= 1e-12 * scale ? u : next;
 }

@@ -23,6 +23,13 @@ namespace plsa {
 /// Whether this processor runs the AVX2+FMA versions of the predictor's kernels.
 inline bool predictorUsesAvx2() noexcept { return simd::cpuHasAvx2Fma(); }
 
+/// Whether every entry of a plan is finite, without a branch per entry: x * 0
+/// is a signed zero for a finite x and NaN for an infinite or NaN one, so
+/// their sum is zero exactly when all are finite (Eigen sums it in vectors).
+inline bool finiteEverywhere(const Eigen::Ref<const Eigen::MatrixXd>& plan) noexcept {
+  return plan.size() == 0 || (plan.array() * 0.0).sum() == 0.0;
+}
+
 /// y[0, rows) += A[0, rows) x [0, cols) for a column-major table with leading
 /// dimension ld: the held paths' table products, in a generic and an AVX2 build.
 PLSA_ALWAYS_INLINE void accumulateColumnsBody(const double* __restrict a, Eigen::Index ld, int rows, int cols,

@@ -93,8 +93,9 @@ struct PlannedSchedule {
   }
 
   /// One step's inputs: row h of a column-major plan (leading dimension ld)
-  /// when `take`, else u held; the lag's next value toward u (lagTowards, as
-  /// the predictor's own); returns positiveSum(u) when the coupling needs it.
+  /// when `take`, else u held; the lag's next value toward u (lagStep: over
+  /// a plan the lag is not snapped to u, whose few ulps never move a
+  /// prediction); returns positiveSum(u) when the coupling needs it.
   PLSA_ALWAYS_INLINE double takeAndLag(const double* plan, Eigen::Index ld, int h, bool take) noexcept {
     const double threshold = shaping->threshold;
     const bool coupled = shaping->coupling != 0.0;
@@ -102,7 +103,7 @@ struct PlannedSchedule {
     for (int j = 0; j < nu; ++j) {
       const auto jj = static_cast<std::size_t>(j);
       if (take) u[jj] = plan[h + j * ld];
-      us[jj] = lagTowards(us[jj], u[jj], pole);
+      us[jj] = lagStep(us[jj], u[jj], pole);
       if (coupled) positive_sum += positivePartAbove(u[jj], threshold);
     }
     return positive_sum;
@@ -120,7 +121,8 @@ struct PlannedSchedule {
   }
 
   /// takeAndLag and moveChannels for a quad schedule, lane by lane the
-  /// same arithmetic; the channels into `next` (four doubles).
+  /// same arithmetic; the channels into `next` (four doubles). What one step
+  /// hands the next is the lag (one multiply-add) and the channels (a clamp).
   PLSA_ALWAYS_INLINE void stepQuad(const double* plan, Eigen::Index ld, int h, bool take, double* next) noexcept {
     // Lane by lane as the scalar functions pick, NaN included: std::max(0, x)
     // is 0 < x ? x : 0, std::max(a, b) a < b ? b : a, std::min(a, b) b < a ? b : a.
@@ -130,10 +132,7 @@ struct PlannedSchedule {
       for (int j = 0; j < nu; ++j) v[j] = plan[h + j * ld];
       u4 = v;
     }
-    const Quad lagged = pole * us4 + (1.0 - pole) * u4;  // lagTowards
-    const Quad size = u4 < zero ? -u4 : u4, step = lagged - u4;
-    const Quad scale = size > 1e-3 ? size : zero + 1e-3;
-    us4 = (step < zero ? -step : step) <= 1e-12 * scale ? u4 : lagged;
+    us4 = pole * us4 + (1.0 - pole) * u4;  // lagStep
     *quads(us.data()) = us4;
     const Quad level = shaped ? shapedLevelsQuad(*shaping, u4).level : u4;  // InputShaping::level
     const Quad half = width4 + slope4 * (zero < level ? level : zero);      // PlayChannel::follow

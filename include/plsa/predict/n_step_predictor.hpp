@@ -183,7 +183,7 @@ class NStepPredictor {
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
         jacobian.cols() != steps * m.n_u)
       return PredictorStatus::kBadShape;
-    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
     auto nominal = sens_nominal_.topRows(horizon);
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
@@ -414,7 +414,7 @@ class NStepPredictor {
     if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
     if (out.rows() < horizon || out.cols() != m.n_y || (plan.rows() > 0 && plan.cols() != m.n_u))
       return PredictorStatus::kBadShape;
-    if (!plan.allFinite()) return PredictorStatus::kNotFinite;
+    if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
     work_y_ = options_.simulate ? y_sim_ : y_;
     // A held input keeps the schedule fixed once its lag has settled: every
     // mode then decays on its own, y(k+1+h) = y(k) + sum_q zeta_q sum_{s<=h} lambda_q^s.

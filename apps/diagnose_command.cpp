@@ -142,6 +142,9 @@ void addCalibrationBudget(CLI::App* app, diagnose::DiagnoseOptions& o) {
                   "Simulator runs of the short calibration from each spread start of a candidate; the best "
                   "becomes its second start (0: the spread start with the smallest gap)")
       ->check(CLI::Range(0, 10000));
+  app->add_flag("--both-starts-in-later-rounds", o.both_starts_in_later_rounds,
+                "Later rounds calibrate every candidate from both its starts (default: a candidate that gained "
+                "nothing in round 1 from the start that did best for it there)");
 }
 
 void addDiagnoseCommand(CLI::App& app) {

@@ -258,6 +258,20 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_GE(d.ranking[0].evaluations, 2 * 20);
   EXPECT_EQ(j["ranking"][0]["calibration"]["evaluations"], d.ranking[0].evaluations);
   EXPECT_GT(d.nominal_evaluations, 28 + 3 * 20);
+  // Round 2 (the deadzone kept) calibrates a candidate that gained nothing in
+  // round 1 from the one start that did best for it there, the others from both.
+  ASSERT_FALSE(d.later_rounds.empty());
+  int one_start = 0;
+  for (const CandidateResult& later : d.later_rounds) {
+    const auto first = std::find_if(d.ranking.begin(), d.ranking.end(),
+                                    [&](const CandidateResult& c) { return c.effect == later.effect; });
+    ASSERT_NE(first, d.ranking.end()) << later.effect;
+    const bool gained = first->heldout_after.total < d.recalibrated_round1.total;
+    EXPECT_EQ(later.starts, gained ? 2 : 1) << later.effect;
+    EXPECT_EQ(later.train_gap_per_start.size(), static_cast<std::size_t>(later.starts)) << later.effect;
+    one_start += gained ? 0 : 1;
+  }
+  EXPECT_GT(one_start, 0) << "every candidate gained in round 1: the rule was not exercised";
   EXPECT_FALSE(d.reference.note.empty());
   const IdentifiedReference alone = identifiedReference({train}, {held});  // the same, identified by itself
   ASSERT_TRUE(alone.available) << alone.note;

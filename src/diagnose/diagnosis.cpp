@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <map>
 #include <stdexcept>
 #include <utility>
 
@@ -324,29 +325,53 @@ CandidateTrial candidateTrial(const CalibratedState& s, const std::string& e, in
   return {cr, r.config, f};
 }
 
-// Every remaining candidate from both its starts, and the nothing-added bar:
-// 2n + 1 tasks, so that two cores finish a round together (a candidate as
-// one task left a core idle while the costliest ran on). The best spread
-// points' starts (screened in round 1: the larger tasks) go first. The
-// results are those of the candidates run whole.
+// Every remaining candidate from its starts (both, or the one in `only`),
+// and the nothing-added bar: one task per start, so that two cores finish a
+// round together (a candidate as one task left a core idle while the
+// costliest ran on). The best spread points' starts (screened in round 1:
+// the larger tasks) go first. The results are those of the candidates run
+// whole.
 std::vector<CandidateTrial> tryCandidates(const CalibratedState& s, const std::vector<std::string>& selected,
                                           const std::vector<std::string>& remaining, int round, const Screening& screen,
-                                          const SelectionContext& x, Gap& null_gap) {
+                                          const std::map<std::string, int>& only, const SelectionContext& x,
+                                          Gap& null_gap) {
   const std::size_t n = remaining.size();
-  std::vector<StartTrial> starts(2 * n);
-  parallelFor(2 * n + 1, x.o.threads, [&](std::size_t i) {
-    if (i == 2 * n)
+  std::vector<std::pair<std::size_t, int>> tasks;  // (candidate, start)
+  for (int start : {1, 0})
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto one = only.find(remaining[i]);
+      if (one == only.end() || one->second == start) tasks.emplace_back(i, start);
+    }
+  std::vector<StartTrial> starts(tasks.size());
+  parallelFor(tasks.size() + 1, x.o.threads, [&](std::size_t k) {
+    if (k == tasks.size())
       null_gap = recalibratedWithNothingAdded(s, selected, remaining, screen, x);
-    else if (i < n)
-      starts[2 * i + 1] = calibrateFromStart(s, selected, remaining[i], 1, screen, x);
     else
-      starts[2 * (i - n)] = calibrateFromStart(s, selected, remaining[i - n], 0, screen, x);
+      starts[k] = calibrateFromStart(s, selected, remaining[tasks[k].first], tasks[k].second, screen, x);
   });
   std::vector<CandidateTrial> trials;
-  for (std::size_t i = 0; i < n; ++i)
-    trials.push_back(
-        candidateTrial(s, remaining[i], round, {std::move(starts[2 * i]), std::move(starts[2 * i + 1])}, x));
+  for (std::size_t i = 0; i < n; ++i) {
+    std::vector<StartTrial> own;  // start 0 first, as a tie keeps it
+    for (int start : {0, 1})
+      for (std::size_t k = 0; k < tasks.size(); ++k)
+        if (tasks[k] == std::make_pair(i, start)) own.push_back(std::move(starts[k]));
+    trials.push_back(candidateTrial(s, remaining[i], round, std::move(own), x));
+  }
   return trials;
+}
+
+// Later rounds: a candidate whose round-1 calibration ended no lower than
+// round 1's bar explained none of the gap alone; it is tried again (an
+// effect can show only once another is modelled) from the one start that
+// calibrated it best in round 1, instead of both.
+std::map<std::string, int> oneStartForThoseWithoutGain(const Diagnosis& d, const DiagnoseOptions& o) {
+  std::map<std::string, int> only;
+  if (o.both_starts_in_later_rounds) return only;
+  for (const CandidateResult& c : d.ranking) {
+    if (c.heldout_after.total < d.recalibrated_round1.total || c.train_gap_per_start.size() != 2) continue;
+    only[c.effect] = c.train_gap_per_start[1] < c.train_gap_per_start[0] ? 1 : 0;  // candidateTrial's choice
+  }
+  return only;
 }
 
 // Polish the kept model with the nominal fit's budget (chosen on training
@@ -377,7 +402,8 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   // that has absorbed it (and would take twice as long).
   const Screening screen{round == 1 ? o.screen_evaluations : 0, o.screen_step_s};
   Gap null_gap = s.heldout;
-  const std::vector<CandidateTrial> trials = tryCandidates(s, selected, remaining, round, screen, x, null_gap);
+  const std::map<std::string, int> only = round == 1 ? std::map<std::string, int>{} : oneStartForThoseWithoutGain(d, o);
+  const std::vector<CandidateTrial> trials = tryCandidates(s, selected, remaining, round, screen, only, x, null_gap);
   std::vector<std::size_t> order(trials.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

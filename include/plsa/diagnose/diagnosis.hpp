@@ -55,6 +55,10 @@ struct DiagnoseOptions {
   double calibration_step_s = 0.004;
   double coarse_step_tolerance = 0.1;
   int max_selected = 3;
+  /// Later rounds calibrate a candidate whose round-1 calibration ended no
+  /// lower than round 1's bar (re-calibration with nothing added) from the
+  /// one start that did best for it in round 1 (false), or from both (true).
+  bool both_starts_in_later_rounds = false;
   std::vector<std::string> candidates;  ///< empty: every effect switched off in the simulator
   /// A switched-on candidate takes its flexible law where the simulator has
   /// one (stiffening and pneumatic_lag: "power", whose exponent spans the

@@ -239,8 +239,9 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
 // later rounds kept effects that were not there. It gets the budget of the
 // largest candidate, spent as the candidates spend theirs: with screening
 // first the runs of the largest screening stage (at its step), then two
-// calibrations, the second from where the first ended. Returns its
-// held-out gap.
+// calibrations, the second from where the first ended (in later rounds a
+// candidate without a round-1 gain gets one calibration, so against it the
+// bar has the larger budget). Returns its held-out gap.
 Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std::string>& selected,
                                  const std::vector<std::string>& remaining, const Screening& screen,
                                  const SelectionContext& x) {
@@ -270,7 +271,7 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
 }
 
 // One candidate added to the current model, calibrated from each of its
-// two starts (two tasks of a round); the better start's result.
+// starts (a task each); the best start's result.
 struct CandidateTrial {
   CandidateResult result;
   sim::SimConfig config;
@@ -280,6 +281,7 @@ struct CandidateTrial {
 struct StartTrial {
   CalibrationResult calibrated;
   int evaluations = 0;  ///< the screening's runs included
+  int start = 0;        ///< 0: neutral, 1: the best spread point
 };
 
 // Start 0: neutral; start 1: the best spread point (after screening, if any).
@@ -290,6 +292,7 @@ StartTrial calibrateFromStart(const CalibratedState& s, const std::vector<std::s
   enableCandidate(c, e, o);
   const std::vector<std::string> modules = modulesWith(selected, e);
   StartTrial t;
+  t.start = start;
   const sim::SimConfig from =
       start == 0 ? neutralStart(c, e)
                  : bestSpreadStart(c, e, modules, x.runs.train, x.fill, o.calibration, screen, t.evaluations);
@@ -320,6 +323,7 @@ CandidateTrial candidateTrial(const CalibratedState& s, const std::string& e, in
   cr.train_after = r.train_gap;
   cr.shrink_percent = 100.0 * (1.0 - cr.heldout_after.percent() / std::max(1e-12, s.heldout.percent()));
   cr.params = r.values;
+  cr.best_start = starts[best].start;
   const auto sig = s.where.signatures.find(e);
   if (sig != s.where.signatures.end()) cr.signature = sig->second;
   return {cr, r.config, f};
@@ -368,8 +372,8 @@ std::map<std::string, int> oneStartForThoseWithoutGain(const Diagnosis& d, const
   std::map<std::string, int> only;
   if (o.both_starts_in_later_rounds) return only;
   for (const CandidateResult& c : d.ranking) {
-    if (c.heldout_after.total < d.recalibrated_round1.total || c.train_gap_per_start.size() != 2) continue;
-    only[c.effect] = c.train_gap_per_start[1] < c.train_gap_per_start[0] ? 1 : 0;  // candidateTrial's choice
+    if (c.heldout_after.total < d.recalibrated_round1.total || c.starts != 2) continue;
+    only[c.effect] = c.best_start;
   }
   return only;
 }

@@ -81,8 +81,12 @@ struct CandidateResult {
   /// for sensor bias, the residual's offset and drift), the simulator runs
   /// spent over all of them (screening included), and the training gap each
   /// start ended at (%).
+  /// In a later round a candidate that gained nothing in round 1 has one
+  /// start, the one that did best for it there
+  /// (DiagnoseOptions::both_starts_in_later_rounds).
   int starts = 0, evaluations = 0;
   std::vector<double> train_gap_per_start;
+  int best_start = 0;   ///< the start whose calibration was kept: 0 neutral, 1 the best spread point
   Signature signature;  ///< of the residual before it was added
 };
 

@@ -150,8 +150,9 @@ struct CompiledModel {
 };
 
 /// The scheduling inputs' lag, one sample on: its next value from `lagged`
-/// toward u. A planned prediction steps it so (no branch on its one-step
-/// chain); the predictor's own state takes lagTowards.
+/// toward u. The merged modes' planned path steps it so (no branch on its
+/// step-to-step chain); the predictor's own state and the step-by-step path
+/// take lagTowards.
 inline double lagStep(double lagged, double u, double pole) noexcept { return pole * lagged + (1.0 - pole) * u; }
 
 /// lagStep, and once within rounding of u it is u, so a held input settles

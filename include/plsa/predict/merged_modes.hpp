@@ -94,8 +94,9 @@ struct PlannedSchedule {
 
   /// One step's inputs: row h of a column-major plan (leading dimension ld)
   /// when `take`, else u held; the lag's next value toward u (lagStep: over
-  /// a plan the lag is not snapped to u, whose few ulps never move a
-  /// prediction); returns positiveSum(u) when the coupling needs it.
+  /// a plan the lag is not snapped to u; it settles within about
+  /// ulp(u) / (1 - pole) of u, which moves a prediction by rounding only);
+  /// returns positiveSum(u) when the coupling needs it.
   PLSA_ALWAYS_INLINE double takeAndLag(const double* plan, Eigen::Index ld, int h, bool take) noexcept {
     const double threshold = shaping->threshold;
     const bool coupled = shaping->coupling != 0.0;

@@ -2,6 +2,7 @@
 #include "plsa/core/number_text.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -340,11 +341,14 @@ std::vector<CandidateTrial> tryCandidates(const CalibratedState& s, const std::v
                                           const std::map<std::string, int>& only, const SelectionContext& x,
                                           Gap& null_gap) {
   const std::size_t n = remaining.size();
-  std::vector<std::pair<std::size_t, int>> tasks;  // (candidate, start)
+  std::vector<std::pair<std::size_t, int>> tasks;        // (candidate, start)
+  std::vector<std::array<int, 2>> task_of(n, {-1, -1});  // [candidate][start]: its task, or -1
   for (int start : {1, 0})
     for (std::size_t i = 0; i < n; ++i) {
       const auto one = only.find(remaining[i]);
-      if (one == only.end() || one->second == start) tasks.emplace_back(i, start);
+      if (one != only.end() && one->second != start) continue;
+      task_of[i][static_cast<std::size_t>(start)] = static_cast<int>(tasks.size());
+      tasks.emplace_back(i, start);
     }
   std::vector<StartTrial> starts(tasks.size());
   parallelFor(tasks.size() + 1, x.o.threads, [&](std::size_t k) {
@@ -356,9 +360,8 @@ std::vector<CandidateTrial> tryCandidates(const CalibratedState& s, const std::v
   std::vector<CandidateTrial> trials;
   for (std::size_t i = 0; i < n; ++i) {
     std::vector<StartTrial> own;  // start 0 first, as a tie keeps it
-    for (int start : {0, 1})
-      for (std::size_t k = 0; k < tasks.size(); ++k)
-        if (tasks[k] == std::make_pair(i, start)) own.push_back(std::move(starts[k]));
+    for (const int k : task_of[i])
+      if (k >= 0) own.push_back(std::move(starts[static_cast<std::size_t>(k)]));
     trials.push_back(candidateTrial(s, remaining[i], round, std::move(own), x));
   }
   return trials;

@@ -133,7 +133,7 @@ struct PlannedSchedule {
       for (int j = 0; j < nu; ++j) v[j] = plan[h + j * ld];
       u4 = v;
     }
-    us4 = pole * us4 + (1.0 - pole) * u4;  // lagStep
+    us4 = pole * us4 + (1.0 - pole) * u4;  // lagStep's arithmetic (a Quad through a non-AVX2 function changes its ABI)
     *quads(us.data()) = us4;
     const Quad level = shaped ? shapedLevelsQuad(*shaping, u4).level : u4;  // InputShaping::level
     const Quad half = width4 + slope4 * (zero < level ? level : zero);      // PlayChannel::follow

@@ -132,6 +132,7 @@ FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std:
 
 /// The fold's rows (and its drift line), added to the sums and the JSON.
 void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult& f, FitSums& sums, nlohmann::json& j) {
+  if (f.report.grid_levels > 0) j["folds"][name]["grid_levels"] = f.report.grid_levels;
   if (f.report.drift_taken_out) {
     std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
     for (std::size_t out = 0; out < a.outputs.size(); ++out) {
@@ -213,7 +214,8 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--outputs", a->outputs, "Output columns")->delimiter(',');
   c->add_option("--horizons", a->horizons, "Horizons in samples")->delimiter(',')->check(CLI::Range(1, 1000000));
   c->add_option("--levels", a->options.quantile_levels,
-                "Grid levels per input (quantiles); 0 (default): " + identify::IdentifyOptions::autoQuantileRule())
+                "Grid levels per input (quantiles); 0 (default): " + identify::IdentifyOptions::autoQuantileRule() +
+                    " (plsa's model; the paper's configuration takes the count before refinement)")
       ->check(CLI::Range(0, 12));
   addChoice(c, "--cv-layout", a->options.cv_layout,
             "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");

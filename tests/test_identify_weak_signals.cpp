@@ -309,8 +309,8 @@ io::Log randomChambersLog(double seconds) {
 }
 
 // quantile_levels 0 (the default): 3 levels per moving input, or 2 when 3
-// would leave under 10 s of data per region (three chambers: 270 s); a
-// number given is kept.
+// would leave under 10 s of data per region (three chambers: 270 s), then
+// finer counts scored while they leave 10 s per region; a number given is kept.
 TEST(Pipeline, QuantileGridTakesTwoLevelsWhenThreeWouldLeaveRegionsShortOfData) {
   IdentifyOptions o = partitionOnly({"p_1", "p_2", "p_3"}, {"y"});
   ASSERT_EQ(o.quantile_levels, 0);
@@ -320,13 +320,94 @@ TEST(Pipeline, QuantileGridTakesTwoLevelsWhenThreeWouldLeaveRegionsShortOfData) 
   const std::string line = progressLine(short_rep, "[4/5] partition");
   EXPECT_NE(line.find("quantile grid of 2 levels"), std::string::npos) << line;
   EXPECT_NE(line.find("3 would leave under 10 s of data per region"), std::string::npos) << line;
-  EXPECT_EQ(identifyModel({randomChambersLog(300.0)}, o, &long_rep).partition.regionCount(), 27)
-      << progressLine(long_rep, "[4/5] partition");
+  EXPECT_TRUE(short_rep.grid_level_scores.empty()) << "120 s leave 3 levels' regions under 10 s: nothing to score";
+  EXPECT_EQ(short_rep.grid_levels, 2);
+  // 300 s: 3 levels (11 s per region); 4 would leave 4.7 s, so nothing finer is scored.
+  const DioPwlObfModel long_model = identifyModel({randomChambersLog(300.0)}, o, &long_rep);
+  EXPECT_TRUE(long_rep.grid_level_scores.empty()) << progressLine(long_rep, "[5/5] quantile grid");
+  EXPECT_EQ(long_rep.grid_levels, 3);
+  EXPECT_EQ(long_model.partition.regionCount(), 27);
   o.quantile_levels = 3;
   EXPECT_EQ(identifyModel({randomChambersLog(120.0)}, o, &asked_rep).partition.regionCount(), 27);
   EXPECT_EQ(progressLine(asked_rep, "[4/5] partition").find("would leave"), std::string::npos);
+  EXPECT_TRUE(asked_rep.grid_level_scores.empty());
   o.quantile_levels = -1;
   EXPECT_THROW(identifyModel({randomChambersLog(20.0)}, o), std::invalid_argument);
+}
+
+// One chamber moved at random through a gain that grows steeply with its
+// level (a cubic static map): the finer grids follow the gain, so the
+// scored stage keeps more levels than the automatic 3; through a constant
+// gain the automatic count stands. Counts are tried one level finer at a
+// time from the automatic one.
+io::Log oneChamberLog(bool steep) {
+  const double seconds = 200.0;  // 5 levels leave 40 s per region
+  const auto n = static_cast<Eigen::Index>(seconds / kDt);
+  io::Log l = blankLog("one_chamber.csv", {"time_s", "p_1", "y"}, n);
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  double p = 0.2, y = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    p = std::clamp(p + 0.01 * noise(rng), 0.0, 0.4);
+    const double level = steep ? 40.0 * p * p * p / 0.04 : 40.0 * p;
+    y = 0.95 * y + 0.05 * level;
+    l.data.row(k) << static_cast<double>(k) * kDt, p, y + 0.05 * noise(rng);
+  }
+  return l;
+}
+
+TEST(Pipeline, QuantileGridLevelsAreChosenByHeldOutScore) {
+  auto log = oneChamberLog;
+  IdentifyOptions o = partitionOnly({"p_1"}, {"y"});
+  IdentifyReport steep, flat;
+  const DioPwlObfModel m = identifyModel({log(true)}, o, &steep);
+  // From the automatic 3, one level finer at a time while it gains.
+  ASSERT_GE(steep.grid_level_scores.size(), 2u) << progressLine(steep, "[5/5] quantile grid");
+  EXPECT_EQ(steep.grid_level_scores.front().levels, 3) << progressLine(steep, "[5/5] quantile grid");
+  EXPECT_EQ(steep.grid_level_scores.front().structure, "S") << "the options give switched scheduling alone";
+  EXPECT_GT(steep.grid_levels, 3) << progressLine(steep, "[5/5] quantile grid");
+  for (std::size_t i = 1; i < steep.grid_level_scores.size(); ++i)
+    EXPECT_EQ(steep.grid_level_scores[i].levels, steep.grid_level_scores[i - 1].levels + 1);
+  EXPECT_EQ(m.partition.regionCount(), steep.grid_levels);
+  EXPECT_NE(progressLine(steep, "[5/5] quantile grid").find("kept " + std::to_string(steep.grid_levels) + " levels"),
+            std::string::npos);
+  identifyModel({log(false)}, o, &flat);
+  // 4 levels gain nothing: 5 is not scored.
+  ASSERT_EQ(flat.grid_level_scores.size(), 2u) << progressLine(flat, "[5/5] quantile grid");
+  EXPECT_EQ(flat.grid_level_scores.back().levels, 4);
+  EXPECT_EQ(flat.grid_levels, 3) << progressLine(flat, "[5/5] quantile grid");
+  // Not scored (the paper's configuration): the automatic count.
+  o.score_grid_levels = false;
+  IdentifyReport unscored;
+  EXPECT_EQ(identifyModel({log(true)}, o, &unscored).partition.regionCount(), 3);
+  EXPECT_TRUE(unscored.grid_level_scores.empty());
+  EXPECT_EQ(unscored.grid_levels, 3);
+}
+
+// The play stage takes the first play set's scores on the kept grid from the
+// level stage (input side only there) and scores the rest itself: every
+// score, and the model, as when the kept count is given.
+TEST(Pipeline, PlayStageReusesTheGridLevelStagesScores) {
+  IdentifyOptions o = partitionOnly({"p_1"}, {"y"});
+  o.scheduling = SchedulingChoice::kAuto;
+  o.play_candidates = {{0.0}, {0.05}};
+  IdentifyReport chosen, given;
+  const DioPwlObfModel a = identifyModel({oneChamberLog(true)}, o, &chosen);
+  ASSERT_GT(chosen.grid_levels, 3) << progressLine(chosen, "[5/5] quantile grid");
+  EXPECT_EQ(chosen.grid_level_scores.front().structure, "N");
+  o.quantile_levels = chosen.grid_levels;
+  const DioPwlObfModel b = identifyModel({oneChamberLog(true)}, o, &given);
+  EXPECT_TRUE(given.grid_level_scores.empty());
+  ASSERT_EQ(chosen.play_scores.size(), given.play_scores.size());
+  ASSERT_EQ(chosen.play_scores.size(), 6u) << "two play sets on I, N and S";
+  for (std::size_t i = 0; i < chosen.play_scores.size(); ++i)
+    EXPECT_EQ(chosen.play_scores[i].second, given.play_scores[i].second) << i;
+  const auto kept = std::find_if(chosen.grid_level_scores.begin(), chosen.grid_level_scores.end(),
+                                 [&](const GridLevelScore& g) { return g.levels == chosen.grid_levels; });
+  ASSERT_NE(kept, chosen.grid_level_scores.end());
+  EXPECT_EQ(chosen.play_scores[2].second, kept->step_ahead) << "N's first set on the kept grid";
+  EXPECT_EQ(a.partition.regionCount(), b.partition.regionCount());
+  EXPECT_EQ(a.coefficients, b.coefficients);
 }
 
 // Random excitation gives no step: the poles come from windows, and the same

@@ -20,6 +20,7 @@ IdentifyOptions paperConfiguration(IdentifyOptions o) {
   o.slow_pole_candidates = {};
   o.output_drift = OutputDriftChoice::kOff;
   o.second_order_windows_below = -std::numeric_limits<double>::infinity();
+  o.score_grid_levels = false;  // the automatic quantile grid: the paper has no such stage
   return o;
 }
 

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -70,10 +71,21 @@ struct IdentificationRun {
     std::vector<std::vector<double>> levels;
     std::vector<int> moving;
     int quantile_levels = 0;
+    bool scored = false;  ///< quantile_levels kept by held-out score (chooseGridLevels)
   };
   GridPlan gridPlan() const;
   std::vector<int> quantileInputs() const;
   int quantileLevels(std::size_t inputs) const;
+  /// partitions (and the model's) for grid_plan, replacing any there are;
+  /// `announce`: each partition's [4/5] line.
+  void makePartitions(bool announce);
+  // A quantile grid's level count by held-out score (grid_level_search.cpp).
+  void chooseGridLevels();  // the second stage of the structure search
+  std::vector<int> gridLevelCandidates() const;
+  void setGridLevels(int levels, bool announce);
+  GridLevelScore scoreGrid(int levels, std::vector<std::optional<double>>& by_structure);
+  std::string gridLevelsLine(int kept, int automatic) const;
+  static constexpr int kMaxRegions = 4096;  ///< a partition with more is refused (addPartition)
 
   // Pole selection (pole_selection.cpp): the local poles a pair clusters
   // (and how the progress line names them), and one method's basis poles for
@@ -117,7 +129,7 @@ struct IdentificationRun {
   };
   void scorePoleCandidates(const char* stage, const Structure* input_side, PoleChoice& choice);
   void addPoleCandidates(PoleSourceKind kind, const char* stage, const Structure* input_side, PoleChoice& choice);
-  void addPartition(bool interpolated, const GridPlan& grid);
+  void addPartition(bool interpolated, const GridPlan& grid, bool announce);
   void requireDataForPartition(const PwlPartition& partition, const GridPlan& grid) const;
   std::string partitionLine(bool interpolated, const GridPlan& grid, const std::vector<int>& sched,
                             const std::vector<std::vector<double>>& bps) const;
@@ -199,6 +211,10 @@ struct IdentificationRun {
   std::vector<PoleCandidate> pole_candidates;
   std::vector<ClusteredSet> clustered_sets;
   std::vector<PwlPartition> partitions;
+  GridPlan grid_plan;  ///< the partitions' grid (buildPartitions; chooseGridLevels sets its level count)
+  /// Per structure, the first play set's held-out score on the grid kept,
+  /// where chooseGridLevels scored it (the play stage reuses it).
+  std::vector<std::optional<double>> first_set_scores;
   std::vector<Structure> structures;
   std::vector<double> range;  ///< per input: its training range (play widths are fractions of it)
   double top_level = 1e-12;   ///< the largest training input level

@@ -118,6 +118,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   sampleForSearch();
   cutFolds();
   choosePoleMethod();
+  chooseGridLevels();
   searchPlayAndScheduling();
   searchCoupling();
   searchScheduleLag();
@@ -422,13 +423,18 @@ void IdentificationRun::buildPartitions() {
       row += U[r].rows();
     }
   }
-  const GridPlan grid = gridPlan();
+  grid_plan = gridPlan();
+  makePartitions(true);
+  top_level = std::max(1e-12, all_u.maxCoeff());
+}
+
+void IdentificationRun::makePartitions(bool announce) {
+  partitions.clear();
   std::vector<bool> schedulings;  // interpolated?
   if (o.scheduling != SchedulingChoice::kSwitched) schedulings.push_back(true);
   if (o.scheduling != SchedulingChoice::kInterpolated) schedulings.push_back(false);
-  for (const bool interpolated : schedulings) addPartition(interpolated, grid);
+  for (const bool interpolated : schedulings) addPartition(interpolated, grid_plan, announce);
   PLSA_CHECK(!partitions.empty(), "identify: no partition could be built");
-  top_level = std::max(1e-12, all_u.maxCoeff());
 }
 
 // The staircase's reference levels, or a quantile grid when the logs hold
@@ -476,8 +482,10 @@ int IdentificationRun::quantileLevels(std::size_t inputs) const {
 }
 
 std::string IdentifyOptions::autoQuantileRule() {
-  return std::to_string(kAutoQuantileLevels) + ", or " + std::to_string(kShortDataQuantileLevels) + " when " +
-         shortDataReason();
+  return std::to_string(kAutoQuantileLevels) + ", then one level finer at a time, up to " +
+         std::to_string(kMaxScoredQuantileLevels) + ", while the finer grid has " + formatNumber(kMinSecondsPerRegion) +
+         " s of data per region on average and scores " + formatNumber(kGridLevelsMargin) +
+         " points higher held out; or " + std::to_string(kShortDataQuantileLevels) + " when " + shortDataReason();
 }
 
 std::string IdentifyOptions::shortDataReason() {
@@ -487,7 +495,7 @@ std::string IdentifyOptions::shortDataReason() {
 
 // One partition (interpolated nodes or switched cells) over the scheduling
 // inputs the grid plan gives.
-void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
+void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid, bool announce) {
   std::vector<int> sched;
   std::vector<std::vector<double>> bps;
   for (int in_i = 0; in_i < ni && grid.designed; ++in_i) {
@@ -520,12 +528,11 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
                             std::to_string(sched.size()) + " inputs move";
     if (o.scheduling != SchedulingChoice::kAuto)
       throw std::invalid_argument("identify: " + why + "; use --scheduling switched");
-    say("[4/5] " + why + ": switched cells only (input-side scheduling needs the interpolated grid)");
+    if (announce) say("[4/5] " + why + ": switched cells only (input-side scheduling needs the interpolated grid)");
     return;
   }
   partitions.push_back(interpolated ? PwlPartition::interpolated(sched, bps, o.direction_split)
                                     : PwlPartition(sched, bps, o.direction_split));
-  constexpr int kMaxRegions = 4096;
   if (partitions.back().regionCount() > kMaxRegions)
     throw std::invalid_argument(
         "identify: the partition would have " + std::to_string(partitions.back().regionCount()) + " regions (limit " +
@@ -537,7 +544,7 @@ void IdentificationRun::addPartition(bool interpolated, const GridPlan& grid) {
   model.input_ranges.clear();
   for (Eigen::Index c = 0; c < all_u.cols(); ++c)
     model.input_ranges.push_back({all_u.col(c).minCoeff(), all_u.col(c).maxCoeff()});
-  say(partitionLine(interpolated, grid, sched, bps));
+  if (announce) say(partitionLine(interpolated, grid, sched, bps));
 }
 
 // Each region's coefficients need samples: with more coefficients than
@@ -568,7 +575,8 @@ std::string IdentificationRun::partitionLine(bool interpolated, const GridPlan& 
   if (!grid.designed)
     s += " (quantile grid of " + std::to_string(grid.quantile_levels) +
          " levels: the logs hold no designed reference levels" +
-         (o.quantile_levels > 0 || grid.quantile_levels == IdentifyOptions::kAutoQuantileLevels
+         (grid.scored ? "; kept by held-out score"
+          : o.quantile_levels > 0 || grid.quantile_levels == IdentifyOptions::kAutoQuantileLevels
               ? std::string()
               : "; " + IdentifyOptions::shortDataReason()) +
          ")";

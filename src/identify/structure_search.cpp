@@ -236,12 +236,17 @@ double IdentificationRun::crossValidatedContiguous(Score what) {
 // structure; keep the pair whose model predicts held-out data best k steps ahead.
 void IdentificationRun::searchPlayAndScheduling() {
   rep.play_scores.clear();
-  beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size());
+  const auto known_scores = static_cast<std::size_t>(
+      std::count_if(first_set_scores.begin(), first_set_scores.end(), [](const auto& v) { return v.has_value(); }));
+  beginScoring("play channels and scheduling", structures.size() * o.play_candidates.size() - known_scores);
   for (std::size_t pi = 0; pi < structures.size(); ++pi)
-    for (const auto& set : o.play_candidates) {
+    for (std::size_t si = 0; si < o.play_candidates.size(); ++si) {
+      const auto& set = o.play_candidates[si];
       applyStructure(structures[pi]);
       applyPlay(set);
-      const double score = crossValidated();
+      // The first set's score where the grid's level stage already has it (the same fit and folds).
+      const bool known = si == 0 && pi < first_set_scores.size() && first_set_scores[pi];
+      const double score = known ? *first_set_scores[pi] : crossValidated();
       rep.play_scores.emplace_back(set, score);
       if (score > best_score + 1e-9) {
         best_score = score;

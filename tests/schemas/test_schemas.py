@@ -392,7 +392,9 @@ def test_crossval_fits(out):
     assert set(doc["folds"]) == {"joystick2", "joystick3"}
     # Every peer fitted and scored in the same run, each a model of its own.
     fold = doc["folds"]["joystick2"]
-    assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx"}
+    assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx", "grid_levels"}
+    # A joystick run holds no staircase: the quantile grid's level count is recorded (20 s: the automatic 2).
+    assert fold["grid_levels"] == 2, fold["grid_levels"]
     sims = {key: fold[key]["bend_deg"]["fit_sim"] for key in ("plsa", "paper", "global_linear", "arx")}
     assert len(set(sims.values())) == 4, sims
     assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")

@@ -139,15 +139,26 @@ struct IdentifyOptions {
   PoleMethod pole_method = PoleMethod::kAuto;
   ClusteringOptions clustering;
   /// Levels per scheduling input when the log has no staircase (quantile
-  /// grid). 0 (default): 3, or 2 (kShortDataQuantileLevels) when the training data give under
-  /// kMinSecondsPerRegion per region of 3 levels (two minutes of three
-  /// chambers: 27 regions of under 5 s each).
+  /// grid). 0 (default): the automatic count (3, or 2 when the training
+  /// data give under kMinSecondsPerRegion per region of 3 levels: two
+  /// minutes of three chambers, 27 regions of under 5 s each; 2 is kept),
+  /// then, the structure search's second stage
+  /// (IdentifyReport::grid_level_scores), one level finer at a time up to
+  /// kMaxScoredQuantileLevels while the finer grid's regions get
+  /// kMinSecondsPerRegion of the scored data on average and it scores
+  /// kGridLevelsMargin points above the best so far, held out
+  /// play_selection_horizon steps ahead. A number given is kept.
   int quantile_levels = 0;
+  /// quantile_levels 0: score the level counts (true) or take the automatic
+  /// count unscored (false: the paper's configuration, which has no such stage).
+  bool score_grid_levels = true;
   static constexpr int kAutoQuantileLevels = 3;
   static constexpr int kShortDataQuantileLevels = 2;
+  static constexpr int kMaxScoredQuantileLevels = 5;
   static constexpr double kMinSecondsPerRegion = 10.0;
-  /// quantile_levels 0's rule in words, for help texts: "3, or 2 when 3
-  /// would leave under 10 s of data per region".
+  static constexpr double kGridLevelsMargin = 0.1;  ///< fit points
+  /// quantile_levels 0's rule in words, for help texts: "3 (or 2 when ...),
+  /// then one level finer at a time, up to 5, while ...".
   static std::string autoQuantileRule();
   /// Why the rule takes kShortDataQuantileLevels: "3 would leave under 10 s
   /// of data per region".
@@ -296,6 +307,16 @@ struct PoleMethodScore {
   double step_ahead = 0.0, simulation = 0.0;
 };
 
+/// A quantile grid's level count scored as the play sets are: the held-out
+/// fit 40 steps ahead (play_selection_horizon) of the first play set on the
+/// input-side structure when one is offered, else on the structure
+/// (scheduling) that scores best.
+struct GridLevelScore {
+  int levels = 0;
+  double step_ahead = 0.0;
+  std::string structure;  ///< the scored structure's tag as the progress lines print it: "N", "I" or "S"
+};
+
 struct PairPoles {
   int input = 0, output = 0;
   std::vector<std::complex<double>> identified;  ///< usable local poles
@@ -376,6 +397,13 @@ struct IdentifyReport {
   /// poles too if the steps' score below window_poles_below; empty when
   /// there was one candidate and no output short of step poles.
   std::vector<PoleMethodScore> pole_method_scores;
+  /// Quantile grids (IdentifyOptions::quantile_levels 0 on logs without a
+  /// staircase): each level count scored, from the automatic one up; empty
+  /// when no finer count leaves its regions enough data, the levels were
+  /// given or not to be scored (score_grid_levels), no input moves, or the
+  /// logs hold a staircase.
+  std::vector<GridLevelScore> grid_level_scores;
+  int grid_levels = 0;           ///< a quantile grid's level count kept (0: the staircase's levels)
   OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
   Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)

@@ -44,7 +44,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
                               std::optional<std::vector<std::string>> outputs, int poles, const std::string& scheduling,
                               const std::string& cv_layout, const std::string& output_drift,
                               std::optional<std::string> output_frame, int refine_play,
-                              std::function<void(const std::string&)> progress) {
+                              std::function<void(const std::string&)> progress, int levels) {
   plsa::identify::IdentifyOptions o;
   if (inputs) o.inputs = *inputs;
   if (outputs) o.outputs = *outputs;
@@ -54,6 +54,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
   o.output_drift = plsa::identify::parseOption<plsa::identify::OutputDriftChoice>(output_drift);
   if (output_frame && *output_frame != "auto") o.output_frame = plsa::outputFrameFromString(*output_frame);
   o.play_refine_evaluations = refine_play;
+  o.quantile_levels = levels;
   if (progress)
     o.progress = [progress](const std::string& line) {
       py::gil_scoped_acquire gil;
@@ -298,8 +299,9 @@ void bindTools(py::module_& m) {
   m.def("identify", &identify, py::arg("logs"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
         py::arg("poles") = 5, py::arg("scheduling") = "auto", py::arg("cv_layout") = "interleaved",
         py::arg("output_drift") = "auto", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
-        py::arg("progress") = py::none(),
-        "Identify a model from CSV logs, as `plsa identify` (the same options and defaults)");
+        py::arg("progress") = py::none(), py::arg("levels") = 0,
+        "Identify a model from CSV logs, as `plsa identify` (the same options and defaults; levels: its --levels, "
+        "quantile levels per input for logs without a staircase, 0 to choose them)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
         py::arg("settle_s") = 0.0,
         "Fits (%) and rms errors of a model on a CSV log, with what was scored: {output: {fit: {horizon: %}, "

@@ -151,6 +151,16 @@ def test_predictor_follows_the_run_and_its_sensitivity_matches_differences(model
         assert np.allclose(column, diff, atol=1e-5 * np.abs(diff).max() + 1e-7), (s, np.abs(column - diff).max())
 
 
+def test_levels_set_a_quantile_grid(runs):
+    """The joystick run holds no staircase: its grid is a quantile grid of the
+    levels asked for (40 s: 2 by default, under 10 s per region of 3)."""
+    two = plsa.identify([str(runs[1])], scheduling="input")
+    three = plsa.identify([str(runs[1])], scheduling="input", levels=3)
+    assert two.regions < three.regions, (two.regions, three.regions)
+    with pytest.raises(ValueError, match="quantile levels"):
+        plsa.identify([str(runs[1])], levels=-1)
+
+
 def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     with pytest.raises(ValueError, match="no_such_column"):
         plsa.identify([str(runs[0])], inputs=["no_such_column"])

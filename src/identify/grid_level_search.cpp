@@ -15,9 +15,8 @@ namespace plsa::identify {
 namespace {
 
 bool hasInputSideStructure(const std::vector<IdentificationRun::Structure>& structures) {
-  return std::any_of(structures.begin(), structures.end(), [](const IdentificationRun::Structure& st) {
-    return st.side == ScheduleSide::kInput;
-  });
+  return std::any_of(structures.begin(), structures.end(),
+                     [](const IdentificationRun::Structure& st) { return st.side == ScheduleSide::kInput; });
 }
 
 }  // namespace

@@ -130,9 +130,13 @@ FoldResult scoreFold(const CrossvalArgs& a, const IdentifyOptions& o, const std:
   return f;
 }
 
-/// The fold's rows (and its drift line), added to the sums and the JSON.
+/// The fold's rows (and its grid and drift lines), added to the sums and the JSON.
 void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult& f, FitSums& sums, nlohmann::json& j) {
-  if (f.report.grid_levels > 0) j["folds"][name]["grid_levels"] = f.report.grid_levels;
+  if (f.report.grid_levels > 0) {
+    std::printf("%-12s quantile grid: %d levels per input%s\n", name.c_str(), f.report.grid_levels,
+                f.report.grid_level_scores.empty() ? "" : " (chosen by held-out score)");
+    j["folds"][name]["grid_levels"] = f.report.grid_levels;
+  }
   if (f.report.drift_taken_out) {
     std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
     for (std::size_t out = 0; out < a.outputs.size(); ++out) {

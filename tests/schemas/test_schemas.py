@@ -386,7 +386,7 @@ def test_crossval_fits(out):
         logs.append(out / f"joystick{seed}.csv")
         run("simulate", "--experiment", "joystick", "--duration", "20", "--seed", seed, "--out", logs[-1])
     path = out / "crossval.json"
-    run("crossval", "--log", logs[0], "--log", logs[1], "--json", path)
+    printed = run("crossval", "--log", logs[0], "--log", logs[1], "--json", path).stdout
     doc = load(path)
     assert_valid("crossval-fits", doc, "plsa crossval --json")
     assert set(doc["folds"]) == {"joystick2", "joystick3"}
@@ -395,6 +395,7 @@ def test_crossval_fits(out):
     assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx", "grid_levels"}
     # A joystick run holds no staircase: the quantile grid's level count is recorded (20 s: the automatic 2).
     assert fold["grid_levels"] == 2, fold["grid_levels"]
+    assert "joystick2    quantile grid: 2 levels per input\n" in printed, printed  # and the table says it
     sims = {key: fold[key]["bend_deg"]["fit_sim"] for key in ("plsa", "paper", "global_linear", "arx")}
     assert len(set(sims.values())) == 4, sims
     assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")

@@ -3,7 +3,6 @@
 // staircase). A finer grid follows a nonlinearity more closely and gives
 // each region fewer samples; which wins depends on the data, so the data
 // decide, scored as the play sets are: held out, play_selection_horizon steps ahead.
-#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -12,15 +11,6 @@
 #include "identification_run.hpp"
 
 namespace plsa::identify {
-namespace {
-
-bool hasInputSideStructure(const std::vector<IdentificationRun::Structure>& structures) {
-  return std::any_of(structures.begin(), structures.end(),
-                     [](const IdentificationRun::Structure& st) { return st.side == ScheduleSide::kInput; });
-}
-
-}  // namespace
-
 // The counts a quantile grid may take: the automatic one, and every finer
 // count up to kMaxScoredQuantileLevels whose regions (a direction split
 // doubles them per input) get kMinSecondsPerRegion of the scored data (the
@@ -62,7 +52,7 @@ GridLevelScore IdentificationRun::scoreGrid(int levels, std::vector<std::optiona
   setGridLevels(levels, false);
   GridLevelScore sc{levels, -INFINITY, ""};
   applyPlay(o.play_candidates.front());
-  const bool input_side = hasInputSideStructure(structures);
+  const bool input_side = firstInputSide() != nullptr;
   by_structure.assign(structures.size(), std::nullopt);
   for (std::size_t pi = 0; pi < structures.size(); ++pi) {
     if (input_side && structures[pi].side != ScheduleSide::kInput) continue;
@@ -88,7 +78,7 @@ void IdentificationRun::chooseGridLevels() {
   rep.grid_levels = grid_plan.designed ? 0 : grid_plan.quantile_levels;
   if (counts.size() < 2) return;
   const int automatic = counts.front();
-  beginScoring("quantile grid levels", counts.size() * (hasInputSideStructure(structures) ? 1 : structures.size()));
+  beginScoring("quantile grid levels", counts.size() * (firstInputSide() ? 1 : structures.size()));
   std::vector<std::optional<double>> trial;
   rep.grid_level_scores.push_back(scoreGrid(automatic, first_set_scores));
   int best = automatic;
@@ -110,8 +100,8 @@ void IdentificationRun::chooseGridLevels() {
 std::string IdentificationRun::gridLevelsLine(int kept, int automatic) const {
   std::string line = "[5/5] quantile grid: kept " + std::to_string(kept) + " levels per input (held-out fits " +
                      std::to_string(o.play_selection_horizon) + " steps ahead on the first play set, " +
-                     (hasInputSideStructure(structures) ? "input side; " : "best scheduling; ") + "from " +
-                     std::to_string(automatic) + ", one level finer at a time while a count scores " +
+                     (firstInputSide() ? "input side; " : "best scheduling; ") + "from " + std::to_string(automatic) +
+                     ", one level finer at a time while a count scores " +
                      formatNumber(IdentifyOptions::kGridLevelsMargin) + " above the best:";
   for (const GridLevelScore& sc : rep.grid_level_scores)
     line += " " + std::to_string(sc.levels) + "->" + sc.structure + " " + scoreText(sc.step_ahead);

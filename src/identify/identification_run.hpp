@@ -178,6 +178,8 @@ struct IdentificationRun {
   double crossValidatedContiguous(Score what);
   void beginScoring(std::string stage, std::size_t count);
   void applyStructure(const Structure& st);
+  /// The first structure scheduled on the input side, or nullptr.
+  const Structure* firstInputSide() const;
   void applyPlay(const std::vector<PlayChannel>& set);
   void stepResolution();
   void say(const std::string& line);

@@ -218,9 +218,7 @@ double IdentificationRun::poleMethodScore(const Structure* input_side, PoleMetho
 void IdentificationRun::choosePoleMethod() {
   const bool windows = !rep.window_candidate_outputs.empty(), second_order = secondOrderWindowsFitted();
   if (pole_candidates.size() < 2 && !windows && !second_order) return;
-  const auto first_input_side = std::find_if(structures.begin(), structures.end(),
-                                             [](const Structure& st) { return st.side == ScheduleSide::kInput; });
-  const Structure* input_side = first_input_side == structures.end() ? nullptr : &*first_input_side;
+  const Structure* input_side = firstInputSide();
   rep.pole_method_scores.clear();
   PoleChoice choice;
   scorePoleCandidates("pole methods", input_side, choice);

@@ -43,6 +43,12 @@ void IdentificationRun::listStructures() {
     range[static_cast<std::size_t>(in_i)] = all_u.col(in_i).maxCoeff() - all_u.col(in_i).minCoeff();
 }
 
+const IdentificationRun::Structure* IdentificationRun::firstInputSide() const {
+  const auto it = std::find_if(structures.begin(), structures.end(),
+                               [](const Structure& st) { return st.side == ScheduleSide::kInput; });
+  return it == structures.end() ? nullptr : &*it;
+}
+
 void IdentificationRun::applyStructure(const Structure& st) {
   model.partition = partitions[st.partition];
   model.schedule_side = st.side;

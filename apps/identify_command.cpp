@@ -242,9 +242,10 @@ std::string describeSimulation(const DioPwlObfModel& model, const eval::Simulati
                 " (not scored)"
           : "model output level";
   const double yaw_rate = eval::carriedYawRate(model, s);
-  if (yaw_rate != 0.0) start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " deg/s";
+  if (yaw_rate != 0.0)
+    start += ", turning at the training run's sensor drift of " + rateText(yaw_rate) + " " + model.output_unit + "/s";
   j["simulation_start"] = start;
-  j["simulation_yaw_drift_deg_per_s"] = yaw_rate;
+  j["simulation_yaw_drift_deg_per_s"] = yaw_rate == 0.0 ? 0.0 : yaw_rate * model.radiansPerAngleUnit() / kRadPerDeg;
   j["simulation_departures"] = nlohmann::json::array();
   for (const eval::SimulationDeparture& d : departures)
     j["simulation_departures"].push_back({{"output", d.output},
@@ -387,6 +388,17 @@ void addFrameAndScheduling(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a)
         "tip_cartesian: the model runs on bend*cos(steer), bend*sin(steer), where a constant-curvature "
         "segment's dynamics are linear; predictions come back as the logged angles")
       ->check(CLI::IsMember({"auto", "as_logged", "tip_cartesian"}));
+  id->add_option_function<std::string>(
+        "--angle-unit",
+        [a](const std::string& u) {
+          if (u == "auto")
+            a->options.angle_unit.reset();
+          else
+            a->options.angle_unit = u;
+        },
+        "The tip frame's bending and steering angles: deg or rad; auto (default): as the names say (deg, rad), "
+        "else rad when every value lies within 2 pi and deg otherwise; the choice is printed")
+      ->check(CLI::IsMember({"auto", "deg", "rad"}));
   addChoice(id, "--scheduling", a->options.scheduling,
             "auto (chosen by cross-validation), interpolated (coefficients blended between grid nodes), "
             "switched (the paper's PWL) or input (grid nodes weigh the inputs before the filters: no drift in "

@@ -88,7 +88,7 @@ class StraightforwardPredictor {
         out.row(h) = y_.transpose() + (Eigen::Rotation2Dd(a) * (out.row(h) - y_.transpose()).transpose()).transpose();
       double reference = steer_;
       for (int h = 0; h < horizon; ++h) {
-        tipAngles(out(h, 0), out(h, 1), reference, out(h, 0), out(h, 1));
+        tipAngles(out(h, 0), out(h, 1), reference, m_.radiansPerAngleUnit(), out(h, 0), out(h, 1));
         reference = out(h, 1);
       }
     }
@@ -126,7 +126,7 @@ class StraightforwardPredictor {
 
   Eigen::VectorXd toModel(const Eigen::VectorXd& y) const {
     Eigen::VectorXd m = y;
-    if (m_.output_frame == OutputFrame::kTipCartesian) tipComponents(y(0), y(1), m(0), m(1));
+    if (m_.output_frame == OutputFrame::kTipCartesian) tipComponents(y(0), y(1), m_.radiansPerAngleUnit(), m(0), m(1));
     return m;
   }
 

@@ -44,7 +44,8 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
                               std::optional<std::vector<std::string>> outputs, int poles, const std::string& scheduling,
                               const std::string& cv_layout, const std::string& output_drift,
                               std::optional<std::string> output_frame, int refine_play,
-                              std::function<void(const std::string&)> progress, int levels) {
+                              std::function<void(const std::string&)> progress, int levels,
+                              std::optional<std::string> angle_unit) {
   plsa::identify::IdentifyOptions o;
   if (inputs) o.inputs = *inputs;
   if (outputs) o.outputs = *outputs;
@@ -55,6 +56,7 @@ plsa::DioPwlObfModel identify(const std::vector<std::string>& logs, std::optiona
   if (output_frame && *output_frame != "auto") o.output_frame = plsa::outputFrameFromString(*output_frame);
   o.play_refine_evaluations = refine_play;
   o.quantile_levels = levels;
+  if (angle_unit && *angle_unit != "auto") o.angle_unit = *angle_unit;
   if (progress)
     o.progress = [progress](const std::string& line) {
       py::gil_scoped_acquire gil;
@@ -287,6 +289,7 @@ void bindModel(py::module_& m) {
       .def_readonly("sample_time_s", &plsa::DioPwlObfModel::sample_time_s)
       .def_property_readonly("output_frame",
                              [](const plsa::DioPwlObfModel& self) { return plsa::toString(self.output_frame); })
+      .def_readonly("output_unit", &plsa::DioPwlObfModel::output_unit)
       .def_property_readonly("regions", [](const plsa::DioPwlObfModel& self) { return self.partition.regionCount(); })
       .def("__repr__", [](const plsa::DioPwlObfModel& self) {
         return "<plsa.Model " + std::to_string(self.inputCount()) + " inputs, " + std::to_string(self.outputCount()) +
@@ -299,9 +302,10 @@ void bindTools(py::module_& m) {
   m.def("identify", &identify, py::arg("logs"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
         py::arg("poles") = 5, py::arg("scheduling") = "auto", py::arg("cv_layout") = "interleaved",
         py::arg("output_drift") = "auto", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
-        py::arg("progress") = py::none(), py::arg("levels") = 0,
+        py::arg("progress") = py::none(), py::arg("levels") = 0, py::arg("angle_unit") = py::none(),
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults; levels: its --levels, "
-        "quantile levels per input for logs without a staircase, 0 to choose them)");
+        "quantile levels per input for logs without a staircase, 0 to choose them; angle_unit: its --angle-unit, "
+        "deg or rad, None to read it from the names or the data)");
   m.def("validate", &validate, py::arg("model"), py::arg("log"), py::arg("horizons") = std::vector<int>{40, 80},
         py::arg("settle_s") = 0.0,
         "Fits (%) and rms errors of a model on a CSV log, with what was scored: {output: {fit: {horizon: %}, "

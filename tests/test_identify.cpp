@@ -238,6 +238,54 @@ TEST(Pipeline, InputSideSchedulingReturnsTheOutputWhenTheInputsReturn) {
   EXPECT_EQ(modelFromJson(modelToJson(input_side)).output_level, input_side.output_level);
 }
 
+// A tip's angles logged in radians under names that give no unit (theta and
+// phi, as constant-curvature papers write them) are read as radians: the
+// model is the degrees' model in radians (the same structure and drift, the
+// same fits held out). Taken for degrees, as they were before the unit was
+// read, the steering's simulation fit fell from 95 to 86 on a joystick run
+// of the independent actuator.
+TEST(Pipeline, TipAnglesInRadiansIdentifyAsInDegrees) {
+  const double rate = 0.03;
+  const DriftRuns runs = yawDriftRuns(rate);
+  auto inRadians = [](io::Log log) {
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"bend_deg", "theta"}, {"steer_deg", "phi"}}) {
+      const int c = log.columnIndex(from);
+      log.columns[static_cast<std::size_t>(c)] = to;
+      log.data.col(c) *= kRadPerDeg;
+    }
+    return log;
+  };
+  IdentifyOptions o = fixedInputSide(OutputFrame::kTipCartesian);
+  o.output_frame.reset();  // chosen from the names and the data
+  IdentifyReport rep_deg, rep_rad;
+  const DioPwlObfModel deg = identifyModel({runs.train}, o, &rep_deg);
+  o.outputs = {"theta", "phi"};
+  const DioPwlObfModel rad = identifyModel({inRadians(runs.train)}, o, &rep_rad);
+  EXPECT_EQ(rep_deg.output_frame.angle_unit, "deg");
+  ASSERT_EQ(rep_rad.output_frame.frame, OutputFrame::kTipCartesian);
+  EXPECT_EQ(rep_rad.output_frame.angle_unit, "rad");
+  EXPECT_EQ(deg.output_unit, "deg");
+  EXPECT_EQ(rad.output_unit, "rad");
+  EXPECT_EQ(modelFromJson(modelToJson(rad)).output_unit, "rad");
+  EXPECT_EQ(rad.partition.regionCount(), deg.partition.regionCount());
+  EXPECT_EQ(rep_rad.drift_taken_out, rep_deg.drift_taken_out);
+  ASSERT_TRUE(rep_rad.drift_taken_out) << "the drift stage did not run in either unit";
+  EXPECT_NEAR(rad.training_drift_per_s[1], deg.training_drift_per_s[1] * kRadPerDeg, 1e-3 * rate * kRadPerDeg);
+  const eval::ValidationResult vd = eval::validateModel(deg, runs.val, {40}),
+                               vr = eval::validateModel(rad, inRadians(runs.val), {40});
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_NEAR(vr.outputs[i].fit_k.at(40), vd.outputs[i].fit_k.at(40), 1e-3) << vd.outputs[i].name;
+    EXPECT_NEAR(vr.outputs[i].fit_sim, vd.outputs[i].fit_sim, 1e-3) << vd.outputs[i].name;
+  }
+  // The option overrides the data; a unit that is neither is refused by name.
+  o.angle_unit = "deg";
+  IdentifyReport rep_as_deg;
+  EXPECT_EQ(identifyModel({inRadians(runs.train)}, o, &rep_as_deg).output_unit, "deg");
+  EXPECT_EQ(rep_as_deg.output_frame.angle_unit_reason, "as given");
+  o.angle_unit = "grad";
+  expectThrowContaining([&] { identifyModel({runs.train}, o); }, "deg or rad");
+}
+
 // A yaw drift turns the tip frame: with tip_cartesian the stage reads one
 // yaw rate; as logged (forced "on"), the steering angle's own trend. Both
 // must find the simulator's rate; in the tip frame it must be kept and lift

@@ -421,7 +421,7 @@ INSTANTIATE_TEST_SUITE_P(ModelFile, ModelFileField, ::testing::ValuesIn(fieldCas
                          [](const ::testing::TestParamInfo<FieldCase>& info) { return info.param.name; });
 
 // The tip frame's own conditions, checked on the model (not its file).
-TEST(ModelFile, OutputFrameTipCartesianNeedsTwoOutputsInDegrees) {
+TEST(ModelFile, OutputFrameTipCartesianNeedsTwoOutputsInDegreesOrRadians) {
   DioPwlObfModel m = knownModel();
   m.poles = {{PoleSet::real({0.9, 0.7})}, {PoleSet::real({0.8, 0.5})}};
   m.outputs = {"bend_deg", "steer_deg"};
@@ -429,7 +429,14 @@ TEST(ModelFile, OutputFrameTipCartesianNeedsTwoOutputsInDegrees) {
   m.output_frame = OutputFrame::kTipCartesian;
   EXPECT_NO_THROW(m.validate());
   m.output_unit = "rad";
-  EXPECT_THROW(m.validate(), std::invalid_argument);
+  EXPECT_NO_THROW(m.validate());
+  m.output_unit = "mm";
+  try {
+    m.validate();
+    ADD_FAILURE() << "a tip frame in mm accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("deg or rad"), std::string::npos) << e.what();
+  }
   DioPwlObfModel one_output = knownModel();
   one_output.output_frame = OutputFrame::kTipCartesian;
   EXPECT_THROW(one_output.validate(), std::invalid_argument);

@@ -6,31 +6,57 @@ using namespace plsa::test_fixtures;
 using C = std::complex<double>;
 
 TEST(OutputFrame, TipComponentsRoundTripOnTheReferenceBranch) {
+  const double deg = radiansPerAngleUnit("deg");
   double x = 0, y = 0, bend = 0, steer = 0;
-  tipComponents(30.0, 60.0, x, y);
+  tipComponents(30.0, 60.0, deg, x, y);
   EXPECT_NEAR(x, 15.0, 1e-12);
   EXPECT_NEAR(y, 30.0 * std::sqrt(3.0) / 2.0, 1e-12);
-  tipAngles(x, y, 55.0, bend, steer);
+  tipAngles(x, y, 55.0, deg, bend, steer);
   EXPECT_NEAR(bend, 30.0, 1e-12);
   EXPECT_NEAR(steer, 60.0, 1e-12);
   // Across +-180 deg the angle follows the reference instead of jumping a turn.
-  tipComponents(20.0, 185.0, x, y);
-  tipAngles(x, y, 179.0, bend, steer);
+  tipComponents(20.0, 185.0, deg, x, y);
+  tipAngles(x, y, 179.0, deg, bend, steer);
   EXPECT_NEAR(steer, 185.0, 1e-9);
-  tipAngles(x, y, -170.0, bend, steer);
+  tipAngles(x, y, -170.0, deg, bend, steer);
   EXPECT_NEAR(steer, -175.0, 1e-9);
-  tipAngles(x, y, 900.0, bend, steer);  // several turns on: the nearest branch still
+  tipAngles(x, y, 900.0, deg, bend, steer);  // several turns on: the nearest branch still
   EXPECT_NEAR(steer, 905.0, 1e-9);
   // Records: exactly two outputs, else an error naming the frame.
   const Eigen::MatrixXd three = Eigen::MatrixXd::Ones(4, 3);
   try {
-    toModelFrame(OutputFrame::kTipCartesian, three);
+    toModelFrame(OutputFrame::kTipCartesian, three, deg);
     ADD_FAILURE() << "three outputs accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("exactly two outputs"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(toModelFrame(OutputFrame::kAsLogged, three), three);
+  EXPECT_EQ(toModelFrame(OutputFrame::kAsLogged, three, deg), three);
   EXPECT_THROW(outputFrameFromString("polar"), std::invalid_argument);
+}
+
+// The same direction logged in radians: the same components (in the bending's
+// unit), and a turn of 2 pi where degrees take 360.
+TEST(OutputFrame, TipComponentsInRadians) {
+  const double rad = radiansPerAngleUnit("rad"), deg = radiansPerAngleUnit("deg");
+  EXPECT_EQ(rad, 1.0);
+  EXPECT_EQ(angleUnitsPerRadian("rad"), 1.0);
+  EXPECT_EQ(angleUnitsPerRadian("deg"), 180.0 / kPi);
+  double xd = 0, yd = 0, xr = 0, yr = 0, bend = 0, steer = 0;
+  tipComponents(30.0, 185.0, deg, xd, yd);
+  tipComponents(30.0 * deg, 185.0 * deg, rad, xr, yr);
+  EXPECT_NEAR(xr, xd * deg, 1e-12);
+  EXPECT_NEAR(yr, yd * deg, 1e-12);
+  tipAngles(xr, yr, 179.0 * deg, rad, bend, steer);
+  EXPECT_NEAR(bend, 30.0 * deg, 1e-12);
+  EXPECT_NEAR(steer, 185.0 * deg, 1e-12);  // past pi on the reference's branch
+  tipAngles(xr, yr, -3.0, rad, bend, steer);
+  EXPECT_NEAR(steer, 185.0 * deg - 2.0 * kPi, 1e-12);
+  try {
+    radiansPerAngleUnit("grad");
+    ADD_FAILURE() << "grad accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'grad'"), std::string::npos) << e.what();
+  }
 }
 
 // Rising from a vent, the band trails below the first pressure, so the next

@@ -41,3 +41,48 @@ TEST(OutputFrameChoice, TipFrameFromBendingAndSteeringNamesAndNonNegativeBending
   noisy(3, 0) = -0.3;
   EXPECT_EQ(chooseOutputFrame({"bend_deg", "steer_deg"}, {noisy}).frame, OutputFrame::kTipCartesian);
 }
+
+// The tip's angle unit: what the names say, else what the data allow (a
+// radian angle stays within 2 pi), else as given; each choice says why, and
+// the negative-bending check reads its -0.5 deg in that unit.
+TEST(OutputFrameChoice, AngleUnitFromTheNamesElseTheData) {
+  Eigen::MatrixXd deg(100, 2);
+  deg.col(0) = Eigen::VectorXd::LinSpaced(100, 0.0, 30.0);
+  deg.col(1) = Eigen::VectorXd::LinSpaced(100, -170.0, 170.0);
+  const Eigen::MatrixXd rad = deg * kRadPerDeg;
+  std::string why;
+  EXPECT_EQ(chooseAngleUnit({"theta", "phi"}, {rad}, std::nullopt, why), "rad");
+  EXPECT_NE(why.find("--angle-unit deg"), std::string::npos) << why;
+  EXPECT_EQ(chooseAngleUnit({"theta", "phi"}, {deg}, std::nullopt, why), "deg");
+  EXPECT_EQ(why, "values beyond 2 pi");
+  // An azimuth in [0, 2 pi) is radians still.
+  Eigen::MatrixXd azimuth = rad;
+  azimuth.col(1).array() += kPi;
+  EXPECT_EQ(chooseAngleUnit({"theta", "phi"}, {azimuth}, std::nullopt, why), "rad");
+  // The names win over the data, the option over both.
+  EXPECT_EQ(chooseAngleUnit({"bend_deg", "steer_deg"}, {rad}, std::nullopt, why), "deg");
+  EXPECT_EQ(why, "as the names say");
+  EXPECT_EQ(chooseAngleUnit({"bend_rad", "steer_rad"}, {deg}, std::nullopt, why), "rad");
+  EXPECT_EQ(chooseAngleUnit({"theta", "phi"}, {rad}, std::string("deg"), why), "deg");
+  EXPECT_EQ(why, "as given");
+  EXPECT_THROW(chooseAngleUnit({"theta", "phi"}, {rad}, std::string("grad"), why), std::invalid_argument);
+  try {
+    chooseAngleUnit({"bend_deg", "steer_rad"}, {rad}, std::nullopt, why);
+    ADD_FAILURE() << "two units accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("different angle units"), std::string::npos) << e.what();
+  }
+  // The choice carries the unit and says it.
+  const OutputFrameChoice in_rad = chooseOutputFrame({"theta", "phi"}, {rad});
+  EXPECT_EQ(in_rad.frame, OutputFrame::kTipCartesian);
+  EXPECT_EQ(in_rad.angle_unit, "rad");
+  EXPECT_NE(in_rad.reason.find("angles in rad"), std::string::npos) << in_rad.reason;
+  EXPECT_EQ(chooseOutputFrame({"theta", "phi"}, {deg}).angle_unit, "deg");
+  // -0.3 deg of noise passes in radians as in degrees; a planar angle's -15 deg does not.
+  Eigen::MatrixXd noisy = rad;
+  noisy(3, 0) = -0.3 * kRadPerDeg;
+  EXPECT_EQ(chooseOutputFrame({"theta", "phi"}, {noisy}).frame, OutputFrame::kTipCartesian);
+  Eigen::MatrixXd planar = rad;
+  planar.col(0).array() -= 15.0 * kRadPerDeg;
+  EXPECT_EQ(chooseOutputFrame({"theta", "phi"}, {rad, planar}).frame, OutputFrame::kAsLogged);
+}

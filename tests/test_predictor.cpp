@@ -129,6 +129,17 @@ DioPwlObfModel registeredTip(const Data& d) {
   return m;
 }
 
+// A tip_cartesian model in degrees as the same model for angles logged in
+// radians: its components, level and drift scale by pi / 180.
+DioPwlObfModel inRadians(DioPwlObfModel m) {
+  m.output_unit = "rad";
+  for (auto& region : m.coefficients)
+    for (Eigen::VectorXd& c : region) c *= kRadPerDeg;
+  for (double& v : m.output_level) v *= kRadPerDeg;
+  for (double& v : m.training_drift_per_s) v *= kRadPerDeg;
+  return m;
+}
+
 // The run as a sensor turned by `yaw_deg` logs it.
 Eigen::MatrixXd turnedRun(const Eigen::MatrixXd& y, double yaw_deg) {
   Eigen::MatrixXd turned = y;
@@ -409,6 +420,36 @@ TEST(Predictor, HeldInputWhoseLagCrossesCellsMatchesTheSteppedPlan) {
 // predict() itself, where the schedule cannot move: a model of one region,
 // and scheduled models whose scheduling inputs the plan holds (only the third
 // chamber moves, coupled to the others through the play channels' level).
+// A tip logged in radians: the predictor agrees with offline validation as
+// in degrees, and predicts the degrees model's angles times pi / 180, with
+// the sensor's yaw registered and the training drift carried.
+TEST(Predictor, TipFrameInRadiansPredictsWhatDegreesDoInRadians) {
+  const Data& d = data();
+  const DioPwlObfModel deg = registeredTip(d), rad = inRadians(deg);
+  const Eigen::MatrixXd turned = turnedRun(d.y, 20.0), turned_rad = turned * kRadPerDeg;
+  expectAgreement<5>(inRadians(d.tip), d.u, d.y * kRadPerDeg, d.dt);
+  Predictor<5> p(rad);
+  const test::Agreement registered =
+      test::plannedAgainstOffline(p, d.u, turned_rad, d.dt, eval::predictOutputs(rad, d.u, turned_rad, {40}), {40}, 7);
+  EXPECT_GT(registered.compared, 100);
+  EXPECT_LT(registered.worst, 1e-9 * kRadPerDeg) << "predictor and validation turn differently in radians";
+  Predictor<5> in_deg(deg), in_rad(rad);
+  Eigen::MatrixXd out_deg(80, 2), out_rad(80, 2);
+  double worst = 0.0, moved = 0.0;
+  for (Eigen::Index t = 0; t + 80 < d.u.rows(); ++t) {
+    ASSERT_EQ(in_deg.update(t * d.dt, d.u.row(t), turned.row(t)), PredictorStatus::kOk);
+    ASSERT_EQ(in_rad.update(t * d.dt, d.u.row(t), turned_rad.row(t)), PredictorStatus::kOk);
+    if (t % 25 != 0) continue;
+    const Eigen::MatrixXd plan = d.u.middleRows(t + 1, 79);
+    ASSERT_EQ(in_deg.predict(80, plan, out_deg), PredictorStatus::kOk);
+    ASSERT_EQ(in_rad.predict(80, plan, out_rad), PredictorStatus::kOk);
+    worst = std::max(worst, (out_rad - out_deg * kRadPerDeg).cwiseAbs().maxCoeff());
+    moved = std::max(moved, (out_deg.row(79) - out_deg.row(0)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(moved, 1.0) << "the predictions moved less than a degree: the check shows little";
+  EXPECT_LT(worst, 1e-9) << "radians predicted otherwise than degrees";
+}
+
 TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   const Data& d = data();
   DioPwlObfModel one_region = d.switched;
@@ -423,6 +464,8 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   no_lag.schedule_lag_s = 0.0;
   const DioPwlObfModel registered = registeredTip(d);  // its rows turned by the sensor's yaw
   const Eigen::MatrixXd turned = turnedRun(d.y, 20.0);
+  const DioPwlObfModel registered_rad = inRadians(registered);  // angles logged in radians
+  const Eigen::MatrixXd turned_rad = turned * kRadPerDeg;
   DioPwlObfModel one_region_shaped = one_region;  // every input moving through the coupled, softened level
   one_region_shaped.shaping.coupling = 1.0;
   one_region_shaped.shaping.threshold = 0.07;
@@ -432,10 +475,10 @@ TEST(Predictor, SensitivityMatchesFiniteDifferencesWhereTheScheduleHolds) {
   for (auto& channels : two_channels.shaping.play) channels.push_back(PlayChannel(0.03, 0.0));
   fitCoefficients(two_channels, {d.u}, {d.y});
   int index = 0;
-  for (const Case& c :
-       {Case{&one_region, true, &d.y}, Case{&d.input_side, false, &d.y}, Case{&d.tip, false, &d.y},
-        Case{&d.interpolated, false, &d.y}, Case{&no_lag, false, &d.y}, Case{&registered, false, &turned},
-        Case{&two_channels, false, &d.y}, Case{&one_region_shaped, true, &d.y}}) {
+  for (const Case& c : {Case{&one_region, true, &d.y}, Case{&d.input_side, false, &d.y}, Case{&d.tip, false, &d.y},
+                        Case{&d.interpolated, false, &d.y}, Case{&no_lag, false, &d.y},
+                        Case{&registered, false, &turned}, Case{&two_channels, false, &d.y},
+                        Case{&one_region_shaped, true, &d.y}, Case{&registered_rad, false, &turned_rad}}) {
     SCOPED_TRACE("case " + std::to_string(index++));
     const DioPwlObfModel& m = *c.model;
     PredictorOptions options;

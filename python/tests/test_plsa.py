@@ -161,6 +161,27 @@ def test_levels_set_a_quantile_grid(runs):
         plsa.identify([str(runs[1])], levels=-1)
 
 
+def test_angle_unit_is_read_from_the_data_or_given(runs, tmp_path):
+    """Angles logged in radians under names without a unit (theta, phi) are
+    read as radians; angle_unit overrides; another unit is refused by name."""
+    rows = [line for line in open(runs[1]).read().splitlines() if not line.startswith("#")]
+    names = rows[0].split(",")
+    data = np.array([[float(v) for v in row.split(",")] for row in rows[1:]])
+    for n in ("bend_deg", "steer_deg"):
+        data[:, names.index(n)] *= math.pi / 180
+    names[names.index("bend_deg")], names[names.index("steer_deg")] = "theta", "phi"
+    path = tmp_path / "radians.csv"
+    np.savetxt(str(path), data, delimiter=",", header=",".join(names), comments="")
+    lines = []
+    rad = plsa.identify([str(path)], outputs=["theta", "phi"], scheduling="input", progress=lines.append)
+    assert rad.output_frame == "tip_cartesian" and rad.output_unit == "rad", rad
+    assert any("angles in rad" in line for line in lines), lines
+    given = plsa.identify([str(path)], outputs=["theta", "phi"], scheduling="input", angle_unit="deg")
+    assert given.output_unit == "deg"
+    with pytest.raises(ValueError, match="deg or rad, got 'grad'"):
+        plsa.identify([str(path)], outputs=["theta", "phi"], angle_unit="grad")
+
+
 def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     with pytest.raises(ValueError, match="no_such_column"):
         plsa.identify([str(runs[0])], inputs=["no_such_column"])

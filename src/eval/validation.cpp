@@ -54,7 +54,7 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
              "trackSensorYaw: the model's tip does not match the record");
   SensorYaw yaw;
   yaw.configure(static_cast<int>(yawRegistrationSamples(model, start)),
-                carriedYawRate(model, start) * kRadPerDeg * model.sample_time_s,
+                carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
                 static_cast<long>(settleSamples(model, start)));
   yaw.restart();
   SensorYawTrack track;
@@ -94,7 +94,7 @@ std::vector<AlignedPrediction> simulatedTip(const DioPwlObfModel& model, Eigen::
   const double offset = n > 0 ? track.offset : 0.0;
   if (const double yaw_rate = carriedYawRate(model, start); yaw_rate != 0.0) {
     // Turned from the record's start; the registration takes the turn's offset.
-    const double rate = yaw_rate * kRadPerDeg * model.sample_time_s;
+    const double rate = yaw_rate * model.radiansPerAngleUnit() * model.sample_time_s;
     for (Eigen::Index k = 0; k < rows; ++k) {
       const double c = std::cos(rate * static_cast<double>(k)), s = std::sin(rate * static_cast<double>(k));
       const double x = level(k, 0);
@@ -152,10 +152,10 @@ namespace {
 // `reference(t)` is the steering angle whose branch sample t takes.
 template <class Reference>
 std::pair<AlignedPrediction, AlignedPrediction> toTipAngles(const AlignedPrediction& x, const AlignedPrediction& y,
-                                                            Reference reference) {
+                                                            double rad_per_unit, Reference reference) {
   std::pair<AlignedPrediction, AlignedPrediction> out{x, y};
   for (Eigen::Index i = 0; i < x.values.size(); ++i)
-    tipAngles(x.values(i), y.values(i), reference(x.first + i, i == 0 ? 0.0 : out.second.values(i - 1)),
+    tipAngles(x.values(i), y.values(i), reference(x.first + i, i == 0 ? 0.0 : out.second.values(i - 1)), rad_per_unit,
               out.first.values(i), out.second.values(i));
   return out;
 }
@@ -195,7 +195,7 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
              "predictOutputs: the record does not match the model's outputs");
   PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
              "predictOutputs: the increments do not match the record");
-  const Eigen::MatrixXd ym = toModelFrame(model.output_frame, y);
+  const Eigen::MatrixXd ym = model.toModelFrame(y);
   std::vector<std::map<int, AlignedPrediction>> out(static_cast<std::size_t>(model.outputCount()));
   const bool tip = model.output_frame == OutputFrame::kTipCartesian;
   // A tip's k-step predictions turn into the sensor's frame as the predictor's do.
@@ -220,8 +220,8 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
     // angle it starts from, as the predictor writes it, a log whose angle
     // wraps at +-180 deg within the horizon scored a 2 deg miss as 358.)
     if (tip)
-      std::tie(out[0][k], out[1][k]) =
-          toTipAngles(out[0][k], out[1][k], [&](Eigen::Index t, double) { return y(t, 1); });
+      std::tie(out[0][k], out[1][k]) = toTipAngles(out[0][k], out[1][k], model.radiansPerAngleUnit(),
+                                                   [&](Eigen::Index t, double) { return y(t, 1); });
   }
   if (with_simulation) {
     const std::vector<AlignedPrediction> sims =
@@ -235,8 +235,8 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
     // direction can turn half a turn in a sample, or a log whose angle wraps
     // at +-180 deg would keep a whole turn's error on every later sample.)
     if (model.output_frame == OutputFrame::kTipCartesian)
-      std::tie(out[0][0], out[1][0]) =
-          toTipAngles(out[0][0], out[1][0], [&](Eigen::Index t, double) { return y(t, 1); });
+      std::tie(out[0][0], out[1][0]) = toTipAngles(out[0][0], out[1][0], model.radiansPerAngleUnit(),
+                                                   [&](Eigen::Index t, double) { return y(t, 1); });
   }
   return out;
 }

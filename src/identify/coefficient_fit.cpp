@@ -223,7 +223,7 @@ CoefficientSums groupedSums(const DioPwlObfModel& model, std::size_t records,
   PLSA_CHECK(records > 0 && records == Y_logged.size() && group.size() == Y_logged.size(),
              "coefficientSums: need one input record (or regressor set), output record and group vector per record");
   PLSA_CHECK(groups >= 1, "coefficientSums: need at least one group");
-  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
+  const std::vector<Eigen::MatrixXd> Y = model.toModelFrame(Y_logged);
   CoefficientSums sums;
   sums.groups.assign(static_cast<std::size_t>(groups), emptyGroup(model));
   for (std::size_t r = 0; r < Y.size(); ++r) {
@@ -266,7 +266,7 @@ CoefficientFitReport fitCoefficients(DioPwlObfModel& model, const std::vector<Ei
   checkSampleWeights(U, weights, "fitCoefficients");
   CoefficientSums sums;
   sums.groups.assign(1, emptyGroup(model));
-  const std::vector<Eigen::MatrixXd> Ym = toModelFrame(model.output_frame, Y);
+  const std::vector<Eigen::MatrixXd> Ym = model.toModelFrame(Y);
   for (std::size_t r = 0; r < U.size(); ++r) {
     checkInputs(model, U[r], r, "fitCoefficients");
     checkRecord(model, Ym[r], U[r].rows(), r, "fitCoefficients");
@@ -525,7 +525,7 @@ void fitOutputLevel(DioPwlObfModel& model, const std::vector<Eigen::MatrixXd>& U
   checkSampleWeights(U, weights, "fitOutputLevel");
   PLSA_CHECK(increments.empty() || increments.size() == U.size(),
              "fitOutputLevel: need one increment record per record");
-  const std::vector<Eigen::MatrixXd> Y = toModelFrame(model.output_frame, Y_logged);
+  const std::vector<Eigen::MatrixXd> Y = model.toModelFrame(Y_logged);
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(model.outputCount());
   double n = 0.0;
   for (std::size_t r = 0; r < U.size(); ++r) {

@@ -52,6 +52,7 @@ struct IdentificationRun {
   // The paper's stages (pipeline.cpp).
   void checkOptions(const std::vector<io::Log>& logs) const;
   void readData(const std::vector<io::Log>& logs);
+  OutputFrameChoice givenOutputFrame() const;
   void fitLocalModels(const std::vector<io::Log>& logs);
   void fitStepSegments(const std::vector<io::Log>& logs);
   /// What local windows do for an output: nothing, give its poles (no usable

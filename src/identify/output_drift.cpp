@@ -42,6 +42,7 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
   checkSampleWeights(U, weights, "output drift");
   const int ny = model_in.outputCount();
   const bool tip = model_in.output_frame == OutputFrame::kTipCartesian;
+  const double rad_per_unit = tip ? model_in.radiansPerAngleUnit() : 1.0;
   OutputDrift drift;
   drift.rate.assign(static_cast<std::size_t>(ny), 0.0);
   drift.reference_time_s = meanSampleTime(t);
@@ -57,7 +58,7 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
     double n = 0.0;
     for (std::size_t r = 0; r < U.size(); ++r) {
       if (U[r].rows() == 0) continue;
-      const Eigen::MatrixXd ym = toModelFrame(model.output_frame, Yc[r]);
+      const Eigen::MatrixXd ym = model.toModelFrame(Yc[r]);
       const Eigen::MatrixXd level = eval::modelLevels(model, U[r], eval::modelIncrements(model, U[r]));
       const Eigen::ArrayXd since = t[r].array() - drift.reference_time_s;
       for (Eigen::Index k = 0; k < ym.rows(); ++k) {
@@ -66,8 +67,8 @@ OutputDrift estimateOutputDrift(const DioPwlObfModel& model_in, const std::vecto
         for (int o = 0; o < ny; ++o) {
           const auto oo = static_cast<std::size_t>(o);
           const double res = ym(k, o) - model.output_level[oo] - level(k, o);
-          // A yaw of d deg turns (x, y) by d: dx = -y d, dy = x d (radians).
-          const double z = !tip ? since(k) : (o == 0 ? -ym(k, 1) : ym(k, 0)) * kRadPerDeg * since(k);
+          // A yaw of d (the steering's unit) turns (x, y) by d: dx = -y d, dy = x d (radians).
+          const double z = !tip ? since(k) : (o == 0 ? -ym(k, 1) : ym(k, 0)) * rad_per_unit * since(k);
           zz[oo] += w * z * z;
           zr[oo] += w * z * res;
           sz[oo] += w * z;

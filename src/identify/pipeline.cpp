@@ -144,6 +144,8 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  PLSA_CHECK(!o.angle_unit || *o.angle_unit == "deg" || *o.angle_unit == "rad",
+             "identify: the angle unit must be deg or rad, got '" + o.angle_unit.value_or("") + "'");
   PLSA_CHECK(o.quantile_levels >= 0 && o.quantile_levels <= 12,
              "identify: quantile levels must be 0 (automatic) or 1..12, got " + std::to_string(o.quantile_levels));
   PLSA_CHECK(
@@ -167,6 +169,20 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
 }
 
 // Data and sample time; every log must agree.
+// The output frame as given (IdentifyOptions::output_frame), the tip
+// frame's angle unit given or read as chooseAngleUnit reads it.
+OutputFrameChoice IdentificationRun::givenOutputFrame() const {
+  OutputFrameChoice c;
+  c.frame = *o.output_frame;
+  c.reason = std::string("output frame ") + toString(c.frame) + " as given";
+  if (c.frame != OutputFrame::kTipCartesian) return c;
+  PLSA_CHECK(o.outputs.size() == 2,
+             "identify: the tip_cartesian output frame needs exactly two outputs (bending, steering), got " +
+                 std::to_string(o.outputs.size()));
+  c.angle_unit = chooseAngleUnit(o.outputs, Y, o.angle_unit, c.angle_unit_reason);
+  return c;
+}
+
 void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   std::vector<std::string> reference = o.reference;
   if (reference.empty()) {
@@ -203,25 +219,19 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     times.push_back(log.column(io::standard_columns::kTime));
   }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
-  rep.output_frame =
-      o.output_frame
-          ? OutputFrameChoice{*o.output_frame, std::string("output frame ") + toString(*o.output_frame) + " as given"}
-          : chooseOutputFrame(o.outputs, Y);
+  rep.output_frame = o.output_frame ? givenOutputFrame() : chooseOutputFrame(o.outputs, Y, o.angle_unit);
   frame = rep.output_frame.frame;
-  if (frame == OutputFrame::kTipCartesian)
-    PLSA_CHECK(o.outputs.size() == 2,
-               "identify: the tip_cartesian output frame needs exactly two outputs (bending, "
-               "steering in deg), got " +
-                   std::to_string(o.outputs.size()));
-  Ym = toModelFrame(frame, Y);
+  Ym = toModelFrame(frame, Y, frame == OutputFrame::kAsLogged ? 1.0 : radiansPerAngleUnit(rep.output_frame.angle_unit));
   total = 0;
   for (const auto& u : U) total += u.rows();
   say("[1/5] data: " + std::to_string(logs.size()) + " log(s), " + std::to_string(total) + " samples at " +
       formatNumber(1.0 / dt) + " Hz");
   if (!o.output_frame) say("[1/5] " + rep.output_frame.reason);
   if (frame == OutputFrame::kTipCartesian)
-    say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] +
-        " as a tip's bending and steering angles; the model "
+    say("[1/5] outputs: " + o.outputs[0] + " and " + o.outputs[1] + " as a tip's bending and steering angles in " +
+        rep.output_frame.angle_unit +
+        (o.output_frame ? " (" + rep.output_frame.angle_unit_reason + ")" : std::string()) +
+        "; the model "
         "runs on " +
         o.outputs[0] + " cos(" + o.outputs[1] + ") and " + o.outputs[0] + " sin(" + o.outputs[1] + ")");
   ni = static_cast<int>(o.inputs.size());

@@ -161,6 +161,7 @@ void IdentificationRun::selectPoles() {
   model.inputs = o.inputs;
   model.outputs = o.outputs;
   model.output_frame = frame;
+  if (frame == OutputFrame::kTipCartesian) model.output_unit = rep.output_frame.angle_unit;
   const std::vector<PoleSource> sources = poleSources(PoleSourceKind::kSteps);
   pole_candidates.clear();
   clustered_sets.clear();

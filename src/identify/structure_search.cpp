@@ -141,9 +141,8 @@ IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
   FoldFits ff{std::vector<DioPwlObfModel>(folds, model), std::vector<SampleWeights>(folds),
               std::vector<std::vector<Eigen::MatrixXd>>(folds, FYlog),
               std::vector<std::vector<Eigen::MatrixXd>>(folds)};
-  const std::vector<Eigen::MatrixXd> FYm = fit_options.slow_mode.fractions_on_levels
-                                               ? toModelFrame(model.output_frame, FYlog)
-                                               : std::vector<Eigen::MatrixXd>{};
+  const std::vector<Eigen::MatrixXd> FYm =
+      fit_options.slow_mode.fractions_on_levels ? model.toModelFrame(FYlog) : std::vector<Eigen::MatrixXd>{};
   for (std::size_t f = 0; f < folds; ++f) {
     for (const Eigen::VectorXi& rows : fold_rows)
       ff.W[f].push_back((rows.array() != static_cast<int>(f)).cast<double>().matrix());

@@ -31,13 +31,17 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
   c.n_u = m.inputCount();
   c.n_y = m.outputCount();
   c.frame = m.output_frame;
+  if (m.output_frame == OutputFrame::kTipCartesian) {
+    c.rad_per_angle_unit = m.radiansPerAngleUnit();
+    c.angle_unit_per_rad = angleUnitsPerRadian(m.output_unit);
+  }
   c.sample_time = m.sample_time_s;
   c.output_level = m.output_level;
   if (m.output_frame == OutputFrame::kTipCartesian && m.schedule_side == ScheduleSide::kInput &&
       !m.output_level.empty() && !o.simulate) {
     c.yaw_window = yawRegistrationWindow(o.yaw_registration_s, m.sample_time_s);
     if (c.yaw_window > 0 && m.training_drift_per_s.size() == 2)
-      c.yaw_drift_per_sample = m.training_drift_per_s[1] * kRadPerDeg * m.sample_time_s;
+      c.yaw_drift_per_sample = m.training_drift_per_s[1] * c.rad_per_angle_unit * m.sample_time_s;
   }
   c.max_horizon = o.max_horizon;
   const double span = m.input_max - m.input_min;

@@ -123,11 +123,15 @@ struct IdentifyOptions {
   std::vector<std::string> inputs = io::standard_columns::pressures();
   std::vector<std::string> outputs = io::standard_columns::tipAngles();
   /// tip_cartesian: the two outputs are a tip's bending and steering angles
-  /// (deg) and the model runs on the tip direction's components (output_frame.hpp).
+  /// (deg or rad: angle_unit) and the model runs on the tip direction's components (output_frame.hpp).
   /// Unset (the default): chosen from the outputs' names and data
   /// (chooseOutputFrame), the choice and its reason in the progress lines
   /// and IdentifyReport::output_frame.
   std::optional<OutputFrame> output_frame;
+  /// The unit of a tip's bending and steering angles, "deg" or "rad", for
+  /// the tip frame; unset (the default): read from the names, else from the
+  /// data's range (chooseAngleUnit). The model's output_unit.
+  std::optional<std::string> angle_unit;
   /// Piecewise-constant references to segment on; empty: cmd_1..3 when present, else the inputs.
   std::vector<std::string> reference;
   int poles_per_pair = 5;

@@ -81,6 +81,17 @@ struct DioPwlObfModel {
   /// The frame the poles, coefficients and output_level are in; `outputs`
   /// always names the logged columns (output_frame.hpp).
   OutputFrame output_frame = OutputFrame::kAsLogged;
+  /// Radians per unit of the logged angles, for tip_cartesian (output_unit deg or rad).
+  double radiansPerAngleUnit() const { return plsa::radiansPerAngleUnit(output_unit); }
+  /// Records (logged outputs) in the model's frame.
+  std::vector<Eigen::MatrixXd> toModelFrame(const std::vector<Eigen::MatrixXd>& logged) const {
+    return plsa::toModelFrame(output_frame, logged,
+                              output_frame == OutputFrame::kAsLogged ? 1.0 : radiansPerAngleUnit());
+  }
+  Eigen::MatrixXd toModelFrame(const Eigen::MatrixXd& logged) const {
+    return plsa::toModelFrame(output_frame, logged,
+                              output_frame == OutputFrame::kAsLogged ? 1.0 : radiansPerAngleUnit());
+  }
   /// Pole of that lag per sample (0 when there is none).
   double schedulePole() const { return schedule_lag_s > 0 ? std::exp(-sample_time_s / schedule_lag_s) : 0.0; }
 
@@ -148,8 +159,9 @@ struct DioPwlObfModel {
     for (double r : training_drift_per_s)
       PLSA_CHECK(std::isfinite(r), "model: training_output_drift rates must be finite");
     PLSA_CHECK(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
-    PLSA_CHECK(output_frame == OutputFrame::kAsLogged || (outputs.size() == 2 && output_unit == "deg"),
-               "model: output_frame tip_cartesian needs two outputs in deg (bending, then steering)");
+    PLSA_CHECK(output_frame == OutputFrame::kAsLogged ||
+                   (outputs.size() == 2 && (output_unit == "deg" || output_unit == "rad")),
+               "model: output_frame tip_cartesian needs two outputs in deg or rad (bending, then steering)");
     PLSA_CHECK(schedule_side == ScheduleSide::kOutput ||
                    (partition.scheduling() == Scheduling::kInterpolated && !partition.directionSplit()),
                "model: input-side scheduling needs an interpolated partition without a direction split");

@@ -118,6 +118,8 @@ struct CompiledModel {
   int nodes = 1;  ///< copies of each bank: the grid nodes on the input side, else 1
   int banks = 0;  ///< outputs x nodes x channels
   OutputFrame frame = OutputFrame::kAsLogged;
+  /// tip_cartesian: radians per unit of the logged angles (deg or rad), and units per radian.
+  double rad_per_angle_unit = 1.0, angle_unit_per_rad = 1.0;
   double sample_time = 0.0;
   /// tip_cartesian with an output level: samples the sensor's yaw is
   /// registered on after each start (SensorYaw; 0: none), and the training

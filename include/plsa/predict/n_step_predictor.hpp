@@ -92,7 +92,7 @@ class NStepPredictor {
       if (!std::isfinite(y[o])) return PredictorStatus::kNotFinite;
     SteeringReference steering;
     if (m.frame == OutputFrame::kTipCartesian) {
-      steering = SteeringReference::of(y[1]);  // tipComponents' own
+      steering = SteeringReference::of(y[1], m.rad_per_angle_unit, m.angle_unit_per_rad);  // tipComponents' own
       ym_(0) = y[0] * steering.cos;
       ym_(1) = y[0] * steering.sin;
     } else {

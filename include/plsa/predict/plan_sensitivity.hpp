@@ -233,7 +233,7 @@ class PlanSensitivity {
       for (int h = 0; h < horizon; ++h) {
         const double x = nominal(h, 0), y = nominal(h, 1), r2 = x * x + y * y;
         const double inv_r = r2 == 0.0 ? 0.0 : 1.0 / std::sqrt(r2);  // straight: no direction to move
-        const double inv_r2 = inv_r * inv_r / kRadPerDeg;
+        const double inv_r2 = inv_r * inv_r / m.rad_per_angle_unit;
         // (d bend, d steer) by the sensor's components: (bx, sx) * d x + (by, sy) * d y ...
         const double bx = x * inv_r, sx = -y * inv_r2, by = y * inv_r, sy = x * inv_r2;
         // ... which are the model's turned by the yaw: (0, 1) * d x + (2, 3) * d y in the model's.

@@ -13,12 +13,14 @@
 
 namespace plsa {
 
-/// A steering angle (deg) with its direction's cosine and sine: the last
-/// measured one, taken once per sample, from which every prediction's rows turn.
+/// A steering angle (in the model's angle unit) with its direction's cosine
+/// and sine: the last measured one, taken once per sample, from which every
+/// prediction's rows turn; `rad_per_unit` (radiansPerAngleUnit) and its
+/// inverse, the unit's size.
 struct SteeringReference {
-  double deg = 0.0, cos = 1.0, sin = 0.0;
-  static SteeringReference of(double steer_deg) noexcept {
-    return {steer_deg, std::cos(steer_deg * kRadPerDeg), std::sin(steer_deg * kRadPerDeg)};
+  double angle = 0.0, cos = 1.0, sin = 0.0, rad_per_unit = kRadPerDeg, unit_per_rad = 180.0 / kPi;
+  static SteeringReference of(double steer, double rad_per_unit, double unit_per_rad) noexcept {
+    return {steer, std::cos(steer * rad_per_unit), std::sin(steer * rad_per_unit), rad_per_unit, unit_per_rad};
   }
 };
 
@@ -29,12 +31,12 @@ struct SteeringReference {
 inline void tipAnglesRowByRow(int horizon, const SteeringReference& reference,
                               Eigen::Ref<Eigen::MatrixXd> out) noexcept {
   PLSA_DEBUG_ASSERT(out.cols() == 2 && out.rows() >= horizon);
-  double steer = reference.deg;
+  double steer = reference.angle;
   double px = reference.cos, py = reference.sin;
   for (int h = 0; h < horizon; ++h) {
     const double x = out(h, 0), y = out(h, 1);
     if (x != 0.0 || y != 0.0) {
-      steer += std::atan2(px * y - py * x, px * x + py * y) / kRadPerDeg;
+      steer += std::atan2(px * y - py * x, px * x + py * y) / reference.rad_per_unit;
       px = x;
       py = y;
     }
@@ -53,10 +55,10 @@ inline void tipAnglesFromComponents(int horizon, const SteeringReference& refere
   PLSA_DEBUG_ASSERT(out.cols() == 2 && out.rows() >= horizon && turn != nullptr && bend != nullptr);
   if (!tipTurns(out.col(0).data(), out.col(1).data(), horizon, reference.cos, reference.sin, turn, bend))
     return tipAnglesRowByRow(horizon, reference, out);
-  constexpr double kDegPerRad = 180.0 / kPi;  // a product per row, not a division
-  double steer = reference.deg;
+  const double unit_per_rad = reference.unit_per_rad;  // a product per row, not a division
+  double steer = reference.angle;
   for (int h = 0; h < horizon; ++h) {
-    steer += turn[h] * kDegPerRad;
+    steer += turn[h] * unit_per_rad;
     out(h, 0) = bend[h];
     out(h, 1) = steer;
   }

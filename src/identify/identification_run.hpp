@@ -55,6 +55,7 @@ struct IdentificationRun {
   OutputFrameChoice givenOutputFrame() const;
   void fitLocalModels(const std::vector<io::Log>& logs);
   void fitStepSegments(const std::vector<io::Log>& logs);
+  void stepsFromPlateaus(const std::vector<io::Log>& logs);
   /// What local windows do for an output: nothing, give its poles (no usable
   /// step pole), or give a second pole candidate (too few to place a bank).
   enum class WindowUse { kNone, kInstead, kCandidate };
@@ -202,6 +203,7 @@ struct IdentificationRun {
   double step = 0.0;  ///< a reference change above this is a step (stepResolution)
   int ni = 0, no = 0;
   Eigen::MatrixXd all_ref, all_u;
+  bool references_are_inputs = false;  ///< no commands logged or named: the inputs are the step references
   // Every log's inputs, outputs and times while the search runs on windows
   // of them (sampleForSearch; empty: it runs on every sample), and per
   // window the count of its first rows fitted but never scored.

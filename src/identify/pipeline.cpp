@@ -190,6 +190,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     const bool have_cmd = logs[0].hasColumn(columns::command(1)) && o.inputs.size() <= columns::kChambers;
     for (std::size_t j = 0; j < o.inputs.size(); ++j)
       reference.push_back(have_cmd ? columns::command(static_cast<int>(j) + 1) : o.inputs[j]);
+    references_are_inputs = !have_cmd;
   }
   if (reference.size() != o.inputs.size()) {
     std::string names;
@@ -264,6 +265,7 @@ void IdentificationRun::fitLocalModels(const std::vector<io::Log>& logs) {
       rep.pairs.push_back(pp);
     }
   fitStepSegments(logs);
+  if (rep.segments == 0 && references_are_inputs) stepsFromPlateaus(logs);
   const std::vector<WindowUse> windows = chooseWindows();
   if (rep.used_windows || !rep.window_candidate_outputs.empty()) fitLocalWindows(logs, windows);
   int usable = 0, rejected = 0;
@@ -299,6 +301,25 @@ void IdentificationRun::fitStepSegments(const std::vector<io::Log>& logs) {
       }
     }
   }
+}
+
+// Measured inputs as their own references (no commands logged, none named)
+// that give no step: their noise cuts them at every sample. The plateaus
+// they hold (plateauReference) give the steps and levels a staircase's
+// commands would, when they hold any.
+void IdentificationRun::stepsFromPlateaus(const std::vector<io::Log>& logs) {
+  std::vector<Eigen::MatrixXd> plateaus;
+  for (const Eigen::MatrixXd& u : U) plateaus.push_back(plateauReference(u, min_len, step));
+  std::swap(Ref, plateaus);
+  fitStepSegments(logs);
+  if (rep.segments == 0) {
+    std::swap(Ref, plateaus);  // nothing held: the inputs stay the references
+    return;
+  }
+  rep.references_from_plateaus = true;
+  say("[2/5] step references: the inputs, logged without commands, step nowhere as logged (their noise); the "
+      "plateaus they hold for 1 s or more within 5 times their noise give " +
+      std::to_string(rep.segments) + " step segments");
 }
 
 // Per output, what local windows do: an output whose steps gave no usable

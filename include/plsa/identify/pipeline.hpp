@@ -132,7 +132,9 @@ struct IdentifyOptions {
   /// the tip frame; unset (the default): read from the names, else from the
   /// data's range (chooseAngleUnit). The model's output_unit.
   std::optional<std::string> angle_unit;
-  /// Piecewise-constant references to segment on; empty: cmd_1..3 when present, else the inputs.
+  /// Piecewise-constant references to segment on; empty: cmd_1..3 when
+  /// present, else the inputs, or, when those step nowhere as logged (their
+  /// noise), the plateaus they hold (plateauReference).
   std::vector<std::string> reference;
   int poles_per_pair = 5;
   int local_order = 1;
@@ -341,6 +343,10 @@ struct PairPoles {
 
 struct IdentifyReport {
   int segments = 0;
+  /// The step references were the plateaus the measured inputs hold
+  /// (plateauReference): no commands logged or named, and the inputs as
+  /// logged gave no step.
+  bool references_from_plateaus = false;
   /// The frame the outputs were fitted in and why (given, or chosen).
   OutputFrameChoice output_frame;
   std::vector<std::pair<std::vector<PlayChannel>, double>> play_scores;  ///< (candidate channels, held-out k-step fit)

@@ -1,6 +1,7 @@
 // Step 1: the reference's one-input steps and its levels (plsa/identify/segmentation.hpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -76,5 +77,12 @@ TEST(Segmentation, PlateausOfMeasuredPressuresGiveTheirCommandsSteps) {
   Eigen::MatrixXd random(n, 1);
   for (Eigen::Index k = 0; k < n; ++k) random(k, 0) = 0.1 * ((k / 40) % 7);
   EXPECT_EQ(plateauReference(random, min_len, 0.005), random);
+  // Nor is a random walk, which holds within its band for 1 s now and then
+  // (at least once here), but not for most of the run.
+  Eigen::MatrixXd walk(n, 1);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  double w = 0.2;
+  for (Eigen::Index k = 0; k < n; ++k) walk(k, 0) = w = std::clamp(w + 0.01 * unit(rng), 0.05, 0.35);
+  EXPECT_EQ(plateauReference(walk, min_len, 0.005), walk);
   EXPECT_THROW(plateauReference(u, 0, 0.005), std::invalid_argument);
 }

@@ -108,7 +108,12 @@ Eigen::MatrixXd plateauReference(const Eigen::MatrixXd& inputs, Eigen::Index min
     const Eigen::VectorXd u = inputs.col(j);
     const double tol = std::max(noise_multiple * differenceNoise(u), resolution / 2);
     std::vector<SteadyRun> runs = steadyRuns(u, tol);
-    if (std::none_of(runs.begin(), runs.end(), [&](const SteadyRun& r) { return r.length() >= min_hold; })) continue;
+    Eigen::Index held = 0;
+    for (const SteadyRun& r : runs)
+      if (r.length() >= min_hold) held += r.length();
+    // A staircase holds its levels most of the time; a random walk or an
+    // excitation holds now and then by chance: no plateaus to read.
+    if (held == 0 || 2 * held < u.size()) continue;
     shareLevels(runs, min_hold, tol);
     double next = 0.0;  // the level of the plateau after, from the end back
     for (auto r = runs.rbegin(); r != runs.rend(); ++r)

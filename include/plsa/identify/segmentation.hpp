@@ -30,8 +30,9 @@ std::vector<LocalDataSet> segmentSteps(const Eigen::MatrixXd& reference, double 
 /// of the plateaus whose means lie within the same band (one commanded level
 /// read once); a shorter run (a transition, a spike) takes the level of the
 /// plateau after it (the last one's at the end), so the reference steps
-/// where the input starts to move, as a command does. A column with no
-/// plateau is returned as it is.
+/// where the input starts to move, as a command does. A column whose
+/// plateaus cover less than half its samples (a random walk, an excitation
+/// that holds now and then by chance) is returned as it is.
 Eigen::MatrixXd plateauReference(const Eigen::MatrixXd& inputs, Eigen::Index min_hold, double resolution,
                                  double noise_multiple = 5.0);
 

@@ -292,6 +292,26 @@ TEST(Pipeline, QuantileGridLeavesOutAnInputThatOnlyReadsNoise) {
   EXPECT_EQ(line->find("p_2"), std::string::npos) << *line;
 }
 
+// Inputs that never leave a step's band (a dither of under 5 mbar): no
+// input to schedule on, one region, and so no quantile grid to report.
+TEST(Pipeline, NoMovingInputReportsNoQuantileGrid) {
+  const Eigen::Index n = 6000;
+  io::Log log = blankLog("dither.csv", {"time_s", "p_1", "y"}, n);
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> dither(-0.002, 0.002);
+  double y = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double p = 0.2 + dither(rng);
+    y = 0.95 * y + 0.05 * 40.0 * p;
+    log.data.row(k) << static_cast<double>(k) * kDt, p, y;
+  }
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({log}, partitionOnly({"p_1"}, {"y"}), &rep);
+  EXPECT_EQ(m.partition.regionCount(), 1);
+  EXPECT_EQ(rep.grid_levels, 0) << "a grid reported where no input moves";
+  EXPECT_TRUE(rep.grid_level_scores.empty());
+}
+
 // Three chambers moved at random, no staircase: `seconds` of a quantile
 // grid's data, its output a lag of their sum.
 io::Log randomChambersLog(double seconds) {

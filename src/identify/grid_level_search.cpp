@@ -75,7 +75,8 @@ GridLevelScore IdentificationRun::scoreGrid(int levels, std::vector<std::optiona
 void IdentificationRun::chooseGridLevels() {
   rep.grid_level_scores.clear();
   const std::vector<int> counts = gridLevelCandidates();
-  rep.grid_levels = grid_plan.designed ? 0 : grid_plan.quantile_levels;
+  // A staircase's levels, or no moving input (one region): no quantile grid.
+  rep.grid_levels = grid_plan.designed || grid_plan.moving.empty() ? 0 : grid_plan.quantile_levels;
   if (counts.size() < 2) return;
   const int automatic = counts.front();
   beginScoring("quantile grid levels", counts.size() * (firstInputSide() ? 1 : structures.size()));

@@ -413,7 +413,7 @@ struct IdentifyReport {
   /// given or not to be scored (score_grid_levels), no input moves, or the
   /// logs hold a staircase.
   std::vector<GridLevelScore> grid_level_scores;
-  int grid_levels = 0;           ///< a quantile grid's level count kept (0: the staircase's levels)
+  int grid_levels = 0;           ///< a quantile grid's level count kept (0: the staircase's levels, or no input moves)
   OutputDrift output_drift;      ///< the drift estimated on the samples the search scored (empty rates: stage not run)
   bool drift_taken_out = false;  ///< whether the model was fitted to the outputs less output_drift
   Eigen::Index search_samples = 0;          ///< the samples the structure search scored on (search_max_samples)

@@ -1,9 +1,9 @@
 // One identification (identifyModel) as a pipeline of named stages over a
 // shared state: the data, the model being built, the cross-validation folds
 // and the best choice so far. pipeline.cpp holds the paper's stages (data,
-// local fits, poles, partitions), structure_search.cpp plsa's search over
-// structures (joint_refinement.cpp its local search), each a function that
-// reads and sets this state. Internal to the identify library.
+// local fits, poles, partitions; step_segments.cpp the step segments' fits),
+// structure_search.cpp plsa's search over structures (joint_refinement.cpp
+// its local search), each a function that reads and sets this state. Internal to the identify library.
 #pragma once
 
 #include <chrono>
@@ -54,7 +54,7 @@ struct IdentificationRun {
   void readData(const std::vector<io::Log>& logs);
   OutputFrameChoice givenOutputFrame() const;
   void fitLocalModels(const std::vector<io::Log>& logs);
-  void fitStepSegments(const std::vector<io::Log>& logs);
+  void fitStepSegments(const std::vector<io::Log>& logs);  // step_segments.cpp
   void stepsFromPlateaus(const std::vector<io::Log>& logs);
   /// What local windows do for an output: nothing, give its poles (no usable
   /// step pole), or give a second pole candidate (too few to place a bank).

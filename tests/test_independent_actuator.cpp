@@ -137,3 +137,25 @@ TEST(IndependentActuator, ScalesItsLeverToABendingRange) {
   EXPECT_THROW(scaleToBendRange(p, commands, 0.0), std::invalid_argument);
   EXPECT_THROW(scaleToBendRange(p, Eigen::MatrixXd::Zero(80, 3), 10.0), std::invalid_argument);
 }
+
+TEST(IndependentActuator, TheNoiseFreeReadingIsTheMeasuredOneLessTheWhiteNoise) {
+  // The same physics and seed with and without the sensor's white noise:
+  // the noisy run's noise-free reading is the quiet run's reading (the
+  // sensor's own bias in both), and what the noise adds has its spread.
+  IndependentPhysics noisy;
+  setIndependentEffect(noisy, "sensor_bias", "warm_up", 1.0);
+  noisy.pressure_noise_bar = 0.0;
+  IndependentPhysics quiet = noisy;
+  quiet.noise_deg = 0.0;
+  IndependentActuator a(noisy, 3), b(quiet, 3);
+  double sum_sq = 0.0;
+  const int n = 4000;
+  for (int k = 0; k < n; ++k) {
+    const std::array<double, 3> cmd = {k % 400 < 200 ? 0.3 : 0.1, 0.1, 0.0};
+    const IndependentSample s = a.step(cmd), q = b.step(cmd);
+    ASSERT_LT((s.bending_noise_free_deg - q.bending_deg).norm(), 1e-12) << k;
+    EXPECT_EQ(q.bending_noise_free_deg, q.bending_deg);
+    sum_sq += (s.bending_deg - s.bending_noise_free_deg).squaredNorm();
+  }
+  EXPECT_NEAR(std::sqrt(sum_sq / (2 * n)), noisy.noise_deg, 0.1 * noisy.noise_deg);
+}

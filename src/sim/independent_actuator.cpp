@@ -321,7 +321,7 @@ void IndependentActuator::substep(const std::array<double, 3>& cmd, double dt) {
   t_ += dt;
 }
 
-Eigen::Vector2d IndependentActuator::measured(const Eigen::Vector2d& bend_rad) {
+Eigen::Vector2d IndependentActuator::measuredNoiseFree(const Eigen::Vector2d& bend_rad) {
   Eigen::Vector2d v = bend_rad / kRadPerDeg;
   if (ph_.hysteresis == "backlash") {
     const double b = 10.0 * ph_.hysteresis_strength;
@@ -342,7 +342,6 @@ Eigen::Vector2d IndependentActuator::measured(const Eigen::Vector2d& bend_rad) {
     wander_ += Eigen::Vector2d(normal_(rng_), normal_(rng_)) * sd / std::max(1e-9, o);
     v += o * wander_;
   }
-  if (ph_.noise_deg > 0) v += ph_.noise_deg * Eigen::Vector2d(normal_(rng_), normal_(rng_));
   return v;
 }
 
@@ -358,7 +357,9 @@ IndependentSample IndependentActuator::step(const std::array<double, 3>& command
   for (int k = 0; k < substeps_; ++k) substep(cmd, dt);
   IndependentSample s;
   for (std::size_t i = 0; i < 3; ++i) s.pressure_bar[i] = p_[i] + ph_.pressure_noise_bar * normal_(rng_);
-  s.bending_deg = measured(bend_);
+  s.bending_noise_free_deg = measuredNoiseFree(bend_);
+  s.bending_deg = s.bending_noise_free_deg;
+  if (ph_.noise_deg > 0) s.bending_deg += ph_.noise_deg * Eigen::Vector2d(normal_(rng_), normal_(rng_));
   return s;
 }
 

@@ -415,6 +415,8 @@ def test_generalise(out):
     assert [r["case"] for r in doc["rows"]] == ["sensor_bias.scale_offset"]
     assert "sensor_offset_direction_deg" in doc["rows"][0]["physics"]
     assert_refused("generalise", broken(doc, without("rows", 0, "fits", "arx")), "a row without ARX's fits")
+    assert_refused("generalise", broken(doc, without("rows", 0, "fits", "noise_free")),
+                   "a row without its noise-free ceiling")
     assert_refused("generalise", broken(doc, without("summary", "plsa", "steer_deg", "sim")), "no simulation summary")
     assert_refused("generalise", broken(doc, setting("fast", "rows", 0, "fits", "plsa", "bend_deg", "40")),
                    "a fit that is not a number")

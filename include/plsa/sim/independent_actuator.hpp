@@ -125,6 +125,10 @@ void setIndependentEffect(IndependentPhysics& physics, const std::string& effect
 struct IndependentSample {
   std::array<double, 3> pressure_bar{};
   Eigen::Vector2d bending_deg = Eigen::Vector2d::Zero();  ///< measured bending vector (bend cos steer, bend sin steer)
+  /// The same reading without the sensor's white noise (its gain, offsets
+  /// and backlash still in it): the best any model of the commands could
+  /// predict, short of the sensor's random-walk offset.
+  Eigen::Vector2d bending_noise_free_deg = Eigen::Vector2d::Zero();
 };
 
 /// Starts vented and at rest; step() advances one sample.
@@ -143,7 +147,7 @@ class IndependentActuator {
   double effectivePressure(std::size_t i, double p);
   double hysteretic(std::size_t i, double strain, double dt);
   double creepOf(std::size_t i, double strain, double dt);
-  Eigen::Vector2d measured(const Eigen::Vector2d& bend);
+  Eigen::Vector2d measuredNoiseFree(const Eigen::Vector2d& bend);  ///< the sensor's reading before its white noise
 
   IndependentPhysics ph_;
   std::mt19937_64 rng_;

@@ -1,0 +1,112 @@
+// Banks of plays (IdentifyOptions::play_bank_candidates): several widths
+// per input, a Prandtl-Ishlinskii operator weighted by the least squares.
+// Their data come from the independently written actuator, whose Preisach
+// hysteresis (a triangle of relays) is no play of plsa's.
+#include "plsa/sim/independent_actuator.hpp"
+#include "plsa/io/standard_columns.hpp"
+#include "support/identify_fixtures.hpp"
+
+using namespace plsa;
+using namespace plsa::identify;
+
+namespace {
+
+/// A run of the independent actuator from rest, logged as a tip sensor
+/// reports it: bend and steering angles, steering unwrapped.
+io::Log recordIndependent(const sim::IndependentPhysics& physics, const sim::Experiment& e, std::uint64_t seed) {
+  sim::IndependentActuator a(physics, seed);
+  io::Log log;
+  log.columns = io::standard_columns::recorded();
+  log.data.resize(e.commands.rows(), static_cast<Eigen::Index>(log.columns.size()));
+  double steer = 0.0;
+  for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
+    const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
+    if (s.bending_deg.norm() > 0.5)
+      steer += std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * M_PI / 180, 2 * M_PI) *
+               180 / M_PI;
+    log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),
+        e.commands(k, 2), s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2], s.bending_deg.norm(), steer;
+  }
+  return log;
+}
+
+/// A short search: input side, three single sets, nothing after the bank.
+IdentifyOptions bankSearch() {
+  IdentifyOptions o;
+  o.scheduling = SchedulingChoice::kInputSide;
+  o.play_candidates = {{0.0}, {0.04}, {0.1}};
+  o.play_coupling_candidates = {};
+  o.schedule_lag_candidates = {};
+  o.play_threshold_candidates = {};
+  o.slow_pole_candidates = {};
+  o.output_drift = OutputDriftChoice::kOff;
+  return o;
+}
+
+struct Runs {
+  io::Log train, val;
+};
+
+Runs independentRuns(const std::string& hysteresis_law) {
+  sim::IndependentPhysics physics;
+  if (!hysteresis_law.empty()) {
+    const auto [lo, hi] = sim::independentStrengthRange("hysteresis", hysteresis_law);
+    sim::setIndependentEffect(physics, "hysteresis", hysteresis_law, 0.5 * (lo + hi));
+  }
+  sim::ExperimentOptions eo;
+  eo.seed = 2;
+  return {recordIndependent(physics, sim::gridExperiment(eo), 1),
+          recordIndependent(physics, sim::joystickExperiment(eo), 101)};
+}
+
+}  // namespace
+
+// Preisach hysteresis: the bank scores above every single set held out,
+// is kept, and simulates the joystick run it never saw better than the
+// single set chosen without it. On a plant without hysteresis no bank is
+// kept: a tie keeps the single set.
+TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
+  const Runs preisach = independentRuns("preisach");
+  IdentifyOptions o = bankSearch();
+  IdentifyReport with_bank;
+  const DioPwlObfModel banked = identifyModel({preisach.train}, o, &with_bank);
+  ASSERT_EQ(with_bank.play_bank_scores.size(), 1u);  // uncoupled only: no coupling was chosen
+  double best_single = -INFINITY;
+  for (const auto& [set, score] : with_bank.play_scores) best_single = std::max(best_single, score);
+  EXPECT_GT(with_bank.play_bank_scores[0].score, best_single + 0.5);
+  ASSERT_EQ(banked.shaping.play.size(), 3u);
+  for (const auto& channels : banked.shaping.play) EXPECT_EQ(channels.size(), 3u);
+
+  o.play_bank_candidates = {};
+  IdentifyReport without_bank;
+  const DioPwlObfModel single = identifyModel({preisach.train}, o, &without_bank);
+  EXPECT_TRUE(without_bank.play_bank_scores.empty());
+  for (const auto& channels : single.shaping.play) EXPECT_EQ(channels.size(), 1u);
+  const eval::ValidationResult b = eval::validateModel(banked, preisach.val, {40});
+  const eval::ValidationResult s = eval::validateModel(single, preisach.val, {40});
+  for (std::size_t out = 0; out < 2; ++out) {
+    std::printf("%s: bank %.2f / %.2f, single set %.2f / %.2f (40 steps / simulation)\n",
+                b.outputs[out].name.c_str(), b.outputs[out].fit_k.at(40), b.outputs[out].fit_sim,
+                s.outputs[out].fit_k.at(40), s.outputs[out].fit_sim);
+    EXPECT_GT(b.outputs[out].fit_k.at(40), s.outputs[out].fit_k.at(40)) << b.outputs[out].name;
+  }
+  EXPECT_GT(b.outputs[0].fit_sim, s.outputs[0].fit_sim + 5.0);
+
+  const Runs plain = independentRuns("");
+  IdentifyReport no_hysteresis;
+  const DioPwlObfModel linear = identifyModel({plain.train}, bankSearch(), &no_hysteresis);
+  ASSERT_EQ(no_hysteresis.play_bank_scores.size(), 1u);
+  for (const auto& channels : linear.shaping.play) EXPECT_EQ(channels.size(), 1u);
+  const std::string& line = *std::find_if(no_hysteresis.lines.begin(), no_hysteresis.lines.end(),
+                                          [](const std::string& l) { return l.find("banks of plays") != l.npos; });
+  EXPECT_NE(line.find("none kept"), std::string::npos) << line;
+}
+
+// A bank is two or more plays; one is a set for --play.
+TEST(Pipeline, ABankOfOnePlayIsRefusedByName) {
+  const Runs plain = independentRuns("");
+  IdentifyOptions o = bankSearch();
+  o.play_bank_candidates = {{PlayChannel(0.1)}};
+  plsa::test_fixtures::expectThrowContaining([&] { identifyModel({plain.train}, o); },
+                                             "a bank of plays needs at least two channels");
+}

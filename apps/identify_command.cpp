@@ -405,34 +405,51 @@ void addFrameAndScheduling(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a)
             "simulation)");
 }
 
+// One candidate set of play channels, channels separated by '/', e.g. 0/0.1/0.12u.
+std::vector<PlayChannel> parsePlaySet(const std::string& text, const std::string& option) {
+  std::vector<PlayChannel> set;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, '/')) {
+    const bool slope = !item.empty() && item.back() == 'u';
+    const std::string number = slope ? item.substr(0, item.size() - 1) : item;
+    double v = NAN;
+    // A band wider than the input's whole range never moves: at most 1 (or 1u).
+    if (!parseNonNegative(number, v) || v > 1.0)
+      throw CLI::ValidationError(option,
+                                 "'" + item + "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u) of at most 1");
+    set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
+  }
+  return set;
+}
+
 // identify's candidates for the input shaping, the schedule's lag and the slow pole.
 void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   id->add_option_function<std::vector<std::string>>(
         "--play",
         [a](const std::vector<std::string>& sets) {
-          // Each value is one candidate set, channels separated by '/', e.g. 0/0.1/0.12u.
           a->options.play_candidates.clear();
-          for (const auto& s : sets) {
-            std::vector<PlayChannel> set;
-            std::stringstream ss(s);
-            std::string item;
-            while (std::getline(ss, item, '/')) {
-              const bool slope = !item.empty() && item.back() == 'u';
-              const std::string number = slope ? item.substr(0, item.size() - 1) : item;
-              double v = NAN;
-              // A band wider than the input's whole range never moves: at most 1 (or 1u).
-              if (!parseNonNegative(number, v) || v > 1.0)
-                throw CLI::ValidationError("--play", "'" + item +
-                                                         "' is not a width (e.g. 0.1) or a slope (e.g. 0.12u) of at "
-                                                         "most 1");
-              set.push_back(slope ? PlayChannel(0.0, v) : PlayChannel(v));
-            }
-            a->options.play_candidates.push_back(set);
-          }
+          for (const auto& s : sets) a->options.play_candidates.push_back(parsePlaySet(s, "--play"));
         },
         "Candidate play channel sets, comma-separated, channels within a set by '/': a width as a fraction of "
         "the input range (0.1) or a band growing with the level (0.12u: 12% of the pressure); "
-        "e.g. 0,0.1,0.12u,0/0.1; '0' alone is the paper's model")
+        "e.g. 0,0.1,0.12u,0/0.1; '0' alone (and --play-bank none) is the paper's model")
+      ->delimiter(',');
+  id->add_option_function<std::vector<std::string>>(
+        "--play-bank",
+        [a](const std::vector<std::string>& banks) {
+          a->options.play_bank_candidates.clear();
+          for (const auto& s : banks) {
+            if (s == "none") continue;
+            a->options.play_bank_candidates.push_back(parsePlaySet(s, "--play-bank"));
+            if (a->options.play_bank_candidates.back().size() < 2)
+              throw CLI::ValidationError("--play-bank", "'" + s + "' is one play; a bank has two or more (0/0.07/0.2)");
+          }
+        },
+        "Candidate banks of plays (a Prandtl-Ishlinskii operator: several widths per input, each weighted by the "
+        "least squares; 0 is its linear part), comma-separated, plays within a bank by '/' as in --play; each "
+        "tried on the chosen scheduling, uncoupled and with the chosen coupling, against the chosen play set; "
+        "'none' tries none (default 0/0.07/0.2)")
       ->delimiter(',');
   id->add_option("--schedule-lag", a->options.schedule_lag_candidates,
                  "Candidate time constants (s) of a lag on the scheduling inputs, tried against none by "

@@ -400,6 +400,15 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
             2);  // a band wider than the input's range never moves
   EXPECT_NE(err_.find("'1e308u' is not a width (e.g. 0.1) or a slope (e.g. 0.12u) of at most 1"), std::string::npos)
       << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --play-bank 0/0.1,0.2 --out " + file("m.json")),
+            2);  // a bank of one play is a --play set
+  EXPECT_NE(err_.find("--play-bank: '0.2' is one play; a bank has two or more (0/0.07/0.2)"), std::string::npos)
+      << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") + " --inputs p_1 --outputs bend_deg --play-bank 0/x --out " +
+                file("m.json")),
+            2);
+  EXPECT_NE(err_.find("--play-bank: 'x' is not a width"), std::string::npos) << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") +
                 " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " + file("m.json")),
             0);

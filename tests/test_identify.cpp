@@ -66,24 +66,31 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   o.slow_pole_candidates = {0.0, 5.0};  // 0 is "none", scored once
   o.progress_interval_s = 0.0;
   IdentifyReport rep;
-  identifyModel({train}, o, &rep);
+  const DioPwlObfModel m = identifyModel({train}, o, &rep);
   std::vector<std::string> ticks;
   for (const std::string& l : rep.lines)
     if (l.rfind("[5/5] scoring ", 0) == 0) ticks.push_back(l.substr(14, l.find(" held-out") - 14));
-  const std::vector<std::string> expected{"pole methods: 1 of 4",  // two each: 40 steps ahead, simulated
-                                          "pole methods: 2 of 4",
-                                          "pole methods: 3 of 4",
-                                          "pole methods: 4 of 4",
-                                          "play channels and scheduling: 1 of 2",
-                                          "play channels and scheduling: 2 of 2",
-                                          "coupled play channels: 1 of 2",
-                                          "coupled play channels: 2 of 2",
-                                          "scheduling lags: 1 of 1",
-                                          "play thresholds: 1 of 1",
-                                          "sensor drift: 1 of 2",
-                                          "sensor drift: 2 of 2",
-                                          "slow poles: 1 of 2",
-                                          "slow poles: 2 of 2"};
+  // The default bank of plays, uncoupled and, when the coupling stage kept
+  // one, with it.
+  const std::size_t banks = rep.play_bank_scores.size();
+  ASSERT_EQ(banks, m.shaping.coupling > 0 ? 2u : 1u);
+  std::vector<std::string> expected{"pole methods: 1 of 4",  // two each: 40 steps ahead, simulated
+                                    "pole methods: 2 of 4",
+                                    "pole methods: 3 of 4",
+                                    "pole methods: 4 of 4",
+                                    "play channels and scheduling: 1 of 2",
+                                    "play channels and scheduling: 2 of 2",
+                                    "coupled play channels: 1 of 2",
+                                    "coupled play channels: 2 of 2",
+                                    "banks of plays: 1 of " + std::to_string(banks),
+                                    "scheduling lags: 1 of 1",
+                                    "play thresholds: 1 of 1",
+                                    "sensor drift: 1 of 2",
+                                    "sensor drift: 2 of 2",
+                                    "slow poles: 1 of 2",
+                                    "slow poles: 2 of 2"};
+  if (banks == 2)
+    expected.insert(std::find(expected.begin(), expected.end(), "scheduling lags: 1 of 1"), "banks of plays: 2 of 2");
   EXPECT_EQ(ticks, expected);
   // An interval longer than the run prints none.
   o.progress_interval_s = 1e6;
@@ -605,6 +612,7 @@ TEST(Pipeline, AllEffectsPlayModelBeatsThePapersConfiguration) {
   IdentifyOptions paper_options;
   paper_options.scheduling = SchedulingChoice::kSwitched;
   paper_options.play_candidates = {{0.0}};
+  paper_options.play_bank_candidates = {};
   paper_options.play_coupling_candidates = {};
   const DioPwlObfModel paper = identifyModel({train}, paper_options);
   EXPECT_EQ(paper.shaping.coupling, 0.0);

@@ -22,8 +22,8 @@ io::Log recordIndependent(const sim::IndependentPhysics& physics, const sim::Exp
   for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
     const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
     if (s.bending_deg.norm() > 0.5)
-      steer += std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * M_PI / 180, 2 * M_PI) *
-               180 / M_PI;
+      steer +=
+          std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * M_PI / 180, 2 * M_PI) * 180 / M_PI;
     log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),
         e.commands(k, 2), s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2], s.bending_deg.norm(), steer;
   }
@@ -85,9 +85,9 @@ TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   const eval::ValidationResult b = eval::validateModel(banked, preisach.val, {40});
   const eval::ValidationResult s = eval::validateModel(single, preisach.val, {40});
   for (std::size_t out = 0; out < 2; ++out) {
-    std::printf("%s: bank %.2f / %.2f, single set %.2f / %.2f (40 steps / simulation)\n",
-                b.outputs[out].name.c_str(), b.outputs[out].fit_k.at(40), b.outputs[out].fit_sim,
-                s.outputs[out].fit_k.at(40), s.outputs[out].fit_sim);
+    std::printf("%s: bank %.2f / %.2f, single set %.2f / %.2f (40 steps / simulation)\n", b.outputs[out].name.c_str(),
+                b.outputs[out].fit_k.at(40), b.outputs[out].fit_sim, s.outputs[out].fit_k.at(40),
+                s.outputs[out].fit_sim);
     EXPECT_GT(b.outputs[out].fit_k.at(40), s.outputs[out].fit_k.at(40)) << b.outputs[out].name;
   }
   EXPECT_GT(b.outputs[0].fit_sim, s.outputs[0].fit_sim + 5.0);

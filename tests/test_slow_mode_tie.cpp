@@ -356,6 +356,7 @@ TEST(Pipeline, SlowPoleIsChosenForCreepAndLiftsTheSimulation) {
   const io::Log val = sim::runExperiment(b, sim::joystickExperiment(eo));
   IdentifyOptions o;
   o.play_candidates = {{0.0}};
+  o.play_bank_candidates = {};  // no play at all: the slow pole alone is compared
   o.play_coupling_candidates = {};
   o.schedule_lag_candidates = {};
   o.scheduling = SchedulingChoice::kInputSide;

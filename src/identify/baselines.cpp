@@ -14,6 +14,7 @@ IdentifyOptions paperConfiguration(IdentifyOptions o) {
   o.scheduling = SchedulingChoice::kSwitched;
   o.output_frame = OutputFrame::kAsLogged;
   o.play_candidates = {{0.0}};
+  o.play_bank_candidates = {};
   o.play_coupling_candidates = {};
   o.play_threshold_candidates = {};
   o.schedule_lag_candidates = {};

@@ -142,6 +142,7 @@ struct IdentificationRun {
   void cutFolds();
   void searchPlayAndScheduling();
   void searchCoupling();
+  void searchPlayBank();
   void reportPlayChoice();
   void searchScheduleLag();
   void searchThreshold();

@@ -121,6 +121,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   chooseGridLevels();
   searchPlayAndScheduling();
   searchCoupling();
+  searchPlayBank();
   searchScheduleLag();
   searchThreshold();
   refineJointly();
@@ -160,6 +161,10 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
              "identify: the step threshold must be a positive, finite reference change");
   PLSA_CHECK(std::isfinite(o.step_threshold_share) && o.step_threshold_share > 0 && o.step_threshold_share < 1,
              "identify: the step threshold's share must be a fraction of the references' largest level in (0, 1)");
+  for (const auto& bank : o.play_bank_candidates)
+    PLSA_CHECK(bank.size() >= 2,
+               "identify: a bank of plays needs at least two channels (a single one is a play "
+               "set: play_candidates, --play)");
   PLSA_CHECK(!std::isnan(o.window_poles_below), "identify: window_poles_below is NaN");
   PLSA_CHECK(!std::isnan(o.second_order_windows_below), "identify: second_order_windows_below is NaN");
   checkOption(o.pole_method);

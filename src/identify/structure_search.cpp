@@ -286,6 +286,39 @@ void IdentificationRun::searchCoupling() {
   reportPlayChoice();
 }
 
+// Banks of plays on the chosen scheduling: each uncoupled and with the
+// chosen coupling, against the set chosen so far.
+void IdentificationRun::searchPlayBank() {
+  if (o.play_bank_candidates.empty()) return;
+  std::vector<double> couplings = {0.0};
+  if (best_coupling > 0) couplings.push_back(best_coupling);
+  beginScoring("banks of plays", o.play_bank_candidates.size() * couplings.size());
+  applyStructure(structures[best_structure]);
+  const double before = best_score;
+  for (const auto& bank : o.play_bank_candidates) {
+    for (const double c : couplings) {
+      model.shaping.coupling = c;
+      applyPlay(bank);
+      const double score = crossValidated();
+      rep.play_bank_scores.push_back({bank, c * top_level, score});
+      if (score > best_score + 1e-9) {
+        best_score = score;
+        best_set = bank;
+        best_coupling = c;
+      }
+    }
+  }
+  model.shaping.coupling = best_coupling;
+  applyPlay(best_set);
+  std::string line = "[5/5] banks of plays (several widths per input, on the chosen scheduling): ";
+  line += best_score > before ? "kept " + formatPlaySet(best_set) + (best_coupling > 0 ? " coupled" : "")
+                              : "none kept (" + scoreText(before) + " without)";
+  line += ". Scores (coupling x top level{plays}):";
+  for (const auto& b : rep.play_bank_scores)
+    line += " " + fixedDecimals(b.coupling, 2) + formatPlaySet(b.set) + "->" + scoreText(b.score);
+  say(line);
+}
+
 void IdentificationRun::reportPlayChoice() {
   if (o.play_candidates.size() * structures.size() > 1) {
     const bool chosen_interp = model.partition.scheduling() == Scheduling::kInterpolated;

@@ -209,10 +209,9 @@ struct IdentifyOptions {
   /// set whose model predicts held-out blocks of the training data best k
   /// steps ahead (blocked cross-validation) is kept. {{0}} alone gives the
   /// paper's model.
-  /// Default: one channel per input, fixed or growing, its size chosen;
-  /// several channels per set are possible but a grid of one-input steps
-  /// cannot tell them apart (nearly collinear), so they extrapolate badly
-  /// (docs/identification.md).
+  /// Default: one channel per input, fixed or growing, its size chosen.
+  /// Several channels per set are possible; the default's banks of several
+  /// widths are play_bank_candidates, scored on the chosen scheduling only.
   std::vector<std::vector<PlayChannel>> play_candidates = {
       {0.0}, {0.02}, {0.04}, {0.07}, {0.1}, {0.15}, {0.2}, {{0.0, 0.08}}, {{0.0, 0.12}}, {{0.0, 0.16}}, {{0.0, 0.2}}};
   /// Then, on the chosen scheduling, every play set again with its channels
@@ -220,6 +219,16 @@ struct IdentifyOptions {
   /// given as a fraction of the largest training input level: 0.3 lets a
   /// full neighbour cut a chamber's level by 30%. Empty: no coupling.
   std::vector<double> play_coupling_candidates = {0.15, 0.3};
+  /// Then banks of plays, several widths per input (a Prandtl-Ishlinskii
+  /// operator: a width-0 channel is its linear part, each play's weight is
+  /// fitted by the same least squares), each tried on the chosen scheduling,
+  /// uncoupled and with the chosen coupling, against the chosen set; kept
+  /// only if one scores higher. Scored here rather than with every
+  /// scheduling and coupling as the sets above are: a bank of three
+  /// multiplies the regressors by three. Widths as in play_candidates.
+  /// Empty: none.
+  std::vector<std::vector<PlayChannel>> play_bank_candidates = {
+      {PlayChannel(0.0), PlayChannel(0.07), PlayChannel(0.2)}};
   /// Then the time constants (s) of a lag on the scheduling inputs
   /// (DioPwlObfModel::schedule_lag_s) tried against none, on the chosen
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
@@ -356,6 +365,7 @@ struct IdentifyReport {
     double score;
   };
   std::vector<CouplingScore> coupling_scores;
+  std::vector<CouplingScore> play_bank_scores;  ///< each bank of plays, uncoupled and with the chosen coupling
   struct ThresholdScore {
     std::vector<PlayChannel> set;
     double threshold;  ///< as given in the options (0: none)

@@ -30,7 +30,8 @@ import tempfile
 # Name -> the identify arguments that leave one knob's candidates out.
 CONFIGURATIONS = {
     "defaults": [],
-    "no play channels": ["--play", "0"],
+    "no play channels": ["--play", "0", "--play-bank", "none"],
+    "no play bank": ["--play-bank", "none"],
     "no play coupling": ["--play-coupling", "0"],
     "no play threshold": ["--play-threshold", "0"],
     "no schedule lag": ["--schedule-lag", "0"],
@@ -91,6 +92,8 @@ def unchanged_by(config, chosen):
     choice; --exhaustive identifies anyway, to check this)."""
     if config == "no play channels":
         return all(channel == 0.0 for channels in chosen["input_play"] for channel in channels)
+    if config == "no play bank":
+        return all(len(channels) == 1 for channels in chosen["input_play"])
     if config == "no play coupling":
         return chosen.get("play_coupling", 0.0) == 0.0
     if config == "no play threshold":

@@ -64,7 +64,7 @@ Runs independentRuns(const std::string& hysteresis_law) {
 // Preisach hysteresis: the bank scores above every single set held out,
 // is kept, and simulates the joystick run it never saw better than the
 // single set chosen without it. On a plant without hysteresis no bank is
-// kept: a tie keeps the single set.
+// kept: it must gain over two standard errors held out.
 TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   const Runs preisach = independentRuns("preisach");
   IdentifyOptions o = bankSearch();
@@ -74,6 +74,8 @@ TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   double best_single = -INFINITY;
   for (const auto& [set, score] : with_bank.play_scores) best_single = std::max(best_single, score);
   EXPECT_GT(with_bank.play_bank_scores[0].score, best_single + 0.5);
+  // Kept by the two-standard-error rule (a bank triples the later stages' regressors).
+  EXPECT_GT(with_bank.play_bank_gain.first, 2.0 * with_bank.play_bank_gain.second);
   ASSERT_EQ(banked.shaping.play.size(), 3u);
   for (const auto& channels : banked.shaping.play) EXPECT_EQ(channels.size(), 3u);
 
@@ -96,6 +98,7 @@ TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   IdentifyReport no_hysteresis;
   const DioPwlObfModel linear = identifyModel({plain.train}, bankSearch(), &no_hysteresis);
   ASSERT_EQ(no_hysteresis.play_bank_scores.size(), 1u);
+  EXPECT_LE(no_hysteresis.play_bank_gain.first, 2.0 * no_hysteresis.play_bank_gain.second);
   for (const auto& channels : linear.shaping.play) EXPECT_EQ(channels.size(), 1u);
   const std::string& line = *std::find_if(no_hysteresis.lines.begin(), no_hysteresis.lines.end(),
                                           [](const std::string& l) { return l.find("banks of plays") != l.npos; });

@@ -34,7 +34,7 @@ io::Log asLog(const RunData& run, bool pressures) {
 
 // Identification's defaults (on short runs its quantile grid takes 2 levels
 // per input instead of 3: IdentifyOptions::quantile_levels), scheduled on the
-// input side when the inputs are the measured pressures.
+// input side when the inputs are the measured pressures, without banks of plays.
 IdentifyOptions referenceOptions(bool pressures) {
   IdentifyOptions o;
   o.inputs = {"u_1", "u_2", "u_3"};
@@ -47,6 +47,9 @@ IdentifyOptions referenceOptions(bool pressures) {
   // gap to the digit), at a median 60% of its CPU time there. On commands
   // (the real arm's trials) its choice differs, and the reference with it.
   if (pressures) o.scheduling = SchedulingChoice::kInputSide;
+  // No bank of plays: scoring one costs two or three more fits of three
+  // times the regressors, on the thread that bounds a diagnosis's time.
+  o.play_bank_candidates = {};
   return o;
 }
 

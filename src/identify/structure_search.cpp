@@ -287,33 +287,49 @@ void IdentificationRun::searchCoupling() {
 }
 
 // Banks of plays on the chosen scheduling: each uncoupled and with the
-// chosen coupling, against the set chosen so far.
+// chosen coupling, against the set chosen so far, scored again for its
+// terms. A bank multiplies the regressors of every later fit, so the best
+// is kept only when it gains more than two standard errors over folds and
+// outputs, a higher bar than the slow poles' and the drift's one
+// (docs/identification.md, "Banks of plays").
 void IdentificationRun::searchPlayBank() {
   if (o.play_bank_candidates.empty()) return;
   std::vector<double> couplings = {0.0};
   if (best_coupling > 0) couplings.push_back(best_coupling);
-  beginScoring("banks of plays", o.play_bank_candidates.size() * couplings.size());
+  beginScoring("banks of plays", 1 + o.play_bank_candidates.size() * couplings.size());
   applyStructure(structures[best_structure]);
-  const double before = best_score;
-  for (const auto& bank : o.play_bank_candidates) {
+  model.shaping.coupling = best_coupling;
+  applyPlay(best_set);
+  const double before = crossValidated();
+  const std::vector<double> before_terms = fold_scores;
+  struct Trial {
+    std::vector<PlayChannel> bank;
+    double coupling = 0.0, score = -INFINITY;
+    std::vector<double> terms;
+  } best;
+  for (const auto& bank : o.play_bank_candidates)
     for (const double c : couplings) {
       model.shaping.coupling = c;
       applyPlay(bank);
       const double score = crossValidated();
       rep.play_bank_scores.push_back({bank, c * top_level, score});
-      if (score > best_score + 1e-9) {
-        best_score = score;
-        best_set = bank;
-        best_coupling = c;
-      }
+      if (score > best.score + 1e-9) best = {bank, c, score, fold_scores};
     }
+  rep.play_bank_gain = eval::pairedGain(best.terms, before_terms);
+  const bool keep = rep.play_bank_gain.first > 2.0 * rep.play_bank_gain.second;
+  if (keep) {
+    best_score = best.score;
+    best_set = best.bank;
+    best_coupling = best.coupling;
   }
   model.shaping.coupling = best_coupling;
   applyPlay(best_set);
   std::string line = "[5/5] banks of plays (several widths per input, on the chosen scheduling): ";
-  line += best_score > before ? "kept " + formatPlaySet(best_set) + (best_coupling > 0 ? " coupled" : "")
-                              : "none kept (" + scoreText(before) + " without)";
-  line += ". Scores (coupling x top level{plays}):";
+  line += keep ? "kept " + formatPlaySet(best.bank) + (best.coupling > 0 ? " coupled" : "") : std::string("none kept");
+  line += "; the best, " + formatPlaySet(best.bank) + ", gains " + formatNumber(rep.play_bank_gain.first) + " +- " +
+          formatNumber(rep.play_bank_gain.second) + (keep ? "" : ", under two standard errors") + " over " +
+          scoreText(before) + " (" + perOutputGains(best.terms, before_terms, o.outputs) +
+          "). Scores (coupling x top level{plays}):";
   for (const auto& b : rep.play_bank_scores)
     line += " " + fixedDecimals(b.coupling, 2) + formatPlaySet(b.set) + "->" + scoreText(b.score);
   say(line);

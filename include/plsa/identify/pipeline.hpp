@@ -222,10 +222,11 @@ struct IdentifyOptions {
   /// Then banks of plays, several widths per input (a Prandtl-Ishlinskii
   /// operator: a width-0 channel is its linear part, each play's weight is
   /// fitted by the same least squares), each tried on the chosen scheduling,
-  /// uncoupled and with the chosen coupling, against the chosen set; kept
-  /// only if one scores higher. Scored here rather than with every
-  /// scheduling and coupling as the sets above are: a bank of three
-  /// multiplies the regressors by three. Widths as in play_candidates.
+  /// uncoupled and with the chosen coupling, against the chosen set. A bank
+  /// of three multiplies the regressors of every later fit by three, so it
+  /// is scored here, not with every scheduling and coupling as the sets
+  /// above are, and the best is kept only when its held-out gain exceeds two
+  /// standard errors over folds and outputs. Widths as in play_candidates.
   /// Empty: none.
   std::vector<std::vector<PlayChannel>> play_bank_candidates = {
       {PlayChannel(0.0), PlayChannel(0.07), PlayChannel(0.2)}};
@@ -366,6 +367,10 @@ struct IdentifyReport {
   };
   std::vector<CouplingScore> coupling_scores;
   std::vector<CouplingScore> play_bank_scores;  ///< each bank of plays, uncoupled and with the chosen coupling
+  /// The best bank's gain over the set chosen before it, and the gain's
+  /// standard error over folds and outputs: kept when the gain is over
+  /// twice that.
+  std::pair<double, double> play_bank_gain{0.0, 0.0};
   struct ThresholdScore {
     std::vector<PlayChannel> set;
     double threshold;  ///< as given in the options (0: none)

@@ -143,9 +143,10 @@ TEST_F(LcmSimTest, PredictorNodeForecastsTheSimulator) {
   const plsa::io::Log train = plsa::sim::runExperiment(rig, plsa::sim::gridExperiment(eo));
   plsa::identify::IdentifyOptions io;
   io.play_candidates = {{0.1}};
-  // Any model serves the node; the threshold and drift stages only cost time
-  // (under ASan the threshold stage pushed this test past its limit).
+  // Any model serves the node; the threshold, bank and drift stages only
+  // cost time (under ASan the threshold stage pushed this test past its limit).
   io.play_threshold_candidates = {};
+  io.play_bank_candidates = {};  // a bank's scoring took this test past its limit under ASan in CI
   io.output_drift = plsa::identify::OutputDriftChoice::kOff;
   const plsa::DioPwlObfModel model = plsa::identify::identifyModel({train}, io);
   const fs::path model_path =

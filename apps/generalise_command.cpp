@@ -20,7 +20,6 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "plsa/core/angle_units.hpp"
 #include "plsa/eval/comparison.hpp"
 #include "plsa/identify/baselines.hpp"
 #include "plsa/core/text_file.hpp"
@@ -30,6 +29,7 @@
 #include "plsa/io/standard_columns.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/sim/independent_actuator.hpp"
+#include "plsa/sim/independent_recording.hpp"
 #include "plsa/sim/sim_config.hpp"
 
 namespace plsa::app {
@@ -58,7 +58,6 @@ constexpr double kBendRangesDeg[] = {2.0, 50.0, 100.0};
 
 const char* kModels[] = {"plsa", "paper", "global_linear", "arx"};
 const std::vector<int> kHorizons = {40, 80};
-constexpr double kStraightDeg = 1.0;  ///< below this bend the recorded steering holds
 /// The run beyond the grid: a joystick over 0.10-0.45 bar (the grid spans 0.20-0.35).
 constexpr double kBeyondMinBar = 0.10, kBeyondMaxBar = 0.45;
 
@@ -109,50 +108,6 @@ sim::IndependentPhysics drawPhysics(const PhysicsCase& c, std::mt19937_64& rng, 
       std::any_of(c.effects.begin(), c.effects.end(), [](const auto& e) { return e.first == "sensor_bias"; });
   if (biased) drawn["sensor_offset_direction_deg"] = t.sensor_offset_direction_deg = 360.0 * uni(rng);
   return t;
-}
-
-/// A bending vector read as bend and steering angles, as a tip sensor's
-/// software reports them: steering unwrapped (continuous), and held at its
-/// last value while the tip is within kStraightDeg of straight, where its
-/// direction is noise (from 0).
-class TipAngles {
- public:
-  std::array<double, 2> operator()(const Eigen::Vector2d& bending_deg) {
-    if (bending_deg.norm() > kStraightDeg) {
-      const double turn = std::remainder(std::atan2(bending_deg.y(), bending_deg.x()) - steer_ * kRadPerDeg, 2.0 * kPi);
-      steer_ += turn / kRadPerDeg;
-    }
-    return {bending_deg.norm(), steer_};
-  }
-
- private:
-  double steer_ = 0.0;
-};
-
-/// The experiment's whole command trajectory, pre-roll included, recorded
-/// from a vented actuator at rest, its bending as TipAngles. With
-/// `noise_free`, also the same angles read without the sensor's white noise
-/// (a row per sample: bend, steer).
-io::Log recordFromRest(const sim::IndependentPhysics& physics, const sim::Experiment& e, std::uint64_t seed,
-                       Eigen::MatrixXd* noise_free = nullptr) {
-  sim::IndependentActuator a(physics, seed);
-  io::Log log;
-  log.source = "independent actuator, " + e.name + " from rest";
-  log.columns = io::standard_columns::recorded();
-  log.data.resize(e.commands.rows(), static_cast<Eigen::Index>(log.columns.size()));
-  if (noise_free) noise_free->resize(e.commands.rows(), 2);
-  TipAngles read, read_noise_free;
-  for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
-    const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
-    const auto [bend, steer] = read(s.bending_deg);
-    log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),
-        e.commands(k, 2), s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2], bend, steer;
-    if (noise_free) {
-      const auto [b, st] = read_noise_free(s.bending_noise_free_deg);
-      noise_free->row(k) << b, st;
-    }
-  }
-  return log;
 }
 
 /// plsa's model on a run beyond its grid: the share of its samples beyond,
@@ -410,13 +365,14 @@ void runGeneralise(const GeneraliseArgs& a) {
       const sim::Experiment grid = sim::gridExperiment(eo);
       row["bend_range_deg"] = c.bend_range_deg > 0 ? sim::scaleToBendRange(physics, grid.commands, c.bend_range_deg)
                                                    : sim::largestBendDeg(physics, grid.commands);
-      const io::Log train = recordFromRest(physics, grid, seed);
+      const io::Log train = sim::recordIndependentFromRest(physics, grid, seed);
       Eigen::MatrixXd val_noise_free;
-      const io::Log val = recordFromRest(physics, sim::joystickExperiment(eo), seed + 100, &val_noise_free);
+      const io::Log val =
+          sim::recordIndependentFromRest(physics, sim::joystickExperiment(eo), seed + 100, &val_noise_free);
       sim::ExperimentOptions wide_eo = eo;  // a joystick run well beyond the grid's 0.20-0.35 bar
       wide_eo.joystick_min_bar = kBeyondMinBar;
       wide_eo.joystick_max_bar = kBeyondMaxBar;
-      const io::Log wide = recordFromRest(physics, sim::joystickExperiment(wide_eo), seed + 200);
+      const io::Log wide = sim::recordIndependentFromRest(physics, sim::joystickExperiment(wide_eo), seed + 200);
       if (!a.save_runs.empty()) saveRuns(a.save_runs, c.name, seed, {train, val, wide});
       double beyond = 0.0;
       row["fits"] = scoreModels(train, val, val_noise_free, wide, beyond);

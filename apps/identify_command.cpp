@@ -451,6 +451,10 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
         "tried on the chosen scheduling, uncoupled and with the chosen coupling, against the chosen play set; "
         "'none' tries none (default 0/0.07/0.2)")
       ->delimiter(',');
+  id->add_option("--play-bank-min-gain", a->options.play_bank_min_gain,
+                 "The least held-out gain (fit points) that keeps a bank of plays, beside two standard errors "
+                 "(default 1; 0: two standard errors alone)")
+      ->check(kNonNegative);
   id->add_option("--schedule-lag", a->options.schedule_lag_candidates,
                  "Candidate time constants (s) of a lag on the scheduling inputs, tried against none by "
                  "cross-validation; '0' alone keeps the paper's schedule on the raw inputs")

@@ -409,6 +409,14 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 file("m.json")),
             2);
   EXPECT_NE(err_.find("--play-bank: 'x' is not a width"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --play-bank-min-gain -1 --out " + file("m.json")),
+            2);
+  EXPECT_NE(err_.find("--play-bank-min-gain: '-1' is not a finite number at least 0"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("steps.csv") +
+                " --inputs p_1 --outputs bend_deg --play-bank-min-gain inf --out " + file("m.json")),
+            2);
+  EXPECT_NE(err_.find("--play-bank-min-gain: 'inf' is not a finite number at least 0"), std::string::npos) << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") +
                 " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " + file("m.json")),
             0);

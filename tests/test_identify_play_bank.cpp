@@ -2,33 +2,13 @@
 // per input, a Prandtl-Ishlinskii operator weighted by the least squares.
 // Their data come from the independently written actuator, whose Preisach
 // hysteresis (a triangle of relays) is no play of plsa's.
-#include "plsa/sim/independent_actuator.hpp"
-#include "plsa/io/standard_columns.hpp"
+#include "plsa/sim/independent_recording.hpp"
 #include "support/identify_fixtures.hpp"
 
 using namespace plsa;
 using namespace plsa::identify;
 
 namespace {
-
-/// A run of the independent actuator from rest, logged as a tip sensor
-/// reports it: bend and steering angles, steering unwrapped.
-io::Log recordIndependent(const sim::IndependentPhysics& physics, const sim::Experiment& e, std::uint64_t seed) {
-  sim::IndependentActuator a(physics, seed);
-  io::Log log;
-  log.columns = io::standard_columns::recorded();
-  log.data.resize(e.commands.rows(), static_cast<Eigen::Index>(log.columns.size()));
-  double steer = 0.0;
-  for (Eigen::Index k = 0; k < e.commands.rows(); ++k) {
-    const sim::IndependentSample s = a.step({e.commands(k, 0), e.commands(k, 1), e.commands(k, 2)});
-    if (s.bending_deg.norm() > 0.5)
-      steer +=
-          std::remainder(std::atan2(s.bending_deg.y(), s.bending_deg.x()) - steer * M_PI / 180, 2 * M_PI) * 180 / M_PI;
-    log.data.row(k) << static_cast<double>(k) / physics.sample_rate_hz, e.commands(k, 0), e.commands(k, 1),
-        e.commands(k, 2), s.pressure_bar[0], s.pressure_bar[1], s.pressure_bar[2], s.bending_deg.norm(), steer;
-  }
-  return log;
-}
 
 /// A short search: input side, three single sets, nothing after the bank.
 IdentifyOptions bankSearch() {
@@ -43,6 +23,13 @@ IdentifyOptions bankSearch() {
   return o;
 }
 
+/// The bank stage's verdict line (empty when there is none).
+std::string bankLine(const IdentifyReport& r) {
+  const auto it = std::find_if(r.lines.begin(), r.lines.end(),
+                               [](const std::string& l) { return l.rfind("[5/5] banks of plays", 0) == 0; });
+  return it == r.lines.end() ? std::string() : *it;
+}
+
 struct Runs {
   io::Log train, val;
 };
@@ -55,8 +42,8 @@ Runs independentRuns(const std::string& hysteresis_law) {
   }
   sim::ExperimentOptions eo;
   eo.seed = 2;
-  return {recordIndependent(physics, sim::gridExperiment(eo), 1),
-          recordIndependent(physics, sim::joystickExperiment(eo), 101)};
+  return {sim::recordIndependentFromRest(physics, sim::gridExperiment(eo), 1),
+          sim::recordIndependentFromRest(physics, sim::joystickExperiment(eo), 101)};
 }
 
 }  // namespace
@@ -79,6 +66,17 @@ TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   ASSERT_EQ(banked.shaping.play.size(), 3u);
   for (const auto& channels : banked.shaping.play) EXPECT_EQ(channels.size(), 3u);
 
+  // The least gain kept: the same bank, asked to gain a little more than it
+  // does, is left out and the line says why.
+  IdentifyOptions demanding = o;
+  demanding.play_bank_min_gain = with_bank.play_bank_gain.first + 0.01;
+  IdentifyReport under_least_gain;
+  const DioPwlObfModel unbanked = identifyModel({preisach.train}, demanding, &under_least_gain);
+  for (const auto& channels : unbanked.shaping.play) EXPECT_EQ(channels.size(), 1u);
+  EXPECT_EQ(under_least_gain.play_bank_gain, with_bank.play_bank_gain);
+  EXPECT_NE(bankLine(under_least_gain).find("under the least gain kept"), std::string::npos)
+      << bankLine(under_least_gain);
+
   o.play_bank_candidates = {};
   IdentifyReport without_bank;
   const DioPwlObfModel single = identifyModel({preisach.train}, o, &without_bank);
@@ -100,16 +98,21 @@ TEST(Pipeline, ABankOfPlaysIsKeptForPreisachHysteresisAndSimulatesItBetter) {
   ASSERT_EQ(no_hysteresis.play_bank_scores.size(), 1u);
   EXPECT_LE(no_hysteresis.play_bank_gain.first, 2.0 * no_hysteresis.play_bank_gain.second);
   for (const auto& channels : linear.shaping.play) EXPECT_EQ(channels.size(), 1u);
-  const std::string& line = *std::find_if(no_hysteresis.lines.begin(), no_hysteresis.lines.end(),
-                                          [](const std::string& l) { return l.rfind("[5/5] banks of plays", 0) == 0; });
-  EXPECT_NE(line.find("none kept"), std::string::npos) << line;
+  EXPECT_NE(bankLine(no_hysteresis).find("none kept"), std::string::npos) << bankLine(no_hysteresis);
 }
 
-// A bank is two or more plays; one is a set for --play.
+// A bank is two or more plays; one is a set for --play. The least gain
+// kept is a finite number of fit points, not negative.
 TEST(Pipeline, ABankOfOnePlayIsRefusedByName) {
   const Runs plain = independentRuns("");
   IdentifyOptions o = bankSearch();
   o.play_bank_candidates = {{PlayChannel(0.1)}};
   plsa::test_fixtures::expectThrowContaining([&] { identifyModel({plain.train}, o); },
                                              "a bank of plays needs at least two channels");
+  for (const double bad : {-0.5, static_cast<double>(NAN), static_cast<double>(INFINITY)}) {
+    IdentifyOptions b = bankSearch();
+    b.play_bank_min_gain = bad;
+    plsa::test_fixtures::expectThrowContaining([&] { identifyModel({plain.train}, b); },
+                                               "the least gain that keeps a bank of plays");
+  }
 }

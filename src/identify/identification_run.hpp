@@ -10,6 +10,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -26,6 +27,10 @@ inline std::string formatNumber(double v) { return significantDigits(v, 6); }
 
 /// A fit score in a progress line (percent): two decimals, -477.21.
 inline std::string scoreText(double v) { return fixedDecimals(v, 2); }
+/// A paired gain and its standard error in a progress line: "gains 0.13 +- 0.1".
+inline std::string gainText(const std::pair<double, double>& gain) {
+  return "gains " + formatNumber(gain.first) + " +- " + formatNumber(gain.second);
+}
 /// Each output's paired gain of held-out terms a over b, "name gain +- se"
 /// joined by commas (the terms alternate by output within each fold).
 std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,

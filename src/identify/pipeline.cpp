@@ -161,6 +161,8 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
              "identify: the step threshold must be a positive, finite reference change");
   PLSA_CHECK(std::isfinite(o.step_threshold_share) && o.step_threshold_share > 0 && o.step_threshold_share < 1,
              "identify: the step threshold's share must be a fraction of the references' largest level in (0, 1)");
+  PLSA_CHECK(std::isfinite(o.play_bank_min_gain) && o.play_bank_min_gain >= 0,
+             "identify: the least gain that keeps a bank of plays must be finite and >= 0 (fit points)");
   for (const auto& bank : o.play_bank_candidates)
     PLSA_CHECK(bank.size() >= 2,
                "identify: a bank of plays needs at least two channels (a single one is a play "

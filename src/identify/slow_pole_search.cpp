@@ -61,9 +61,8 @@ bool IdentificationRun::judgeSlowPole(const SlowPoleTrial& best, const std::vect
   line += keep ? "kept " + formatNumber(best.tau) + " s (pole " + formatNumber(std::exp(-dt / best.tau)) + ")"
                : std::string("none kept");
   if (best.tau > 0)
-    line += "; the best, " + formatNumber(best.tau) + " s, gains " + formatNumber(gain.first) + " +- " +
-            formatNumber(gain.second) + (keep ? "" : ", within one standard error") + " (" +
-            perOutputGains(best.terms, base, o.outputs) + ")";
+    line += "; the best, " + formatNumber(best.tau) + " s, " + gainText(gain) +
+            (keep ? "" : ", within one standard error") + " (" + perOutputGains(best.terms, base, o.outputs) + ")";
   return keep;
 }
 

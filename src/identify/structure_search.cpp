@@ -22,6 +22,13 @@ namespace {
 // taken out of the rows about that run's own mean time.
 constexpr eval::SimulationStart kSameSession{0, false};
 
+// Why a bank was not kept, for its stage's line: empty when it was.
+std::string bankVerdict(bool significant, bool keep, double min_gain) {
+  if (keep) return "";
+  if (!significant) return ", under two standard errors";
+  return ", under the least gain kept (" + formatNumber(min_gain) + ")";
+}
+
 }  // namespace
 
 // The structures to choose from: each partition on the output side (the
@@ -290,8 +297,8 @@ void IdentificationRun::searchCoupling() {
 // chosen coupling, against the set chosen so far, scored again for its
 // terms. A bank multiplies the regressors of every later fit, so the best
 // is kept only when it gains more than two standard errors over folds and
-// outputs, a higher bar than the slow poles' and the drift's one
-// (docs/identification.md, "Banks of plays").
+// outputs, a higher bar than the slow poles' and the drift's one, and more
+// than play_bank_min_gain (docs/identification.md, "Banks of plays").
 void IdentificationRun::searchPlayBank() {
   if (o.play_bank_candidates.empty()) return;
   std::vector<double> couplings = {0.0};
@@ -316,7 +323,8 @@ void IdentificationRun::searchPlayBank() {
       if (score > best.score + 1e-9) best = {bank, c, score, fold_scores};
     }
   rep.play_bank_gain = eval::pairedGain(best.terms, before_terms);
-  const bool keep = rep.play_bank_gain.first > 2.0 * rep.play_bank_gain.second;
+  const bool significant = rep.play_bank_gain.first > 2.0 * rep.play_bank_gain.second;
+  const bool keep = significant && rep.play_bank_gain.first > o.play_bank_min_gain;
   if (keep) {
     best_score = best.score;
     best_set = best.bank;
@@ -326,10 +334,9 @@ void IdentificationRun::searchPlayBank() {
   applyPlay(best_set);
   std::string line = "[5/5] banks of plays (several widths per input, on the chosen scheduling): ";
   line += keep ? "kept " + formatPlaySet(best.bank) + (best.coupling > 0 ? " coupled" : "") : std::string("none kept");
-  line += "; the best, " + formatPlaySet(best.bank) + ", gains " + formatNumber(rep.play_bank_gain.first) + " +- " +
-          formatNumber(rep.play_bank_gain.second) + (keep ? "" : ", under two standard errors") + " over " +
-          scoreText(before) + " (" + perOutputGains(best.terms, before_terms, o.outputs) +
-          "). Scores (coupling x top level{plays}):";
+  line += "; the best, " + formatPlaySet(best.bank) + ", " + gainText(rep.play_bank_gain) +
+          bankVerdict(significant, keep, o.play_bank_min_gain) + " over " + scoreText(before) + " (" +
+          perOutputGains(best.terms, before_terms, o.outputs) + "). Scores (coupling x top level{plays}):";
   for (const auto& b : rep.play_bank_scores)
     line += " " + fixedDecimals(b.coupling, 2) + formatPlaySet(b.set) + "->" + scoreText(b.score);
   say(line);
@@ -446,8 +453,7 @@ void IdentificationRun::searchOutputDrift() {
       s += "left in";
     }
     s += " (held-out simulation " + scoreText(without) + " as logged, " + scoreText(with) +
-         " with it taken out: gains " + formatNumber(gain) + " +- " + formatNumber(se) +
-         (gain > se ? "" : ", within one standard error") + "; " +
+         " with it taken out: " + gainText({gain, se}) + (gain > se ? "" : ", within one standard error") + "; " +
          perOutputGains(fold_scores, without_scores, o.outputs) + ")";
     say(s);
   } else if (o.output_drift != OutputDriftChoice::kOff) {

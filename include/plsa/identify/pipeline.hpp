@@ -226,10 +226,17 @@ struct IdentifyOptions {
   /// of three multiplies the regressors of every later fit by three, so it
   /// is scored here, not with every scheduling and coupling as the sets
   /// above are, and the best is kept only when its held-out gain exceeds two
-  /// standard errors over folds and outputs. Widths as in play_candidates.
-  /// Empty: none.
+  /// standard errors over folds and outputs and play_bank_min_gain. Widths
+  /// as in play_candidates. Empty: none.
   std::vector<std::vector<PlayChannel>> play_bank_candidates = {
       {PlayChannel(0.0), PlayChannel(0.07), PlayChannel(0.2)}};
+  /// The least held-out gain (fit points, mean over outputs) that keeps a
+  /// bank, beside the two standard errors: a bank triples the regressors of
+  /// every later fit and the predictor's work, and on the real arm the
+  /// folds' small gains (under a point) did not carry over to the held-out
+  /// trial (docs/identification.md, "Banks of plays"). 0: two standard
+  /// errors alone.
+  double play_bank_min_gain = 1.0;
   /// Then the time constants (s) of a lag on the scheduling inputs
   /// (DioPwlObfModel::schedule_lag_s) tried against none, on the chosen
   /// model. Empty: no lag (the paper's schedule on the raw inputs).
@@ -369,7 +376,7 @@ struct IdentifyReport {
   std::vector<CouplingScore> play_bank_scores;  ///< each bank of plays, uncoupled and with the chosen coupling
   /// The best bank's gain over the set chosen before it, and the gain's
   /// standard error over folds and outputs: kept when the gain is over
-  /// twice that.
+  /// twice that and over IdentifyOptions::play_bank_min_gain.
   std::pair<double, double> play_bank_gain{0.0, 0.0};
   struct ThresholdScore {
     std::vector<PlayChannel> set;

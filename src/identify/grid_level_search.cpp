@@ -48,7 +48,7 @@ void IdentificationRun::setGridLevels(int levels, bool announce) {
 // play stage's score) on the grid of `levels`: on the input-side structure,
 // plsa's usual choice, when there is one, else on each structure, the best.
 // `by_structure` gets each structure's score, where scored.
-GridLevelScore IdentificationRun::scoreGrid(int levels, std::vector<std::optional<double>>& by_structure) {
+GridLevelScore IdentificationRun::scoreGrid(int levels, std::vector<std::optional<HeldOutScore>>& by_structure) {
   setGridLevels(levels, false);
   GridLevelScore sc{levels, -INFINITY, ""};
   applyPlay(o.play_candidates.front());
@@ -58,7 +58,7 @@ GridLevelScore IdentificationRun::scoreGrid(int levels, std::vector<std::optiona
     if (input_side && structures[pi].side != ScheduleSide::kInput) continue;
     applyStructure(structures[pi]);
     const double score = crossValidated();
-    by_structure[pi] = score;
+    by_structure[pi] = HeldOutScore{score, fold_scores};
     if (std::isfinite(score) && score > sc.step_ahead) {
       sc.step_ahead = score;
       sc.structure = structures[pi].tag;
@@ -80,7 +80,7 @@ void IdentificationRun::chooseGridLevels() {
   if (counts.size() < 2) return;
   const int automatic = counts.front();
   beginScoring("quantile grid levels", counts.size() * (firstInputSide() ? 1 : structures.size()));
-  std::vector<std::optional<double>> trial;
+  std::vector<std::optional<HeldOutScore>> trial;
   rep.grid_level_scores.push_back(scoreGrid(automatic, first_set_scores));
   int best = automatic;
   double best_score = rep.grid_level_scores.back().step_ahead;

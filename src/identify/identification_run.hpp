@@ -39,6 +39,11 @@ std::string perOutputGains(const std::vector<double>& a, const std::vector<doubl
 struct IdentificationRun {
   using Clock = std::chrono::steady_clock;
   enum class Score { kStepAhead, kSimulation };
+  /// A held-out score and its terms (fold_scores when it was computed).
+  struct HeldOutScore {
+    double score = -INFINITY;
+    std::vector<double> terms;
+  };
   /// A partition and the side it schedules; tag as the progress lines print it.
   struct Structure {
     std::size_t partition;
@@ -90,7 +95,7 @@ struct IdentificationRun {
   void chooseGridLevels();  // the second stage of the structure search
   std::vector<int> gridLevelCandidates() const;
   void setGridLevels(int levels, bool announce);
-  GridLevelScore scoreGrid(int levels, std::vector<std::optional<double>>& by_structure);
+  GridLevelScore scoreGrid(int levels, std::vector<std::optional<HeldOutScore>>& by_structure);
   std::string gridLevelsLine(int kept, int automatic) const;
   static constexpr int kMaxRegions = 4096;  ///< a partition with more is refused (addPartition)
 
@@ -225,7 +230,7 @@ struct IdentificationRun {
   GridPlan grid_plan;  ///< the partitions' grid (buildPartitions; chooseGridLevels sets its level count)
   /// Per structure, the first play set's held-out score on the grid kept,
   /// where chooseGridLevels scored it (the play stage reuses it).
-  std::vector<std::optional<double>> first_set_scores;
+  std::vector<std::optional<HeldOutScore>> first_set_scores;
   std::vector<Structure> structures;
   std::vector<double> range;  ///< per input: its training range (play widths are fractions of it)
   double top_level = 1e-12;   ///< the largest training input level
@@ -247,6 +252,7 @@ struct IdentificationRun {
 
   // The best choice so far.
   double best_score = -INFINITY;
+  std::vector<double> best_terms;  ///< best_score's held-out terms, while the play stages choose (the bank's baseline)
   std::vector<PlayChannel> best_set;
   std::size_t best_structure = 0;
   double best_coupling = 0.0;

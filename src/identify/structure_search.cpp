@@ -258,10 +258,11 @@ void IdentificationRun::searchPlayAndScheduling() {
       applyPlay(set);
       // The first set's score where the grid's level stage already has it (the same fit and folds).
       const bool known = si == 0 && pi < first_set_scores.size() && first_set_scores[pi];
-      const double score = known ? *first_set_scores[pi] : crossValidated();
+      const double score = known ? first_set_scores[pi]->score : crossValidated();
       rep.play_scores.emplace_back(set, score);
       if (score > best_score + 1e-9) {
         best_score = score;
+        best_terms = known ? first_set_scores[pi]->terms : fold_scores;
         best_set = set;
         best_structure = pi;
       }
@@ -282,6 +283,7 @@ void IdentificationRun::searchCoupling() {
       rep.coupling_scores.push_back({set, c, score});
       if (score > best_score + 1e-9) {
         best_score = score;
+        best_terms = fold_scores;
         best_set = set;
         best_coupling = model.shaping.coupling;
       }
@@ -294,8 +296,8 @@ void IdentificationRun::searchCoupling() {
 }
 
 // Banks of plays on the chosen scheduling: each uncoupled and with the
-// chosen coupling, against the set chosen so far, scored again for its
-// terms. A bank multiplies the regressors of every later fit, so the best
+// chosen coupling, against the set chosen so far (its held-out terms kept
+// from when it was scored, or scored again). A bank multiplies the regressors of every later fit, so the best
 // is kept only when it gains more than two standard errors over folds and
 // outputs, a higher bar than the slow poles' and the drift's one, and more
 // than play_bank_min_gain (docs/identification.md, "Banks of plays").
@@ -303,12 +305,13 @@ void IdentificationRun::searchPlayBank() {
   if (o.play_bank_candidates.empty()) return;
   std::vector<double> couplings = {0.0};
   if (best_coupling > 0) couplings.push_back(best_coupling);
-  beginScoring("banks of plays", 1 + o.play_bank_candidates.size() * couplings.size());
+  const bool rescore = best_terms.empty();
+  beginScoring("banks of plays", (rescore ? 1 : 0) + o.play_bank_candidates.size() * couplings.size());
   applyStructure(structures[best_structure]);
   model.shaping.coupling = best_coupling;
   applyPlay(best_set);
-  const double before = crossValidated();
-  const std::vector<double> before_terms = fold_scores;
+  const double before = rescore ? crossValidated() : best_score;
+  const std::vector<double> before_terms = rescore ? fold_scores : best_terms;
   struct Trial {
     std::vector<PlayChannel> bank;
     double coupling = 0.0, score = -INFINITY;

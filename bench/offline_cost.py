@@ -5,17 +5,20 @@ Records a joystick run of the built-in simulator (default an hour at 80 Hz,
 from rest, every effect on), then runs `plsa identify` with the demo's
 options (input-side scheduling), the same with the structure search on every
 sample (--search-samples 0) instead of its default sample, and `plsa
-validate` of the first model on the same log, each as its own process, and
-reads each one's peak resident memory and CPU time (user + system, every
-thread) from the kernel (wait4's rusage). Prints them per sample and per
-hour of data, then both models' fits on a new 10 min joystick run (another
-seed); --json FILE writes them.
+validate` of the first model on the same log, each as its own process
+--repeats times (default 3), and reads each one's peak resident memory and
+CPU time (user + system, every thread) from the kernel (wait4's rusage).
+Prints per step the median CPU and wall time of its runs and the largest
+peak memory, per sample and per hour of data, then both models' fits on a
+new 10 min joystick run (another seed); --json FILE writes them, each run's
+CPU time too.
 
-Usage: python3 bench/offline_cost.py [--build build] [--minutes 60] [--json FILE]
+Usage: python3 bench/offline_cost.py [--build build] [--minutes 60] [--repeats 3] [--json FILE]
 """
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import tempfile
 
@@ -40,10 +43,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build", default=default_build())
     ap.add_argument("--minutes", type=float, default=60.0, help="length of the recorded run (default 60)")
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="runs of each step; the median CPU and wall time are reported (default 3)")
     ap.add_argument("--json", metavar="FILE", help="write the figures here")
     a = ap.parse_args()
+    if a.repeats < 1:
+        ap.error("--repeats must be at least 1")
     exe = plsa_exe(a.build, "offline_cost")
-    figures = {"minutes": a.minutes, "steps": {}}
+    figures = {"minutes": a.minutes, "repeats": a.repeats, "steps": {}}
     with tempfile.TemporaryDirectory() as tmp:
         log, model = os.path.join(tmp, "run.csv"), os.path.join(tmp, "model.json")
         subprocess.run([exe, "simulate", "--experiment", "joystick", "--duration", str(a.minutes * 60), "--seed", "6",
@@ -58,15 +65,20 @@ def main():
                  "identify, search on every sample": identify + [every, "--search-samples", "0"],
                  "validate": [exe, "validate", "--model", model, "--log", log]}
         for name, cmd in steps.items():
-            kb, cpu, wall = measured(cmd, "offline_cost")
+            runs = [measured(cmd, "offline_cost") for _ in range(a.repeats)]
+            kb = max(r[0] for r in runs)
+            cpu = statistics.median(r[1] for r in runs)
             figures["steps"][name] = {"peak_kb": kb, "kb_per_sample": kb / samples, "cpu_s": cpu,
-                                      "cpu_s_per_hour": cpu / hours, "wall_s": wall}
+                                      "cpu_s_per_hour": cpu / hours,
+                                      "wall_s": statistics.median(r[2] for r in runs),
+                                      "cpu_s_runs": [r[1] for r in runs]}
         figures["new_run_fits"] = new_run_fits(exe, tmp, {"identify": model,
                                                           "identify, search on every sample": every})
     print(f"{samples} samples ({a.minutes:g} min at 80 Hz)")
     for name, s in figures["steps"].items():
         print(f"{name}: peak {s['peak_kb'] / 1024:.0f} MB ({s['kb_per_sample']:.2f} KB per sample), "
-              f"CPU {s['cpu_s']:.1f} s ({s['cpu_s_per_hour']:.0f} CPU-s per hour of data), wall {s['wall_s']:.1f} s")
+              f"CPU {s['cpu_s']:.1f} s median of {a.repeats} ({s['cpu_s_per_hour']:.0f} CPU-s per hour of data; "
+              f"runs {', '.join(f'{c:.1f}' for c in s['cpu_s_runs'])}), wall {s['wall_s']:.1f} s")
     for name, outs in figures["new_run_fits"].items():
         print(f"{name}, on a new 10 min run: " + ", ".join(
             f"{o} k=40 {f['fit_k40']:.1f} sim {f['fit_sim']:.1f}" for o, f in outs.items()))

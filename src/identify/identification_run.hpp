@@ -247,6 +247,10 @@ struct IdentificationRun {
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
   std::vector<double> fold_scores;  ///< the last held-out score's terms, per fold (or block) and output
+  /// The model's held-out simulation score as it stands, where a stage
+  /// already has it (the drift stage's when it left the drift in): the
+  /// slow pole stage's "none".
+  std::optional<HeldOutScore> simulation_as_it_stands;
   std::vector<std::vector<PoleSet>> poles_before_slow;  ///< the banks' poles before the slow pole search
   Scoring scoring;
 

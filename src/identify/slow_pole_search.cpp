@@ -75,10 +75,12 @@ void IdentificationRun::searchSlowPole() {
   std::vector<double> taus;
   for (double tau : o.slow_pole_candidates)
     if (tau != 0 && std::find(taus.begin(), taus.end(), tau) == taus.end()) taus.push_back(tau);
-  beginScoring("slow poles", 1 + taus.size());
+  // "none" is the model as it stands: its score where the drift stage has it.
+  const std::optional<HeldOutScore> known = simulation_as_it_stands;
+  beginScoring("slow poles", (known ? 0 : 1) + taus.size());
   setSlowPoles({});
-  rep.slow_pole_scores.emplace_back(0.0, crossValidated(Score::kSimulation));
-  const std::vector<double> none_terms = fold_scores;
+  rep.slow_pole_scores.emplace_back(0.0, known ? known->score : crossValidated(Score::kSimulation));
+  const std::vector<double> none_terms = known ? known->terms : fold_scores;
   const SlowPoleTrial best = bestSlowPoleBeside({}, taus, rep.slow_pole_scores);
   std::string s = std::string("[5/5] slow pole in every bank (") + optionName(o.slow_pole_form) +
                   ", scored on held-out simulation): ";

@@ -329,6 +329,7 @@ void IdentificationRun::searchPlayBank() {
   const bool significant = rep.play_bank_gain.first > 2.0 * rep.play_bank_gain.second;
   const bool keep = significant && rep.play_bank_gain.first > o.play_bank_min_gain;
   if (keep) {
+    rep.play_bank_kept = best.bank;
     best_score = best.score;
     best_set = best.bank;
     best_coupling = best.coupling;
@@ -454,6 +455,7 @@ void IdentificationRun::searchOutputDrift() {
       s += o.output_drift == OutputDriftChoice::kOn ? "taken out (forced on)" : "taken out";
     } else {
       s += "left in";
+      simulation_as_it_stands = HeldOutScore{without, without_scores};
     }
     s += " (held-out simulation " + scoreText(without) + " as logged, " + scoreText(with) +
          " with it taken out: " + gainText({gain, se}) + (gain > se ? "" : ", within one standard error") + "; " +

@@ -378,6 +378,7 @@ struct IdentifyReport {
   /// standard error over folds and outputs: kept when the gain is over
   /// twice that and over IdentifyOptions::play_bank_min_gain.
   std::pair<double, double> play_bank_gain{0.0, 0.0};
+  std::vector<PlayChannel> play_bank_kept;  ///< the bank kept (its plays), empty when none was
   struct ThresholdScore {
     std::vector<PlayChannel> set;
     double threshold;  ///< as given in the options (0: none)

@@ -78,6 +78,8 @@ void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
+/// identify's --play-bank and --play-bank-min-gain, into `options` (crossval's too).
+void addPlayBankOptions(CLI::App* app, identify::IdentifyOptions& options);
 void addConvertCommand(CLI::App& app);
 void addCanProfileCommand(CLI::App& app);
 void addPredictCommand(CLI::App& app);

@@ -137,6 +137,13 @@ void printFold(const CrossvalArgs& a, const std::string& name, const FoldResult&
                 f.report.grid_level_scores.empty() ? "" : " (chosen by held-out score)");
     j["folds"][name]["grid_levels"] = f.report.grid_levels;
   }
+  if (!f.report.play_bank_scores.empty()) {
+    const auto& [gain, se] = f.report.play_bank_gain;
+    const bool kept = !f.report.play_bank_kept.empty();
+    std::printf("%-12s bank of plays: %s (held-out gain %.3g +- %.2g)\n", name.c_str(),
+                kept ? ("kept " + identify::formatPlaySet(f.report.play_bank_kept)).c_str() : "none kept", gain, se);
+    j["folds"][name]["play_bank"] = {{"kept", kept}, {"gain", gain}, {"gain_se", se}};
+  }
   if (f.report.drift_taken_out) {
     std::printf("%-12s sensor drift taken out of the training outputs (per s):", name.c_str());
     for (std::size_t out = 0; out < a.outputs.size(); ++out) {
@@ -230,6 +237,7 @@ void addCrossvalCommand(CLI::App& app) {
   c->add_option("--refine-play", a->options.play_refine_evaluations,
                 "Fits spent refining threshold, coupling, softening and band together, as in identify; default 0")
       ->check(CLI::Range(0, 10000));
+  addPlayBankOptions(c, a->options);
   c->add_option("--arx-na", a->arx_na, "ARX output lags")->check(CLI::Range(0, 64));
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags")->check(CLI::Range(1, 64));
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");

@@ -435,26 +435,7 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
         "the input range (0.1) or a band growing with the level (0.12u: 12% of the pressure); "
         "e.g. 0,0.1,0.12u,0/0.1; '0' alone (and --play-bank none) is the paper's model")
       ->delimiter(',');
-  id->add_option_function<std::vector<std::string>>(
-        "--play-bank",
-        [a](const std::vector<std::string>& banks) {
-          a->options.play_bank_candidates.clear();
-          for (const auto& s : banks) {
-            if (s == "none") continue;
-            a->options.play_bank_candidates.push_back(parsePlaySet(s, "--play-bank"));
-            if (a->options.play_bank_candidates.back().size() < 2)
-              throw CLI::ValidationError("--play-bank", "'" + s + "' is one play; a bank has two or more (0/0.07/0.2)");
-          }
-        },
-        "Candidate banks of plays (a Prandtl-Ishlinskii operator: several widths per input, each weighted by the "
-        "least squares; 0 is its linear part), comma-separated, plays within a bank by '/' as in --play; each "
-        "tried on the chosen scheduling, uncoupled and with the chosen coupling, against the chosen play set; "
-        "'none' tries none (default 0/0.07/0.2)")
-      ->delimiter(',');
-  id->add_option("--play-bank-min-gain", a->options.play_bank_min_gain,
-                 "The least held-out gain (fit points) that keeps a bank of plays, beside two standard errors "
-                 "(default 1; 0: two standard errors alone)")
-      ->check(kNonNegative);
+  addPlayBankOptions(id, a->options);
   id->add_option("--schedule-lag", a->options.schedule_lag_candidates,
                  "Candidate time constants (s) of a lag on the scheduling inputs, tried against none by "
                  "cross-validation; '0' alone keeps the paper's schedule on the raw inputs")
@@ -578,6 +559,31 @@ void addValidateCommand(CLI::App& app) {
 }
 
 }  // namespace
+
+// identify's and crossval's banks of plays and the least gain that keeps one.
+void addPlayBankOptions(CLI::App* app, identify::IdentifyOptions& options) {
+  app->add_option_function<std::vector<std::string>>(
+         "--play-bank",
+         [&options](const std::vector<std::string>& banks) {
+           options.play_bank_candidates.clear();
+           for (const auto& s : banks) {
+             if (s == "none") continue;
+             options.play_bank_candidates.push_back(parsePlaySet(s, "--play-bank"));
+             if (options.play_bank_candidates.back().size() < 2)
+               throw CLI::ValidationError("--play-bank",
+                                          "'" + s + "' is one play; a bank has two or more (0/0.07/0.2)");
+           }
+         },
+         "Candidate banks of plays (a Prandtl-Ishlinskii operator: several widths per input, each weighted by the "
+         "least squares; 0 is its linear part), comma-separated, plays within a bank by '/' as in --play; each "
+         "tried on the chosen scheduling, uncoupled and with the chosen coupling, against the chosen play set; "
+         "'none' tries none (default 0/0.07/0.2)")
+      ->delimiter(',');
+  app->add_option("--play-bank-min-gain", options.play_bank_min_gain,
+                  "The least held-out gain (fit points) that keeps a bank of plays, beside two standard errors "
+                  "(default 1; 0: two standard errors alone)")
+      ->check(kNonNegative);
+}
 
 void addIdentifyCommands(CLI::App& app) {
   addIdentifyCommand(app);

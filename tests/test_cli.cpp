@@ -417,6 +417,10 @@ TEST_F(Cli, BadInputGetsAClearErrorNotACrash) {
                 " --inputs p_1 --outputs bend_deg --play-bank-min-gain inf --out " + file("m.json")),
             2);
   EXPECT_NE(err_.find("--play-bank-min-gain: 'inf' is not a finite number at least 0"), std::string::npos) << err_;
+  EXPECT_EQ(run("crossval --log " + file("steps.csv") + " --log " + file("steps.csv") + " --play-bank 0.2"),
+            2);  // crossval's banks are identify's, refused alike
+  EXPECT_NE(err_.find("--play-bank: '0.2' is one play; a bank has two or more (0/0.07/0.2)"), std::string::npos)
+      << err_;
   EXPECT_NE(run("identify --log " + file("steps.csv") +
                 " --inputs p_1 --outputs bend_deg --schedule-lag 0.4,-1 --out " + file("m.json")),
             0);

@@ -392,10 +392,25 @@ def test_crossval_fits(out):
     assert set(doc["folds"]) == {"joystick2", "joystick3"}
     # Every peer fitted and scored in the same run, each a model of its own.
     fold = doc["folds"]["joystick2"]
-    assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx", "grid_levels"}
+    assert set(fold) - {"output_drift_per_s"} == {"plsa", "paper", "global_linear", "arx", "grid_levels",
+                                                    "play_bank"}
     # A joystick run holds no staircase: the quantile grid's level count is recorded (20 s: the automatic 2).
     assert fold["grid_levels"] == 2, fold["grid_levels"]
     assert "joystick2    quantile grid: 2 levels per input\n" in printed, printed  # and the table says it
+    # The default bank of plays is scored in every fold, its verdict printed and recorded.
+    bank = fold["play_bank"]
+    verdict = "kept {0.00,0.07,0.20}" if bank["kept"] else "none kept"
+    assert f"joystick2    bank of plays: {verdict} (held-out gain " in printed, printed
+    assert bank["kept"] == (bank["gain"] > max(2 * bank["gain_se"], 1.0)), bank
+    # --play-bank reaches each fold's identification: none scores no bank.
+    plain = out / "crossval_no_bank.json"
+    printed = run("crossval", "--log", logs[0], "--log", logs[1], "--play-bank", "none", "--json", plain).stdout
+    assert "bank of plays" not in printed, printed
+    assert all("play_bank" not in f for f in load(plain)["folds"].values())
+    assert_refused("crossval-fits", broken(doc, without("folds", "joystick2", "play_bank", "kept")),
+                   "a bank verdict without 'kept'")
+    assert_refused("crossval-fits", broken(doc, setting(-0.1, "folds", "joystick2", "play_bank", "gain_se")),
+                   "a negative standard error")
     sims = {key: fold[key]["bend_deg"]["fit_sim"] for key in ("plsa", "paper", "global_linear", "arx")}
     assert len(set(sims.values())) == 4, sims
     assert_refused("crossval-fits", broken(doc, without("mean", "arx")), "no mean ARX entry")

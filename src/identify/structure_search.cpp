@@ -297,10 +297,11 @@ void IdentificationRun::searchCoupling() {
 
 // Banks of plays on the chosen scheduling: each uncoupled and with the
 // chosen coupling, against the set chosen so far (its held-out terms kept
-// from when it was scored, or scored again). A bank multiplies the regressors of every later fit, so the best
-// is kept only when it gains more than two standard errors over folds and
-// outputs, a higher bar than the slow poles' and the drift's one, and more
-// than play_bank_min_gain (docs/identification.md, "Banks of plays").
+// from when it was scored, or scored again). A bank multiplies the
+// regressors of every later fit, so the best is kept only when it gains
+// more than two standard errors over folds and outputs, a higher bar than
+// the slow poles' and the drift's one, and more than play_bank_min_gain
+// (docs/identification.md, "Banks of plays").
 void IdentificationRun::searchPlayBank() {
   if (o.play_bank_candidates.empty()) return;
   std::vector<double> couplings = {0.0};

@@ -157,8 +157,12 @@ struct IdentificationRun {
   void searchScheduleLag();
   void searchThreshold();
   void refineJointly();  // joint_refinement.cpp
-  void searchOutputDrift();
-  void searchSlowPole();  // slow_pole_search.cpp
+  /// The model's held-out simulation score as the stage leaves it, where
+  /// it has one (when it leaves the drift in).
+  std::optional<HeldOutScore> searchOutputDrift();
+  /// `as_it_stands`: the model's held-out simulation score, where known (the
+  /// slow poles' "none", not scored again).
+  void searchSlowPole(const std::optional<HeldOutScore>& as_it_stands);  // slow_pole_search.cpp
   struct SlowPoleTrial {
     double tau = 0.0;           ///< s; 0: none scored
     double score = -INFINITY;   ///< held-out simulation fit
@@ -247,10 +251,6 @@ struct IdentificationRun {
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
   std::vector<double> fold_scores;  ///< the last held-out score's terms, per fold (or block) and output
-  /// The model's held-out simulation score as it stands, where a stage
-  /// already has it (the drift stage's when it left the drift in): the
-  /// slow pole stage's "none".
-  std::optional<HeldOutScore> simulation_as_it_stands;
   std::vector<std::vector<PoleSet>> poles_before_slow;  ///< the banks' poles before the slow pole search
   Scoring scoring;
 

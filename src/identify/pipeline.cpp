@@ -125,8 +125,7 @@ DioPwlObfModel IdentificationRun::identify(const std::vector<io::Log>& logs) {
   searchScheduleLag();
   searchThreshold();
   refineJointly();
-  searchOutputDrift();
-  searchSlowPole();
+  searchSlowPole(searchOutputDrift());
   restoreAllData();
   return fitFinal();
 }

@@ -66,7 +66,7 @@ bool IdentificationRun::judgeSlowPole(const SlowPoleTrial& best, const std::vect
   return keep;
 }
 
-void IdentificationRun::searchSlowPole() {
+void IdentificationRun::searchSlowPole(const std::optional<HeldOutScore>& as_it_stands) {
   if (model.schedule_side != ScheduleSide::kInput || o.slow_pole_candidates.empty()) return;
   PLSA_CHECK(o.slow_pole_count >= 1 && o.slow_pole_count <= 2, "identify: the slow pole count must be 1 or 2");
   for (double tau : o.slow_pole_candidates)
@@ -76,11 +76,10 @@ void IdentificationRun::searchSlowPole() {
   for (double tau : o.slow_pole_candidates)
     if (tau != 0 && std::find(taus.begin(), taus.end(), tau) == taus.end()) taus.push_back(tau);
   // "none" is the model as it stands: its score where the drift stage has it.
-  const std::optional<HeldOutScore> known = simulation_as_it_stands;
-  beginScoring("slow poles", (known ? 0 : 1) + taus.size());
+  beginScoring("slow poles", (as_it_stands ? 0 : 1) + taus.size());
   setSlowPoles({});
-  rep.slow_pole_scores.emplace_back(0.0, known ? known->score : crossValidated(Score::kSimulation));
-  const std::vector<double> none_terms = known ? known->terms : fold_scores;
+  rep.slow_pole_scores.emplace_back(0.0, as_it_stands ? as_it_stands->score : crossValidated(Score::kSimulation));
+  const std::vector<double> none_terms = as_it_stands ? as_it_stands->terms : fold_scores;
   const SlowPoleTrial best = bestSlowPoleBeside({}, taus, rep.slow_pole_scores);
   std::string s = std::string("[5/5] slow pole in every bank (") + optionName(o.slow_pole_form) +
                   ", scored on held-out simulation): ";

@@ -422,12 +422,13 @@ std::string perOutputGains(const std::vector<double>& a, const std::vector<doubl
   return s;
 }
 
-void IdentificationRun::searchOutputDrift() {
+std::optional<IdentificationRun::HeldOutScore> IdentificationRun::searchOutputDrift() {
   // A sensor drift, on an input-side model: estimated on each fold's training
   // blocks and taken out of them; kept if the held-out simulation, scored
   // against the logged outputs, gains more than one standard error (as the
   // slow pole).
   Yfit = Y;
+  std::optional<HeldOutScore> as_it_stands;
   if (model.schedule_side == ScheduleSide::kInput && o.output_drift != OutputDriftChoice::kOff) {
     beginScoring("sensor drift", 2);
     const double without = crossValidated(Score::kSimulation);
@@ -456,7 +457,7 @@ void IdentificationRun::searchOutputDrift() {
       s += o.output_drift == OutputDriftChoice::kOn ? "taken out (forced on)" : "taken out";
     } else {
       s += "left in";
-      simulation_as_it_stands = HeldOutScore{without, without_scores};
+      as_it_stands = HeldOutScore{without, without_scores};
     }
     s += " (held-out simulation " + scoreText(without) + " as logged, " + scoreText(with) +
          " with it taken out: " + gainText({gain, se}) + (gain > se ? "" : ", within one standard error") + "; " +
@@ -466,6 +467,7 @@ void IdentificationRun::searchOutputDrift() {
     say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
         "inputs)");
   }
+  return as_it_stands;
 }
 
 // The chosen structure fitted on all the training data.

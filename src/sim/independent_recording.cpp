@@ -2,15 +2,14 @@
 
 #include <cmath>
 
+#include "plsa/core/angle_units.hpp"
 #include "plsa/io/standard_columns.hpp"
 
 namespace plsa::sim {
 
 std::array<double, 2> TipAngles::operator()(const Eigen::Vector2d& bending_deg) {
-  constexpr double kRadPerDeg = M_PI / 180.0;
   if (bending_deg.norm() > straight_deg_) {
-    const double turn =
-        std::remainder(std::atan2(bending_deg.y(), bending_deg.x()) - steer_deg_ * kRadPerDeg, 2 * M_PI);
+    const double turn = std::remainder(std::atan2(bending_deg.y(), bending_deg.x()) - steer_deg_ * kRadPerDeg, 2 * kPi);
     steer_deg_ += turn / kRadPerDeg;
   }
   return {bending_deg.norm(), steer_deg_};

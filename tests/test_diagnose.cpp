@@ -179,6 +179,13 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   o.candidates = {"friction"};
   EXPECT_THROW(runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o),
                std::invalid_argument);
+  o.candidates = {"creep", "deadzone", "creep"};  // tried twice, it would be its own runner-up
+  try {
+    runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
+    ADD_FAILURE() << "a candidate named twice was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("candidate 'creep' is named twice"), std::string::npos) << e.what();
+  }
   // One run twice, even under two names, would be its own held-out check.
   RunData copy = recorded(sim::probes::everyEffectOff(), 20, 1);
   copy.name = "copy_of_run1";
@@ -191,6 +198,29 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
     EXPECT_NE(std::string(e.what()).find("'run1' and 'copy_of_run1' hold the same samples"), std::string::npos)
         << e.what();
   }
+  // Commands that never change (a wrong --inputs column, say) drive every
+  // calibration to the same state; refused, naming the runs.
+  RunData still = recorded(sim::probes::everyEffectOff(), 20, 1),
+          other = recorded(sim::probes::everyEffectOff(), 20, 2);
+  still.commands.setConstant(0.1);
+  other.commands.setConstant(0.1);
+  other.name = "run2";
+  const auto whyRefused = [](const std::vector<RunData>& runs) {
+    try {
+      runDiagnosis(sim::probes::everyEffectOff(), runs, quick());
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(whyRefused({still, other, recorded(sim::probes::everyEffectOff(), 20, 3)})
+                .find("commands of the training run(s) 'run1', 'run2' never change"),
+            std::string::npos);
+  // Too little data to settle a bending mode or estimate a noise floor:
+  // 4 s split 70/30 leaves 2.8 s to train on.
+  const std::string short_run = whyRefused({recorded(sim::probes::everyEffectOff(), 4, 1)});
+  EXPECT_NE(short_run.find("2.8 s of training and 1.2 s of held-out data"), std::string::npos) << short_run;
+  EXPECT_NE(short_run.find("needs at least 5 s and 2 s"), std::string::npos) << short_run;
 }
 
 TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <future>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -92,7 +93,7 @@ void refuseRepeatedRuns(const std::vector<RunData>& runs) {
                                     "' hold the same samples; each run may appear once");
 }
 
-// The candidates asked for, or every effect the simulator has off; each known and off.
+// The candidates asked for, or every effect the simulator has off; each known, off and named once.
 std::vector<std::string> checkedCandidates(const sim::SimConfig& simulator, const DiagnoseOptions& o) {
   std::vector<std::string> candidates = o.candidates;
   if (candidates.empty())
@@ -103,6 +104,8 @@ std::vector<std::string> checkedCandidates(const sim::SimConfig& simulator, cons
       throw std::invalid_argument("diagnose: unknown candidate effect '" + e + "'");
     if (simulator.effectEnabled(e))
       throw std::invalid_argument("diagnose: candidate '" + e + "' is already switched on in the simulator");
+    if (std::count(candidates.begin(), candidates.end(), e) > 1)
+      throw std::invalid_argument("diagnose: candidate '" + e + "' is named twice (each is tried once)");
   }
   return candidates;
 }
@@ -125,6 +128,43 @@ RunSplit splitRuns(const std::vector<RunData>& runs, const DiagnoseOptions& o) {
     s.held.assign(runs.end() - static_cast<std::ptrdiff_t>(n_held), runs.end());
   }
   return s;
+}
+
+// Seconds of data in `runs`.
+double secondsOf(const std::vector<RunData>& runs) {
+  double s = 0.0;
+  for (const auto& r : runs) s += static_cast<double>(r.samples()) * r.sample_time_s;
+  return s;
+}
+
+std::string namesOf(const std::vector<RunData>& runs) {
+  std::string names;
+  for (const auto& r : runs) names += (names.empty() ? "'" : ", '") + r.name + "'";
+  return names;
+}
+
+// Data no diagnosis can read: training commands that never change drive the
+// simulator to one state whatever its physics (every calibration ties, and
+// a gap would be blamed on the simulator that belongs to the column
+// mapping), and a few seconds cannot show a bending mode of about 1 Hz
+// settle or estimate a noise floor.
+void refuseUnusableSplit(const RunSplit& s) {
+  bool driven = false;
+  for (const auto& r : s.train)
+    for (Eigen::Index j = 0; j < r.commands.cols(); ++j)
+      driven = driven || r.commands.col(j).maxCoeff() - r.commands.col(j).minCoeff() > 1e-6;
+  if (!driven)
+    throw std::invalid_argument("diagnose: the chamber commands of the training run(s) " + namesOf(s.train) +
+                                " never change: nothing drives the simulator, so its physics cannot be calibrated "
+                                "(check --inputs and --input-scale)");
+  const double train_s = secondsOf(s.train), held_s = secondsOf(s.held);
+  if (train_s < kMinTrainingSeconds || held_s < kMinHeldOutSeconds) {
+    std::ostringstream msg;
+    msg << "diagnose: " << train_s << " s of training and " << held_s << " s of held-out data (" << namesOf(s.train)
+        << " / " << namesOf(s.held) << "); a diagnosis needs at least " << kMinTrainingSeconds << " s and "
+        << kMinHeldOutSeconds << " s (record longer runs, or give several)";
+    throw std::invalid_argument(msg.str());
+  }
 }
 
 // The simulator as calibrated so far: its configuration, held-out and
@@ -525,6 +565,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);
+  refuseUnusableSplit(split);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
   SelectionContext x{split, o, d.map, 0.0, {}};

@@ -133,9 +133,17 @@ struct Diagnosis {
   double elapsed_s = 0.0;
 };
 
+/// The least data a diagnosis reads (seconds, summed over the runs on each
+/// side of the split): a bending mode of about 1 Hz must settle and a noise
+/// floor be estimated.
+inline constexpr double kMinTrainingSeconds = 5.0;
+inline constexpr double kMinHeldOutSeconds = 2.0;
+
 /// `runs` with two or more entries: split by run (the last third, at least
 /// one, held out); one run: split by time. Throws std::invalid_argument on
-/// unusable input (no runs, no candidates, an unknown candidate).
+/// unusable input (no runs, no candidates, an unknown candidate, the same
+/// run twice, training commands that never change, less data than
+/// kMinTrainingSeconds / kMinHeldOutSeconds), naming the runs.
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs,
                        const DiagnoseOptions& options);
 

@@ -328,6 +328,33 @@ io::Log randomChambersLog(double seconds) {
   return log;
 }
 
+// Columns that hold one value in every sample (a wrong --inputs or --outputs
+// name, typically) are refused before any work, naming them; an output
+// that moves through inputs that hold is not a model either.
+TEST(Pipeline, StillColumnsAreRefusedNamingThem) {
+  const auto whyRefused = [](const io::Log& log, const std::vector<std::string>& inputs) {
+    try {
+      identifyModel({log}, partitionOnly(inputs, {"y"}));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  io::Log still_output = randomChambersLog(120.0);
+  still_output.data.col(4).setConstant(2.5);
+  EXPECT_EQ(whyRefused(still_output, {"p_1", "p_2", "p_3"}),
+            "identify: output 'y' holds 2.5 in every sample of the logs: there is no response to identify (check "
+            "--outputs)");
+  io::Log still_inputs = randomChambersLog(120.0);
+  still_inputs.data.col(1).setZero();
+  still_inputs.data.col(2).setConstant(0.2);
+  EXPECT_EQ(whyRefused(still_inputs, {"p_1", "p_2"}),
+            "identify: the inputs (p_1, p_2) hold one value each in every sample of the logs: nothing drives a "
+            "response (check --inputs)");
+  EXPECT_EQ(whyRefused(still_inputs, {"p_1", "p_2", "p_3"}).find("hold one value"), std::string::npos)
+      << "one input moving is enough";
+}
+
 // quantile_levels 0 (the default): 3 levels per moving input, or 2 when 3
 // would leave under 10 s of data per region (three chambers: 270 s), then
 // finer counts scored while they leave 10 s per region; a number given is kept.

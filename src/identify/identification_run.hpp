@@ -199,6 +199,7 @@ struct IdentificationRun {
   const Structure* firstInputSide() const;
   void applyPlay(const std::vector<PlayChannel>& set);
   void stepResolution();
+  void refuseStillColumns() const;
   void say(const std::string& line);
   PairPoles& pairAt(int in_i, int out_i);
 

@@ -225,6 +225,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     Ref.push_back(log.columnsOf(reference));
     times.push_back(log.column(io::standard_columns::kTime));
   }
+  refuseStillColumns();
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
   rep.output_frame = o.output_frame ? givenOutputFrame() : chooseOutputFrame(o.outputs, Y, o.angle_unit);
   frame = rep.output_frame.frame;
@@ -245,6 +246,33 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   no = static_cast<int>(o.outputs.size());
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
   stepResolution();
+}
+
+// Columns that never change, over every log: an output has no response to
+// identify (its fit is undefined), and inputs that all hold drive none.
+// Refused before any work, naming the columns (a wrong --inputs or
+// --outputs name, typically).
+void IdentificationRun::refuseStillColumns() const {
+  const auto still = [](const std::vector<Eigen::MatrixXd>& blocks, Eigen::Index j) {
+    double lo = blocks[0](0, j), hi = lo;
+    for (const auto& b : blocks) lo = std::min(lo, b.col(j).minCoeff()), hi = std::max(hi, b.col(j).maxCoeff());
+    return hi - lo <= 1e-12 * std::max(1.0, std::abs(hi));
+  };
+  for (std::size_t j = 0; j < o.outputs.size(); ++j)
+    if (still(Y, static_cast<Eigen::Index>(j)))
+      throw std::invalid_argument("identify: output '" + o.outputs[j] + "' holds " +
+                                  formatNumber(Y[0](0, static_cast<Eigen::Index>(j))) +
+                                  " in every sample of the logs: there is no response to identify (check --outputs)");
+  bool any_moves = false;
+  std::string names;
+  for (std::size_t j = 0; j < o.inputs.size(); ++j) {
+    any_moves = any_moves || !still(U, static_cast<Eigen::Index>(j));
+    names += (names.empty() ? "" : ", ") + o.inputs[j];
+  }
+  if (!any_moves)
+    throw std::invalid_argument("identify: the inputs (" + names +
+                                ") hold one value each in every sample of the logs: nothing drives a response "
+                                "(check --inputs)");
 }
 
 // The reference change that counts as a step, in the logs' units:

@@ -110,6 +110,7 @@ void runSelfcheckCommand(SelfcheckArgs& a) {
     j["confusion"] = r.confusion;
     j["targets_met"] = r.targets_met;
     j["truth"] = r.truth;
+    j["excitation"] = r.excitation;
     j["summary"] = {{"single_cases", r.single_cases},
                     {"single_top1", r.single_top1},
                     {"pair_cases", r.pair_cases},
@@ -199,6 +200,15 @@ void addSelfcheckCommand(CLI::App& app) {
         "candidate's family, nominal physics randomised widely; own: plsa's simulator and its formulations (a "
         "check of the machinery, not of generalisation)")
       ->check(CLI::IsMember({"independent", "own"}));
+  sc->add_option_function<std::string>(
+        "--excitation",
+        [s](const std::string& e) {
+          s->options.excitation = e == "joystick" ? diagnose::SelfcheckExcitation::kJoystick
+                                                  : diagnose::SelfcheckExcitation::kHoldsAndRamps;
+        },
+        "holds (default): random multi-chamber holds of 0.6-3 s, some ramped; joystick: a two-axis joystick moved "
+        "by hand at about 0.3 Hz, one or two chambers at a time")
+      ->check(CLI::IsMember({"holds", "joystick"}));
   sc->add_flag(
       "--settled", [s](std::int64_t n) { s->options.from_rest = n == 0; },
       "own laws: record the runs settled at their first command instead of from rest");

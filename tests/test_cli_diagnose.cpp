@@ -130,6 +130,26 @@ TEST_F(Cli, SelfcheckCountsPairsByTheirRankingAndByWhatWasSelected) {
             std::string::npos);
 }
 
+TEST_F(Cli, SelfcheckRunsFromAJoystickWhenAsked) {
+  // One deadzone case on short runs and a small budget: the runs it saves are
+  // the joystick's (from rest, smooth), and the results say so.
+  fs::create_directories(file("joy_runs"));
+  const int rc =
+      run("diagnose-selfcheck --excitation joystick --effects deadzone --seeds 1 --no-pairs --null 0 --train-s 10 "
+          "--heldout-s 10 --evaluations 20 --evaluations-per-parameter 0 --screen-evaluations 0 --save-runs " +
+          file("joy_runs") + " --out " + file("joy.json"));
+  ASSERT_TRUE(rc == 0 || rc == 1) << err_;
+  EXPECT_EQ(nlohmann::json::parse(slurp(file("joy.json")))["excitation"], "joystick");
+  EXPECT_NE(slurp(file("stdout.txt")).find("independent laws (joystick runs)"), std::string::npos);
+  const plsa::io::Log train = plsa::io::readCsvLog(file("joy_runs") + "/deadzone__logistic___1_train.csv");
+  const Eigen::MatrixXd u = train.columnsOf({"cmd_1", "cmd_2", "cmd_3"});
+  ASSERT_EQ(u.rows(), 800);
+  EXPECT_EQ(u.row(0).norm(), 0.0);
+  EXPECT_LT((u.bottomRows(u.rows() - 1) - u.topRows(u.rows() - 1)).cwiseAbs().maxCoeff(), 0.02);
+  EXPECT_EQ(run("diagnose-selfcheck --excitation stairs --out " + file("no.json")), 2);
+  EXPECT_NE(err_.find("--excitation"), std::string::npos) << err_;
+}
+
 TEST_F(Cli, IndependentSelfcheckCasesAreSavedForDiagnoseAndScored) {
   // The default truth: an independently written actuator, recorded from rest.
   // A withheld deadzone (logistic law) and a null case; the whole 40-case

@@ -518,3 +518,29 @@ TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {
   blind.pressures.resize(0, 0);
   EXPECT_FALSE(fillLawFromPressures({blind}, start).found) << "no pressures logged: nothing to fit";
 }
+
+// The joystick excitation (diagnose-selfcheck --excitation joystick): from
+// rest, smooth (a hand, not a valve's step), never past 0.36 bar, one or two
+// chambers at a time (the deflection's projection onto three directions 120
+// deg apart is positive on at most two), each chamber driven high and also
+// left vented; the seed picks the run.
+TEST(Selfcheck, JoystickRunsStartAtRestStaySmoothAndDriveOneOrTwoChambers) {
+  const Eigen::MatrixXd u = joystickCommands(60.0, 80.0, 7);
+  ASSERT_EQ(u.rows(), 4800);
+  ASSERT_EQ(u.cols(), 3);
+  EXPECT_EQ(u.row(0).norm(), 0.0);
+  EXPECT_GE(u.minCoeff(), 0.0);
+  EXPECT_LE(u.maxCoeff(), 0.36 + 1e-12);
+  const double largest_step = (u.bottomRows(u.rows() - 1) - u.topRows(u.rows() - 1)).cwiseAbs().maxCoeff();
+  EXPECT_LT(largest_step, 0.02) << "a joystick moves smoothly";
+  for (Eigen::Index i = 0; i < u.rows(); ++i) ASSERT_LT((u.row(i).array() > 0.0).count(), 3) << "row " << i;
+  for (Eigen::Index c = 0; c < 3; ++c) {
+    EXPECT_GT(u.col(c).maxCoeff(), 0.25) << "chamber " << c + 1;
+    EXPECT_GT((u.col(c).array() == 0.0).count(), u.rows() / 5) << "chamber " << c + 1;
+  }
+  EXPECT_EQ(joystickCommands(60.0, 80.0, 7), u);
+  EXPECT_NE(joystickCommands(60.0, 80.0, 8), u);
+  // The default holds and ramps step: the bound above tells the two apart.
+  const Eigen::MatrixXd holds = excitationCommands(60.0, 80.0, 7);
+  EXPECT_GT((holds.bottomRows(holds.rows() - 1) - holds.topRows(holds.rows() - 1)).cwiseAbs().maxCoeff(), 0.02);
+}

@@ -108,6 +108,33 @@ Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint6
   return u;
 }
 
+Eigen::MatrixXd joystickCommands(double duration_s, double rate_hz, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> white(0.0, 1.0);
+  const auto n = static_cast<Eigen::Index>(std::lround(duration_s * rate_hz));
+  const double a = 1.0 - std::exp(-2.0 * kPi * 0.3 / rate_hz);  // one first-order low-pass step at 0.3 Hz
+  Eigen::MatrixXd axes(n, 2);
+  Eigen::Vector2d first = Eigen::Vector2d::Zero(), second = Eigen::Vector2d::Zero();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    first += a * (Eigen::Vector2d(white(rng), white(rng)) - first);
+    second += a * (first - second);
+    axes.row(i) = second.transpose();
+  }
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 3);
+  if (n == 0) return u;
+  const double spread = std::sqrt(axes.array().square().mean());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::Vector2d d = 0.6 * axes.row(i).transpose() / std::max(spread, 1e-12);
+    if (d.norm() > 1.0) d.normalize();
+    d *= std::min(1.0, static_cast<double>(i) / (2.0 * rate_hz));  // from rest
+    for (Eigen::Index c = 0; c < 3; ++c) {
+      const double dir = 2.0 * kPi * static_cast<double>(c) / 3.0;
+      u(i, c) = 0.36 * std::max(0.0, d.x() * std::cos(dir) + d.y() * std::sin(dir));
+    }
+  }
+  return u;
+}
+
 namespace {
 std::string roundedPercent(double v) { return std::isfinite(v) ? std::to_string(std::lround(v)) + "%" : "-"; }
 }  // namespace
@@ -147,14 +174,14 @@ std::string SelfcheckResult::summary() const {
     o << "\n";
   }
   std::snprintf(line, sizeof line,
-                "\n\"real\" data: %s laws; targets: top-1 correct %d/%d (%.0f%%, target >= 95%%); pairs with both "
+                "\n\"real\" data: %s laws%s; targets: top-1 correct %d/%d (%.0f%%, target >= 95%%); pairs with both "
                 "in the top 2: %d/%d (target >= 90%%); true-effect held-out shrink min %.0f%%, median %.0f%% (target "
                 ">= 60%%); null cases claiming nothing: %d/%d; cases with a spurious selection: %d/%zu (target <= "
                 "10%%) -> %s\n",
-                truth == "own laws" ? "plsa's own" : truth.c_str(), single_top1, single_cases,
-                single_cases ? 100.0 * single_top1 / single_cases : 0.0, pair_top2, pair_cases, min_true_shrink,
-                median_true_shrink, null_clean, null_cases, cases_with_spurious, cases.size(),
-                targets_met ? "all targets met" : "targets NOT met");
+                truth == "own laws" ? "plsa's own" : truth.c_str(), excitation == "joystick" ? " (joystick runs)" : "",
+                single_top1, single_cases, single_cases ? 100.0 * single_top1 / single_cases : 0.0, pair_top2,
+                pair_cases, min_true_shrink, median_true_shrink, null_clean, null_cases, cases_with_spurious,
+                cases.size(), targets_met ? "all targets met" : "targets NOT met");
   o << line;
   std::snprintf(line, sizeof line,
                 "single cases with a calibrated gap over twice the noise floor: %d/%d, the withheld effect named "
@@ -319,8 +346,9 @@ void saveRuns(const std::vector<io::Log>& logs, const std::string& dir, const st
 std::vector<RunData> caseRuns(const Spec& spec, const SelfcheckOptions& o, SelfcheckCase& c) {
   std::mt19937_64 rng(spec.seed * 7919 + 13);
   const double rate = sim::SimConfig{}.sample_rate_hz;
-  const Eigen::MatrixXd train_u = excitationCommands(o.train_s, rate, spec.seed * 2 + 1);
-  const Eigen::MatrixXd held_u = excitationCommands(o.heldout_s, rate, spec.seed * 2 + 2);
+  const auto commands = o.excitation == SelfcheckExcitation::kJoystick ? joystickCommands : excitationCommands;
+  const Eigen::MatrixXd train_u = commands(o.train_s, rate, spec.seed * 2 + 1);
+  const Eigen::MatrixXd held_u = commands(o.heldout_s, rate, spec.seed * 2 + 2);
   if (o.truth == SelfcheckTruth::kIndependent) {
     const sim::IndependentPhysics truth = independentTruth(spec, o.diagnose.flexible_laws, rng, c);
     c.effect_size = effectSize(truth, held_u);
@@ -425,6 +453,7 @@ void summarise(SelfcheckResult& res, std::vector<double>& shrinks) {
 SelfcheckResult runSelfcheck(const SelfcheckOptions& o) {
   SelfcheckResult res;
   res.truth = o.truth == SelfcheckTruth::kIndependent ? "independent" : "own laws";
+  res.excitation = o.excitation == SelfcheckExcitation::kJoystick ? "joystick" : "holds and ramps";
   res.labels = sim::effectNames();
   res.labels.push_back("none");
   res.confusion.assign(res.labels.size(), std::vector<int>(res.labels.size(), 0));

@@ -324,6 +324,8 @@ def test_diagnose_selfcheck(out):
     assert_valid("diagnose-selfcheck", doc, "diagnose-selfcheck's --out")
     assert_refused("diagnose-selfcheck", broken(doc, without("summary")), "no 'summary'")
     assert_refused("diagnose-selfcheck", broken(doc, setting("mine", "truth")), "truth 'mine'")
+    assert doc["excitation"] == "holds and ramps"
+    assert_refused("diagnose-selfcheck", broken(doc, setting("stairs", "excitation")), "excitation 'stairs'")
     assert_refused("diagnose-selfcheck", broken(doc, setting(["friction"], "cases", 0, "withheld")),
                    "a withheld effect 'friction'")
 

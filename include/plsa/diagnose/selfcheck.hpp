@@ -27,8 +27,20 @@ enum class SelfcheckTruth {
   kOwnLaws,
 };
 
+/// The command shape of the self-check's runs.
+enum class SelfcheckExcitation {
+  /// Random multi-chamber holds of 0.6-3 s, some reached by a ramp
+  /// (excitationCommands): the default.
+  kHoldsAndRamps,
+  /// A hand on a two-axis joystick (joystickCommands): smooth, one or two
+  /// chambers at a time, through the deadzone region on every return to
+  /// the centre.
+  kJoystick,
+};
+
 struct SelfcheckOptions {
   SelfcheckTruth truth = SelfcheckTruth::kIndependent;
+  SelfcheckExcitation excitation = SelfcheckExcitation::kHoldsAndRamps;
   std::vector<std::string> effects;  ///< single-effect cases; empty: all seven
   int seeds_per_effect = 4;          ///< independent: laws in turn; own laws: odd seeds another formulation
   std::vector<std::pair<std::string, std::string>> pairs = {
@@ -101,12 +113,21 @@ struct SelfcheckResult {
   /// >= 60%, spurious selections in <= 10% of cases.
   bool targets_met = false;
   std::string truth;            ///< "independent" or "own laws"
+  std::string excitation;       ///< "holds and ramps" or "joystick"
   std::string summary() const;  ///< the printed table: cases, confusion matrix, targets
 };
 
 /// The random piecewise-constant (sometimes ramped) multi-chamber excitation
 /// used for self-check runs: holds of 0.6-3 s, zero or 0.03-0.36 bar per chamber.
 Eigen::MatrixXd excitationCommands(double duration_s, double sample_rate_hz, std::uint64_t seed);
+
+/// A two-axis joystick moved by hand, from rest: its deflection (x, y), each
+/// axis white noise through two first-order low-passes at 0.3 Hz, scaled to
+/// a standard deviation of 0.6 and held inside the unit disc, faded in over
+/// the first 2 s; each chamber's command is 0.36 bar times the deflection's
+/// projection onto that chamber's bending direction (0, 120, 240 deg), none
+/// when negative. Samples x 3, bar, the first row 0.
+Eigen::MatrixXd joystickCommands(double duration_s, double sample_rate_hz, std::uint64_t seed);
 
 SelfcheckResult runSelfcheck(const SelfcheckOptions& options);
 

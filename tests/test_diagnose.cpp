@@ -198,29 +198,46 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
     EXPECT_NE(std::string(e.what()).find("'run1' and 'copy_of_run1' hold the same samples"), std::string::npos)
         << e.what();
   }
-  // Commands that never change (a wrong --inputs column, say) drive every
-  // calibration to the same state; refused, naming the runs.
+  // Commands that never change on runs replayed settled, all at one level (a
+  // wrong --inputs column, say), drive every calibration to the same state;
+  // refused, naming the runs. A step from rest, or runs held at different
+  // levels, do drive it (a step response is what calibrates the chambers).
   RunData still = recorded(sim::probes::everyEffectOff(), 20, 1),
           other = recorded(sim::probes::everyEffectOff(), 20, 2);
   still.commands.setConstant(0.1);
   other.commands.setConstant(0.1);
   other.name = "run2";
-  const auto whyRefused = [](const std::vector<RunData>& runs) {
+  DiagnoseOptions creep_only = quick();
+  creep_only.candidates = {"creep"};
+  const auto whyRefused = [&creep_only](const std::vector<RunData>& runs) {
     try {
-      runDiagnosis(sim::probes::everyEffectOff(), runs, quick());
+      runDiagnosis(sim::probes::everyEffectOff(), runs, creep_only);
     } catch (const std::invalid_argument& e) {
       return std::string(e.what());
     }
     return std::string("accepted");
   };
-  EXPECT_NE(whyRefused({still, other, recorded(sim::probes::everyEffectOff(), 20, 3)})
-                .find("commands of the training run(s) 'run1', 'run2' never change"),
+  const RunData held = recorded(sim::probes::everyEffectOff(), 20, 3);
+  EXPECT_NE(whyRefused({still, other, held}).find("commands of the training run(s) 'run1', 'run2' never change"),
             std::string::npos);
+  RunData step = still;
+  step.start = RunStart::kAtRest;
+  EXPECT_EQ(whyRefused({step, other, held}), "accepted") << "a step from vent drives the simulator";
+  RunData higher = other;
+  higher.commands.setConstant(0.3);
+  EXPECT_EQ(whyRefused({still, higher, held}), "accepted") << "two levels drive it to two states";
   // Too little data to settle a bending mode or estimate a noise floor:
   // 4 s split 70/30 leaves 2.8 s to train on.
   const std::string short_run = whyRefused({recorded(sim::probes::everyEffectOff(), 4, 1)});
   EXPECT_NE(short_run.find("2.8 s of training and 1.2 s of held-out data"), std::string::npos) << short_run;
   EXPECT_NE(short_run.find("needs at least 5 s and 2 s"), std::string::npos) << short_run;
+  // Several runs: the seconds on each side are summed (2 + 2 s train, 2 s held out).
+  const std::string short_runs =
+      whyRefused({recorded(sim::probes::everyEffectOff(), 2, 1), recorded(sim::probes::everyEffectOff(), 2, 2),
+                  recorded(sim::probes::everyEffectOff(), 2, 3)});
+  EXPECT_NE(short_runs.find("4.0 s of training and 2.0 s of held-out data ('run1', 'run2' / 'run3')"),
+            std::string::npos)
+      << short_runs;
 }
 
 TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
@@ -520,25 +537,34 @@ TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {
 }
 
 // The joystick excitation (diagnose-selfcheck --excitation joystick): from
-// rest, smooth (a hand, not a valve's step), never past 0.36 bar, one or two
-// chambers at a time (the deflection's projection onto three directions 120
-// deg apart is positive on at most two), each chamber driven high and also
-// left vented; the seed picks the run.
+// rest (faded in over 2 s), smooth (a hand, not a valve's step), never past
+// 0.36 bar, one or two chambers at a time (the deflection's projection onto
+// three directions 120 deg apart is positive on at most two, and above half
+// its length on at most one), each chamber driven high and also left
+// vented; the seed picks the run.
 TEST(Selfcheck, JoystickRunsStartAtRestStaySmoothAndDriveOneOrTwoChambers) {
   const Eigen::MatrixXd u = joystickCommands(60.0, 80.0, 7);
   ASSERT_EQ(u.rows(), 4800);
   ASSERT_EQ(u.cols(), 3);
   EXPECT_EQ(u.row(0).norm(), 0.0);
+  for (Eigen::Index i = 0; i < 160; ++i)  // faded in over the first 2 s
+    ASSERT_LE(u.row(i).maxCoeff(), 0.36 * static_cast<double>(i) / 160.0 + 1e-12) << "row " << i;
   EXPECT_GE(u.minCoeff(), 0.0);
   EXPECT_LE(u.maxCoeff(), 0.36 + 1e-12);
   const double largest_step = (u.bottomRows(u.rows() - 1) - u.topRows(u.rows() - 1)).cwiseAbs().maxCoeff();
   EXPECT_LT(largest_step, 0.02) << "a joystick moves smoothly";
-  for (Eigen::Index i = 0; i < u.rows(); ++i) ASSERT_LT((u.row(i).array() > 0.0).count(), 3) << "row " << i;
+  for (Eigen::Index i = 0; i < u.rows(); ++i) {
+    ASSERT_LT((u.row(i).array() > 0.0).count(), 3) << "row " << i;
+    ASSERT_LT((u.row(i).array() > 0.18 + 1e-12).count(), 2) << "row " << i << ": two chambers high at once";
+  }
   for (Eigen::Index c = 0; c < 3; ++c) {
     EXPECT_GT(u.col(c).maxCoeff(), 0.25) << "chamber " << c + 1;
     EXPECT_GT((u.col(c).array() == 0.0).count(), u.rows() / 5) << "chamber " << c + 1;
   }
   EXPECT_EQ(joystickCommands(60.0, 80.0, 7), u);
+  EXPECT_EQ(joystickCommands(0.0, 80.0, 7).rows(), 0);
+  EXPECT_THROW(joystickCommands(-1.0, 80.0, 7), std::invalid_argument);
+  EXPECT_THROW(joystickCommands(60.0, 0.0, 7), std::invalid_argument);
   EXPECT_NE(joystickCommands(60.0, 80.0, 8), u);
   // The default holds and ramps step: the bound above tells the two apart.
   const Eigen::MatrixXd holds = excitationCommands(60.0, 80.0, 7);

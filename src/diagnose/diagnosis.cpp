@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <future>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -143,27 +142,42 @@ std::string namesOf(const std::vector<RunData>& runs) {
   return names;
 }
 
-// Data no diagnosis can read: training commands that never change drive the
-// simulator to one state whatever its physics (every calibration ties, and
-// a gap would be blamed on the simulator that belongs to the column
-// mapping), and a few seconds cannot show a bending mode of about 1 Hz
-// settle or estimate a noise floor.
-void refuseUnusableSplit(const RunSplit& s) {
-  bool driven = false;
-  for (const auto& r : s.train)
+// Whether the training commands drive the simulator through anything that
+// depends on its physics: a command that changes within a run, a run
+// replayed from rest under a pressure (a step from vent: the step response
+// calibrates the chambers and the bending mode), or runs held at different
+// levels. Commands that never change on runs replayed settled leave the
+// simulator in one state: every calibration ties, and a gap would be blamed
+// on the simulator that belongs to a wrong column.
+bool drivenTraining(const std::vector<RunData>& train) {
+  for (const auto& r : train) {
+    if (r.samples() == 0) continue;
     for (Eigen::Index j = 0; j < r.commands.cols(); ++j)
-      driven = driven || r.commands.col(j).maxCoeff() - r.commands.col(j).minCoeff() > 1e-6;
-  if (!driven)
+      if (r.commands.col(j).maxCoeff() - r.commands.col(j).minCoeff() > 1e-6) return true;
+    if (r.start == RunStart::kAtRest && r.commands.row(0).maxCoeff() > 1e-6) return true;
+    if ((r.commands.row(0) - train[0].commands.row(0)).cwiseAbs().maxCoeff() > 1e-6) return true;
+  }
+  return false;
+}
+
+// Data no diagnosis can read: training that drives nothing, and a few
+// seconds, which cannot show a bending mode of about 1 Hz settle or give a
+// noise floor.
+void refuseUnusableSplit(const RunSplit& s) {
+  if (!drivenTraining(s.train))
     throw std::invalid_argument("diagnose: the chamber commands of the training run(s) " + namesOf(s.train) +
-                                " never change: nothing drives the simulator, so its physics cannot be calibrated "
-                                "(check --inputs and --input-scale)");
+                                " never change and start settled: nothing drives the simulator, so its physics "
+                                "cannot be calibrated (check --inputs)");
   const double train_s = secondsOf(s.train), held_s = secondsOf(s.held);
   if (train_s < kMinTrainingSeconds || held_s < kMinHeldOutSeconds) {
-    std::ostringstream msg;
-    msg << "diagnose: " << train_s << " s of training and " << held_s << " s of held-out data (" << namesOf(s.train)
-        << " / " << namesOf(s.held) << "); a diagnosis needs at least " << kMinTrainingSeconds << " s and "
-        << kMinHeldOutSeconds << " s (record longer runs, or give several)";
-    throw std::invalid_argument(msg.str());
+    char line[160];
+    std::snprintf(line, sizeof line, "diagnose: %.1f s of training and %.1f s of held-out data (", train_s, held_s);
+    char need[200];
+    std::snprintf(need, sizeof need,
+                  "); a diagnosis needs at least %.0f s and %.0f s (record longer runs, give several, or, for one "
+                  "run, change --heldout-fraction)",
+                  kMinTrainingSeconds, kMinHeldOutSeconds);
+    throw std::invalid_argument(line + namesOf(s.train) + " / " + namesOf(s.held) + need);
   }
 }
 

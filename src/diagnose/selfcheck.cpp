@@ -8,6 +8,8 @@
 #include <map>
 #include <random>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "plsa/core/angle_units.hpp"
 #include "plsa/io/csv_log.hpp"
@@ -87,10 +89,22 @@ sim::SimConfig allOff() {
 
 }  // namespace
 
+namespace {
+// Samples in `duration_s` at `rate_hz`; throws for a negative or
+// non-finite duration or a rate that is not positive.
+Eigen::Index samplesOf(double duration_s, double rate_hz, const char* who) {
+  if (!(std::isfinite(duration_s) && duration_s >= 0.0 && std::isfinite(rate_hz) && rate_hz > 0.0 &&
+        duration_s * rate_hz < 1e9))
+    throw std::invalid_argument(std::string(who) + ": duration " + std::to_string(duration_s) + " s at " +
+                                std::to_string(rate_hz) + " Hz (a duration of 0 or more at a positive rate)");
+  return static_cast<Eigen::Index>(std::lround(duration_s * rate_hz));
+}
+}  // namespace
+
 Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint64_t seed) {
+  const Eigen::Index n = samplesOf(duration_s, rate_hz, "excitationCommands");
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> uni(0.0, 1.0);
-  const auto n = static_cast<Eigen::Index>(std::lround(duration_s * rate_hz));
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 3);
   Eigen::Vector3d level = Eigen::Vector3d::Zero();
   Eigen::Index i = 0;
@@ -109,9 +123,9 @@ Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint6
 }
 
 Eigen::MatrixXd joystickCommands(double duration_s, double rate_hz, std::uint64_t seed) {
+  const Eigen::Index n = samplesOf(duration_s, rate_hz, "joystickCommands");
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> white(0.0, 1.0);
-  const auto n = static_cast<Eigen::Index>(std::lround(duration_s * rate_hz));
   const double a = 1.0 - std::exp(-2.0 * kPi * 0.3 / rate_hz);  // one first-order low-pass step at 0.3 Hz
   Eigen::MatrixXd axes(n, 2);
   Eigen::Vector2d first = Eigen::Vector2d::Zero(), second = Eigen::Vector2d::Zero();

@@ -141,9 +141,10 @@ inline constexpr double kMinHeldOutSeconds = 2.0;
 
 /// `runs` with two or more entries: split by run (the last third, at least
 /// one, held out); one run: split by time. Throws std::invalid_argument on
-/// unusable input (no runs, no candidates, an unknown candidate, the same
-/// run twice, training commands that never change, less data than
-/// kMinTrainingSeconds / kMinHeldOutSeconds), naming the runs.
+/// unusable input (no runs, no candidates, an unknown candidate or one
+/// named twice, the same run twice, training commands that drive nothing:
+/// constant on runs replayed settled, all at one level; less data than
+/// kMinTrainingSeconds / kMinHeldOutSeconds), naming the runs or effect.
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs,
                        const DiagnoseOptions& options);
 

@@ -33,8 +33,8 @@ enum class SelfcheckExcitation {
   /// (excitationCommands): the default.
   kHoldsAndRamps,
   /// A hand on a two-axis joystick (joystickCommands): smooth, one or two
-  /// chambers at a time, through the deadzone region on every return to
-  /// the centre.
+  /// chambers at a time, each vented whenever the stick crosses its null
+  /// line (about half the time) and so passing its deadzone region there.
   kJoystick,
 };
 
@@ -119,14 +119,18 @@ struct SelfcheckResult {
 
 /// The random piecewise-constant (sometimes ramped) multi-chamber excitation
 /// used for self-check runs: holds of 0.6-3 s, zero or 0.03-0.36 bar per chamber.
+/// Throws std::invalid_argument as joystickCommands does.
 Eigen::MatrixXd excitationCommands(double duration_s, double sample_rate_hz, std::uint64_t seed);
 
 /// A two-axis joystick moved by hand, from rest: its deflection (x, y), each
-/// axis white noise through two first-order low-passes at 0.3 Hz, scaled to
-/// a standard deviation of 0.6 and held inside the unit disc, faded in over
-/// the first 2 s; each chamber's command is 0.36 bar times the deflection's
-/// projection onto that chamber's bending direction (0, 120, 240 deg), none
-/// when negative. Samples x 3, bar, the first row 0.
+/// axis white noise through two first-order low-passes at 0.3 Hz, both
+/// scaled by one factor to a root-mean-square of 0.6 per axis, held inside
+/// the unit disc (at its rim about a quarter of the time), faded in linearly
+/// over the first 2 s; each chamber's command is 0.36 bar times the
+/// deflection's projection onto that chamber's bending direction (0, 120,
+/// 240 deg), none when negative, so never two chambers above 0.18 bar at
+/// once. Samples x 3, bar, the first row 0. Throws std::invalid_argument for
+/// a negative or non-finite duration or a rate that is not positive.
 Eigen::MatrixXd joystickCommands(double duration_s, double sample_rate_hz, std::uint64_t seed);
 
 SelfcheckResult runSelfcheck(const SelfcheckOptions& options);

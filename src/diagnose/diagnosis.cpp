@@ -81,17 +81,6 @@ void judgeConfidence(Diagnosis& d, const Gap& bar, const DiagnoseOptions& o) {
     d.confidence = "confident";
 }
 
-// The same run twice would be held out and trained on: a held-out gap that holds nothing out.
-void refuseRepeatedRuns(const std::vector<RunData>& runs) {
-  if (runs.empty()) throw std::invalid_argument("diagnose: no real runs given");
-  for (std::size_t i = 0; i < runs.size(); ++i)
-    for (std::size_t j = i + 1; j < runs.size(); ++j)
-      if (runs[i].samples() == runs[j].samples() && runs[i].commands == runs[j].commands &&
-          runs[i].outputs == runs[j].outputs)
-        throw std::invalid_argument("diagnose: runs '" + runs[i].name + "' and '" + runs[j].name +
-                                    "' hold the same samples; each run may appear once");
-}
-
 // The candidates asked for, or every effect the simulator has off; each known, off and named once.
 std::vector<std::string> checkedCandidates(const sim::SimConfig& simulator, const DiagnoseOptions& o) {
   std::vector<std::string> candidates = o.candidates;
@@ -127,58 +116,6 @@ RunSplit splitRuns(const std::vector<RunData>& runs, const DiagnoseOptions& o) {
     s.held.assign(runs.end() - static_cast<std::ptrdiff_t>(n_held), runs.end());
   }
   return s;
-}
-
-// Seconds of data in `runs`.
-double secondsOf(const std::vector<RunData>& runs) {
-  double s = 0.0;
-  for (const auto& r : runs) s += static_cast<double>(r.samples()) * r.sample_time_s;
-  return s;
-}
-
-std::string namesOf(const std::vector<RunData>& runs) {
-  std::string names;
-  for (const auto& r : runs) names += (names.empty() ? "'" : ", '") + r.name + "'";
-  return names;
-}
-
-// Whether the training commands drive the simulator through anything that
-// depends on its physics: a command that changes within a run, a run
-// replayed from rest under a pressure (a step from vent: the step response
-// calibrates the chambers and the bending mode), or runs held at different
-// levels. Commands that never change on runs replayed settled leave the
-// simulator in one state: every calibration ties, and a gap would be blamed
-// on the simulator that belongs to a wrong column.
-bool drivenTraining(const std::vector<RunData>& train) {
-  for (const auto& r : train) {
-    if (r.samples() == 0) continue;
-    for (Eigen::Index j = 0; j < r.commands.cols(); ++j)
-      if (r.commands.col(j).maxCoeff() - r.commands.col(j).minCoeff() > 1e-6) return true;
-    if (r.start == RunStart::kAtRest && r.commands.row(0).maxCoeff() > 1e-6) return true;
-    if ((r.commands.row(0) - train[0].commands.row(0)).cwiseAbs().maxCoeff() > 1e-6) return true;
-  }
-  return false;
-}
-
-// Data no diagnosis can read: training that drives nothing, and a few
-// seconds, which cannot show a bending mode of about 1 Hz settle or give a
-// noise floor.
-void refuseUnusableSplit(const RunSplit& s) {
-  if (!drivenTraining(s.train))
-    throw std::invalid_argument("diagnose: the chamber commands of the training run(s) " + namesOf(s.train) +
-                                " never change and start settled: nothing drives the simulator, so its physics "
-                                "cannot be calibrated (check --inputs)");
-  const double train_s = secondsOf(s.train), held_s = secondsOf(s.held);
-  if (train_s < kMinTrainingSeconds || held_s < kMinHeldOutSeconds) {
-    char line[160];
-    std::snprintf(line, sizeof line, "diagnose: %.1f s of training and %.1f s of held-out data (", train_s, held_s);
-    char need[200];
-    std::snprintf(need, sizeof need,
-                  "); a diagnosis needs at least %.0f s and %.0f s (record longer runs, give several, or, for one "
-                  "run, change --heldout-fraction)",
-                  kMinTrainingSeconds, kMinHeldOutSeconds);
-    throw std::invalid_argument(line + namesOf(s.train) + " / " + namesOf(s.held) + need);
-  }
 }
 
 // The simulator as calibrated so far: its configuration, held-out and
@@ -579,7 +516,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);
-  refuseUnusableSplit(split);
+  refuseUnusableSplit(split.train, split.held);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
   SelectionContext x{split, o, d.map, 0.0, {}};

@@ -87,9 +87,6 @@ sim::SimConfig allOff() {
   return c;
 }
 
-}  // namespace
-
-namespace {
 // Samples in `duration_s` at `rate_hz`; throws for a negative or
 // non-finite duration or a rate that is not positive.
 Eigen::Index samplesOf(double duration_s, double rate_hz, const char* who) {

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <sstream>
 
 #include "identification_run.hpp"
 #include "plsa/core/number_text.hpp"
@@ -69,34 +68,6 @@ double centralSpread(const std::vector<double>& values) {
 }
 
 }  // namespace
-
-std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names) {
-  for (const auto& name : names) {
-    const Eigen::VectorXd x = log.column(name);
-    if (x.size() < 3) continue;
-    std::vector<double> sorted(x.data(), x.data() + x.size());
-    std::sort(sorted.begin(), sorted.end());
-    auto quantile = [&](double q) {
-      return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))];
-    };
-    const double median = quantile(0.5), band = quantile(0.99) - quantile(0.01);
-    if (!(band > 0)) continue;
-    for (Eigen::Index k = 0; k < x.size(); ++k) {
-      const double bands = std::abs(x(k) - median) / band;
-      if (bands <= kGrossOutlierBands) continue;
-      std::ostringstream msg;
-      msg << log.source << ": data row " << k + 1 << ", column '" << name << "': " << x(k) << " lies ";
-      if (std::isfinite(bands))
-        msg << bands << " times";
-      else
-        msg << "beyond any multiple of";
-      msg << " the width of the column's 1-99% band (" << quantile(0.01) << " to " << quantile(0.99)
-          << ") from its median " << median;
-      return msg.str();
-    }
-  }
-  return {};
-}
 
 DioPwlObfModel identifyModel(const std::vector<io::Log>& logs, const IdentifyOptions& o, IdentifyReport* out) {
   IdentifyReport local;
@@ -246,33 +217,6 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   no = static_cast<int>(o.outputs.size());
   min_len = static_cast<Eigen::Index>(std::lround(1.0 / dt));  // a local step needs >= 1 s
   stepResolution();
-}
-
-// Columns that never change, over every log: an output has no response to
-// identify (its fit is undefined), and inputs that all hold drive none.
-// Refused before any work, naming the columns (a wrong --inputs or
-// --outputs name, typically).
-void IdentificationRun::refuseStillColumns() const {
-  const auto still = [](const std::vector<Eigen::MatrixXd>& blocks, Eigen::Index j) {
-    double lo = blocks[0](0, j), hi = lo;
-    for (const auto& b : blocks) lo = std::min(lo, b.col(j).minCoeff()), hi = std::max(hi, b.col(j).maxCoeff());
-    return hi - lo <= 1e-12 * std::max(1.0, std::abs(hi));
-  };
-  for (std::size_t j = 0; j < o.outputs.size(); ++j)
-    if (still(Y, static_cast<Eigen::Index>(j)))
-      throw std::invalid_argument("identify: output '" + o.outputs[j] + "' holds " +
-                                  formatNumber(Y[0](0, static_cast<Eigen::Index>(j))) +
-                                  " in every sample of the logs: there is no response to identify (check --outputs)");
-  bool any_moves = false;
-  std::string names;
-  for (std::size_t j = 0; j < o.inputs.size(); ++j) {
-    any_moves = any_moves || !still(U, static_cast<Eigen::Index>(j));
-    names += (names.empty() ? "" : ", ") + o.inputs[j];
-  }
-  if (!any_moves)
-    throw std::invalid_argument("identify: the inputs (" + names +
-                                ") hold one value each in every sample of the logs: nothing drives a response "
-                                "(check --inputs)");
 }
 
 // The reference change that counts as a step, in the logs' units:

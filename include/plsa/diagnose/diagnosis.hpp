@@ -12,6 +12,7 @@
 #include "plsa/diagnose/calibration.hpp"
 #include "plsa/diagnose/gap_breakdown.hpp"
 #include "plsa/diagnose/identified_reference.hpp"
+#include "plsa/diagnose/run_checks.hpp"
 #include "plsa/diagnose/run_data.hpp"
 #include "plsa/sim/sim_config.hpp"
 
@@ -133,18 +134,13 @@ struct Diagnosis {
   double elapsed_s = 0.0;
 };
 
-/// The least data a diagnosis reads (seconds, summed over the runs on each
-/// side of the split): a bending mode of about 1 Hz must settle and a noise
-/// floor be estimated.
-inline constexpr double kMinTrainingSeconds = 5.0;
-inline constexpr double kMinHeldOutSeconds = 2.0;
-
 /// `runs` with two or more entries: split by run (the last third, at least
 /// one, held out); one run: split by time. Throws std::invalid_argument on
 /// unusable input (no runs, no candidates, an unknown candidate or one
 /// named twice, the same run twice, training commands that drive nothing:
 /// constant on runs replayed settled, all at one level; less data than
-/// kMinTrainingSeconds / kMinHeldOutSeconds), naming the runs or effect.
+/// kMinTrainingSeconds / kMinHeldOutSeconds: run_checks.hpp), naming the
+/// runs or effect.
 Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunData>& runs,
                        const DiagnoseOptions& options);
 

@@ -238,6 +238,18 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   EXPECT_NE(short_runs.find("4.0 s of training and 2.0 s of held-out data ('run1', 'run2' / 'run3')"),
             std::string::npos)
       << short_runs;
+  // Pressure columns that never change while the commands drive (a sensor
+  // not logging): the fill law and the identified reference would read them.
+  RunData dead = recorded(sim::probes::everyEffectOff(), 20, 1), dead2 = recorded(sim::probes::everyEffectOff(), 20, 2);
+  dead.pressures.setZero();
+  dead2.pressures.setZero();
+  const std::string dead_sensor = whyRefused({dead, dead2, held});
+  EXPECT_NE(dead_sensor.find("measured pressures of the training run(s) 'run1', 'run2' hold one value each"),
+            std::string::npos)
+      << dead_sensor;
+  EXPECT_NE(dead_sensor.find("--pressures none"), std::string::npos) << dead_sensor;
+  dead2.pressures(100, 1) = 0.05;  // one chamber's reading moves in one run: the sensors log
+  EXPECT_EQ(whyRefused({dead, dead2, held}), "accepted");
 }
 
 TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {

@@ -1,6 +1,7 @@
 // Checks on the runs a diagnosis is given, before any work (run_checks.hpp).
 #include "plsa/diagnose/run_checks.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -39,6 +40,19 @@ bool drivenTraining(const std::vector<RunData>& train) {
   return false;
 }
 
+// Whether every column of one of the runs' blocks holds one value in every sample of every run.
+bool heldThroughout(const std::vector<RunData>& runs, const Eigen::MatrixXd RunData::*block) {
+  Eigen::RowVectorXd lo, hi;
+  for (const auto& r : runs) {
+    const Eigen::MatrixXd& m = r.*block;
+    if (m.rows() == 0) continue;
+    if (lo.size() == 0) lo = hi = m.row(0);
+    lo = lo.cwiseMin(m.colwise().minCoeff());
+    hi = hi.cwiseMax(m.colwise().maxCoeff());
+  }
+  return lo.size() == 0 || ((hi - lo).array() <= 1e-12 * hi.cwiseAbs().cwiseMax(1.0).array()).all();
+}
+
 }  // namespace
 
 void refuseRepeatedRuns(const std::vector<RunData>& runs) {
@@ -56,6 +70,12 @@ void refuseUnusableSplit(const std::vector<RunData>& train, const std::vector<Ru
     throw std::invalid_argument("diagnose: the chamber commands of the training run(s) " + namesOf(train) +
                                 " never change and start settled: nothing drives the simulator, so its physics "
                                 "cannot be calibrated (check --inputs)");
+  if (std::all_of(train.begin(), train.end(), [](const RunData& r) { return r.hasPressures(); }) &&
+      heldThroughout(train, &RunData::pressures))
+    throw std::invalid_argument(
+        "diagnose: the measured pressures of the training run(s) " + namesOf(train) +
+        " hold one value each in every sample while the commands drive the chambers: a sensor that "
+        "was not logging? (check --pressures; --pressures none diagnoses without them)");
   const double train_s = secondsOf(train), held_s = secondsOf(held);
   if (train_s < kMinTrainingSeconds || held_s < kMinHeldOutSeconds) {
     char line[160];

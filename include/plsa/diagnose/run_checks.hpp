@@ -23,7 +23,10 @@ void refuseRepeatedRuns(const std::vector<RunData>& runs);
 /// nothing (commands that never change on runs replayed settled, all at one
 /// level: every calibration would leave the simulator in one state; a step
 /// from rest or runs at different levels do drive it) and for less data
-/// than kMinTrainingSeconds / kMinHeldOutSeconds.
+/// than kMinTrainingSeconds / kMinHeldOutSeconds; and for measured
+/// pressures that hold one value in every training sample while the
+/// commands drive (a sensor not logging: the fill law and the identified
+/// reference would read it).
 void refuseUnusableSplit(const std::vector<RunData>& train, const std::vector<RunData>& held);
 
 }  // namespace plsa::diagnose

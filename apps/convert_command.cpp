@@ -36,13 +36,7 @@ void runConvert(const ConvertArgs& a) {
   wo.can_profile = a.can_profile;
   io::writeLog(a.out, log, wo);
   std::printf("plsa convert: %s -> %s: %lld rows, columns %s\n", a.in.c_str(), a.out.c_str(),
-              static_cast<long long>(log.samples()),
-              [&] {
-                std::string c;
-                for (const auto& name : log.columns) c += (c.empty() ? "" : ", ") + name;
-                return c;
-              }()
-                  .c_str());
+              static_cast<long long>(log.samples()), io::columnList(log.columns).c_str());
 }
 
 struct CanProfileArgs {

@@ -44,6 +44,7 @@ struct ValidateArgs {
   eval::SimulationStart start;
   std::string channel = "PLSA_STATE";
   std::string can_profile;
+  bool refuse_outliers = true;
 };
 
 std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
@@ -270,6 +271,13 @@ void runValidate(const ValidateArgs& a) {
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   required.push_back(io::standard_columns::kTime);  // the sample rate and gaps are checked against the model's
   const io::Log log = readLogs({a.log}, required, "validate", a.channel, a.can_profile).front();
+  if (a.refuse_outliers) {
+    const std::string outlier = identify::grossOutlier(log, {required.begin(), required.end() - 1});
+    if (!outlier.empty())
+      throw std::invalid_argument(outlier +
+                                  ": a glitch would dominate the scores; remove the sample (or validate "
+                                  "with --keep-outliers)");
+  }
   const eval::ValidationResult v = validateModel(model, log, a.horizons, a.start);
   for (const std::string& w : eval::inputCoverageWarnings(model, v.outside_training))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
@@ -555,6 +563,9 @@ void addValidateCommand(CLI::App& app) {
   va->add_flag("!--no-drift", v->start.carry_training_drift,
                "tip_cartesian models with a training_output_drift: simulate without the sensor yaw drift the training "
                "run showed (by default the simulation turns at that rate over the log)");
+  va->add_flag("!--keep-outliers", v->refuse_outliers,
+               "Score samples that lie more than 50 times the width of their column's 1-99% band from its median "
+               "(by default such a glitch is an error naming its row)");
   va->callback([v] { runValidate(*v); });
 }
 

@@ -200,5 +200,27 @@ TEST(CandumpLog, ASignalTooCoarseForItsColumnIsRefused) {
   std::remove(path.c_str());
 }
 
+// candump's (seconds.micros) stamp has no sign: a negative time_s, which its
+// reader would refuse, is refused when writing, naming the row.
+TEST(CandumpLog, ATimeCandumpCannotStampIsRefusedWhenWriting) {
+  io::Log log;
+  log.source = "shifted.csv";
+  log.columns = {"time_s", "cmd_1", "cmd_2", "cmd_3", "p_1", "p_2", "p_3"};
+  log.data.setZero(4, 7);
+  for (Eigen::Index r = 0; r < 4; ++r) log.data(r, 0) = -0.0125 + 0.0125 * static_cast<double>(r);
+  const std::string path = ::testing::TempDir() + "shifted.candump";
+  try {
+    writeCandumpLog(path, log, defaultSignalMap());
+    ADD_FAILURE() << "a negative time was written";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("row 1 of shifted.csv: time_s is not a time candump writes"),
+              std::string::npos)
+        << e.what();
+  }
+  log.data.col(0).array() += 0.0125;  // from 0: written and read back
+  writeCandumpLog(path, log, defaultSignalMap());
+  std::remove(path.c_str());
+}
+
 }  // namespace
 }  // namespace plsa::can

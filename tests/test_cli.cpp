@@ -190,6 +190,23 @@ TEST_F(Cli, IdentifyFitsThePapersConfigurationAndTheGlobalLinearObf) {
   EXPECT_EQ(linear.partition.regionCount(), 1);
   EXPECT_EQ(linear.schedule_lag_s, 0.0);
   ASSERT_EQ(run("validate --model " + file("linear.json") + " --log " + file("train.csv")), 0) << err_;
+  // A glitch in the validation log (1e160 squares to infinity: the spread was
+  // inf and every fit printed 100) is refused naming its row, as identify's.
+  plsa::io::Log glitched = plsa::io::readCsvLog(file("train.csv"));
+  glitched.data(3000, glitched.columnIndex("bend_deg")) = 1e160;
+  plsa::io::writeCsvLog(file("glitched.csv"), glitched);
+  EXPECT_EQ(run("validate --model " + file("linear.json") + " --log " + file("glitched.csv")), 1);
+  EXPECT_NE(err_.find("data row 3001, column 'bend_deg': 1e+160 lies"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("(or validate with --keep-outliers)"), std::string::npos) << err_;
+  EXPECT_EQ(run("validate --model " + file("linear.json") + " --log " + file("glitched.csv") + " --keep-outliers"), 1);
+  EXPECT_NE(err_.find("output 'bend_deg' reaches 1e+160 over the scored samples, beyond what a fit can be computed on"),
+            std::string::npos)
+      << err_;
+  glitched.data(3000, glitched.columnIndex("bend_deg")) = 1e6;  // kept: scored as it is
+  plsa::io::writeCsvLog(file("glitched.csv"), glitched);
+  EXPECT_EQ(run("validate --model " + file("linear.json") + " --log " + file("glitched.csv")), 1);
+  ASSERT_EQ(run("validate --model " + file("linear.json") + " --log " + file("glitched.csv") + " --keep-outliers"), 0)
+      << err_;
   EXPECT_NE(run("identify --log " + file("train.csv") + " --structure lstm --out " + file("x.json")), 0);
   EXPECT_NE(err_.find("lstm"), std::string::npos) << err_;
   EXPECT_FALSE(std::filesystem::exists(file("x.json")));

@@ -110,6 +110,22 @@ TEST_F(CsvLogTest, ByteOrderMarkCutLastLineBinaryAndEndlessLines) {
         << e.what();
   }
   expectError("time_s,y\n" + std::string(plsa::io::kMaxCsvLineBytes + 10, '1'), ":2: line longer than 1 MiB");
+  // A header of 100000 names (under the 1 MiB line limit) reads, and a
+  // message about it lists a few hundred characters of them, not all.
+  std::string header = "time_s", row = "0";
+  for (int i = 0; i < 100000; ++i) header += ",c" + std::to_string(i), row += ",0";
+  const plsa::io::Log wide = plsa::io::readCsvLog(write(header + "\n" + row + "\n"));
+  EXPECT_EQ(wide.columns.size(), 100001u);
+  try {
+    plsa::io::readCsvLog(write(header + "\n" + row + "\n"), needs_u);
+    ADD_FAILURE() << "a missing column was accepted";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("(it has: time_s, c0, c1, "), std::string::npos) << what.substr(0, 400);
+    EXPECT_NE(what.find(", ... (100001 columns))"), std::string::npos) << what.substr(0, 400);
+    EXPECT_LT(what.size(), 500u);
+  }
+  expectError("time_s,y,y\n0,1,2\n", "header names column 'y' twice");
 }
 
 TEST_F(CsvLogTest, WritesAtomicallyAndLeavesNoTemporaryFile) {

@@ -355,6 +355,22 @@ TEST(Pipeline, StillColumnsAreRefusedNamingThem) {
       << "one input moving is enough";
 }
 
+// By default a chamber's pressure steps on its own command: --inputs p_2
+// alone takes cmd_2's staircase (0.08 to 0.32 bar in four steps), not
+// cmd_1's, which the first input's position would give.
+TEST(Pipeline, AnInputStepsOnItsOwnChambersCommand) {
+  IdentifyReport rep;
+  const DioPwlObfModel m = identifyModel({twoChamberLog()}, partitionOnly({"p_2"}, {"z"}), &rep);
+  ASSERT_EQ(m.partition.breakpoints().size(), 1u);
+  const auto& b = m.partition.breakpoints()[0];
+  ASSERT_EQ(b.size(), 3u) << progressLine(rep, "[4/5] partition");
+  for (std::size_t i = 0; i < b.size(); ++i) EXPECT_NEAR(b[i], 0.12 + 0.08 * static_cast<double>(i), 1e-9);
+  IdentifyOptions on_cmd_1 = partitionOnly({"p_2"}, {"z"});
+  on_cmd_1.reference = {"cmd_1"};
+  const DioPwlObfModel other = identifyModel({twoChamberLog()}, on_cmd_1);
+  EXPECT_NE(other.partition.breakpoints(), m.partition.breakpoints()) << "the test tells the references apart";
+}
+
 // quantile_levels 0 (the default): 3 levels per moving input, or 2 when 3
 // would leave under 10 s of data per region (three chambers: 270 s), then
 // finer counts scored while they leave 10 s per region; a number given is kept.

@@ -47,6 +47,18 @@ TEST(LcmLog, MalformedFilesAreClearErrors) {
   log.data = Eigen::MatrixXd::Zero(3, 9);
   log.data.col(0) << 0.0125, 0.025, 0.0375;
   const std::string good = tempPath("good.lcmlog");
+  // Microseconds since the epoch in the time column: beyond an int64 utime, refused naming the row.
+  plsa::io::Log in_us = log;
+  in_us.source = "us.csv";
+  in_us.data(1, 0) = 1.7e15;
+  try {
+    plsa::lcm::writeLcmLog(good, in_us);
+    ADD_FAILURE() << "a time beyond int64 microseconds was written";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("row 2 of us.csv: time_s 1700000000000000.000000 s is beyond"),
+              std::string::npos)
+        << e.what();
+  }
   plsa::lcm::writeLcmLog(good, log);
   try {
     plsa::lcm::readLcmLog(good, "OTHER_CHANNEL");

@@ -96,6 +96,17 @@ TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
   bad.search_max_samples = -1;
   expectThrowContaining([&] { identifyModel({train}, bad); }, "sample size must be >= 0");
   bad = o;
+  bad.search_max_samples = 1500;  // under one 25 s window: windows of warm-up, scored on nothing
+  expectThrowContaining([&] { identifyModel({train}, bad); },
+                        "--search-samples 1500 (18.75 s) is under one search window (25 s, whose first 10 s are not "
+                        "scored): give at least 2000, or 0");
+  bad = o;
+  bad.cv_chunk_s = 1e18;  // rounded to whole samples this overflowed, and chunks of one sample were scored
+  expectThrowContaining([&] { identifyModel({train}, bad); },
+                        "--cv-chunk 1e+18 s leaves some of the 3 cross-validation folds without data");
+  bad.cv_chunk_s = 20.0;  // two chunks fit a 25 s window: the third fold would hold nothing
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "give a chunk under 12.5 s");
+  bad = o;
   bad.play_candidates = {{}, {0.1}};  // refused before any stage scores with it
   expectThrowContaining([&] { identifyModel({train}, bad); }, "a play channel set is empty");
   // No budget: the search runs on every sample and says nothing about windows.

@@ -146,6 +146,13 @@ TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("yaw registration window"), std::string::npos) << e.what();
   }
+  try {  // beyond int64 samples the window was scored as if a few samples long
+    eval::validateModel(tip, turned, {40}, eval::SimulationStart{1e18});
+    ADD_FAILURE() << "accepted a registration window of 1e18 s";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("(1e+18 s, over 10^15 samples) leaves nothing"), std::string::npos)
+        << e.what();
+  }
   EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{-1.0}), std::invalid_argument);
   EXPECT_THROW(eval::validateModel(tip, turned, {40}, eval::SimulationStart{std::nan("")}), std::invalid_argument);
   // So does a simulation without an output level, which starts from the measured sample.
@@ -405,10 +412,12 @@ TEST(Validation, NamesALogThatDoesNotStartAtRestAndSettlesIt) {
   EXPECT_GT(s.outputs[0].fit_sim, v.outputs[0].fit_sim + 5.0);
   EXPECT_GT(s.outputs[0].fit_sim, 95.0);
   EXPECT_GT(s.outputs[0].fit_k.at(40), v.outputs[0].fit_k.at(40));
-  for (const double bad : {-1.0, std::nan(""), 1e6}) {
+  for (const double bad : {-1.0, std::nan(""), 1e6, 1e18}) {  // 1e18 s overflowed to bad_alloc
     settled.settle_s = bad;
     expectThrowContaining([&] { eval::validateModel(m, moving, {40}, settled); }, "settling time");
   }
+  settled.settle_s = 1e18;
+  expectThrowContaining([&] { eval::validateModel(m, moving, {40}, settled); }, "is over 10^15 samples of the log's");
 }
 
 // A model without an output level simulates from the measured sample it

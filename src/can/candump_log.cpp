@@ -366,9 +366,10 @@ void writeCandumpLog(const std::string& path, const io::Log& log, const SignalMa
       if (!encodeFrame(m, v.data(), counter[k]++, f))
         throw std::invalid_argument(path + ": row " + std::to_string(r + 1) + " of " + log.source + ": " + m.name +
                                     " cannot carry its values (a signal out of its range, or not finite)");
-      if (!(std::abs(log.data(r, time)) < 1e11))  // candump's (seconds.micros) field, seconds since 1970 at most
+      // candump's (seconds.micros) field: seconds since 1970 at most, never negative (its reader refuses a sign).
+      if (!(log.data(r, time) >= 0.0 && log.data(r, time) < 1e11))
         throw std::invalid_argument(path + ": row " + std::to_string(r + 1) + " of " + log.source +
-                                    ": time_s is not a time candump writes");
+                                    ": time_s is not a time candump writes (0 to 1e11 s)");
       text += candumpLine(log.data(r, time), "can0", f);
     }
   writeTextFile(path, text, "candump log");

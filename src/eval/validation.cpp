@@ -18,19 +18,34 @@
 
 namespace plsa::eval {
 
+namespace {
+
+// Seconds as samples, saturated far beyond any log's length: a window longer
+// than the log is then refused by name (it leaves nothing to score) instead
+// of overflowing the conversion.
+constexpr double kSaturatedSamples = 1e15;
+double samplesIn(double seconds, double sample_time_s) { return std::min(seconds / sample_time_s, kSaturatedSamples); }
+
+// A sample count as the messages print it: a saturated one as what it is.
+std::string samplesText(Eigen::Index n) {
+  return static_cast<double>(n) >= kSaturatedSamples ? std::string("over 10^15") : std::to_string(n);
+}
+
+}  // namespace
+
 Eigen::Index yawRegistrationSamples(const DioPwlObfModel& model, const SimulationStart& start) {
   PLSA_CHECK(std::isfinite(start.yaw_registration_s) && start.yaw_registration_s >= 0,
              "SimulationStart: the yaw registration window must be finite and >= 0 s, got " +
                  std::to_string(start.yaw_registration_s));
   if (model.output_level.empty() || model.output_frame != OutputFrame::kTipCartesian || start.yaw_registration_s == 0)
     return 0;
-  return std::max<Eigen::Index>(1, std::llround(start.yaw_registration_s / model.sample_time_s));
+  return std::max<Eigen::Index>(1, std::llround(samplesIn(start.yaw_registration_s, model.sample_time_s)));
 }
 
 Eigen::Index settleSamples(const DioPwlObfModel& model, const SimulationStart& start) {
   PLSA_CHECK(std::isfinite(start.settle_s) && start.settle_s >= 0,
              "SimulationStart: the settling time must be finite and >= 0 s, got " + std::to_string(start.settle_s));
-  return static_cast<Eigen::Index>(std::ceil(start.settle_s / model.sample_time_s - 1e-9));
+  return static_cast<Eigen::Index>(std::ceil(samplesIn(start.settle_s, model.sample_time_s) - 1e-9));
 }
 
 double carriedYawRate(const DioPwlObfModel& model, const SimulationStart& start) {
@@ -74,10 +89,10 @@ namespace {
 // settling time.
 Eigen::Index checkedRegistration(const DioPwlObfModel& model, const SimulationStart& start, Eigen::Index rows) {
   const Eigen::Index n = yawRegistrationSamples(model, start), settle = settleSamples(model, start);
-  const std::string after = settle > 0 ? " after " + std::to_string(settle) + " settling samples" : "";
+  const std::string after = settle > 0 ? " after " + samplesText(settle) + " settling samples" : "";
   if (n > 0)
     PLSA_CHECK(settle + n < rows, "the yaw registration window (" + significantDigits(start.yaw_registration_s, 4) +
-                                      " s, " + std::to_string(n) + " samples)" + after + " leaves nothing of the " +
+                                      " s, " + samplesText(n) + " samples)" + after + " leaves nothing of the " +
                                       std::to_string(rows) +
                                       "-sample record to simulate: give a longer log, or a shorter "
                                       "--yaw-registration or --settle");
@@ -380,7 +395,7 @@ void requireSettlingTime(const DioPwlObfModel& model, const SimulationStart& sta
   const Eigen::Index settle = settleSamples(model, start);
   if (settle > log.samples() - 2)
     throw std::invalid_argument(log.source + ": settling time " + significantDigits(start.settle_s, 4) + " s is " +
-                                std::to_string(settle) + " samples of the log's " + std::to_string(log.samples()) +
+                                samplesText(settle) + " samples of the log's " + std::to_string(log.samples()) +
                                 "; a fit needs 2 after it: give a longer log");
 }
 
@@ -428,6 +443,12 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     if (!(scored.maxCoeff() > scored.minCoeff()))
       throw std::invalid_argument(log.source + ": output '" + ov.name + "' is constant over the scored samples (from " +
                                   std::to_string(res.scored_from + 1) + "); a fit against it is undefined");
+    // Values beyond about 1e154 square to infinity: the spread would be
+    // infinite and every fit 100.
+    if (!std::isfinite((scored.array() - scored.mean()).matrix().norm()))
+      throw std::invalid_argument(log.source + ": output '" + ov.name + "' reaches " +
+                                  significantDigits(scored.cwiseAbs().maxCoeff(), 4) +
+                                  " over the scored samples, beyond what a fit can be computed on (a glitch?)");
     for (int k : horizons) {
       const AlignedPrediction p = scoredPart(pred[static_cast<std::size_t>(o)].at(k), res.scored_from);
       ov.fit_k[k] = fitOf(ov.measured, p);

@@ -160,13 +160,27 @@ OutputFrameChoice IdentificationRun::givenOutputFrame() const {
   return c;
 }
 
+namespace {
+
+// The command column that steps input j by default: cmd_N for a chamber's
+// own columns (p_N, cmd_N), so that --inputs p_2 alone steps on cmd_2;
+// cmd_<j+1> for an input of another name.
+std::string defaultCommandReference(const std::string& input, std::size_t j) {
+  namespace columns = io::standard_columns;
+  for (int n = 1; n <= columns::kChambers; ++n)
+    if (input == columns::pressure(n) || input == columns::command(n)) return columns::command(n);
+  return columns::command(static_cast<int>(j) + 1);
+}
+
+}  // namespace
+
 void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   std::vector<std::string> reference = o.reference;
   if (reference.empty()) {
     namespace columns = io::standard_columns;
     const bool have_cmd = logs[0].hasColumn(columns::command(1)) && o.inputs.size() <= columns::kChambers;
     for (std::size_t j = 0; j < o.inputs.size(); ++j)
-      reference.push_back(have_cmd ? columns::command(static_cast<int>(j) + 1) : o.inputs[j]);
+      reference.push_back(have_cmd ? defaultCommandReference(o.inputs[j], j) : o.inputs[j]);
     references_are_inputs = !have_cmd;
   }
   if (reference.size() != o.inputs.size()) {

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "identification_run.hpp"
 #include "plsa/core/check.hpp"
+#include "plsa/core/number_text.hpp"
 
 namespace plsa::identify {
 namespace {
@@ -66,6 +68,13 @@ void IdentificationRun::sampleForSearch() {
   rep.search_samples = total;
   if (o.search_max_samples <= 0 || total <= o.search_max_samples) return;  // searchWindows: every log whole
   const auto window = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(o.search_window_s / dt)));
+  // Fewer samples than one window: windows of the warm-up alone, scored on nothing.
+  if (o.search_max_samples < window)
+    throw std::invalid_argument(
+        "identify: --search-samples " + std::to_string(o.search_max_samples) + " (" +
+        formatNumber(static_cast<double>(o.search_max_samples) * dt) + " s) is under one search window (" +
+        formatNumber(o.search_window_s) + " s, whose first " + formatNumber(kSearchWarmupS) +
+        " s are not scored): give at least " + std::to_string(window) + ", or 0 to search on every sample");
   std::vector<Eigen::Index> lengths;
   for (const auto& u : U) lengths.push_back(u.rows());
   const std::vector<SearchWindow> windows = searchWindows(lengths, o.search_max_samples, window);

@@ -88,7 +88,17 @@ void IdentificationRun::cutFolds() {
   // favour structures that extrapolate rather than fit; interleaved chunks
   // leave every fold the whole grid.
   if (interleaved) {
-    const auto chunk = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(o.cv_chunk_s / dt)));
+    Eigen::Index longest = 0;
+    for (const auto& u : U) longest = std::max(longest, u.rows());
+    const double chunk_rows = std::max(1.0, std::round(o.cv_chunk_s / dt));
+    if (chunk_rows * static_cast<double>(o.play_selection_folds - 1) >= static_cast<double>(longest))
+      throw std::invalid_argument("identify: --cv-chunk " + formatNumber(o.cv_chunk_s) + " s leaves some of the " +
+                                  std::to_string(o.play_selection_folds) +
+                                  " cross-validation folds without data: the longest log (or search window) lasts " +
+                                  formatNumber(static_cast<double>(longest) * dt) + " s; give a chunk under " +
+                                  formatNumber(static_cast<double>(longest) * dt / (o.play_selection_folds - 1)) +
+                                  " s");
+    const auto chunk = static_cast<Eigen::Index>(chunk_rows);
     for (std::size_t r = 0; r < U.size(); ++r) {
       Eigen::VectorXi f(U[r].rows());
       for (Eigen::Index k = 0; k < f.size(); ++k) f(k) = static_cast<int>((k / chunk) % o.play_selection_folds);

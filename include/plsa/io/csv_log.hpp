@@ -36,6 +36,10 @@ struct Log {
   Eigen::MatrixXd columnsOf(const std::vector<std::string>& names) const;
 };
 
+/// Column names joined by ", " for a message, cut after about `max_chars`
+/// characters with the count of all ("a, b, ... (200001 columns)").
+std::string columnList(const std::vector<std::string>& names, std::size_t max_chars = 300);
+
 struct CsvReadOptions {
   /// Strictly increasing time is required when this column exists ("" to skip).
   std::string time_column = standard_columns::kTime;

@@ -103,9 +103,11 @@ TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
   bad = o;
   bad.cv_chunk_s = 1e18;  // rounded to whole samples this overflowed, and chunks of one sample were scored
   expectThrowContaining([&] { identifyModel({train}, bad); },
-                        "--cv-chunk 1e+18 s leaves some of the 3 cross-validation folds without data");
-  bad.cv_chunk_s = 20.0;  // two chunks fit a 25 s window: the third fold would hold nothing
-  expectThrowContaining([&] { identifyModel({train}, bad); }, "give a chunk under 12.5 s");
+                        "--cv-chunk 1e+18 s puts every sample in one cross-validation fold");
+  bad.cv_chunk_s = 25.0;  // one chunk per 25 s window: fold 0 holds everything
+  expectThrowContaining([&] { identifyModel({train}, bad); }, "lasts 25 s; give a chunk under that");
+  bad.cv_chunk_s = 20.0;  // two chunks per window: the third fold is empty and left out of the scores
+  EXPECT_NO_THROW(identifyModel({train}, bad));
   bad = o;
   bad.play_candidates = {{}, {0.1}};  // refused before any stage scores with it
   expectThrowContaining([&] { identifyModel({train}, bad); }, "a play channel set is empty");

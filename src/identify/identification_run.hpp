@@ -249,6 +249,7 @@ struct IdentificationRun {
   std::vector<int> fold_of;
   std::vector<Eigen::VectorXi> fold_rows;  ///< per row its fold, or fold_groups - 1 for a warm-up row
   int fold_groups = 0;                     ///< the folds, and one more when some rows are warm-up
+  std::string unusable_folds;              ///< why the interleaved folds cannot be scored, or empty
   std::vector<Eigen::MatrixXd> FY, FYlog, Yfit;
   bool drift_per_fold = false;
   std::vector<double> fold_scores;  ///< the last held-out score's terms, per fold (or block) and output

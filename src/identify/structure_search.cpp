@@ -88,16 +88,18 @@ void IdentificationRun::cutFolds() {
   // favour structures that extrapolate rather than fit; interleaved chunks
   // leave every fold the whole grid.
   if (interleaved) {
+    // Every log shorter than one chunk puts every sample in fold 0: the fold
+    // fit leaving it out has nothing to fit. Refused, naming the option, when
+    // a score needs the folds (interleavedFoldFits); folds beyond the data
+    // are left out of the scores.
     Eigen::Index longest = 0;
     for (const auto& u : U) longest = std::max(longest, u.rows());
     const double chunk_rows = std::max(1.0, std::round(o.cv_chunk_s / dt));
-    if (chunk_rows * static_cast<double>(o.play_selection_folds - 1) >= static_cast<double>(longest))
-      throw std::invalid_argument("identify: --cv-chunk " + formatNumber(o.cv_chunk_s) + " s leaves some of the " +
-                                  std::to_string(o.play_selection_folds) +
-                                  " cross-validation folds without data: the longest log (or search window) lasts " +
-                                  formatNumber(static_cast<double>(longest) * dt) + " s; give a chunk under " +
-                                  formatNumber(static_cast<double>(longest) * dt / (o.play_selection_folds - 1)) +
-                                  " s");
+    if (chunk_rows >= static_cast<double>(longest))
+      unusable_folds = "identify: --cv-chunk " + formatNumber(o.cv_chunk_s) +
+                       " s puts every sample in one cross-validation fold, leaving the others nothing to fit on: the "
+                       "longest log (or search window) lasts " +
+                       formatNumber(static_cast<double>(longest) * dt) + " s; give a chunk under that";
     const auto chunk = static_cast<Eigen::Index>(chunk_rows);
     for (std::size_t r = 0; r < U.size(); ++r) {
       Eigen::VectorXi f(U[r].rows());
@@ -152,6 +154,7 @@ void IdentificationRun::beginScoring(std::string stage, std::size_t count) {
 // every fold's increments. Both passes stream the regressors a chunk at a
 // time: a long log's would take gigabytes.
 IdentificationRun::FoldFits IdentificationRun::interleavedFoldFits() {
+  if (!unusable_folds.empty()) throw std::invalid_argument(unusable_folds);
   CoefficientSums sums;
   if (!drift_per_fold) sums = coefficientSums(model, U, FYlog, fold_rows, fold_groups);
   const auto folds = static_cast<std::size_t>(o.play_selection_folds);

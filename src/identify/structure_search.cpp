@@ -100,7 +100,9 @@ void IdentificationRun::cutFolds() {
                        " s puts every sample in one cross-validation fold, leaving the others nothing to fit on: the "
                        "longest log (or search window) lasts " +
                        formatNumber(static_cast<double>(longest) * dt) + " s; give a chunk under that";
-    const auto chunk = static_cast<Eigen::Index>(chunk_rows);
+    // At most the longest log's rows: the same folds, and no conversion beyond int64.
+    const auto chunk =
+        static_cast<Eigen::Index>(std::min(chunk_rows, static_cast<double>(std::max<Eigen::Index>(1, longest))));
     for (std::size_t r = 0; r < U.size(); ++r) {
       Eigen::VectorXi f(U[r].rows());
       for (Eigen::Index k = 0; k < f.size(); ++k) f(k) = static_cast<int>((k / chunk) % o.play_selection_folds);

@@ -355,6 +355,27 @@ TEST(Pipeline, StillColumnsAreRefusedNamingThem) {
       << "one input moving is enough";
 }
 
+// A column named twice among the inputs and outputs, or the time as one of
+// them, is refused before any work (before, after the whole identification,
+// by the model file; the time identified as a signal).
+TEST(Pipeline, AColumnNamedTwiceOrTheTimeIsRefusedBeforeAnyWork) {
+  const io::Log log = randomChambersLog(120.0);
+  const auto whyRefused = [&log](const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+    try {
+      identifyModel({log}, partitionOnly(inputs, outputs));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(whyRefused({"p_1", "p_1"}, {"y"}),
+            "identify: column 'p_1' is named twice among the inputs and outputs (check --inputs, --outputs)");
+  EXPECT_EQ(whyRefused({"p_1", "p_2"}, {"p_2"}),
+            "identify: column 'p_2' is named twice among the inputs and outputs (check --inputs, --outputs)");
+  EXPECT_EQ(whyRefused({"time_s"}, {"y"}),
+            "identify: 'time_s' is the logs' time, not an input or output (check --inputs, --outputs)");
+}
+
 // By default a chamber's pressure steps on its own command: --inputs p_2
 // alone takes cmd_2's staircase (0.08 to 0.32 bar in four steps), not
 // cmd_1's, which the first input's position would give.

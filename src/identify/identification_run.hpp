@@ -61,6 +61,7 @@ struct IdentificationRun {
 
   // The paper's stages (pipeline.cpp).
   void checkOptions(const std::vector<io::Log>& logs) const;
+  void refuseRepeatedColumns() const;
   void readData(const std::vector<io::Log>& logs);
   OutputFrameChoice givenOutputFrame() const;
   void fitLocalModels(const std::vector<io::Log>& logs);

@@ -115,6 +115,7 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
   PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  refuseRepeatedColumns();
   PLSA_CHECK(!o.angle_unit || *o.angle_unit == "deg" || *o.angle_unit == "rad",
              "identify: the angle unit must be deg or rad, got '" + o.angle_unit.value_or("") + "'");
   PLSA_CHECK(o.quantile_levels >= 0 && o.quantile_levels <= 12,
@@ -143,6 +144,21 @@ void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   checkOption(o.scheduling);
   checkOption(o.output_drift);
   checkOption(o.cv_layout);
+}
+
+// A column named twice among the inputs and outputs, or the time column as
+// one of them: refused before any work (the model file would refuse it after
+// the whole identification).
+void IdentificationRun::refuseRepeatedColumns() const {
+  std::vector<std::string> named = o.inputs;
+  named.insert(named.end(), o.outputs.begin(), o.outputs.end());
+  for (std::size_t i = 0; i < named.size(); ++i) {
+    PLSA_CHECK(named[i] != io::standard_columns::kTime,
+               "identify: '" + named[i] + "' is the logs' time, not an input or output (check --inputs, --outputs)");
+    for (std::size_t j = 0; j < i; ++j)
+      PLSA_CHECK(named[i] != named[j], "identify: column '" + named[i] + "' is named twice among the inputs and " +
+                                           "outputs (check --inputs, --outputs)");
+  }
 }
 
 // Data and sample time; every log must agree.

@@ -64,6 +64,17 @@ inline const CLI::Validator kSeed = CLI::Validator(
     },
     "SEED");
 
+/// The whole of `text` as a finite number >= 0, else false.
+inline bool parseNonNegative(const std::string& text, double& value) {
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used > 0 && used == text.size() && std::isfinite(value) && value >= 0;
+}
+
 /// How a command reads logs of other formats: the LCM channel of the
 /// actuator-state messages and the signal map of a candump log's bus.
 inline void addLogFormatOptions(CLI::App* app, std::string& channel, std::string& can_profile) {
@@ -77,6 +88,7 @@ void addDemoCommand(CLI::App& app);
 void addSimulateCommands(CLI::App& app);
 void addSimNodeCommand(CLI::App& app);
 void addIdentifyCommands(CLI::App& app);
+void addValidateCommand(CLI::App& app);
 void addCrossvalCommand(CLI::App& app);
 /// identify's --play-bank and --play-bank-min-gain, into `options` (crossval's too).
 void addPlayBankOptions(CLI::App* app, identify::IdentifyOptions& options);

@@ -79,4 +79,15 @@ io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& o
   return log;
 }
 
+std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
+                              const std::string& tool, const std::string& channel, const std::string& can_profile) {
+  io::CsvReadOptions ro;
+  ro.required = required;
+  ro.lcm_channel = channel;
+  ro.can_profile = can_profile;
+  std::vector<io::Log> logs;
+  for (const auto& p : logPaths(paths, tool, false)) logs.push_back(readLogWithWarnings(p, ro, tool));
+  return logs;
+}
+
 }  // namespace plsa::app

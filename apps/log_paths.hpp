@@ -29,4 +29,9 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
 /// event logs in a build with LCM), printing its warnings as "TOOL: warning: ...".
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);
 
+/// Every log of `paths` (files or folders, logPaths) with readLogWithWarnings,
+/// each needing the `required` columns.
+std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,
+                              const std::string& tool, const std::string& channel, const std::string& can_profile);
+
 }  // namespace plsa::app

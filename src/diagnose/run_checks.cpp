@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "plsa/identify/pipeline.hpp"
+
 namespace plsa::diagnose {
 namespace {
 
@@ -40,17 +42,13 @@ bool drivenTraining(const std::vector<RunData>& train) {
   return false;
 }
 
-// Whether every column of one of the runs' blocks holds one value in every sample of every run.
-bool heldThroughout(const std::vector<RunData>& runs, const Eigen::MatrixXd RunData::*block) {
-  Eigen::RowVectorXd lo, hi;
-  for (const auto& r : runs) {
-    const Eigen::MatrixXd& m = r.*block;
-    if (m.rows() == 0) continue;
-    if (lo.size() == 0) lo = hi = m.row(0);
-    lo = lo.cwiseMin(m.colwise().minCoeff());
-    hi = hi.cwiseMax(m.colwise().maxCoeff());
-  }
-  return lo.size() == 0 || ((hi - lo).array() <= 1e-12 * hi.cwiseAbs().cwiseMax(1.0).array()).all();
+// Whether every pressure column holds one value in every sample of every run.
+bool pressuresHeldThroughout(const std::vector<RunData>& runs) {
+  std::vector<Eigen::MatrixXd> pressures;
+  for (const auto& r : runs) pressures.push_back(r.pressures);
+  for (Eigen::Index j = 0; j < 3; ++j)
+    if (!identify::holdsOneValue(pressures, j)) return false;
+  return true;
 }
 
 }  // namespace
@@ -71,7 +69,7 @@ void refuseUnusableSplit(const std::vector<RunData>& train, const std::vector<Ru
                                 " never change and start settled: nothing drives the simulator, so its physics "
                                 "cannot be calibrated (check --inputs)");
   if (std::all_of(train.begin(), train.end(), [](const RunData& r) { return r.hasPressures(); }) &&
-      heldThroughout(train, &RunData::pressures))
+      pressuresHeldThroughout(train))
     throw std::invalid_argument(
         "diagnose: the measured pressures of the training run(s) " + namesOf(train) +
         " hold one value each in every sample while the commands drive the chambers: a sensor that "

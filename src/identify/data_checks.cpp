@@ -43,21 +43,23 @@ std::string grossOutlier(const io::Log& log, const std::vector<std::string>& nam
 // identify (its fit is undefined), and inputs that all hold drive none.
 // Refused before any work, naming the columns (a wrong --inputs or
 // --outputs name, typically).
+bool holdsOneValue(const std::vector<Eigen::MatrixXd>& blocks, Eigen::Index j) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& b : blocks)
+    if (b.rows() > 0) lo = std::min(lo, b.col(j).minCoeff()), hi = std::max(hi, b.col(j).maxCoeff());
+  return !(lo <= hi) || hi - lo <= 1e-12 * std::max(1.0, std::abs(hi));
+}
+
 void IdentificationRun::refuseStillColumns() const {
-  const auto still = [](const std::vector<Eigen::MatrixXd>& blocks, Eigen::Index j) {
-    double lo = blocks[0](0, j), hi = lo;
-    for (const auto& b : blocks) lo = std::min(lo, b.col(j).minCoeff()), hi = std::max(hi, b.col(j).maxCoeff());
-    return hi - lo <= 1e-12 * std::max(1.0, std::abs(hi));
-  };
   for (std::size_t j = 0; j < o.outputs.size(); ++j)
-    if (still(Y, static_cast<Eigen::Index>(j)))
+    if (holdsOneValue(Y, static_cast<Eigen::Index>(j)))
       throw std::invalid_argument("identify: output '" + o.outputs[j] + "' holds " +
                                   formatNumber(Y[0](0, static_cast<Eigen::Index>(j))) +
                                   " in every sample of the logs: there is no response to identify (check --outputs)");
   bool any_moves = false;
   std::string names;
   for (std::size_t j = 0; j < o.inputs.size(); ++j) {
-    any_moves = any_moves || !still(U, static_cast<Eigen::Index>(j));
+    any_moves = any_moves || !holdsOneValue(U, static_cast<Eigen::Index>(j));
     names += (names.empty() ? "" : ", ") + o.inputs[j];
   }
   if (!any_moves)

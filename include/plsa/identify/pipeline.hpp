@@ -31,6 +31,10 @@ inline constexpr double kGrossOutlierBands = 50.0;
 /// there is none (or a column's band has no width).
 std::string grossOutlier(const io::Log& log, const std::vector<std::string>& names);
 
+/// Whether column `j` holds one value (to 1e-12 of its size) in every sample
+/// of every block: a column that never moves.
+bool holdsOneValue(const std::vector<Eigen::MatrixXd>& blocks, Eigen::Index j);
+
 /// How each input-output pair's poles are chosen from its local poles
 /// (pole_clustering.hpp).
 enum class PoleMethod { kFkcm, kFuzzyCMeans, kKMeans, kGlobalRho, kAuto };

@@ -75,6 +75,8 @@ TEST_F(CsvLogTest, RejectsMalformedFilesWithLineAndReason) {
   expectError("time_s,y\n0,1\n0.2,1\n0.1,1\n", ":4: time 0.1 is not after");
   expectError("time_s,y\n0,1\n0,1\n", ":3: time 0 is not after");
   expectError("time_s,y,y\n0,1,1\n", ":1: header names column 'y' twice");
+  expectError("time_s,y\x01z\n0,1\n", ":1: header column 2 has the control character U+0001 at byte 1 of its name");
+  expectError("time_s,y\x7f\n0,1\n", ":1: header column 2 has the control character U+007F at byte 1");
   expectError("# only a comment\n", "no header line");
   expectError("time_s,y\n", "no data rows");
 }

@@ -46,6 +46,15 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
             std::string::npos);
   EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, null, 240]}})").find("must be a number"),
             std::string::npos);
+  // A NUL in a string cut every message that quoted it ("coupling.formulation 'multi").
+  EXPECT_EQ(error(R"({"coupling": {"formulation": "multi\u0000plicative"}})"),
+            "cfg.json: the string at 'coupling.formulation' has the control character U+0000 at byte 5 (names, units "
+            "and laws are printable text)");
+  EXPECT_NE(
+      error(R"({"coupling": {"per\u0007bar": 0.5}})").find("a key in 'coupling' has the control character U+0007"),
+      std::string::npos);
+  EXPECT_NE(error(R"({"bogus\u001f": 1})").find("a key at the top level has the control character U+001F at byte 5"),
+            std::string::npos);
   // 0.75 p - 1 p^2 peaks at 0.375 bar, inside the 0.4 bar range; -0.9 peaks beyond it.
   EXPECT_NE(error(R"({"elongation": {"quadratic": -1.0}})").find("stops rising at 0.375 bar"), std::string::npos);
   EXPECT_EQ(error(R"({"elongation": {"quadratic": -0.9}})"), "accepted");

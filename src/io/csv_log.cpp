@@ -13,6 +13,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "plsa/core/printable_text.hpp"
 #include "plsa/core/text_file.hpp"
 
 namespace plsa::io {
@@ -136,6 +137,11 @@ int readHeader(std::vector<std::string> fields, const std::string& path, std::si
   std::unordered_set<std::string> seen;  // linear in the columns: a header of 10^5 names reads in milliseconds
   for (std::size_t i = 0; i < fields.size(); ++i) {
     if (fields[i].empty()) fail(path, lineno, "header column " + std::to_string(i + 1) + " has no name");
+    if (const std::size_t at = controlCharacterAt(fields[i]); at != std::string::npos)
+      fail(path, lineno,  // it would be written into models and garble every message naming it
+           "header column " + std::to_string(i + 1) + " has the control character " +
+               controlCharacterName(fields[i][at]) + " at byte " + std::to_string(at) +
+               " of its name (column names are printable text)");
     if (!seen.insert(fields[i]).second) fail(path, lineno, "header names column '" + fields[i] + "' twice");
   }
   log.columns = fields;

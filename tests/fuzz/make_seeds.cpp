@@ -88,6 +88,8 @@ void modelSeeds() {
       replaceFirst(good, "\"sample_time_s\"", "\"from_the_future\": 1, \"sample_time_s\""));
   put("model_file", "regression-duplicate-output.json",
       replaceFirst(good, "\"inputs\": [\n  \"p_1\",\n  \"p_2\"", "\"inputs\": [\n  \"p_1\",\n  \"p_1\""));
+  put("model_file", "regression-nul-in-name.json",
+      replaceFirst(good, "\"inputs\": [\n  \"p_1\"", "\"inputs\": [\n  \"p\\u0000_1\""));
   put("model_file", "regression-deep-nesting.json", std::string(5000, '[') + std::string(5000, ']'));
   // Two inputs of 1100 breakpoints each: 1.2 million cells, past the partition's limit (an int product before).
   std::string many = "[";

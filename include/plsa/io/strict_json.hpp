@@ -1,8 +1,9 @@
 // JSON input as plsa's loaders read it (model files, simulator
 // configurations, signal maps): what nlohmann accepts silently is refused
 // with the file and the field named. Duplicate keys (the last would win),
-// numbers beyond double range, nesting deeper than any plsa file, unknown
-// keys, and numbers cast to integers without a range check.
+// numbers beyond double range, nesting deeper than any plsa file, control
+// characters in a string or key (a NUL cut every message that quoted it),
+// unknown keys, and numbers cast to integers without a range check.
 // Header-only; include it only from targets that link nlohmann_json.
 #pragma once
 
@@ -16,6 +17,8 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "plsa/core/printable_text.hpp"
 
 namespace plsa::io {
 
@@ -38,7 +41,11 @@ class StrictJsonCheck {
     if (!std::isfinite(v)) refuse("not valid JSON: number overflow parsing '" + text + "' at '" + where() + "'");
     return true;
   }
-  bool string(json::string_t&) { return true; }
+  bool string(json::string_t& s) {
+    if (const std::size_t at = plsa::controlCharacterAt(s); at != std::string::npos)
+      refuseControlCharacter(s, at, "the string at '" + where() + "'");
+    return true;
+  }
   bool binary(json::binary_t&) { return true; }
   bool start_object(std::size_t) {
     open();
@@ -47,6 +54,8 @@ class StrictJsonCheck {
     return true;
   }
   bool key(json::string_t& k) {
+    if (const std::size_t at = plsa::controlCharacterAt(k); at != std::string::npos)
+      refuseControlCharacter(k, at, path_.size() == 1 ? "a key at the top level" : "a key in '" + where(1) + "'");
     path_.back() = k;
     if (!seen_.back().insert(k).second) refuse("key '" + where() + "' is given twice (which one is meant?)");
     return true;
@@ -77,9 +86,14 @@ class StrictJsonCheck {
     ++depth_;
   }
   [[noreturn]] void refuse(const std::string& why) const { throw std::invalid_argument(source_ + ": " + why); }
-  std::string where() const {
+  [[noreturn]] void refuseControlCharacter(const std::string& s, std::size_t at, const std::string& what) const {
+    refuse(what + " has the control character " + controlCharacterName(s[at]) + " at byte " + std::to_string(at) +
+           " (names, units and laws are printable text)");
+  }
+  /// The path being read, less its last `drop` keys.
+  std::string where(std::size_t drop = 0) const {
     std::string p;
-    for (const auto& k : path_) p += (p.empty() ? "" : ".") + k;
+    for (std::size_t i = 0; i + drop < path_.size(); ++i) p += (p.empty() ? "" : ".") + path_[i];
     return p;
   }
 
@@ -91,7 +105,8 @@ class StrictJsonCheck {
 
 /// Parses `text`; throws std::invalid_argument "SOURCE: reason" for invalid
 /// JSON, a number beyond double range, a key given twice in one object (naming
-/// its path) or nesting deeper than kMaxJsonDepth. Linear in the text.
+/// its path), a control character in a string or key, or nesting deeper than
+/// kMaxJsonDepth. Linear in the text.
 inline nlohmann::json parseStrictJson(const std::string& text, const std::string& source) {
   StrictJsonCheck check(source);
   nlohmann::json::sax_parse(text, &check);  // throws on the first refusal

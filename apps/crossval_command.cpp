@@ -228,6 +228,9 @@ void addCrossvalCommand(CLI::App& app) {
                 "Grid levels per input (quantiles); 0 (default): " + identify::IdentifyOptions::autoQuantileRule() +
                     " (plsa's model; the paper's configuration takes the count before refinement)")
       ->check(CLI::Range(0, 12));
+  c->add_option("--local-order", a->options.local_order,
+                "Order of plsa's local LTI fits, as in identify (default 1; the paper's configuration keeps 1)")
+      ->check(CLI::Range(1, 6));
   addChoice(c, "--cv-layout", a->options.cv_layout,
             "Inner cross-validation of each training set: interleaved (default) or contiguous (see identify)");
   c->add_option("--play-softening", a->options.play_softening_candidates,

@@ -100,8 +100,10 @@ void runIdentify(IdentifyArgs& a) {
   const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
   if (a.structure == "paper") {  // the peers the demo and generalise score plsa against
     const auto progress = o.progress;
+    const int local_order = o.local_order;  // given with --structure paper, the user's choice
     o = paperConfiguration(o);
     o.progress = progress;
+    o.local_order = local_order;
   }
   IdentifyReport report;
   DioPwlObfModel model = identifyModel(logs, o, &report);

@@ -524,6 +524,7 @@ TEST(Pipeline, WindowsInsteadOfStepsAlsoOfferTheirSecondOrderPoles) {
   identifyModel({randomChambersLog(120.0)}, paperConfiguration(o), &paper);
   for (const auto& pp : paper.pairs) EXPECT_TRUE(pp.window_second_order.empty());
   o.local_order = 2;
+  EXPECT_EQ(paperConfiguration(o).local_order, 1);  // the paper's first-order fits whatever plsa's were given
   IdentifyReport second;
   identifyModel({randomChambersLog(120.0)}, o, &second);
   for (const auto& s : second.pole_method_scores) EXPECT_EQ(s.method.find("order2"), std::string::npos) << s.method;

@@ -11,6 +11,7 @@ namespace plsa::identify {
 IdentifyOptions paperConfiguration(IdentifyOptions o) {
   o.progress = nullptr;
   o.pole_method = PoleMethod::kFkcm;
+  o.local_order = 1;  // the paper's first-order local fits, whatever plsa's model was given
   o.scheduling = SchedulingChoice::kSwitched;
   o.output_frame = OutputFrame::kAsLogged;
   o.play_candidates = {{0.0}};

@@ -287,7 +287,8 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
         "--slow-pole", a->options.slow_pole_candidates,
         "Candidate time constants (s) of one extra real pole in every bank of an input-side model, for "
         "creep and drift, tried against none by cross-validated simulation and kept only if the best gains more "
-        "than one standard error over folds and outputs; '0' alone adds none")
+        "than one standard error over folds and outputs, or more than two on one output, losing on none; '0' "
+        "alone adds none")
       ->delimiter(',')
       ->check(secondsValidator("5"));
   addChoice(id, "--slow-pole-form", a->options.slow_pole_form,
@@ -299,8 +300,7 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
             "runs' simulated level, keeping what simulates them best; increments: on the increments alone");
   id->add_option("--slow-pole-count", a->options.slow_pole_count,
                  "At most this many slow poles: with one kept, each other --slow-pole candidate is tried beside "
-                 "it and the best kept only if its simulation gains more than one standard error over the one "
-                 "alone; default 2")
+                 "it and the best kept by the same rule against the one alone; default 2")
       ->check(CLI::Range(1, 2));
 }
 

@@ -1,8 +1,9 @@
 // The slow poles of an input-side model (identification_run.hpp): one extra
 // real pole in every bank, tried against none, then a second beside it, each
-// scored on held-out simulation and kept only if its gain exceeds one
-// standard error of that gain across folds and outputs (the one-standard-error
-// rule: the simpler model unless the richer one is clearly better). Tied (the
+// scored on held-out simulation and kept only if it is clearly better
+// (eval::clearGain: its gain exceeds one standard error across folds and
+// outputs, the one-standard-error rule, or one output shows it plainly and
+// none loses by it). Tied (the
 // default), their coefficients carry fitted fractions of each bank's own
 // response (slow_mode_tie.hpp).
 #include <algorithm>
@@ -52,17 +53,21 @@ IdentificationRun::SlowPoleTrial IdentificationRun::bestSlowPoleBeside(const std
   return best;
 }
 
-// Whether `best` gains more than one standard error over the held-out terms
-// `base` (into `gain`); the verdict appended to `line`.
+// Whether `best` is clearly better than the held-out terms `base`
+// (eval::clearGain; its gain over them into `gain`); the verdict appended to `line`.
 bool IdentificationRun::judgeSlowPole(const SlowPoleTrial& best, const std::vector<double>& base,
                                       std::pair<double, double>& gain, std::string& line) const {
-  gain = best.tau > 0 ? eval::pairedGain(best.terms, base) : std::pair<double, double>{0.0, 0.0};
-  const bool keep = best.tau > 0 && gain.first > gain.second;
+  const eval::ClearGain c = best.tau > 0 ? eval::clearGain(best.terms, base, o.outputs.size()) : eval::ClearGain{};
+  gain = best.tau > 0 ? c.overall : std::pair<double, double>{0.0, 0.0};
+  const bool keep = best.tau > 0 && c.clear();
   line += keep ? "kept " + formatNumber(best.tau) + " s (pole " + formatNumber(std::exp(-dt / best.tau)) + ")"
                : std::string("none kept");
   if (best.tau > 0)
     line += "; the best, " + formatNumber(best.tau) + " s, " + gainText(gain) +
-            (keep ? "" : ", within one standard error") + " (" + perOutputGains(best.terms, base, o.outputs) + ")";
+            (c.by_overall      ? ""
+             : c.by_one_output ? ", within one standard error overall, over two on one output and losing on none"
+                               : ", within one standard error") +
+            " (" + perOutputGains(best.terms, base, o.outputs) + ")";
   return keep;
 }
 

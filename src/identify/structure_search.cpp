@@ -423,17 +423,11 @@ void IdentificationRun::searchScheduleLag() {
 std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
                            const std::vector<std::string>& outputs) {
   PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
+  const auto gains = eval::perOutputPairedGains(a, b, outputs.size());
   std::string s;
-  const std::size_t no = outputs.size();
-  for (std::size_t out_i = 0; out_i < no; ++out_i) {
-    std::vector<double> ao, bo;
-    for (std::size_t k = out_i; k < a.size(); k += no) {
-      ao.push_back(a[k]);
-      bo.push_back(b[k]);
-    }
-    const auto [g, e] = eval::pairedGain(ao, bo);
-    s += (out_i ? ", " : "") + outputs[out_i] + " " + formatNumber(g) + " +- " + formatNumber(e);
-  }
+  for (std::size_t out_i = 0; out_i < outputs.size(); ++out_i)
+    s += (out_i ? ", " : "") + outputs[out_i] + " " + formatNumber(gains[out_i].first) + " +- " +
+         formatNumber(gains[out_i].second);
   return s;
 }
 

@@ -57,18 +57,21 @@ IdentificationRun::SlowPoleTrial IdentificationRun::bestSlowPoleBeside(const std
 // (eval::clearGain; its gain over them into `gain`); the verdict appended to `line`.
 bool IdentificationRun::judgeSlowPole(const SlowPoleTrial& best, const std::vector<double>& base,
                                       std::pair<double, double>& gain, std::string& line) const {
-  const eval::ClearGain c = best.tau > 0 ? eval::clearGain(best.terms, base, o.outputs.size()) : eval::ClearGain{};
-  gain = best.tau > 0 ? c.overall : std::pair<double, double>{0.0, 0.0};
-  const bool keep = best.tau > 0 && c.clear();
-  line += keep ? "kept " + formatNumber(best.tau) + " s (pole " + formatNumber(std::exp(-dt / best.tau)) + ")"
-               : std::string("none kept");
-  if (best.tau > 0)
-    line += "; the best, " + formatNumber(best.tau) + " s, " + gainText(gain) +
-            (c.by_overall      ? ""
-             : c.by_one_output ? ", within one standard error overall, over two on one output and losing on none"
-                               : ", within one standard error") +
-            " (" + perOutputGains(best.terms, base, o.outputs) + ")";
-  return keep;
+  if (!(best.tau > 0)) {
+    gain = {0.0, 0.0};
+    line += "none kept";
+    return false;
+  }
+  const eval::ClearGain c = eval::clearGain(best.terms, base, o.outputs.size());
+  gain = c.overall;
+  line += c.clear() ? "kept " + formatNumber(best.tau) + " s (pole " + formatNumber(std::exp(-dt / best.tau)) + ")"
+                    : std::string("none kept");
+  line += "; the best, " + formatNumber(best.tau) + " s, " + gainText(gain) +
+          (c.by_overall      ? ""
+           : c.by_one_output ? ", within one standard error overall, over two on one output and losing on none"
+                             : ", within one standard error") +
+          " (" + perOutputGains(best.terms, base, o.outputs) + ")";
+  return c.clear();
 }
 
 void IdentificationRun::searchSlowPole(const std::optional<HeldOutScore>& as_it_stands) {

@@ -422,8 +422,7 @@ void IdentificationRun::searchScheduleLag() {
 
 std::string perOutputGains(const std::vector<double>& a, const std::vector<double>& b,
                            const std::vector<std::string>& outputs) {
-  PLSA_CHECK(a.size() == b.size(), "identify: held-out scores to compare do not pair up");
-  const auto gains = eval::perOutputPairedGains(a, b, outputs.size());
+  const auto gains = eval::perOutputPairedGains(a, b, outputs.size());  // checks that they pair up
   std::string s;
   for (std::size_t out_i = 0; out_i < outputs.size(); ++out_i)
     s += (out_i ? ", " : "") + outputs[out_i] + " " + formatNumber(gains[out_i].first) + " +- " +

@@ -92,16 +92,22 @@ void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<i
 // How the simulation started, in words (the ways differ when the log starts
 // unsettled), into `j` with the yaw drift it carried and where it departed.
 std::string describeSimulation(const DioPwlObfModel& model, const eval::SimulationStart& s,
+                               const eval::ValidationResult& v,
                                const std::vector<eval::SimulationDeparture>& departures, nlohmann::json& j) {
-  const bool registered = eval::yawRegistrationSamples(model, s) > 0;
-  std::string start =
-      model.output_level.empty() ? "first measured sample"
-      : registered
-          ? "model output level, sensor yaw registered on the " +
-                (s.settle_s > 0 ? seconds(s.yaw_registration_s) + " s after the first " + seconds(s.settle_s) + " s"
-                                : "first " + seconds(s.yaw_registration_s) + " s") +
-                " (not scored)"
-          : "model output level";
+  const std::string window = s.settle_s > 0
+                                 ? seconds(s.yaw_registration_s) + " s after the first " + seconds(s.settle_s) + " s"
+                                 : "first " + seconds(s.yaw_registration_s) + " s";
+  const std::string kept = "model output level, training sensor yaw kept: the tip straight over the ";
+  std::string start = model.output_level.empty() ? "first measured sample"
+                      : !v.yaw_asked             ? "model output level"
+                      : v.yaw.registered
+                          ? "model output level, sensor yaw registered on the " + window + " (not scored)"
+                          : kept + window + " (not scored)";
+  if (v.yaw_asked)
+    j["yaw_registration"] = {{"registered", v.yaw.registered},
+                             {"offset_deg", v.yaw.offset / kRadPerDeg},
+                             {"bent_share", v.yaw.bent_share},
+                             {"min_bend_deg", s.yaw_registration_min_bend_deg}};
   const double yaw_rate = eval::carriedYawRate(model, s);
   if (yaw_rate != 0.0)
     start += ", turning at the training run's sensor drift of " + significantDigits(yaw_rate, 4) + " " +
@@ -147,6 +153,12 @@ void runValidate(const ValidateArgs& a) {
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
   for (const std::string& w : eval::unsettledStartWarnings(v.unsettled_starts))
     std::fprintf(stderr, "plsa validate: warning: %s\n", w.c_str());
+  if (v.yaw_asked && !v.yaw.registered)
+    std::fprintf(stderr,
+                 "plsa validate: warning: the sensor's yaw was not registered: the tip was bent %s deg or more on "
+                 "%.0f%% of the registration window (half is needed), so the simulation keeps the training run's "
+                 "yaw; --settle SECONDS starts the window where the tip bends\n",
+                 significantDigits(a.start.yaw_registration_min_bend_deg, 6).c_str(), 100.0 * v.yaw.bent_share);
   nlohmann::json j;
   printFits(table, v, a.horizons, j);
   j["model"] = a.model;
@@ -155,7 +167,7 @@ void runValidate(const ValidateArgs& a) {
   j["rms_metric"] =
       "rms_*: sqrt(mean (y - yhat)^2) in the output's units; std: the measured output's standard "
       "deviation; every fit, rms and std over the same samples (scored_samples)";
-  const std::string start = describeSimulation(model, a.start, departures, j);
+  const std::string start = describeSimulation(model, a.start, v, departures, j);
   j["scored_samples"]["settle_s"] = a.start.settle_s;
   j["simulation_unsettled_starts"] = nlohmann::json::array();
   for (const eval::UnsettledStart& t : v.unsettled_starts)
@@ -198,6 +210,11 @@ void addValidateCommand(CLI::App& app) {
                  "from the window's end on; every column is scored after it) (default 5); 0 carries the training "
                  "run's yaw")
       ->check(durationValidator("5, or 0 for none"));
+  va->add_option("--yaw-min-bend", v->start.yaw_registration_min_bend_deg,
+                 "the yaw registration reads only samples whose measured tip is bent at least this much (deg) and "
+                 "keeps the training yaw unless they are half its window: a straight tip's direction is the "
+                 "sensor's noise (default 1)")
+      ->check(finiteNumberAtLeast(0.0, false));
   va->add_option("--settle", v->start.settle_s,
                  "seconds at the log's start left out of every score, for a log that does not start at rest (the "
                  "simulation starts settled at the first sample's inputs; it and the predictions run through them) "

@@ -312,8 +312,25 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
         EXPECT_NEAR(v["outputs"][out]["fit_sim"].get<double>(), fits["models"][name][out][key].get<double>(), 1e-6)
             << model << flag << " " << out;
       EXPECT_EQ(v["simulation_yaw_drift_deg_per_s"].get<double>(), flag.empty() ? drift : 0.0) << model << flag;
+      // The run starts from rest, and within the window the tip bends: registered on it.
+      EXPECT_TRUE(v["yaw_registration"]["registered"].get<bool>()) << model << flag;
+      EXPECT_GT(v["yaw_registration"]["bent_share"].get<double>(), 0.5) << model << flag;
+      EXPECT_EQ(err_.find("yaw was not registered"), std::string::npos) << err_;
     }
   }
+  // With a least bend no reading reaches, nothing is registered, and validate says so.
+  ASSERT_EQ(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
+                " --horizons 40 --yaw-min-bend 1000 --json " + file("v.json")),
+            0)
+      << err_;
+  EXPECT_FALSE(nlohmann::json::parse(slurp(file("v.json")))["yaw_registration"]["registered"].get<bool>());
+  EXPECT_NE(err_.find("the sensor's yaw was not registered: the tip was bent 1000 deg or more on 0% of the "
+                      "registration window"),
+            std::string::npos)
+      << err_;
+  EXPECT_NE(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
+                " --yaw-min-bend nan"),
+            0);
   ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " +
                 file("demo/validate_joystick.csv") + " --horizons 40 --json " + file("v.json")),
             0)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <random>
 #include <thread>
 
 #include "plsa/eval/dio_prediction.hpp"
@@ -197,6 +198,48 @@ TEST(Predictor, TipFrameFollowsTheSensorsYawAsValidationDoes) {
   Predictor<5> r(m);
   EXPECT_GT(test::plannedAgainstOffline(r, d.u, turned, d.dt, in_model_frame, {40}, 7).worst, 0.1)
       << "the registration turned nothing";
+}
+
+// Started with the tip straight (the arm at rest, the reading's direction
+// the sensor's noise) the predictor keeps the model's frame, turning at the
+// drift alone, as validation does; registered on the noise (no minimum
+// bend) both would turn every prediction by whatever it pointed at.
+TEST(Predictor, TipFrameStartedAtRestKeepsTheModelsFrame) {
+  const Data& d = data();
+  const DioPwlObfModel m = registeredTip(d);
+  constexpr Eigen::Index kRest = 600;  // past the 400 samples of the registration
+  Eigen::MatrixXd u(kRest + d.u.rows(), d.u.cols()), y(kRest + d.y.rows(), 2);
+  u.bottomRows(d.u.rows()) = d.u;
+  y.bottomRows(d.y.rows()) = turnedRun(d.y, 20.0);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (Eigen::Index k = 0; k < kRest; ++k) {  // pointing within about 30 deg of +x (no branch to tell)
+    u.row(k) = d.u.row(0);
+    const double x = 0.05 + 0.5 * noise(rng), z = 0.5 * noise(rng);
+    y(k, 0) = std::hypot(x, z);
+    y(k, 1) = std::atan2(z, x) / kRadPerDeg;
+  }
+  Predictor<5> p(m);
+  const auto offline = eval::predictOutputs(m, u, y, {40});
+  const test::Agreement kept = test::plannedAgainstOffline(p, u, y, d.dt, offline, {40}, 7);
+  EXPECT_GT(kept.compared, 100);
+  EXPECT_LT(kept.worst, 1e-9) << "predictor and validation differ on a start at rest";
+  io::Log log;
+  log.columns = m.inputs;
+  log.columns.insert(log.columns.end(), m.outputs.begin(), m.outputs.end());
+  log.data.resize(u.rows(), u.cols() + 2);
+  log.data << u, y;
+  EXPECT_FALSE(eval::validateModel(m, log, {40}).yaw.registered);
+  PredictorOptions any_bend;
+  any_bend.yaw_registration_min_bend_deg = 0.0;
+  eval::SimulationStart any_bend_start;
+  any_bend_start.yaw_registration_min_bend_deg = 0.0;
+  const auto noise_offline = eval::predictOutputs(m, u, y, {40}, false, any_bend_start);
+  Predictor<5> q(m, any_bend);
+  EXPECT_LT(test::plannedAgainstOffline(q, u, y, d.dt, noise_offline, {40}, 7).worst, 1e-9);
+  Predictor<5> r(m);
+  EXPECT_GT(test::plannedAgainstOffline(r, u, y, d.dt, noise_offline, {40}, 7).worst, 0.1)
+      << "the noise registered no turn: the check shows nothing";
 }
 
 TEST(Predictor, NoAllocationOverFortyThousandTicksWithRegionSwitching) {

@@ -577,6 +577,49 @@ TEST(SensorYawTurn, StaysTheCosineAndSineOfItsAngleOverALongRun) {
   EXPECT_EQ(off.turn().sin, 0.0);
 }
 
+// A tip near the axis has no direction to register: at rest the reading
+// points wherever the sensor's noise takes it and the model's rest tip
+// wherever its level lies. Such samples are not registered on, and a window
+// that is more than half of them keeps the model's frame.
+TEST(SensorYawTurn, AStraightTipRegistersNothing) {
+  constexpr int kWindow = 200;
+  constexpr double kYaw = 0.3, kMinBend = 1.0;
+  // k < rest: the tip at rest (a 0.05 reading in a random direction, the
+  // model's rest tip 2 off the axis); after: bent 20, the sensor kYaw ahead.
+  auto feed = [&](SensorYaw& yaw, int rest) {
+    yaw.restart();
+    std::uint64_t state = 7;
+    for (int k = 0; k < kWindow + 10; ++k) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      const double noise_dir = 6.283185307179586 * static_cast<double>(state >> 11) / 9007199254740992.0;
+      if (k < rest)
+        yaw.add(2.0, 0.0, 0.05 * std::cos(noise_dir), 0.05 * std::sin(noise_dir));
+      else
+        yaw.add(20.0 * std::cos(0.01 * k), 20.0 * std::sin(0.01 * k), 20.0 * std::cos(0.01 * k + kYaw),
+                20.0 * std::sin(0.01 * k + kYaw));
+    }
+  };
+  SensorYaw yaw;
+  yaw.configure(kWindow, 0.0, 0, kMinBend);
+  feed(yaw, kWindow + 10);  // at rest throughout
+  EXPECT_FALSE(yaw.registered());
+  EXPECT_EQ(yaw.bentSamples(), 0);
+  EXPECT_EQ(yaw.offset(), 0.0);
+  EXPECT_EQ(yaw.turn().cos, 1.0);
+  feed(yaw, kWindow / 2 + 1);  // bent on one sample under half the window
+  EXPECT_FALSE(yaw.registered());
+  EXPECT_EQ(yaw.bentSamples(), kWindow / 2 - 1);
+  EXPECT_EQ(yaw.offset(), 0.0);
+  feed(yaw, kWindow / 2);  // bent on half: the bent samples alone register
+  EXPECT_TRUE(yaw.registered());
+  EXPECT_NEAR(yaw.offset(), kYaw, 1e-12);
+  SensorYaw every;  // no minimum: the rest samples are in the offset
+  every.configure(kWindow, 0.0);
+  feed(every, kWindow + 10);
+  EXPECT_TRUE(every.registered());
+  EXPECT_GT(std::abs(every.offset() - kYaw), 0.05);
+}
+
 // A registration after a delay (validation's settling time) reads only the
 // window after it: what the tip did before, however far off, is not in the
 // offset; before the window ends only the drift turns.

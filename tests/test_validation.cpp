@@ -88,6 +88,61 @@ TEST(Validation, RejectsAnotherSampleRateAGapAndARepeatedHorizon) {
   expectThrowContaining([&] { eval::validateModel(m, runs.val, {40, 80, 40}); }, "horizon 40 is given twice");
 }
 
+// A log that starts with the actuator at rest (a user starts recording, then
+// moves it): over the registration window the reading's direction is the
+// sensor's noise. Registered on it, the whole simulation and every k-step
+// prediction turned by whatever that noise pointed at; now the training
+// yaw is kept and validation says so, and --settle past the rest registers
+// the run's yaw on the bent tip.
+TEST(Validation, AStraightTipAtTheStartRegistersNoYaw) {
+  const DriftRuns runs = yawDriftRuns(0.0);
+  const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));
+  const io::Log& val = runs.val;
+  const int t = val.columnIndex("time_s"), bend = val.columnIndex("bend_deg"), steer = val.columnIndex("steer_deg");
+  const Eigen::Index rest = static_cast<Eigen::Index>(std::llround(6.0 / tip.sample_time_s));
+  io::Log rested = val;
+  rested.data.resize(rest + val.samples(), val.data.cols());
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (Eigen::Index k = 0; k < rest; ++k) {  // the first sample's inputs, the tip straight
+    rested.data.row(k) = val.data.row(0);
+    const double x = noise(rng), y = noise(rng);
+    rested.data(k, bend) = std::hypot(x, y);
+    rested.data(k, steer) = std::atan2(y, x) / kRadPerDeg;
+  }
+  rested.data.bottomRows(val.samples()) = val.data;
+  for (Eigen::Index k = 0; k < rested.samples(); ++k) rested.data(k, t) = static_cast<double>(k) * tip.sample_time_s;
+  const double yaw = 3.0;
+  rested.data.col(steer).array() += yaw;
+  const eval::ValidationResult by_default = eval::validateModel(tip, rested, {40});  // 5 s, 1 deg
+  EXPECT_TRUE(by_default.yaw_asked);
+  EXPECT_FALSE(by_default.yaw.registered);
+  EXPECT_LT(by_default.yaw.bent_share, 0.01);
+  EXPECT_EQ(by_default.yaw.offset, 0.0);
+  // The same as carrying the training yaw, scored on the same samples.
+  eval::SimulationStart carry{0};
+  carry.settle_s = 5.0;
+  const eval::ValidationResult carried = eval::validateModel(tip, rested, {40}, carry);
+  for (int o : {0, 1}) EXPECT_NEAR(by_default.outputs[o].fit_sim, carried.outputs[o].fit_sim, 1e-9) << o;
+  // Without the minimum bend the noise is registered as the yaw.
+  eval::SimulationStart any_bend;
+  any_bend.yaw_registration_min_bend_deg = 0.0;
+  const eval::ValidationResult noise_registered = eval::validateModel(tip, rested, {40}, any_bend);
+  EXPECT_TRUE(noise_registered.yaw.registered);
+  EXPECT_GT(std::abs(noise_registered.yaw.offset / kRadPerDeg - yaw), 10.0);
+  // (The tip turned about 40 deg: the simulated steering is off by that on every sample.)
+  EXPECT_LT(noise_registered.outputs[1].fit_sim, by_default.outputs[1].fit_sim - 50.0);
+  // Started after the rest, the window is on the bent tip: the run's yaw.
+  eval::SimulationStart after_rest;
+  after_rest.settle_s = 6.0;
+  const eval::ValidationResult registered = eval::validateModel(tip, rested, {40}, after_rest);
+  EXPECT_TRUE(registered.yaw.registered);
+  EXPECT_GT(registered.yaw.bent_share, 0.9);
+  EXPECT_NEAR(registered.yaw.offset / kRadPerDeg, yaw, 0.3);
+  EXPECT_THROW(eval::validateModel(tip, rested, {40}, eval::SimulationStart{5.0, true, 0.0, -1.0}),
+               std::invalid_argument);
+}
+
 TEST(Validation, TipFrameSimulationRegistersTheRunsSensorYaw) {
   const DriftRuns runs = yawDriftRuns(0.0);
   const DioPwlObfModel tip = identifyModel({runs.train}, fixedInputSide(OutputFrame::kTipCartesian));

@@ -68,9 +68,13 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
   PLSA_CHECK(level.rows() == ym.rows() && level.cols() >= 2 && ym.cols() >= 2,
              "trackSensorYaw: the model's tip does not match the record");
   SensorYaw yaw;
-  yaw.configure(static_cast<int>(yawRegistrationSamples(model, start)),
-                carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
-                static_cast<long>(settleSamples(model, start)));
+  PLSA_CHECK(std::isfinite(start.yaw_registration_min_bend_deg) && start.yaw_registration_min_bend_deg >= 0,
+             "SimulationStart: the yaw registration's least bend must be finite and >= 0 deg, got " +
+                 std::to_string(start.yaw_registration_min_bend_deg));
+  const int window = static_cast<int>(yawRegistrationSamples(model, start));
+  yaw.configure(window, carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
+                static_cast<long>(settleSamples(model, start)),
+                start.yaw_registration_min_bend_deg * kRadPerDeg / model.radiansPerAngleUnit());
   yaw.restart();
   SensorYawTrack track;
   track.angle.resize(ym.rows());
@@ -79,6 +83,8 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
     track.angle(k) = yaw.angle();
   }
   track.offset = yaw.offset();
+  track.registered = yaw.registered();
+  track.bent_share = window > 0 ? static_cast<double>(yaw.bentSamples()) / window : 0.0;
   return track;
 }
 
@@ -468,6 +474,8 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     res.outputs.push_back(std::move(ov));
   }
   res.unsettled_starts = unsettledStartsOf(model, u, y, dy, start, res.scored_from, res.outputs);
+  res.yaw_asked = yawRegistrationSamples(model, start) > 0;
+  if (res.yaw_asked) res.yaw = trackSensorYaw(model, modelTip(model, u, dy), model.toModelFrame(y), start);
   return res;
 }
 

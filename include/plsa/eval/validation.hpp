@@ -65,6 +65,19 @@ struct UnsettledStart {
 /// settling time (`plsa validate --settle`) that leaves it out.
 std::vector<std::string> unsettledStartWarnings(const std::vector<UnsettledStart>& starts);
 
+/// The sensor's yaw over a record as the predictor follows it from the
+/// record's start (SensorYaw): each sample's turn from the model's frame into
+/// the sensor's (rad; the registered offset from the window's last sample on,
+/// and the carried drift), and the offset.
+struct SensorYawTrack {
+  Eigen::VectorXd angle;
+  double offset = 0.0;
+  /// Whether the offset was registered: false when the measured tip was bent
+  /// less than the minimum over half the window or more (the training yaw kept).
+  bool registered = false;
+  double bent_share = 0.0;  ///< the window's share of samples bent at least the minimum
+};
+
 /// Every fit and rms error, at every horizon and in simulation, is computed
 /// on the same samples: from `scored_from` (the first sample every
 /// prediction covers: the longest horizon, or the end of the simulation's
@@ -79,6 +92,10 @@ struct ValidationResult {
   /// output's standard deviation); empty when none has or the log is too
   /// short to tell (the later start past half of it).
   std::vector<UnsettledStart> unsettled_starts;
+  /// A tip_cartesian model's yaw registration (SimulationStart): asked for
+  /// (a window and an output level), and the track it followed.
+  bool yaw_asked = false;
+  SensorYawTrack yaw;
 };
 
 /// InputsOutsideTraining of `u` (one column per model input).
@@ -138,16 +155,13 @@ struct SimulationStart {
   /// from the one at their end (an unsettled start would leave it a lasting
   /// offset). 0: score from the first sample every prediction covers.
   double settle_s = 0.0;
+  /// The yaw registration reads only samples whose measured tip is bent at
+  /// least this much (deg), and keeps the training yaw unless they are half
+  /// its window or more: at rest the reading's direction is the sensor's
+  /// noise and the model's rest tip, not the yaw (SensorYaw).
+  double yaw_registration_min_bend_deg = 1.0;
 };
 
-/// The sensor's yaw over a record as the predictor follows it from the
-/// record's start (SensorYaw): each sample's turn from the model's frame into
-/// the sensor's (rad; the registered offset from the window's last sample on,
-/// and the carried drift), and the offset.
-struct SensorYawTrack {
-  Eigen::VectorXd angle;
-  double offset = 0.0;
-};
 /// `level`: the model's tip in its frame (modelTip), `ym` the measured one
 /// (tip components).
 SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd& level, const Eigen::MatrixXd& ym,

@@ -123,9 +123,11 @@ struct CompiledModel {
   double sample_time = 0.0;
   /// tip_cartesian with an output level: samples the sensor's yaw is
   /// registered on after each start (SensorYaw; 0: none), and the training
-  /// sensor's yaw drift it turns at, rad per sample.
+  /// sensor's yaw drift it turns at, rad per sample; the least bend of a
+  /// measured tip registered on, in the tip components' unit.
   int yaw_window = 0;
   double yaw_drift_per_sample = 0.0;
+  double yaw_min_bend = 0.0;
   std::vector<double> output_level;  ///< the model's (input side), per output; empty: none
   double accept_min = 0.0, accept_max = 0.0;
   bool input_side = false;

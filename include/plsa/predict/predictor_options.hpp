@@ -80,6 +80,11 @@ struct PredictorOptions {
   /// frame, turning on at the training run's yaw drift. 0: the model's frame
   /// (the training sensor's yaw at its mean time). Not in simulation mode.
   double yaw_registration_s = 5.0;
+  /// Only samples whose measured tip is bent at least this much (deg) are
+  /// registered on, and unless they are half the window or more the model's
+  /// frame is kept: at rest the reading's direction is the sensor's noise,
+  /// not its yaw (SensorYaw).
+  double yaw_registration_min_bend_deg = 1.0;
   /// Run in modal form when the model allows it (false: always step the banks
   /// as state-space filters, the slower reference the modal form is checked
   /// and measured against).

@@ -6,7 +6,11 @@
 // model's tip (its level: output_level, the settled response to the first
 // sample and the increments since, turned at the training run's yaw drift)
 // onto the measured tip, weighing each sample by how far the tip is from the
-// axis, then turns on at that drift. One value, shared by
+// axis, then turns on at that drift. A tip near the axis has no direction to
+// register (at rest the reading is the sensor's noise and the model's rest
+// tip, in directions that have nothing to do with the yaw): only samples whose
+// measured tip is bent at least a minimum count, and unless they are half the
+// window or more the training yaw is kept (no offset). One value, shared by
 // validation's simulation and k-step predictions and the real-time
 // predictor, so the three agree; no allocation.
 #pragma once
@@ -32,17 +36,20 @@ class SensorYaw {
   /// Registers over `window` samples from each start (0: never, no turn at
   /// all), turning the model's tip `drift_per_sample` rad per sample from the
   /// start; `delay` samples after the start first (a run that does not start
-  /// at rest: validation's SimulationStart::settle_s), turned by the drift alone.
-  void configure(int window, double drift_per_sample, long delay = 0) noexcept {
+  /// at rest: validation's SimulationStart::settle_s), turned by the drift
+  /// alone. Samples whose measured tip is less than `min_bend` from the axis
+  /// (the tip components' unit) are not registered on.
+  void configure(int window, double drift_per_sample, long delay = 0, double min_bend = 0.0) noexcept {
     window_ = window;
     delay_ = delay > 0 ? delay : 0;
+    min_bend2_ = min_bend > 0.0 ? min_bend * min_bend : 0.0;
     drift_ = drift_per_sample;
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
   }
   /// A (re)start: the next sample is the start's.
   void restart() noexcept {
     cross_ = dot_ = offset_ = 0.0;
-    samples_ = 0;
+    samples_ = bent_ = 0;
     turn_ = {1.0, 0.0};
   }
   /// Whether add() reads the model's tip (the window is still open).
@@ -54,21 +61,33 @@ class SensorYaw {
     if (window_ == 0 || samples_ > delay_ + window_) return advanceTurn();
     const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
-    if (samples_ > delay_) {
+    if (samples_ > delay_ && x * x + y * y >= min_bend2_) {
       cross_ += tx * y - ty * x;
       dot_ += tx * x + ty * y;
+      ++bent_;
     }
     if (samples_ < delay_ + window_) {
       turn_ = {c, s};  // the drift's turn alone (no offset yet): angle()
       return;
     }
-    // A tip on the axis in both has no direction to register: the model's frame.
-    const bool known = std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) && std::isfinite(dot_);
+    // A tip measured near the axis over half the window or more, or on it
+    // in both, has no direction to register: the model's frame.
+    const bool known = registered();
     offset_ = known ? std::atan2(cross_, dot_) : 0.0;
     turn_ = {std::cos(angle()), std::sin(angle())};
   }
   /// The registered turn (rad), 0 until the window is full.
   double offset() const noexcept { return offset_; }
+  /// The window's samples so far whose measured tip was bent at least the minimum.
+  long bentSamples() const noexcept { return bent_; }
+  /// Whether the window's samples so far hold a direction to register (once
+  /// it is full: whether the offset was registered, else the training yaw is
+  /// kept): half the window or more bent at least the minimum, and a tip off
+  /// the axis in both.
+  bool registered() const noexcept {
+    return window_ > 0 && 2 * bent_ >= window_ && std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) &&
+           std::isfinite(dot_);
+  }
   /// The turn (rad) from the model's frame to the sensor's at the last sample
   /// added: the offset and the drift since the start.
   double angle() const noexcept {
@@ -96,10 +115,10 @@ class SensorYaw {
 
   int window_ = 0;
   long delay_ = 0;
-  double drift_ = 0.0;
+  double drift_ = 0.0, min_bend2_ = 0.0;  // the minimum bend, squared
   Turn step_, turn_;
   double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0;
-  long samples_ = 0;
+  long samples_ = 0, bent_ = 0;
 };
 
 /// An input-side tip model's tip (its frame) at a start: its output level and

@@ -171,8 +171,11 @@ void runValidate(const ValidateArgs& a) {
   j["scored_samples"]["settle_s"] = a.start.settle_s;
   j["simulation_unsettled_starts"] = nlohmann::json::array();
   for (const eval::UnsettledStart& t : v.unsettled_starts)
-    j["simulation_unsettled_starts"].push_back(
-        {{"output", t.output}, {"later_s", t.later_s}, {"rms_error", t.rms_error}, {"rms_later", t.rms_later}});
+    j["simulation_unsettled_starts"].push_back({{"output", t.output},
+                                                {"later_s", t.later_s},
+                                                {"rms_error", t.rms_error},
+                                                {"rms_later", t.rms_later},
+                                                {"straight_share", t.straight_share}});
   std::fprintf(table, "(sim from the %s)\n", start.c_str());
   if (!a.json.empty()) writeTextFile(a.json, j.dump(2) + "\n", "fits file");
   if (!a.csv.empty()) io::writeCsvLog(a.csv, eval::predictionLog(v));

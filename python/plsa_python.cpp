@@ -93,8 +93,9 @@ py::dict validate(const plsa::DioPwlObfModel& model, const std::string& log, con
     entry["unsettled_start"] = py::none();
     for (const plsa::eval::UnsettledStart& t : v.unsettled_starts)
       if (t.output == o.name)
-        entry["unsettled_start"] = py::dict(py::arg("later_s") = t.later_s, py::arg("rms_error") = t.rms_error,
-                                            py::arg("rms_later") = t.rms_later);
+        entry["unsettled_start"] =
+            py::dict(py::arg("later_s") = t.later_s, py::arg("rms_error") = t.rms_error,
+                     py::arg("rms_later") = t.rms_later, py::arg("straight_share") = t.straight_share);
     result[py::str(o.name)] = entry;
   }
   return result;
@@ -312,7 +313,9 @@ void bindTools(py::module_& m) {
         "fit_sim, rms, rms_sim, sim_error_kept: {horizon: share}, measured, predicted: {horizon: array}, simulated, "
         "scored_from, sim_departure, unsettled_start}}; settle_s: seconds at the log's start left out of the "
         "scores (a log not recorded from rest); unsettled_start, when not None, says what the log's start costs the "
-        "simulation: its rms error rms_error, and rms_later when started and scored later_s seconds into the log; "
+        "simulation: its rms error rms_error, and rms_later when started and scored later_s seconds into the log "
+        "(straight_share: a tip-frame model's steering, the share of the samples left out on which the tip is "
+        "straight, where its angle is the sensor's noise); "
         "the arrays span the log (NaN where a horizon has no prediction), fits count samples from scored_from on; "
         "sim_departure is None, or how far the free simulation leaves the measured range (farthest, "
         "share_of_width, first_time_s) when it does by more than half its width");

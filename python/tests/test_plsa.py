@@ -60,6 +60,7 @@ def test_validate_names_a_log_that_does_not_start_at_rest(model, runs, tmp_path)
     for n, u in named.items():
         assert u["rms_error"] == pytest.approx(v[n]["rms_sim"], rel=1e-12)
         assert u["rms_later"] < 0.8 * u["rms_error"]
+        assert 0.0 <= u["straight_share"] <= 1.0
     later = max(u["later_s"] for u in named.values())
     settled = plsa.validate(model, str(moving), horizons=[40], settle_s=later)
     for n in named:

@@ -373,6 +373,16 @@ AlignedPrediction scoredPart(const AlignedPrediction& p, Eigen::Index from) {
 // error and spread in `scored`, from `scored_from` on) against the same
 // started kLater_s later, over the samples it would be scored on.
 constexpr double kLater_s = 5.0, kLaterGain = 0.2, kLaterShareOfSpread = 0.02;
+// The share of [from, to) on which a tip-frame model's measured tip (bending
+// `bend`, logged units) is bent less than the yaw registration's least bend.
+double straightShare(const DioPwlObfModel& model, const Eigen::VectorXd& bend, Eigen::Index from, Eigen::Index to,
+                     const SimulationStart& start) {
+  if (model.output_frame != OutputFrame::kTipCartesian || !(to > from)) return 0.0;
+  const double least = start.yaw_registration_min_bend_deg * kRadPerDeg / model.radiansPerAngleUnit();
+  const Eigen::Index straight = (bend.segment(from, to - from).array().abs() < least).count();
+  return static_cast<double>(straight) / static_cast<double>(to - from);
+}
+
 std::vector<UnsettledStart> unsettledStartsOf(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                               const Eigen::MatrixXd& y, const Eigen::MatrixXd& dy,
                                               const SimulationStart& start, Eigen::Index scored_from,
@@ -390,7 +400,9 @@ std::vector<UnsettledStart> unsettledStartsOf(const DioPwlObfModel& model, const
                                                                     scoredPart(then, std::max(then.first, later_from)));
     if (!(rms_then <= (1.0 - kLaterGain) * rms_now) || !(rms_now - rms_then > kLaterShareOfSpread * scored[o].spread))
       continue;
-    out.push_back({scored[o].name, later.settle_s, rms_now, rms_then});
+    const Eigen::Index left_out_to = std::min(std::max(then.first, later_from), y.rows());
+    out.push_back({scored[o].name, later.settle_s, rms_now, rms_then,
+                   o == 1 ? straightShare(model, y.col(0), scored_from, left_out_to, start) : 0.0});
   }
   return out;
 }
@@ -550,12 +562,19 @@ std::vector<std::string> simulationWarnings(const std::vector<SimulationDepartur
 
 std::vector<std::string> unsettledStartWarnings(const std::vector<UnsettledStart>& starts) {
   std::vector<std::string> out;
-  for (const UnsettledStart& t : starts)
+  for (const UnsettledStart& t : starts) {
+    const std::string why =
+        t.straight_share >= 0.05
+            ? "the tip is straight on " + formatted("%.0f", 100.0 * t.straight_share) +
+                  "% of the samples before then, where its steering angle is the sensor's noise, and that counts "
+                  "against the model"
+            : "the log may not start at rest (the simulation starts settled at its first inputs), and that start "
+              "counts against the model";
     out.push_back("the free simulation of " + t.output + " is off by " + formatted("%.4g", t.rms_error) + " rms, by " +
                   formatted("%.4g", t.rms_later) + " when started and scored " + formatted("%.3g", t.later_s) +
-                  " s into the log: the log may not start at rest (the simulation starts settled at its first "
-                  "inputs), and that start counts against the model; --settle " +
-                  formatted("%.3g", t.later_s) + " leaves it out of the scores");
+                  " s into the log: " + why + "; --settle " + formatted("%.3g", t.later_s) +
+                  " leaves it out of the scores");
+  }
   return out;
 }
 

@@ -59,6 +59,12 @@ struct UnsettledStart {
   double later_s = 0.0;    ///< the settling time of the later start
   double rms_error = 0.0;  ///< the validated simulation's rms error, output units
   double rms_later = 0.0;  ///< the later-started one's, over the samples it is scored on
+  /// A tip-frame model's steering: the share of the samples the later start
+  /// leaves out on which the measured tip is straight (bent less than the
+  /// yaw registration's least bend). There the angle is the sensor's noise,
+  /// degrees wide, so a few such samples explain the error, not an
+  /// unsettled start; named when at least 5%.
+  double straight_share = 0.0;
 };
 
 /// One sentence per unsettled start, for a user: what it is and the

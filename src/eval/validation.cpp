@@ -63,6 +63,15 @@ Eigen::MatrixXd modelTip(const DioPwlObfModel& model, const Eigen::MatrixXd& u, 
   return level;
 }
 
+namespace {
+
+// SimulationStart::yaw_registration_min_bend_deg in the logged angles' unit.
+double leastBend(const DioPwlObfModel& model, const SimulationStart& start) {
+  return start.yaw_registration_min_bend_deg * kRadPerDeg / model.radiansPerAngleUnit();
+}
+
+}  // namespace
+
 SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd& level, const Eigen::MatrixXd& ym,
                               const SimulationStart& start) {
   PLSA_CHECK(level.rows() == ym.rows() && level.cols() >= 2 && ym.cols() >= 2,
@@ -73,8 +82,7 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
                  std::to_string(start.yaw_registration_min_bend_deg));
   const int window = static_cast<int>(yawRegistrationSamples(model, start));
   yaw.configure(window, carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
-                static_cast<long>(settleSamples(model, start)),
-                start.yaw_registration_min_bend_deg * kRadPerDeg / model.radiansPerAngleUnit());
+                static_cast<long>(settleSamples(model, start)), leastBend(model, start));
   yaw.restart();
   SensorYawTrack track;
   track.angle.resize(ym.rows());
@@ -208,10 +216,14 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   return predictOutputs(model, u, y, horizons, with_simulation, modelIncrements(model, u), start);
 }
 
-std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+namespace {
+
+// predictOutputs, with the yaw track its predictions turned by (`track`;
+// empty when none was registered).
+std::vector<std::map<int, AlignedPrediction>> predictTracked(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
                                                              const Eigen::MatrixXd& y, const std::vector<int>& horizons,
                                                              bool with_simulation, const Eigen::MatrixXd& dy,
-                                                             const SimulationStart& start) {
+                                                             const SimulationStart& start, SensorYawTrack& track) {
   PLSA_CHECK(y.cols() == model.outputCount() && y.rows() == u.rows(),
              "predictOutputs: the record does not match the model's outputs");
   PLSA_CHECK(dy.rows() == u.rows() && dy.cols() == model.outputCount(),
@@ -225,8 +237,7 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   // (simulateModel's own path refuses a record too short).
   const bool simulated = with_simulation && !model.output_level.empty() && u.rows() >= 2;
   Eigen::MatrixXd tip_level = turned || simulated ? modelTip(model, u, dy) : Eigen::MatrixXd();
-  SensorYawTrack track;
-  if (turned) track = trackSensorYaw(model, tip_level, ym, start);
+  track = turned ? trackSensorYaw(model, tip_level, ym, start) : SensorYawTrack{};
   const Eigen::VectorXd& yaw = track.angle;
   for (int k : horizons) {
     PLSA_CHECK(k >= 1, "validate: horizons must be >= 1, got " + std::to_string(k));
@@ -262,80 +273,14 @@ std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfMode
   return out;
 }
 
-namespace {
-
-// The grid-node part of InputsOutsideTraining.
-void gridCoverage(const PwlPartition& partition, const Eigen::MatrixXd& u, InputsOutsideTraining& out) {
-  const auto n = static_cast<std::size_t>(u.cols());
-  const double nan = std::numeric_limits<double>::quiet_NaN(), rows = static_cast<double>(u.rows());
-  out.on_grid.assign(n, false);
-  out.grid_low.assign(n, nan);
-  out.grid_high.assign(n, nan);
-  out.below_grid.assign(n, 0.0);
-  out.above_grid.assign(n, 0.0);
-  Eigen::Array<bool, Eigen::Dynamic, 1> beyond = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(u.rows(), false);
-  if (partition.scheduling() == Scheduling::kInterpolated)
-    for (std::size_t s = 0; s < partition.inputs().size(); ++s) {
-      const auto c = static_cast<std::size_t>(partition.inputs()[s]);
-      const std::vector<double>& nodes = partition.breakpoints()[s];
-      if (c >= n || nodes.empty()) continue;
-      out.on_grid[c] = true;
-      out.grid_low[c] = nodes.front();
-      out.grid_high[c] = nodes.back();
-      const auto col = u.col(static_cast<Eigen::Index>(c)).array();
-      const Eigen::Array<bool, Eigen::Dynamic, 1> below = col < nodes.front() - 1e-9;
-      const Eigen::Array<bool, Eigen::Dynamic, 1> above = col > nodes.back() + 1e-9;
-      out.below_grid[c] = static_cast<double>(below.count()) / rows;
-      out.above_grid[c] = static_cast<double>(above.count()) / rows;
-      beyond = beyond || below || above;
-    }
-  out.any_beyond_grid = static_cast<double>(beyond.count()) / rows;
-}
-
 }  // namespace
 
-InputsOutsideTraining inputsOutsideTraining(const DioPwlObfModel& model, const Eigen::MatrixXd& u) {
-  PLSA_CHECK(u.cols() == static_cast<Eigen::Index>(model.inputs.size()), "inputsOutsideTraining: one column per input");
-  InputsOutsideTraining out;
-  if (u.rows() == 0) return out;
-  Eigen::Array<bool, Eigen::Dynamic, Eigen::Dynamic> outside(u.rows(), u.cols());
-  for (Eigen::Index c = 0; c < u.cols(); ++c) {
-    const auto [lo, hi] = model.trainingRange(static_cast<std::size_t>(c));
-    outside.col(c) = (u.col(c).array() < lo - 1e-9) || (u.col(c).array() > hi + 1e-9);
-    out.each.push_back(static_cast<double>(outside.col(c).count()) / static_cast<double>(u.rows()));
-  }
-  out.any = static_cast<double>(outside.rowwise().any().count()) / static_cast<double>(u.rows());
-  gridCoverage(model.partition, u, out);
-  return out;
-}
-
-std::vector<std::string> inputCoverageWarnings(const DioPwlObfModel& model, const InputsOutsideTraining& c) {
-  std::vector<std::string> out;
-  auto pct = [](double share) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.1f%%", 100.0 * share);
-    return std::string(b);
-  };
-  auto num = [](double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    return std::string(b);
-  };
-  for (std::size_t i = 0; i < model.inputs.size() && i < c.each.size(); ++i) {
-    const std::string& name = model.inputs[i];
-    const auto [lo, hi] = model.trainingRange(i);
-    const std::string range = "training range [" + num(lo) + ", " + num(hi) + "]";
-    if (i < c.on_grid.size() && c.on_grid[i]) {
-      if (c.below_grid[i] > 0 || c.above_grid[i] > 0)
-        out.push_back(name + " is below the training grid's lowest node " + num(c.grid_low[i]) + " on " +
-                      pct(c.below_grid[i]) + " and above its highest node " + num(c.grid_high[i]) + " on " +
-                      pct(c.above_grid[i]) + " of the samples, where the model holds the outer node's dynamics (" +
-                      range + ", left on " + pct(c.each[i]) + ")");
-    } else if (c.each[i] > 0) {
-      out.push_back(name + " is outside its " + range + " on " + pct(c.each[i]) + " of the samples");
-    }
-  }
-  return out;
+std::vector<std::map<int, AlignedPrediction>> predictOutputs(const DioPwlObfModel& model, const Eigen::MatrixXd& u,
+                                                             const Eigen::MatrixXd& y, const std::vector<int>& horizons,
+                                                             bool with_simulation, const Eigen::MatrixXd& dy,
+                                                             const SimulationStart& start) {
+  SensorYawTrack track;
+  return predictTracked(model, u, y, horizons, with_simulation, dy, start, track);
 }
 
 namespace {
@@ -378,8 +323,7 @@ constexpr double kLater_s = 5.0, kLaterGain = 0.2, kLaterShareOfSpread = 0.02;
 double straightShare(const DioPwlObfModel& model, const Eigen::VectorXd& bend, Eigen::Index from, Eigen::Index to,
                      const SimulationStart& start) {
   if (model.output_frame != OutputFrame::kTipCartesian || !(to > from)) return 0.0;
-  const double least = start.yaw_registration_min_bend_deg * kRadPerDeg / model.radiansPerAngleUnit();
-  const Eigen::Index straight = (bend.segment(from, to - from).array().abs() < least).count();
+  const Eigen::Index straight = (bend.segment(from, to - from).array().abs() < leastBend(model, start)).count();
   return static_cast<double>(straight) / static_cast<double>(to - from);
 }
 
@@ -439,8 +383,9 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
   const Eigen::MatrixXd u = log.columnsOf(model.inputs);
   const Eigen::MatrixXd y = log.columnsOf(model.outputs);
   const Eigen::MatrixXd dy = modelIncrements(model, u);
-  const std::vector<std::map<int, AlignedPrediction>> pred = predictOutputs(model, u, y, horizons, true, dy, start);
   ValidationResult res;
+  const std::vector<std::map<int, AlignedPrediction>> pred =
+      predictTracked(model, u, y, horizons, true, dy, start, res.yaw);
   res.time = log.hasColumn(io::standard_columns::kTime) ? log.column(io::standard_columns::kTime)
                                                         : Eigen::VectorXd::LinSpaced(u.rows(), 0, u.rows() - 1);
   res.outside_training = inputsOutsideTraining(model, u);
@@ -486,8 +431,7 @@ ValidationResult validateModel(const DioPwlObfModel& model, const io::Log& log, 
     res.outputs.push_back(std::move(ov));
   }
   res.unsettled_starts = unsettledStartsOf(model, u, y, dy, start, res.scored_from, res.outputs);
-  res.yaw_asked = yawRegistrationSamples(model, start) > 0;
-  if (res.yaw_asked) res.yaw = trackSensorYaw(model, modelTip(model, u, dy), model.toModelFrame(y), start);
+  res.yaw_asked = yawRegistrationSamples(model, start) > 0;  // the track predictTracked turned by
   return res;
 }
 

@@ -107,7 +107,8 @@ std::string describeSimulation(const DioPwlObfModel& model, const eval::Simulati
     j["yaw_registration"] = {{"registered", v.yaw.registered},
                              {"offset_deg", v.yaw.offset / kRadPerDeg},
                              {"bent_share", v.yaw.bent_share},
-                             {"min_bend_deg", s.yaw_registration_min_bend_deg}};
+                             {"min_bend_deg", s.yaw_registration_min_bend_deg},
+                             {"tracking_s", s.yaw_tracking_s}};
   const double yaw_rate = eval::carriedYawRate(model, s);
   if (yaw_rate != 0.0)
     start += ", turning at the training run's sensor drift of " + significantDigits(yaw_rate, 4) + " " +
@@ -217,6 +218,12 @@ void addValidateCommand(CLI::App& app) {
                  "the yaw registration reads only samples whose measured tip is bent at least this much (deg) and "
                  "keeps the training yaw unless they are half its window: a straight tip's direction is the "
                  "sensor's noise (default 1)")
+      ->check(finiteNumberAtLeast(0.0, false));
+  va->add_option("--yaw-tracking", v->start.yaw_tracking_s,
+                 "tip_cartesian models with an output level: go on registering the sensor's yaw past the window, "
+                 "each sample weighed down by e^-1 per this many seconds, and turn the k-step predictions by it (as "
+                 "the predictor's yaw_tracking_s) instead of the window's offset and the training drift's "
+                 "extrapolation; the simulation keeps the window's (default 60; 0: none)")
       ->check(finiteNumberAtLeast(0.0, false));
   va->add_option("--settle", v->start.settle_s,
                  "seconds at the log's start left out of every score, for a log that does not start at rest (the "

@@ -111,8 +111,10 @@ class StraightforwardPredictor {
         m_.output_level.empty())
       return;
     const double dt = m_.sample_time_s;
-    yaw_.configure(yawRegistrationWindow(PredictorOptions{}.yaw_registration_s, dt),
-                   m_.training_drift_per_s.size() == 2 ? m_.training_drift_per_s[1] * kRadPerDeg * dt : 0.0);
+    const PredictorOptions defaults;  // in degrees, as the bench's models are
+    yaw_.configure(yawRegistrationWindow(defaults.yaw_registration_s, dt),
+                   m_.training_drift_per_s.size() == 2 ? m_.training_drift_per_s[1] * kRadPerDeg * dt : 0.0, 0,
+                   defaults.yaw_registration_min_bend_deg, trackingForget(defaults.yaw_tracking_s, dt));
     yaw_.restart();
     tip_ = Eigen::Vector2d(m_.output_level[0], m_.output_level[1]);
     for (const Bank& b : banks_) {

@@ -331,6 +331,27 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
   EXPECT_NE(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
                 " --yaw-min-bend nan"),
             0);
+  // The yaw tracked past the window (default 60 s) moves the k-step
+  // predictions, never the simulation; 0 holds the window's offset.
+  nlohmann::json by_tracking[2];
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_EQ(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
+                  " --horizons 40 --json " + file("v.json") + (i ? " --yaw-tracking 0" : "")),
+              0)
+        << err_;
+    by_tracking[i] = nlohmann::json::parse(slurp(file("v.json")));
+  }
+  EXPECT_EQ(by_tracking[0]["yaw_registration"]["tracking_s"].get<double>(), 60.0);
+  EXPECT_EQ(by_tracking[1]["yaw_registration"]["tracking_s"].get<double>(), 0.0);
+  for (const std::string out : {"bend_deg", "steer_deg"}) {
+    EXPECT_EQ(by_tracking[0]["outputs"][out]["fit_sim"], by_tracking[1]["outputs"][out]["fit_sim"]) << out;
+    EXPECT_NE(by_tracking[0]["outputs"][out]["fit_k40"], by_tracking[1]["outputs"][out]["fit_k40"]) << out;
+  }
+  for (const std::string bad : {"nan", "-1", "inf"})
+    EXPECT_EQ(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
+                  " --yaw-tracking " + bad),
+              2)
+        << bad;
   ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " +
                 file("demo/validate_joystick.csv") + " --horizons 40 --json " + file("v.json")),
             0)

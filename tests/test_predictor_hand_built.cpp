@@ -650,3 +650,53 @@ TEST(SensorYawTurn, RegistersOnTheWindowAfterItsDelay) {
   }
   EXPECT_GT(std::abs(at_once.offset() - kYaw), 0.5);
 }
+
+// Tracking: past the window the yaw is registered on with a fading memory, so
+// the turn follows a sensor whose yaw drifts at another rate than the
+// training run's (0.5e-4 rad per sample more: 2.4 rad over ten minutes at
+// 80 Hz) instead of extrapolating the training drift:
+// without tracking the error grows as the rate's error times the samples
+// since the start; tracked, it stays about the rate's error times the
+// memory's samples. A straight tip keeps the last offset; the window's offset
+// (the simulation's) is what the window registered.
+TEST(SensorYawTurn, TrackingFollowsAYawTheTrainingDriftMisses) {
+  constexpr int kWindow = 400, kSamples = 80 * 600;  // 5 s and 10 min at 80 Hz
+  constexpr double kDrift = 1e-4, kTrueDrift = 1.5e-4, kYaw = 0.3;
+  const double forget = trackingForget(60.0, 1.0 / 80.0);
+  EXPECT_NEAR(forget, std::exp(-1.0 / 4800.0), 1e-15);
+  EXPECT_EQ(trackingForget(0.0, 0.0125), 1.0);
+  auto feed = [&](SensorYaw& yaw, int straight_from, int straight_to) {
+    yaw.restart();
+    for (int k = 0; k < kSamples; ++k) {
+      const double t = 0.01 * k, model = t, measured = t + kYaw + kTrueDrift * k;
+      const double bend = k >= straight_from && k < straight_to ? 0.01 : 10.0;
+      yaw.add(10.0 * std::cos(model), 10.0 * std::sin(model), bend * std::cos(measured), bend * std::sin(measured));
+      EXPECT_EQ(yaw.registering(), yaw.tracking() || k < kWindow - 1) << k;
+    }
+  };
+  SensorYaw held, tracked;
+  held.configure(kWindow, kDrift, 0, 1.0);
+  tracked.configure(kWindow, kDrift, 0, 1.0, forget);
+  EXPECT_FALSE(held.tracking());
+  EXPECT_TRUE(tracked.tracking());
+  feed(held, kSamples, kSamples);
+  feed(tracked, kSamples, kSamples);
+  const double sensor = kYaw + kTrueDrift * (kSamples - 1);
+  // The window registered the same offset in both (the yaw at the window's middle, less the drift's turn).
+  EXPECT_NEAR(held.windowOffset(), tracked.windowOffset(), 1e-12);
+  EXPECT_NEAR(held.windowOffset(), kYaw + (kTrueDrift - kDrift) * (kWindow - 1) / 2.0, 1e-3);
+  EXPECT_GT(std::abs(held.angle() - sensor), 2.0);  // (1.5e-4 - 1e-4) x 48000 samples, 2.4 rad off
+  // Tracked: the fading memory lags the sensor by the rate's error times its 4800 samples.
+  EXPECT_NEAR(tracked.angle(), sensor, (kTrueDrift - kDrift) * 4800 * 1.05);
+  EXPECT_NEAR(std::cos(tracked.angle()), tracked.turn().cos, 1e-12);
+  EXPECT_NEAR(std::sin(tracked.angle()), tracked.turn().sin, 1e-12);
+  EXPECT_TRUE(tracked.registered());
+  // The tip straight over the last minute: the offset holds where it was when
+  // half the memory's weight stopped being bent, the drift alone turning on.
+  SensorYaw paused;
+  paused.configure(kWindow, kDrift, 0, 1.0, forget);
+  feed(paused, kSamples - 4800, kSamples);
+  EXPECT_TRUE(std::isfinite(paused.angle()));
+  EXPECT_LT(std::abs(paused.offset() - tracked.offset()), (kTrueDrift - kDrift) * 4800 * 1.05);
+  EXPECT_GT(std::abs(paused.offset() - tracked.offset()), 1e-3);
+}

@@ -81,8 +81,12 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
              "SimulationStart: the yaw registration's least bend must be finite and >= 0 deg, got " +
                  std::to_string(start.yaw_registration_min_bend_deg));
   const int window = static_cast<int>(yawRegistrationSamples(model, start));
+  PLSA_CHECK(std::isfinite(start.yaw_tracking_s) && start.yaw_tracking_s >= 0,
+             "SimulationStart: the yaw tracking's memory must be finite and >= 0 s, got " +
+                 std::to_string(start.yaw_tracking_s));
   yaw.configure(window, carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
-                static_cast<long>(settleSamples(model, start)), leastBend(model, start));
+                static_cast<long>(settleSamples(model, start)), leastBend(model, start),
+                trackingForget(start.yaw_tracking_s, model.sample_time_s));
   yaw.restart();
   SensorYawTrack track;
   track.angle.resize(ym.rows());
@@ -90,7 +94,7 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
     yaw.add(level(k, 0), level(k, 1), ym(k, 0), ym(k, 1));
     track.angle(k) = yaw.angle();
   }
-  track.offset = yaw.offset();
+  track.offset = yaw.windowOffset();
   track.registered = yaw.registered();
   track.bent_share = window > 0 ? static_cast<double>(yaw.bentSamples()) / window : 0.0;
   return track;

@@ -26,6 +26,8 @@ void checkOptions(const PredictorOptions& o) {
              "Predictor: yaw_registration_s must be finite and >= 0");
   PLSA_CHECK(std::isfinite(o.yaw_registration_min_bend_deg) && o.yaw_registration_min_bend_deg >= 0,
              "Predictor: yaw_registration_min_bend_deg must be finite and >= 0");
+  PLSA_CHECK(std::isfinite(o.yaw_tracking_s) && o.yaw_tracking_s >= 0,
+             "Predictor: yaw_tracking_s must be finite and >= 0");
 }
 
 // Stage 1: what every form shares.
@@ -45,6 +47,7 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
     if (c.yaw_window > 0 && m.training_drift_per_s.size() == 2)
       c.yaw_drift_per_sample = m.training_drift_per_s[1] * c.rad_per_angle_unit * m.sample_time_s;
     c.yaw_min_bend = o.yaw_registration_min_bend_deg * kRadPerDeg / c.rad_per_angle_unit;
+    c.yaw_forget = trackingForget(o.yaw_tracking_s, m.sample_time_s);
   }
   c.max_horizon = o.max_horizon;
   const double span = m.input_max - m.input_min;

@@ -77,7 +77,7 @@ std::vector<std::string> unsettledStartWarnings(const std::vector<UnsettledStart
 /// and the carried drift), and the offset.
 struct SensorYawTrack {
   Eigen::VectorXd angle;
-  double offset = 0.0;
+  double offset = 0.0;  ///< the window's registration (the simulation's turn)
   /// Whether the offset was registered: false when the measured tip was bent
   /// less than the minimum over half the window or more (the training yaw kept).
   bool registered = false;
@@ -166,6 +166,14 @@ struct SimulationStart {
   /// its window or more: at rest the reading's direction is the sensor's
   /// noise and the model's rest tip, not the yaw (SensorYaw).
   double yaw_registration_min_bend_deg = 1.0;
+  /// Seconds of memory of a yaw tracked on past the registration window
+  /// (SensorYaw tracking, as PredictorOptions::yaw_tracking_s): the k-step
+  /// predictions turn by the yaw registered on the samples up to their
+  /// anchor, each weighed down by e^-1 per this many seconds, so they follow
+  /// the sensor instead of the training drift's extrapolation. The simulation
+  /// keeps the window's registration. 0: the window's offset holds and the
+  /// drift alone turns on.
+  double yaw_tracking_s = 60.0;
 };
 
 /// `level`: the model's tip in its frame (modelTip), `ym` the measured one

@@ -128,6 +128,7 @@ struct CompiledModel {
   int yaw_window = 0;
   double yaw_drift_per_sample = 0.0;
   double yaw_min_bend = 0.0;
+  double yaw_forget = 1.0;           ///< SensorYaw tracking's factor per sample (1: none)
   std::vector<double> output_level;  ///< the model's (input side), per output; empty: none
   double accept_min = 0.0, accept_max = 0.0;
   bool input_side = false;

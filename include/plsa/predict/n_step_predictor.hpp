@@ -272,7 +272,7 @@ class NStepPredictor {
 
   // The sensor's yaw registered afresh from this sample (settledTip).
   void restartSensorYaw(const CompiledModel& m) noexcept {
-    yaw_.configure(m.yaw_window, m.yaw_drift_per_sample, 0, m.yaw_min_bend);
+    yaw_.configure(m.yaw_window, m.yaw_drift_per_sample, 0, m.yaw_min_bend, m.yaw_forget);
     yaw_.restart();
     if (m.yaw_window == 0) return;
     settledTip(m, node_w_, vc_, yaw_tip_);

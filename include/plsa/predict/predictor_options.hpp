@@ -85,6 +85,14 @@ struct PredictorOptions {
   /// frame is kept: at rest the reading's direction is the sensor's noise,
   /// not its yaw (SensorYaw).
   double yaw_registration_min_bend_deg = 1.0;
+  /// Seconds of memory of the yaw tracked on past the window (SensorYaw
+  /// tracking): every sample whose tip is bent is registered on, each earlier
+  /// one weighed down by e^-1 per this many seconds, so the predictions follow
+  /// the sensor's yaw over a session of any length instead of extrapolating
+  /// the training run's drift (docs/predictor.md, 'The sensor's yaw'). Costs
+  /// update() one evaluation of the increments per tick. 0: the window's
+  /// offset holds and the drift alone turns on.
+  double yaw_tracking_s = 60.0;
   /// Run in modal form when the model allows it (false: always step the banks
   /// as state-space filters, the slower reference the modal form is checked
   /// and measured against).

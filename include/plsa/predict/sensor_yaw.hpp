@@ -10,9 +10,13 @@
 // register (at rest the reading is the sensor's noise and the model's rest
 // tip, in directions that have nothing to do with the yaw): only samples whose
 // measured tip is bent at least a minimum count, and unless they are half the
-// window or more the training yaw is kept (no offset). One value, shared by
-// validation's simulation and k-step predictions and the real-time
-// predictor, so the three agree; no allocation.
+// window or more the training yaw is kept (no offset). Tracking (a
+// forgetting factor under 1) keeps registering after the window, each
+// sample's terms weighed down by the factor per sample, so the turn follows
+// the sensor wherever its yaw goes instead of extrapolating the training
+// run's drift without bound; the simulation keeps the window's offset
+// (windowOffset). One value, shared by validation's simulation and k-step
+// predictions and the real-time predictor, so the three agree; no allocation.
 #pragma once
 
 #include <cmath>
@@ -38,30 +42,42 @@ class SensorYaw {
   /// start; `delay` samples after the start first (a run that does not start
   /// at rest: validation's SimulationStart::settle_s), turned by the drift
   /// alone. Samples whose measured tip is less than `min_bend` from the axis
-  /// (the tip components' unit) are not registered on.
-  void configure(int window, double drift_per_sample, long delay = 0, double min_bend = 0.0) noexcept {
+  /// (the tip components' unit) are not registered on. `forget` in (0, 1):
+  /// past the window the registration goes on, every earlier sample's terms
+  /// weighed down by it per sample (trackingForget); 1 (or anything else):
+  /// the window's offset holds and the drift alone turns on.
+  void configure(int window, double drift_per_sample, long delay = 0, double min_bend = 0.0,
+                 double forget = 1.0) noexcept {
     window_ = window;
     delay_ = delay > 0 ? delay : 0;
     min_bend2_ = min_bend > 0.0 ? min_bend * min_bend : 0.0;
     drift_ = drift_per_sample;
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
+    forget_ = forget > 0.0 && forget < 1.0 ? forget : 1.0;
   }
   /// A (re)start: the next sample is the start's.
   void restart() noexcept {
-    cross_ = dot_ = offset_ = 0.0;
+    cross_ = dot_ = offset_ = window_offset_ = 0.0;
+    bent_weight_ = weight_ = 0.0;
     samples_ = bent_ = 0;
+    window_registered_ = false;
     turn_ = {1.0, 0.0};
   }
-  /// Whether add() reads the model's tip (the window is still open).
-  bool registering() const noexcept { return window_ > 0 && samples_ < delay_ + window_; }
+  /// Whether it follows the sensor's yaw past the window (a forgetting factor under 1).
+  bool tracking() const noexcept { return window_ > 0 && forget_ < 1.0; }
+  /// Whether add() reads the model's tip (the window is still open, or tracking).
+  bool registering() const noexcept { return window_ > 0 && (tracking() || samples_ < delay_ + window_); }
   /// The next sample: the model's tip (level_x, level_y), in its frame, and
   /// the measured one. Once the window is full the offset is set.
   void add(double level_x, double level_y, double x, double y) noexcept {
     const double k = static_cast<double>(samples_++);
-    if (window_ == 0 || samples_ > delay_ + window_) return advanceTurn();
+    const bool past = samples_ > delay_ + window_;
+    if (window_ == 0 || (past && !tracking())) return advanceTurn();
     const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
-    if (samples_ > delay_ && x * x + y * y >= min_bend2_) {
+    const bool bent = x * x + y * y >= min_bend2_;
+    if (past) return track(tx * y - ty * x, tx * x + ty * y, bent);
+    if (samples_ > delay_ && bent) {
       cross_ += tx * y - ty * x;
       dot_ += tx * x + ty * y;
       ++bent_;
@@ -72,12 +88,17 @@ class SensorYaw {
     }
     // A tip measured near the axis over half the window or more, or on it
     // in both, has no direction to register: the model's frame.
-    const bool known = registered();
-    offset_ = known ? std::atan2(cross_, dot_) : 0.0;
+    window_registered_ = holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_));
+    offset_ = window_offset_ = window_registered_ ? std::atan2(cross_, dot_) : 0.0;
+    bent_weight_ = static_cast<double>(bent_);
+    weight_ = static_cast<double>(window_);
     turn_ = {std::cos(angle()), std::sin(angle())};
   }
-  /// The registered turn (rad), 0 until the window is full.
+  /// The registered turn (rad), 0 until the window is full; tracking, the
+  /// latest (the window's is windowOffset).
   double offset() const noexcept { return offset_; }
+  /// The turn the window registered (rad): the simulation's.
+  double windowOffset() const noexcept { return window_offset_; }
   /// The window's samples so far whose measured tip was bent at least the minimum.
   long bentSamples() const noexcept { return bent_; }
   /// Whether the window's samples so far hold a direction to register (once
@@ -85,8 +106,8 @@ class SensorYaw {
   /// kept): half the window or more bent at least the minimum, and a tip off
   /// the axis in both.
   bool registered() const noexcept {
-    return window_ > 0 && 2 * bent_ >= window_ && std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) &&
-           std::isfinite(dot_);
+    if (samples_ >= delay_ + window_ && window_ > 0) return window_registered_;
+    return holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_));
   }
   /// The turn (rad) from the model's frame to the sensor's at the last sample
   /// added: the offset and the drift since the start.
@@ -113,13 +134,42 @@ class SensorYaw {
     turn_ = {turn_.cos * step_.cos - turn_.sin * step_.sin, turn_.sin * step_.cos + turn_.cos * step_.sin};
   }
 
+  static double faded(double v) noexcept { return std::abs(v) < 1e-150 ? 0.0 : v; }
+  bool holdsDirection(double twice_bent, double weight) const noexcept {
+    return window_ > 0 && twice_bent >= weight && std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) &&
+           std::isfinite(dot_);
+  }
+  // Past the window, tracking: the terms so far weighed down by the factor,
+  // this sample's added if its tip is bent; the offset follows while half the
+  // (weighed) samples are bent, else the last one holds. Terms that a long
+  // straight tip has faded below 1e-150 are dropped: they would turn
+  // subnormal where the processor does not flush them.
+  void track(double cross, double dot, bool bent) noexcept {
+    cross_ = faded(forget_ * cross_ + (bent ? cross : 0.0));
+    dot_ = faded(forget_ * dot_ + (bent ? dot : 0.0));
+    bent_weight_ = faded(forget_ * bent_weight_ + (bent ? 1.0 : 0.0));
+    weight_ = forget_ * weight_ + 1.0;
+    if (holdsDirection(2.0 * bent_weight_, weight_)) offset_ = std::atan2(cross_, dot_);
+    turn_ = {std::cos(angle()), std::sin(angle())};
+  }
+
   int window_ = 0;
   long delay_ = 0;
   double drift_ = 0.0, min_bend2_ = 0.0;  // the minimum bend, squared
+  double forget_ = 1.0;
   Turn step_, turn_;
-  double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0;
+  double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0, window_offset_ = 0.0;
+  double bent_weight_ = 0.0, weight_ = 0.0;  // tracking: the bent samples' and all samples' weights
   long samples_ = 0, bent_ = 0;
+  bool window_registered_ = false;
 };
+
+/// The per-sample forgetting factor of a yaw tracked with `seconds` of memory
+/// (a sample's terms weigh e^-1 after them) at `sample_time`; 1 (none) for 0.
+inline double trackingForget(double seconds, double sample_time) noexcept {
+  if (!(seconds > 0.0) || !(sample_time > 0.0) || !std::isfinite(seconds)) return 1.0;
+  return std::exp(-sample_time / seconds);
+}
 
 /// An input-side tip model's tip (its frame) at a start: its output level and
 /// the filters' settled response to the start's inputs (each bank's DC gain

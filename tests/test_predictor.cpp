@@ -200,6 +200,44 @@ TEST(Predictor, TipFrameFollowsTheSensorsYawAsValidationDoes) {
       << "the registration turned nothing";
 }
 
+// A swapped-in tip model registers its own frame, over a window from the
+// next sample, its tip anchored on the last measured one turned back by the
+// turn in force, which carries on until the window is full: the old model's
+// tip, drift and memory are not mixed into the new one's registration.
+// Swapped for itself, the model's predictions stay those of a predictor that
+// never swapped, to the model's own error over the window: within a tenth
+// of what leaving the run's 20 deg yaw unregistered costs (a sign slip in the
+// anchor's turn would put them 40 deg off).
+TEST(Predictor, ASwappedInTipModelRegistersItsOwnFrame) {
+  const Data& d = data();
+  const DioPwlObfModel m = registeredTip(d);
+  const Eigen::MatrixXd y = turnedRun(d.y, 20.0);
+  constexpr Eigen::Index kSwap = 500;
+  ASSERT_GT(d.u.rows(), kSwap + 400 + 200);
+  PredictorOptions model_frame;
+  model_frame.yaw_registration_s = 0.0;
+  Predictor<5> swapped(m), kept(m), unturned(m, model_frame);
+  Eigen::MatrixXd a(40, 2), k(40, 2), n(40, 2);
+  double before = 0.0, in_window = 0.0, after = 0.0, unregistered = 0.0;
+  for (Eigen::Index t = 0; t + 40 < d.u.rows(); ++t) {
+    if (t == kSwap) swapped.install(m);
+    for (Predictor<5>* p : {&swapped, &kept, &unturned})
+      ASSERT_EQ(p->update(static_cast<double>(t) * d.dt, d.u.row(t), y.row(t)), PredictorStatus::kOk) << t;
+    ASSERT_EQ(swapped.predict(40, d.u.middleRows(t + 1, 39), a), PredictorStatus::kOk);
+    ASSERT_EQ(kept.predict(40, d.u.middleRows(t + 1, 39), k), PredictorStatus::kOk);
+    ASSERT_EQ(unturned.predict(40, d.u.middleRows(t + 1, 39), n), PredictorStatus::kOk);
+    double& worst = t < kSwap ? before : t < kSwap + 400 ? in_window : after;
+    worst = std::max(worst, (a - k).cwiseAbs().maxCoeff());
+    if (t >= kSwap) unregistered = std::max(unregistered, (n - k).cwiseAbs().maxCoeff());
+  }
+  EXPECT_EQ(swapped.modelId(), 1u);
+  EXPECT_EQ(before, 0.0);
+  EXPECT_GT(unregistered, 0.3);
+  EXPECT_LT(in_window, 0.1 * unregistered) << "the turn in force did not carry on over the new window";
+  EXPECT_LT(after, 0.1 * unregistered) << "the swapped-in model registered another frame";
+  EXPECT_GT(in_window + after, 0.0) << "nothing was registered afresh";
+}
+
 // Started with the tip straight (the arm at rest, the reading's direction
 // the sensor's noise) the predictor keeps the model's frame, turning at the
 // drift alone, as validation does; registered on the noise (no minimum

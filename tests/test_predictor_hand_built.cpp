@@ -699,4 +699,31 @@ TEST(SensorYawTurn, TrackingFollowsAYawTheTrainingDriftMisses) {
   EXPECT_TRUE(std::isfinite(paused.angle()));
   EXPECT_LT(std::abs(paused.offset() - tracked.offset()), (kTrueDrift - kDrift) * 4800 * 1.05);
   EXPECT_GT(std::abs(paused.offset() - tracked.offset()), 1e-3);
+  // Straight for two memories after the window, then bent for a tenth of one
+  // at a yaw 1 rad away: the bent samples are under half the fading weight, so
+  // the offset holds (without the rule those few samples would set it).
+  SensorYaw held_on;
+  held_on.configure(kWindow, 0.0, 0, 1.0, forget);
+  held_on.restart();
+  constexpr int kStraightTo = kWindow + 2 * 4800;
+  for (int k = 0; k < kStraightTo + 480; ++k) {
+    const double t = 0.01 * k, yaw = k < kStraightTo ? kYaw : kYaw + 1.0;
+    const double bend = k >= kWindow && k < kStraightTo ? 0.01 : 10.0;
+    held_on.add(10.0 * std::cos(t), 10.0 * std::sin(t), bend * std::cos(t + yaw), bend * std::sin(t + yaw));
+  }
+  EXPECT_NEAR(held_on.windowOffset(), kYaw, 1e-9);
+  EXPECT_NEAR(held_on.offset(), kYaw, 1e-9);
+  // One glitch, a finite reading 1e300 from the axis 2 rad away, weighs as a
+  // few samples: the offset hardly moves and keeps following afterwards.
+  SensorYaw glitched;
+  glitched.configure(kWindow, 0.0, 0, 1.0, forget);
+  glitched.restart();
+  for (int k = 0; k < kWindow + 4800; ++k) {
+    const double t = 0.01 * k, bend = k == kWindow + 100 ? 1e300 : 10.0, yaw = k == kWindow + 100 ? 2.0 : kYaw;
+    glitched.add(10.0 * std::cos(t), 10.0 * std::sin(t), bend * std::cos(t + yaw), bend * std::sin(t + yaw));
+    if (k == kWindow + 100) {
+      EXPECT_LT(std::abs(glitched.offset() - kYaw), 0.01);
+    }
+  }
+  EXPECT_NEAR(glitched.offset(), kYaw, 1e-3);
 }

@@ -55,9 +55,12 @@ class SensorYaw {
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
     forget_ = forget > 0.0 && forget < 1.0 ? forget : 1.0;
   }
-  /// A (re)start: the next sample is the start's.
-  void restart() noexcept {
-    cross_ = dot_ = offset_ = window_offset_ = 0.0;
+  /// A (re)start: the next sample is the start's. `initial`: the turn (rad)
+  /// in force until the window registers one, and kept if it registers
+  /// nothing (a model swap's: the turn the old model was at); 0 after a start.
+  void restart(double initial = 0.0) noexcept {
+    cross_ = dot_ = 0.0;
+    offset_ = window_offset_ = initial_ = initial;
     bent_weight_ = weight_ = 0.0;
     samples_ = bent_ = 0;
     window_registered_ = false;
@@ -76,20 +79,21 @@ class SensorYaw {
     const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
     const bool bent = x * x + y * y >= min_bend2_;
-    if (past) return track(tx * y - ty * x, tx * x + ty * y, bent);
+    if (past) return trackSample(tx, ty, x, y, bent);
     if (samples_ > delay_ && bent) {
       cross_ += tx * y - ty * x;
       dot_ += tx * x + ty * y;
       ++bent_;
     }
     if (samples_ < delay_ + window_) {
-      turn_ = {c, s};  // the drift's turn alone (no offset yet): angle()
+      // The drift's turn alone (no offset yet): angle()
+      turn_ = initial_ == 0.0 ? Turn{c, s} : Turn{std::cos(angle()), std::sin(angle())};
       return;
     }
     // A tip measured near the axis over half the window or more, or on it
     // in both, has no direction to register: the model's frame.
     window_registered_ = holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_));
-    offset_ = window_offset_ = window_registered_ ? std::atan2(cross_, dot_) : 0.0;
+    offset_ = window_offset_ = window_registered_ ? std::atan2(cross_, dot_) : initial_;
     bent_weight_ = static_cast<double>(bent_);
     weight_ = static_cast<double>(window_);
     turn_ = {std::cos(angle()), std::sin(angle())};
@@ -139,6 +143,17 @@ class SensorYaw {
     return window_ > 0 && twice_bent >= weight && std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) &&
            std::isfinite(dot_);
   }
+  // A tracked sample's terms. A reading farther than kGlitchRatio times the
+  // model's tip from the axis is taken at that distance (a glitch weighs as a
+  // few samples, not for many memories), and a term that is not finite is
+  // not added: one bad reading cannot take the registration over.
+  static constexpr double kGlitchRatio = 4.0;
+  void trackSample(double tx, double ty, double x, double y, bool bent) noexcept {
+    const double t2 = tx * tx + ty * ty, m2 = x * x + y * y, most = kGlitchRatio * kGlitchRatio * t2;
+    const double scale = m2 > most ? std::sqrt(most / m2) : 1.0;
+    const double cross = scale * (tx * y - ty * x), dot = scale * (tx * x + ty * y);
+    track(cross, dot, bent && std::isfinite(cross) && std::isfinite(dot));
+  }
   // Past the window, tracking: the terms so far weighed down by the factor,
   // this sample's added if its tip is bent; the offset follows while half the
   // (weighed) samples are bent, else the last one holds. Terms that a long
@@ -158,7 +173,7 @@ class SensorYaw {
   double drift_ = 0.0, min_bend2_ = 0.0;  // the minimum bend, squared
   double forget_ = 1.0;
   Turn step_, turn_;
-  double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0, window_offset_ = 0.0;
+  double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0, window_offset_ = 0.0, initial_ = 0.0;
   double bent_weight_ = 0.0, weight_ = 0.0;  // tracking: the bent samples' and all samples' weights
   long samples_ = 0, bent_ = 0;
   bool window_registered_ = false;

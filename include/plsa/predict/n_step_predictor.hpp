@@ -80,7 +80,9 @@ class NStepPredictor {
     const SubnormalsFlushed flushed;
     handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
       carryFilterStates(from, to, state_, work_state_, bank_x_);
-      reregisterSensorYaw(to);
+      // A swapped-in tip model registers its own frame (SensorYaw::reregister).
+      if (to.frame == OutputFrame::kTipCartesian && samples_ > 0 && to.yaw_window > 0)
+        yaw_.reregister(to, ym_(0), ym_(1), yaw_tip_);
     });
     const CompiledModel& m = model();
     if (static_cast<int>(u.size()) != m.n_u || static_cast<int>(y.size()) != m.n_y) return PredictorStatus::kBadShape;
@@ -273,27 +275,11 @@ class NStepPredictor {
 
   // The sensor's yaw registered afresh from this sample (settledTip).
   void restartSensorYaw(const CompiledModel& m) noexcept {
-    yaw_.configure(m.yaw_window, m.yaw_drift_per_sample, 0, m.yaw_min_bend, m.yaw_forget);
+    yaw_.configure(m);
     yaw_.restart();
     if (m.yaw_window == 0) return;
     settledTip(m, node_w_, vc_, yaw_tip_);
     yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
-  }
-
-  // A swapped-in tip model registers its own frame, over a window from the
-  // next sample, as after a start; until it has, the turn in force carries
-  // on. Its tip is anchored on the last measured one, turned back into the
-  // model's frame by that turn (its states are the old model's, carried; its
-  // level at them is not known here): the old model's tip, drift and memory
-  // are not mixed into the new one's registration.
-  void reregisterSensorYaw(const CompiledModel& to) noexcept {
-    if (to.frame != OutputFrame::kTipCartesian || samples_ == 0 || to.yaw_window == 0) return;
-    const SensorYaw::Turn t = yaw_.turn();
-    const double angle = std::atan2(t.sin, t.cos);
-    yaw_tip_[0] = t.cos * ym_(0) + t.sin * ym_(1);
-    yaw_tip_[1] = -t.sin * ym_(0) + t.cos * ym_(1);
-    yaw_.configure(to.yaw_window, to.yaw_drift_per_sample, 0, to.yaw_min_bend, to.yaw_forget);
-    yaw_.restart(angle);
   }
 
   // us <- the lag's next value toward u (lagTowards).

@@ -55,6 +55,23 @@ class SensorYaw {
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
     forget_ = forget > 0.0 && forget < 1.0 ? forget : 1.0;
   }
+  /// Configured for a compiled model's registration (no delay).
+  void configure(const CompiledModel& m) noexcept {
+    configure(m.yaw_window, m.yaw_drift_per_sample, 0, m.yaw_min_bend, m.yaw_forget);
+  }
+  /// A model swapped in: registers afresh for `m` from the next sample, the
+  /// turn in force carrying on until its window registers one; `tip` <- the
+  /// measured tip (x, y) turned back into the model's frame by that turn, the
+  /// new model's tip to go on from (its level at the carried states is not
+  /// known), so the old model's tip, drift and memory are not mixed in.
+  void reregister(const CompiledModel& m, double x, double y, double tip[2]) noexcept {
+    const Turn t = turn_;
+    const double in_force = angle();
+    tip[0] = t.cos * x + t.sin * y;
+    tip[1] = -t.sin * x + t.cos * y;
+    configure(m);
+    restart(in_force);
+  }
   /// A (re)start: the next sample is the start's. `initial`: the turn (rad)
   /// in force until the window registers one, and kept if it registers
   /// nothing (a model swap's: the turn the old model was at); 0 after a start.

@@ -485,9 +485,13 @@ void runLoop(double seconds, int segments) {
   std::printf("  deadline misses: %ld of %ld\n", misses, ticks);
 }
 
-void BM_DemoUpdate(benchmark::State& state) {
+// The demo's model updated on one sample after another, the sensor's yaw
+// tracked past its window (the default) or not (yaw_tracking_s = 0).
+void demoUpdates(benchmark::State& state, double yaw_tracking_s) {
   static const std::vector<BenchModel> models = plsa::bench::identifiedModels(1, [](const std::string&) {});
-  plsa::Predictor<> p(models.front().model);
+  plsa::PredictorOptions o;
+  o.yaw_tracking_s = yaw_tracking_s;
+  plsa::Predictor<> p(models.front().model, o);
   const Eigen::Vector3d u(0.25, 0.3, 0.0);
   const Eigen::Vector2d y(10.0, 40.0);
   long k = 0;
@@ -495,7 +499,10 @@ void BM_DemoUpdate(benchmark::State& state) {
     p.update(static_cast<double>(k++) * 0.0125, u, y);
   }
 }
+void BM_DemoUpdate(benchmark::State& state) { demoUpdates(state, plsa::PredictorOptions{}.yaw_tracking_s); }
 BENCHMARK(BM_DemoUpdate)->Name("Predictor<>::update (the demo's model)");
+void BM_DemoUpdateUntracked(benchmark::State& state) { demoUpdates(state, 0.0); }
+BENCHMARK(BM_DemoUpdateUntracked)->Name("Predictor<>::update (the demo's model, yaw not tracked)");
 
 }  // namespace
 

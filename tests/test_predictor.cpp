@@ -24,7 +24,8 @@ namespace {
 
 struct Data {
   DioPwlObfModel switched, interpolated, lagged, input_side, tip, complex_poles, repeated_poles, close_poles;
-  Eigen::MatrixXd u, y;  // validation run
+  Eigen::MatrixXd u, y;              // validation run
+  Eigen::MatrixXd train_u, train_y;  // the training run's
   double dt = 0.0125;
 };
 
@@ -84,6 +85,8 @@ const Data& data() {
     for (auto& row : out.close_poles.poles)
       for (auto& ps : row) ps = PoleSet({{0.9, 0.0}, {0.900001, 0.0}, {0.8, 0.0}, {0.6, 0.0}, {0.3, 0.0}});
     fitCoefficients(out.close_poles, {train.columnsOf(out.switched.inputs)}, {train.columnsOf(out.switched.outputs)});
+    out.train_u = train.columnsOf(out.switched.inputs);
+    out.train_y = train.columnsOf(out.switched.outputs);
     out.u = val.columnsOf(out.switched.inputs);
     out.y = val.columnsOf(out.switched.outputs);
     return out;
@@ -198,6 +201,39 @@ TEST(Predictor, TipFrameFollowsTheSensorsYawAsValidationDoes) {
   Predictor<5> r(m);
   EXPECT_GT(test::plannedAgainstOffline(r, d.u, turned, d.dt, in_model_frame, {40}, 7).worst, 0.1)
       << "the registration turned nothing";
+}
+
+// Past the registration window the tracked tip is read from the filter
+// states (TipReadout) instead of summed from every sample's increment, as
+// validation sums it: on a sensor whose yaw keeps turning (so the tracked
+// turn moves all along), with a mode that settles in 25 s (the readout
+// divides by 1 - lambda = 5e-4), the predictions still equal validation's;
+// a mode within kReadoutGapFloor of 1 has no readout and the sum goes on.
+TEST(Predictor, ATrackedTipReadFromTheStatesIsTheSummedOne) {
+  const Data& d = data();
+  for (const double slowest : {0.9995, 1.0 - 1e-8}) {
+    DioPwlObfModel m = d.tip;
+    for (auto& row : m.poles)
+      for (auto& ps : row) ps = PoleSet({{slowest, 0.0}, {0.95, 0.0}, {0.85, 0.0}, {0.7, 0.0}, {0.4, 0.0}});
+    fitCoefficients(m, {d.train_u}, {d.train_y});
+    fitOutputLevel(m, {d.train_u}, {d.train_y});
+    m.training_drift_per_s = {0.0, 0.03};
+    Eigen::MatrixXd y = turnedRun(d.y, 20.0);
+    for (Eigen::Index t = 0; t < y.rows(); ++t) y(t, 1) += 0.5 * d.dt * static_cast<double>(t);  // 0.5 deg/s
+    Predictor<5> p(m), untracked(m, [] {
+      PredictorOptions o;
+      o.yaw_tracking_s = 0.0;
+      return o;
+    }());
+    ASSERT_EQ(TipReadout::available(*p.compiledModel()), slowest < 1.0 - kReadoutGapFloor) << slowest;
+    const test::Agreement a =
+        test::plannedAgainstOffline(p, d.u, y, d.dt, eval::predictOutputs(m, d.u, y, {40}), {40}, 7);
+    EXPECT_GT(a.compared, 100);
+    EXPECT_LT(a.worst, 1e-9) << slowest << ": the read tip is not the summed one";
+    EXPECT_GT(
+        test::plannedAgainstOffline(untracked, d.u, y, d.dt, eval::predictOutputs(m, d.u, y, {40}), {40}, 7).worst, 0.1)
+        << slowest << ": tracking moved nothing, so the check shows nothing";
+  }
 }
 
 // A swapped-in tip model registers its own frame, over a window from the

@@ -557,18 +557,23 @@ TEST(PredictorHandBuilt, PlannedPathAgreesOnEveryGridAndBlockShape) {
 // trigonometry past the window (a rotation by the drift per sample): it must
 // stay cos and sin of angle() over a long run, registration included.
 TEST(SensorYawTurn, StaysTheCosineAndSineOfItsAngleOverALongRun) {
-  SensorYaw yaw;
-  yaw.configure(400, 3.5e-4);
-  yaw.restart();
-  double worst = 0.0;
-  for (int k = 0; k < 20000; ++k) {
-    const double t = 0.01 * k;  // a tip circling at 10 deg, the model's 0.3 rad behind
-    yaw.add(10.0 * std::cos(t - 0.3), 10.0 * std::sin(t - 0.3), 10.0 * std::cos(t), 10.0 * std::sin(t));
-    worst = std::max(
-        {worst, std::abs(yaw.turn().cos - std::cos(yaw.angle())), std::abs(yaw.turn().sin - std::sin(yaw.angle()))});
+  for (const double forget : {1.0, 0.999}) {  // the window's offset held, and tracked
+    SensorYaw yaw;
+    yaw.configure(400, 3.5e-4, 0, 0.0, forget);
+    yaw.restart();
+    double worst = 0.0, first_offset = 0.0;
+    for (int k = 0; k < 20000; ++k) {
+      const double t = 0.01 * k;  // a tip circling at 10 deg, the model's 0.3 rad behind and falling back
+      const double behind = 0.3 + 2e-5 * k;
+      yaw.add(10.0 * std::cos(t - behind), 10.0 * std::sin(t - behind), 10.0 * std::cos(t), 10.0 * std::sin(t));
+      if (k == 400) first_offset = yaw.offset();
+      worst = std::max(
+          {worst, std::abs(yaw.turn().cos - std::cos(yaw.angle())), std::abs(yaw.turn().sin - std::sin(yaw.angle()))});
+    }
+    EXPECT_GT(std::abs(yaw.offset()), 0.1) << "nothing was registered: the check shows nothing";
+    EXPECT_EQ(yaw.offset() != first_offset, forget < 1.0) << "tracked: the offset moves; held: it does not";
+    EXPECT_LT(worst, 1e-12) << forget;
   }
-  EXPECT_GT(std::abs(yaw.offset()), 0.1) << "nothing was registered: the check shows nothing";
-  EXPECT_LT(worst, 1e-12);
   SensorYaw off;  // no registration: no turn at all
   off.configure(0, 3.5e-4);
   off.restart();
@@ -713,17 +718,23 @@ TEST(SensorYawTurn, TrackingFollowsAYawTheTrainingDriftMisses) {
   }
   EXPECT_NEAR(held_on.windowOffset(), kYaw, 1e-9);
   EXPECT_NEAR(held_on.offset(), kYaw, 1e-9);
-  // One glitch, a finite reading 1e300 from the axis 2 rad away, weighs as a
-  // few samples: the offset hardly moves and keeps following afterwards.
-  SensorYaw glitched;
-  glitched.configure(kWindow, 0.0, 0, 1.0, forget);
-  glitched.restart();
-  for (int k = 0; k < kWindow + 4800; ++k) {
-    const double t = 0.01 * k, bend = k == kWindow + 100 ? 1e300 : 10.0, yaw = k == kWindow + 100 ? 2.0 : kYaw;
-    glitched.add(10.0 * std::cos(t), 10.0 * std::sin(t), bend * std::cos(t + yaw), bend * std::sin(t + yaw));
-    if (k == kWindow + 100) {
-      EXPECT_LT(std::abs(glitched.offset() - kYaw), 0.01);
+  // One glitch, a finite reading 1e6 or 1e300 (its square overflows) from
+  // the axis 2 rad away, on a tracked sample, weighs as a few samples at most:
+  // the offset hardly moves and keeps following afterwards.
+  for (const double glitch : {1e6, 1e300}) {
+    SensorYaw glitched;
+    glitched.configure(kWindow, 0.0, 0, 1.0, forget);
+    glitched.restart();
+    constexpr int kGlitch = kWindow + 12 * SensorYaw::kTrackEvery;
+    for (int k = 0; k < kWindow + 4800; ++k) {
+      const double t = 0.01 * k, bend = k == kGlitch ? glitch : 10.0, yaw = k == kGlitch ? 2.0 : kYaw;
+      glitched.add(10.0 * std::cos(t), 10.0 * std::sin(t), bend * std::cos(t + yaw), bend * std::sin(t + yaw));
+      if (k != kGlitch) continue;
+      if (glitch < 1e100) {
+        EXPECT_GT(std::abs(glitched.offset() - kYaw), 1e-4) << "the glitch was not on a tracked sample";
+      }
+      EXPECT_LT(std::abs(glitched.offset() - kYaw), 0.01) << glitch;
     }
+    EXPECT_NEAR(glitched.offset(), kYaw, 1e-3) << glitch;
   }
-  EXPECT_NEAR(glitched.offset(), kYaw, 1e-3);
 }

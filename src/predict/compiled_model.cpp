@@ -265,6 +265,25 @@ void addMergedBlocks(const CompiledModel& c, ModalForm& f) {
   }
 }
 
+// Input side: the tables that read the output from the states (TipReadout),
+// unless a mode does not settle.
+void addReadout(const CompiledModel& c, ModalForm& f) {
+  const int n = c.poles;
+  const Eigen::VectorXd gap = Eigen::VectorXd::Ones(f.lambda.size()) - f.lambda;
+  if (!(gap.size() > 0 && gap.cwiseAbs().minCoeff() > kReadoutGapFloor)) return;
+  f.readout_mode = f.lambda.cwiseQuotient(gap);
+  for (int j = 0; j < c.n_u; ++j) {
+    Eigen::MatrixXd t = Eigen::MatrixXd::Zero(c.nodes * c.channels(j), c.n_y);
+    for (int o = 0; o < c.n_y; ++o)
+      for (int i = 0; i < n; ++i) {
+        const int q = (j * c.n_y + o) * n + i;
+        for (Eigen::Index k = 0; k < t.rows(); ++k)
+          t(k, o) += f.beta(q) / gap(q) * f.coefficient(0, f.offset[static_cast<std::size_t>(q)] + k);
+      }
+    f.readout_level.push_back(std::move(t));
+  }
+}
+
 // Per output, the running power sums of its modes over the horizon.
 void addPowerSums(const CompiledModel& c, ModalForm& f) {
   const int n = c.poles, Q = c.n_u * c.n_y * n;
@@ -325,6 +344,7 @@ void compileModal(CompiledModel& c) {
   addModes(c, f);
   addModalCoefficients(c, f);
   if (c.input_side) addMergedBlocks(c, f);
+  if (c.input_side) addReadout(c, f);
   addPowerSums(c, f);
   addHeldLagSums(c, f);
   c.modal_form = std::move(f);

@@ -41,6 +41,9 @@ inline constexpr std::size_t kMaxHeldTableDoubles = std::size_t{4} << 20;
 /// (their partial fraction would lose about log10(1 / gap) digits).
 inline constexpr double kLagGapFloor = 1e-3;
 
+/// Below this |1 - lambda| a mode counts as an integrator: no TipReadout.
+inline constexpr double kReadoutGapFloor = 1e-7;
+
 struct ModalForm {
   Eigen::VectorXd lambda;   ///< [modes] the pole
   Eigen::VectorXd beta;     ///< [modes] (V^-1 B) of the mode's bank
@@ -60,6 +63,15 @@ struct ModalForm {
   /// Per input j: [nodes * channels(j)] x [block], the coefficients
   /// transposed so a node's contribution to all of j's modes is one row.
   std::vector<RowMajorMatrix> by_copy;
+  /// Input side, every mode settling (|1 - lambda| > kReadoutGapFloor): the
+  /// output read from the states (TipReadout). An output moves by its modes'
+  /// zeta each step and zeta <- lambda zeta + beta (g' - g), so the output less
+  /// sum (beta g - lambda zeta) / (1 - lambda) stays put. readout_level, per
+  /// input j: [nodes * channels(j)] x [outputs], each copy's share of that
+  /// sum per unit of its level w_r v_c; readout_mode: [modes] lambda / (1 -
+  /// lambda). Both empty otherwise.
+  std::vector<Eigen::MatrixXd> readout_level;
+  Eigen::VectorXd readout_mode;
   /// [output]: max_horizon x (its modes, in mode order), row h = sum_{s<=h} lambda^s;
   /// with lag_sum, D more columns: the same sums of rho^d, d = 1..D.
   std::vector<Eigen::MatrixXd> power_sum;

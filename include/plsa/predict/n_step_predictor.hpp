@@ -32,6 +32,7 @@
 #include "plsa/predict/plan_sensitivity.hpp"
 #include "plsa/predict/predictor_options.hpp"
 #include "plsa/predict/sensor_yaw.hpp"
+#include "plsa/predict/tip_readout.hpp"
 #include "plsa/predict/tip_angles.hpp"
 
 namespace plsa {
@@ -80,6 +81,7 @@ class NStepPredictor {
     const SubnormalsFlushed flushed;
     handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
       carryFilterStates(from, to, state_, work_state_, bank_x_);
+      readout_anchored_ = false;  // until `to`'s window closes (anchorReadout)
       // A swapped-in tip model registers its own frame (SensorYaw::reregister).
       if (to.frame == OutputFrame::kTipCartesian && samples_ > 0 && to.yaw_window > 0)
         yaw_.reregister(to, ym_(0), ym_(1), yaw_tip_);
@@ -122,16 +124,7 @@ class NStepPredictor {
       restart(m, u);
       return status;
     }
-    // The increment predicted for this sample, before it is consumed: for the
-    // simulation, and while the sensor's yaw is registered (the model's tip).
-    const bool registering = yaw_.registering();
-    if (options_.simulate || registering) increments(m, state_, us_, dir_, dy_);
-    if (options_.simulate) y_sim_ += dy_;
-    if (registering) {
-      yaw_tip_[0] += dy_(0);
-      yaw_tip_[1] += dy_(1);
-    }
-    if (m.frame == OutputFrame::kTipCartesian) yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
+    consumeIncrement(m);
     for (int j = 0; j < m.n_u; ++j) {
       du_(j) = u[j] - u_(j);
       u_(j) = u[j];
@@ -277,9 +270,43 @@ class NStepPredictor {
   void restartSensorYaw(const CompiledModel& m) noexcept {
     yaw_.configure(m);
     yaw_.restart();
+    readout_anchored_ = false;
     if (m.yaw_window == 0) return;
     settledTip(m, node_w_, vc_, yaw_tip_);
     yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
+    if (!yaw_.windowOpen()) anchorReadout(m);
+  }
+
+  // The increment predicted for this sample, before it is consumed: for the
+  // simulation, and for the model's tip while the sensor's yaw is registered
+  // (past the window, the tip is read from the states on the samples
+  // tracking reads instead, where the model allows: TipReadout).
+  void consumeIncrement(const CompiledModel& m) noexcept {
+    const bool window = yaw_.windowOpen(), read_out = readout_anchored_ && !window;
+    const bool summing = yaw_.registering() && !read_out;
+    if (options_.simulate || summing) increments(m, state_, us_, dir_, dy_);
+    if (options_.simulate) y_sim_ += dy_;
+    if (summing) {
+      yaw_tip_[0] += dy_(0);
+      yaw_tip_[1] += dy_(1);
+    } else if (read_out && yaw_.readsTip()) {
+      readout_.read(readoutPart(m), yaw_tip_);
+    }
+    if (m.frame == OutputFrame::kTipCartesian) yaw_.add(yaw_tip_[0], yaw_tip_[1], ym_(0), ym_(1));
+    if (window && !yaw_.windowOpen()) anchorReadout(m);
+  }
+  // The window has just closed on this sample (the tip summed to it): the
+  // tip is read from the states from here on if tracking needs it, the model
+  // allows it and no simulation sums the increments anyway.
+  void anchorReadout(const CompiledModel& m) noexcept {
+    readout_anchored_ = yaw_.tracking() && !options_.simulate && TipReadout::available(m);
+    if (readout_anchored_) readout_.anchor(yaw_tip_, readoutPart(m));
+  }
+  // TipReadout's states' part now (before this sample's step).
+  const double* readoutPart(const CompiledModel& m) noexcept {
+    mergeModes(m, state_, us_, dir_, zeta_);
+    TipReadout::statesPart(m, zeta_, node_w_, vc_, readout_part_);
+    return readout_part_;
   }
 
   // us <- the lag's next value toward u (lagTowards).
@@ -584,6 +611,9 @@ class NStepPredictor {
   SteeringReference steer_reference_;  // tip_cartesian: the last measured steering angle
   SensorYaw yaw_;                      // tip_cartesian: the turn from the model's frame to the sensor's
   double yaw_tip_[2] = {0.0, 0.0};     // while registering: the model's tip, in its frame
+  TipReadout readout_;                 // past the window: the tip from the states, where anchored
+  bool readout_anchored_ = false;
+  double readout_part_[2] = {0.0, 0.0};
   std::int64_t samples_ = 0;
 };
 

@@ -11,11 +11,11 @@
 // tip, in directions that have nothing to do with the yaw): only samples whose
 // measured tip is bent at least a minimum count, and unless they are half the
 // window or more the training yaw is kept (no offset). Tracking (a
-// forgetting factor under 1) keeps registering after the window, each
-// sample's terms weighed down by the factor per sample, so the turn follows
-// the sensor wherever its yaw goes instead of extrapolating the training
-// run's drift without bound; the simulation keeps the window's offset
-// (windowOffset). One value, shared by validation's simulation and k-step
+// forgetting factor under 1) keeps registering after the window on every
+// kTrackEvery-th sample, each standing for that many and every earlier one's
+// terms weighed down by the factor per sample, so the turn follows the sensor
+// wherever its yaw goes instead of extrapolating the training run's drift
+// without bound; the simulation keeps the window's offset (windowOffset). One value, shared by validation's simulation and k-step
 // predictions and the real-time predictor, so the three agree; no allocation.
 #pragma once
 
@@ -54,6 +54,7 @@ class SensorYaw {
     drift_ = drift_per_sample;
     step_ = {std::cos(drift_per_sample), std::sin(drift_per_sample)};
     forget_ = forget > 0.0 && forget < 1.0 ? forget : 1.0;
+    forget_every_ = std::pow(forget_, static_cast<double>(kTrackEvery));
   }
   /// Configured for a compiled model's registration (no delay).
   void configure(const CompiledModel& m) noexcept {
@@ -76,48 +77,60 @@ class SensorYaw {
   /// in force until the window registers one, and kept if it registers
   /// nothing (a model swap's: the turn the old model was at); 0 after a start.
   void restart(double initial = 0.0) noexcept {
-    cross_ = dot_ = 0.0;
+    cross_ = dot_ = held_cross_ = held_dot_ = 0.0;
     offset_ = window_offset_ = initial_ = initial;
+    offset_turn_ = initial == 0.0 ? Turn{} : Turn{std::cos(initial), std::sin(initial)};
+    offset_tracked_ = false;
     bent_weight_ = weight_ = 0.0;
     samples_ = bent_ = 0;
     window_registered_ = false;
-    turn_ = {1.0, 0.0};
+    turn_ = drift_turn_ = Turn{};
   }
   /// Whether it follows the sensor's yaw past the window (a forgetting factor under 1).
   bool tracking() const noexcept { return window_ > 0 && forget_ < 1.0; }
-  /// Whether add() reads the model's tip (the window is still open, or tracking).
-  bool registering() const noexcept { return window_ > 0 && (tracking() || samples_ < delay_ + window_); }
+  /// Past the window a tracked sample is every this many (the first past it
+  /// one): its terms count for that many samples.
+  static constexpr long kTrackEvery = 8;
+  /// Whether the next sample is the window's (or its delay's).
+  bool windowOpen() const noexcept { return window_ > 0 && samples_ < delay_ + window_; }
+  /// Whether add() reads the model's tip on some sample from the next on (the
+  /// window is still open, or tracking).
+  bool registering() const noexcept { return window_ > 0 && (tracking() || windowOpen()); }
+  /// Whether add() reads the model's tip on the next sample: the window's, or a tracked one.
+  bool readsTip() const noexcept {
+    return windowOpen() || (tracking() && (samples_ - delay_ - window_) % kTrackEvery == 0);
+  }
   /// The next sample: the model's tip (level_x, level_y), in its frame, and
   /// the measured one. Once the window is full the offset is set.
   void add(double level_x, double level_y, double x, double y) noexcept {
-    const double k = static_cast<double>(samples_++);
+    const long k = samples_++;
+    if (window_ == 0) return;
+    advanceDrift(k);
     const bool past = samples_ > delay_ + window_;
-    if (window_ == 0 || (past && !tracking())) return advanceTurn();
-    const double c = std::cos(drift_ * k), s = std::sin(drift_ * k);
+    if (past && (!tracking() || (k - delay_ - window_) % kTrackEvery != 0)) return composeTurn();
+    const double c = drift_turn_.cos, s = drift_turn_.sin;
     const double tx = c * level_x - s * level_y, ty = s * level_x + c * level_y;
     const bool bent = x * x + y * y >= min_bend2_;
-    if (past) return trackSample(tx, ty, x, y, bent);
+    if (past) return trackSample(tx, ty, x, y, bent);  // readsTip() was true
     if (samples_ > delay_ && bent) {
       cross_ += tx * y - ty * x;
       dot_ += tx * x + ty * y;
       ++bent_;
     }
-    if (samples_ < delay_ + window_) {
-      // The drift's turn alone (no offset yet): angle()
-      turn_ = initial_ == 0.0 ? Turn{c, s} : Turn{std::cos(angle()), std::sin(angle())};
-      return;
-    }
+    // Until the window is full the drift's turn alone (no offset yet): angle()
+    if (samples_ < delay_ + window_) return composeTurn();
     // A tip measured near the axis over half the window or more, or on it
     // in both, has no direction to register: the model's frame.
-    window_registered_ = holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_));
+    window_registered_ = holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_), magnitude());
     offset_ = window_offset_ = window_registered_ ? std::atan2(cross_, dot_) : initial_;
+    offset_turn_ = {std::cos(offset_), std::sin(offset_)};
     bent_weight_ = static_cast<double>(bent_);
     weight_ = static_cast<double>(window_);
-    turn_ = {std::cos(angle()), std::sin(angle())};
+    composeTurn();
   }
   /// The registered turn (rad), 0 until the window is full; tracking, the
   /// latest (the window's is windowOffset).
-  double offset() const noexcept { return offset_; }
+  double offset() const noexcept { return offset_tracked_ ? std::atan2(held_cross_, held_dot_) : offset_; }
   /// The turn the window registered (rad): the simulation's.
   double windowOffset() const noexcept { return window_offset_; }
   /// The window's samples so far whose measured tip was bent at least the minimum.
@@ -128,70 +141,96 @@ class SensorYaw {
   /// the axis in both.
   bool registered() const noexcept {
     if (samples_ >= delay_ + window_ && window_ > 0) return window_registered_;
-    return holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_));
+    return holdsDirection(2.0 * static_cast<double>(bent_), static_cast<double>(window_), magnitude());
   }
   /// The turn (rad) from the model's frame to the sensor's at the last sample
   /// added: the offset and the drift since the start.
   double angle() const noexcept {
-    return window_ > 0 && samples_ > 0 ? offset_ + drift_ * static_cast<double>(samples_ - 1) : 0.0;
+    return window_ > 0 && samples_ > 0 ? offset() + drift_ * static_cast<double>(samples_ - 1) : 0.0;
   }
-  /// cos and sin of angle(), kept by add(): a prediction turns without trigonometry.
+  /// cos and sin of angle(), kept by add() without trigonometry per sample
+  /// (products of the offset's and the drift's turns): a prediction turns
+  /// without it either.
   struct Turn {
     double cos = 1.0, sin = 0.0;
   };
   const Turn& turn() const noexcept { return turn_; }
 
  private:
-  // Past the window the angle grows by the drift each sample: the turn
-  // rotates by the drift's (a complex product), and is taken afresh from
-  // angle() every kExactEvery samples so rounding cannot build up.
+  // The drift's turn at sample k: the last one's rotated by the drift's (a
+  // complex product), taken afresh every kExactEvery samples so rounding
+  // cannot build up.
   static constexpr long kExactEvery = 4096;
-  void advanceTurn() noexcept {
-    if (window_ == 0) return;
-    if (samples_ % kExactEvery == 0) {
-      turn_ = {std::cos(angle()), std::sin(angle())};
-      return;
+  void advanceDrift(long k) noexcept {
+    if (k == 0) {
+      drift_turn_ = {};
+    } else if (k % kExactEvery == 0) {
+      drift_turn_ = {std::cos(drift_ * static_cast<double>(k)), std::sin(drift_ * static_cast<double>(k))};
+    } else {
+      const Turn d = drift_turn_;
+      drift_turn_ = {d.cos * step_.cos - d.sin * step_.sin, d.sin * step_.cos + d.cos * step_.sin};
     }
-    turn_ = {turn_.cos * step_.cos - turn_.sin * step_.sin, turn_.sin * step_.cos + turn_.cos * step_.sin};
+  }
+  // turn_ <- the offset's turn followed by the drift's: angle()'s.
+  void composeTurn() noexcept {
+    const Turn& o = offset_turn_;
+    const Turn& d = drift_turn_;
+    turn_ = {o.cos * d.cos - o.sin * d.sin, o.sin * d.cos + o.cos * d.sin};
+  }
+  // |(cross, dot)|: a square root, hypot only where the squares overflow.
+  double magnitude() const noexcept {
+    const double r2 = cross_ * cross_ + dot_ * dot_;
+    return std::isfinite(r2) ? std::sqrt(r2) : std::hypot(cross_, dot_);
   }
 
   static double faded(double v) noexcept { return std::abs(v) < 1e-150 ? 0.0 : v; }
-  bool holdsDirection(double twice_bent, double weight) const noexcept {
-    return window_ > 0 && twice_bent >= weight && std::hypot(cross_, dot_) > 1e-12 && std::isfinite(cross_) &&
-           std::isfinite(dot_);
+  bool holdsDirection(double twice_bent, double weight, double magnitude) const noexcept {
+    return window_ > 0 && twice_bent >= weight && magnitude > 1e-12 && std::isfinite(cross_) && std::isfinite(dot_);
   }
   // A tracked sample's terms. A reading farther than kGlitchRatio times the
-  // model's tip from the axis is taken at that distance (a glitch weighs as a
-  // few samples, not for many memories), and a term that is not finite is
-  // not added: one bad reading cannot take the registration over.
+  // model's tip from the axis is taken at that distance and stands for itself
+  // alone, not for the samples between tracked ones (a glitch weighs as a few
+  // samples, not for many memories), and a term that is not finite is not
+  // added: one bad reading cannot take the registration over.
   static constexpr double kGlitchRatio = 4.0;
   void trackSample(double tx, double ty, double x, double y, bool bent) noexcept {
     const double t2 = tx * tx + ty * ty, m2 = x * x + y * y, most = kGlitchRatio * kGlitchRatio * t2;
-    const double scale = m2 > most ? std::sqrt(most / m2) : 1.0;
+    const double scale = m2 > most ? std::sqrt(most / m2) / static_cast<double>(kTrackEvery) : 1.0;
     const double cross = scale * (tx * y - ty * x), dot = scale * (tx * x + ty * y);
     track(cross, dot, bent && std::isfinite(cross) && std::isfinite(dot));
   }
-  // Past the window, tracking: the terms so far weighed down by the factor,
-  // this sample's added if its tip is bent; the offset follows while half the
-  // (weighed) samples are bent, else the last one holds. Terms that a long
-  // straight tip has faded below 1e-150 are dropped: they would turn
-  // subnormal where the processor does not flush them.
+  // Past the window, a tracked sample: the terms so far weighed down by the
+  // factor over kTrackEvery samples, this one's added (counting for as many)
+  // if its tip is bent; the offset follows while half the (weighed) samples
+  // are bent, else the last one holds. Terms that a long straight tip has
+  // faded below 1e-150 are dropped: they would turn subnormal where the
+  // processor does not flush them.
   void track(double cross, double dot, bool bent) noexcept {
-    cross_ = faded(forget_ * cross_ + (bent ? cross : 0.0));
-    dot_ = faded(forget_ * dot_ + (bent ? dot : 0.0));
-    bent_weight_ = faded(forget_ * bent_weight_ + (bent ? 1.0 : 0.0));
-    weight_ = forget_ * weight_ + 1.0;
-    if (holdsDirection(2.0 * bent_weight_, weight_)) offset_ = std::atan2(cross_, dot_);
-    turn_ = {std::cos(angle()), std::sin(angle())};
+    constexpr auto n = static_cast<double>(kTrackEvery);
+    const double f = forget_every_;
+    cross_ = faded(f * cross_ + (bent ? n * cross : 0.0));
+    dot_ = faded(f * dot_ + (bent ? n * dot : 0.0));
+    bent_weight_ = faded(f * bent_weight_ + (bent ? n : 0.0));
+    weight_ = f * weight_ + n;
+    const double r = magnitude();
+    if (holdsDirection(2.0 * bent_weight_, weight_, r)) {
+      held_cross_ = cross_;  // offset() is their atan2, taken only when asked
+      held_dot_ = dot_;
+      offset_tracked_ = true;
+      offset_turn_ = {dot_ / r, cross_ / r};
+    }
+    composeTurn();
   }
 
   int window_ = 0;
   long delay_ = 0;
-  double drift_ = 0.0, min_bend2_ = 0.0;  // the minimum bend, squared
-  double forget_ = 1.0;
-  Turn step_, turn_;
+  double drift_ = 0.0, min_bend2_ = 0.0;         // the minimum bend, squared
+  double forget_ = 1.0, forget_every_ = 1.0;     // per sample, per tracked sample
+  Turn step_, turn_, drift_turn_, offset_turn_;  // the drift's per sample, angle()'s, the drift's and the offset's
   double cross_ = 0.0, dot_ = 0.0, offset_ = 0.0, window_offset_ = 0.0, initial_ = 0.0;
-  double bent_weight_ = 0.0, weight_ = 0.0;  // tracking: the bent samples' and all samples' weights
+  double held_cross_ = 0.0, held_dot_ = 0.0;  // tracking: the sums of the offset in force
+  bool offset_tracked_ = false;               // whether tracking has moved it (offset() from the held sums)
+  double bent_weight_ = 0.0, weight_ = 0.0;   // tracking: the bent samples' and all samples' weights
   long samples_ = 0, bent_ = 0;
   bool window_registered_ = false;
 };

@@ -737,4 +737,21 @@ TEST(SensorYawTurn, TrackingFollowsAYawTheTrainingDriftMisses) {
     }
     EXPECT_NEAR(glitched.offset(), kYaw, 1e-3) << glitch;
   }
+  // The clip is continuous: a reading just inside 4 times the model tip's
+  // distance and one just outside move the offset alike (counted for all
+  // eight samples at 4 times, fewer only beyond).
+  double moved[2] = {0.0, 0.0};
+  for (int side = 0; side < 2; ++side) {
+    SensorYaw near;
+    near.configure(kWindow, 0.0, 0, 1.0, forget);
+    near.restart();
+    constexpr int kFar = kWindow + 12 * SensorYaw::kTrackEvery;
+    for (int k = 0; k <= kFar; ++k) {
+      const double t = 0.01 * k, bend = k == kFar ? (side == 0 ? 39.9 : 40.1) : 10.0, yaw = k == kFar ? 2.0 : kYaw;
+      near.add(10.0 * std::cos(t), 10.0 * std::sin(t), bend * std::cos(t + yaw), bend * std::sin(t + yaw));
+    }
+    moved[side] = near.offset() - kYaw;
+  }
+  EXPECT_GT(moved[0], 0.01);
+  EXPECT_NEAR(moved[1], moved[0], 0.02 * moved[0]) << "a jump at the clip";
 }

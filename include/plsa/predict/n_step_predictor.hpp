@@ -80,8 +80,11 @@ class NStepPredictor {
   PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
     const SubnormalsFlushed flushed;
     handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
+      // The tip read now from `from`'s states: summed on from here if `to`
+      // does not register afresh; anchored again when its window closes.
+      if (readout_anchored_) readout_.read(readoutPart(from), yaw_tip_);
+      readout_anchored_ = false;
       carryFilterStates(from, to, state_, work_state_, bank_x_);
-      readout_anchored_ = false;  // until `to`'s window closes (anchorReadout)
       // A swapped-in tip model registers its own frame (SensorYaw::reregister).
       if (to.frame == OutputFrame::kTipCartesian && samples_ > 0 && to.yaw_window > 0)
         yaw_.reregister(to, ym_(0), ym_(1), yaw_tip_);

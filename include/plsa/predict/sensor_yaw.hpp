@@ -19,6 +19,7 @@
 // predictions and the real-time predictor, so the three agree; no allocation.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -185,17 +186,20 @@ class SensorYaw {
 
   static double faded(double v) noexcept { return std::abs(v) < 1e-150 ? 0.0 : v; }
   bool holdsDirection(double twice_bent, double weight, double magnitude) const noexcept {
-    return window_ > 0 && twice_bent >= weight && magnitude > 1e-12 && std::isfinite(cross_) && std::isfinite(dot_);
+    return window_ > 0 && twice_bent >= weight && magnitude > 1e-12 && std::isfinite(magnitude) &&
+           std::isfinite(cross_) && std::isfinite(dot_);
   }
   // A tracked sample's terms. A reading farther than kGlitchRatio times the
-  // model's tip from the axis is taken at that distance and stands for itself
-  // alone, not for the samples between tracked ones (a glitch weighs as a few
+  // model's tip from the axis is taken at that distance and stands for fewer
+  // of the samples between tracked ones the farther it is (all of them at
+  // kGlitchRatio, one at kTrackEvery times that: a glitch weighs as a few
   // samples, not for many memories), and a term that is not finite is not
   // added: one bad reading cannot take the registration over.
   static constexpr double kGlitchRatio = 4.0;
   void trackSample(double tx, double ty, double x, double y, bool bent) noexcept {
     const double t2 = tx * tx + ty * ty, m2 = x * x + y * y, most = kGlitchRatio * kGlitchRatio * t2;
-    const double scale = m2 > most ? std::sqrt(most / m2) / static_cast<double>(kTrackEvery) : 1.0;
+    const double clip = m2 > most ? std::sqrt(most / m2) : 1.0;
+    const double scale = clip * std::max(clip, 1.0 / static_cast<double>(kTrackEvery));
     const double cross = scale * (tx * y - ty * x), dot = scale * (tx * x + ty * y);
     track(cross, dot, bent && std::isfinite(cross) && std::isfinite(dot));
   }

@@ -80,9 +80,10 @@ class NStepPredictor {
   PredictorStatus update(double time_s, const U& u, const Y& y) noexcept {
     const SubnormalsFlushed flushed;
     handoff_.adopt([this](const CompiledModel& from, const CompiledModel& to) {
-      // The tip read now from `from`'s states: summed on from here if `to`
-      // does not register afresh; anchored again when its window closes.
-      if (readout_anchored_) readout_.read(readoutPart(from), yaw_tip_);
+      // The last sample's tip, read from `from`'s states (the states' part
+      // now holds this sample's increment, which `to` adds): summed on from
+      // here if `to` does not register afresh; anchored again when its window closes.
+      if (readout_anchored_) lastTipFromStates(from);
       readout_anchored_ = false;
       carryFilterStates(from, to, state_, work_state_, bank_x_);
       // A swapped-in tip model registers its own frame (SensorYaw::reregister).
@@ -304,6 +305,13 @@ class NStepPredictor {
   void anchorReadout(const CompiledModel& m) noexcept {
     readout_anchored_ = yaw_.tracking() && !options_.simulate && TipReadout::available(m);
     if (readout_anchored_) readout_.anchor(yaw_tip_, readoutPart(m));
+  }
+  // yaw_tip_ <- the last sample's tip: the one read now less this sample's increment.
+  void lastTipFromStates(const CompiledModel& m) noexcept {
+    readout_.read(readoutPart(m), yaw_tip_);
+    increments(m, state_, us_, dir_, dy_);
+    yaw_tip_[0] -= dy_(0);
+    yaw_tip_[1] -= dy_(1);
   }
   // TipReadout's states' part now (before this sample's step).
   const double* readoutPart(const CompiledModel& m) noexcept {

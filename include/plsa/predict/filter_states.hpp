@@ -60,7 +60,7 @@ PLSA_TARGET_AVX2 inline void stepModesAvx2(const ModalForm& f, int begin, int en
 /// (SubnormalsFlushed); elsewhere states below kTinyState are set to zero
 /// here. `resting[j]`: input j's states are all zero; they stay so, and are
 /// skipped, while its drive is zero (a chamber never pressurised). `drive`:
-/// per copy of each input's banks (NStepPredictor::driveInputs); `bank_x`: a
+/// per copy of each input's banks (ModelStep::driveInputs); `bank_x`: a
 /// bank's scratch state (poles long).
 inline void stepFilters(const CompiledModel& m, const Eigen::VectorXd& drive, Eigen::VectorXd& state,
                         std::array<bool, kMaxRestingInputs>& resting, Eigen::VectorXd& bank_x) noexcept {

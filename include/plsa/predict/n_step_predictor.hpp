@@ -29,6 +29,7 @@
 #include "plsa/predict/kernels.hpp"
 #include "plsa/predict/merged_modes.hpp"
 #include "plsa/predict/model_handoff.hpp"
+#include "plsa/predict/model_step.hpp"
 #include "plsa/predict/plan_sensitivity.hpp"
 #include "plsa/predict/predictor_options.hpp"
 #include "plsa/predict/sensor_yaw.hpp"
@@ -85,7 +86,7 @@ class NStepPredictor {
       // here if `to` does not register afresh; anchored again when its window closes.
       if (readout_anchored_) lastTipFromStates(from);
       readout_anchored_ = false;
-      carryFilterStates(from, to, state_, work_state_, bank_x_);
+      carryFilterStates(from, to, state_, work_state_, step_.bankScratch());
       // A swapped-in tip model registers its own frame (SensorYaw::reregister).
       if (to.frame == OutputFrame::kTipCartesian && samples_ > 0 && to.yaw_window > 0)
         yaw_.reregister(to, ym_(0), ym_(1), yaw_tip_);
@@ -134,8 +135,8 @@ class NStepPredictor {
       u_(j) = u[j];
     }
     m.partition.updateDirections(du_, dir_);
-    lagSchedule(m, u_, us_);
-    advance(m, state_, vc_, us_, node_w_, u_, resting_);
+    ModelStep::lagSchedule(m, u_, us_);
+    step_.advance(m, state_, vc_, us_, node_w_, u_, resting_);
     y_ = ym_;
     ++samples_;
     return status;
@@ -232,13 +233,13 @@ class NStepPredictor {
     accept_max_ = m.accept_max;
     const auto nu = static_cast<Eigen::Index>(m.n_u), nc = static_cast<Eigen::Index>(m.play.size());
     for (Eigen::VectorXd* v : {&u_, &du_, &us_, &work_u_, &work_us_}) v->setZero(nu);
-    for (Eigen::VectorXd* v : {&vc_, &work_vc_, &delta_}) v->setZero(nc);
+    for (Eigen::VectorXd* v : {&vc_, &work_vc_}) v->setZero(nc);
     for (Eigen::VectorXd* v : {&y_, &ym_, &y_sim_, &work_y_, &dy_}) v->setZero(m.n_y);
     const Eigen::Index nodes = m.input_side ? m.nodes : 0;
-    for (Eigen::VectorXd* v : {&node_w_, &work_node_w_, &next_node_w_}) v->setZero(nodes);
+    for (Eigen::VectorXd* v : {&node_w_, &work_node_w_}) v->setZero(nodes);
     state_.setZero(m.states());
     work_state_.setZero(m.states());
-    bank_x_.setZero(m.poles);
+    step_.allocate(m);
     const Eigen::Index modes = static_cast<Eigen::Index>(m.n_u) * m.n_y * m.poles;
     zeta_.setZero(modes);
     const Eigen::Index slots = m.modal && m.input_side ? static_cast<Eigen::Index>(m.n_u) * m.modal_form.block : 0;
@@ -248,8 +249,6 @@ class NStepPredictor {
     turn_.setZero(2 * static_cast<Eigen::Index>(options_.max_horizon));  // turns, then lengths
     sens_nominal_.setZero(options_.max_horizon, m.n_y);
     sensitivity_.allocate(m, options_.max_horizon);
-    blended_.setZero(m.states());
-    drive_.setZero(static_cast<Eigen::Index>(m.nodes) * static_cast<Eigen::Index>(m.play.size()));
   }
 
   // The first sample, or the first after a gap: filters at rest, channels and lag settled here.
@@ -264,7 +263,7 @@ class NStepPredictor {
       vc_(static_cast<Eigen::Index>(c)) =
           playStartState(m.shaping.level(u_(m.channel_input[c]), positive_sum), m.play[c], m.shaping.start);
     dir_ = DirectionState{};
-    if (m.input_side) nodeWeights(m, us_, node_w_);
+    if (m.input_side) ModelStep::nodeWeights(m, us_, node_w_);
     y_ = y_sim_ = ym_;
     restartSensorYaw(m);
     samples_ = 1;
@@ -288,7 +287,7 @@ class NStepPredictor {
   void consumeIncrement(const CompiledModel& m) noexcept {
     const bool window = yaw_.windowOpen(), read_out = readout_anchored_ && !window;
     const bool summing = yaw_.registering() && !read_out;
-    if (options_.simulate || summing) increments(m, state_, us_, dir_, dy_);
+    if (options_.simulate || summing) step_.increments(m, state_, us_, dir_, dy_);
     if (options_.simulate) y_sim_ += dy_;
     if (summing) {
       yaw_tip_[0] += dy_(0);
@@ -309,142 +308,15 @@ class NStepPredictor {
   // yaw_tip_ <- the last sample's tip: the one read now less this sample's increment.
   void lastTipFromStates(const CompiledModel& m) noexcept {
     readout_.read(readoutPart(m), yaw_tip_);
-    increments(m, state_, us_, dir_, dy_);
+    step_.increments(m, state_, us_, dir_, dy_);
     yaw_tip_[0] -= dy_(0);
     yaw_tip_[1] -= dy_(1);
   }
   // TipReadout's states' part now (before this sample's step).
   const double* readoutPart(const CompiledModel& m) noexcept {
-    mergeModes(m, state_, us_, dir_, zeta_);
+    step_.mergeModes(m, state_, us_, dir_, zeta_);
     TipReadout::statesPart(m, zeta_, node_w_, vc_, readout_part_);
     return readout_part_;
-  }
-
-  // us <- the lag's next value toward u (lagTowards).
-  static void lagSchedule(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& us) noexcept {
-    for (Eigen::Index j = 0; j < us.size(); ++j) us(j) = lagTowards(us(j), u(j), m.schedule_pole);
-  }
-
-  // Dense node weights (input side) at the scheduling point us.
-  static void nodeWeights(const CompiledModel& m, const Eigen::VectorXd& us, Eigen::VectorXd& w) noexcept {
-    ScheduleBlend blend;
-    m.node_partition.blend(us, DirectionState{}, blend);
-    w.setZero();
-    for (int k = 0; k < blend.count; ++k)
-      w(blend.region[static_cast<std::size_t>(k)]) += blend.weight[static_cast<std::size_t>(k)];
-  }
-
-  // Moves the played channels to the input u (delta_: how far each moved).
-  void moveChannels(const CompiledModel& m, const Eigen::VectorXd& u, Eigen::VectorXd& vc) noexcept {
-    const double positive_sum = m.shaping.coupling != 0.0 ? m.shaping.positiveSum(u) : 0.0;  // unused when uncoupled
-    for (std::size_t c = 0; c < m.play.size(); ++c) {
-      const auto cc = static_cast<Eigen::Index>(c);
-      const double level = m.shaping.level(u(m.channel_input[c]), positive_sum);
-      const double next = m.play[c].follow(level, vc(cc));
-      delta_(cc) = next - vc(cc);
-      vc(cc) = next;
-    }
-  }
-
-  // What drives the filters this step: per copy of each input's banks (node
-  // r, channel c at nodes * first_channel(j) + r * channels(j) + c), the
-  // channel's move, or on the input side the move of its node's weight times
-  // the channel (w' v' - w v); every output's and pole's bank of that copy
-  // takes the same drive.
-  void driveInputs(const CompiledModel& m, const Eigen::VectorXd& vc, const Eigen::VectorXd& node_w) noexcept {
-    const int nodes = m.nodes;
-    for (int ch = 0; ch < static_cast<int>(m.play.size()); ++ch) {
-      const int j = m.channel_input[static_cast<std::size_t>(ch)];
-      const int first = m.first_channel[static_cast<std::size_t>(j)], channels = m.channels(j);
-      double* __restrict d = drive_.data() + nodes * first + (ch - first);
-      const double v = vc(ch), before = v - delta_(ch);
-      if (!m.input_side) {
-        d[0] = delta_(ch);
-        continue;
-      }
-      const double* __restrict next = next_node_w_.data();
-      const double* __restrict now = node_w.data();
-      if (channels == 1) {
-        for (int r = 0; r < nodes; ++r) d[r] = next[r] * v - now[r] * before;
-      } else {
-        for (int r = 0; r < nodes; ++r) d[r * channels] = next[r] * v - now[r] * before;
-      }
-    }
-  }
-
-  // Moves the channels to u and steps every filter with its drive; on the
-  // input side the node weights move to the lagged input us (node_w holds
-  // the previous ones).
-  void advance(const CompiledModel& m, Eigen::VectorXd& state, Eigen::VectorXd& vc, const Eigen::VectorXd& us,
-               Eigen::VectorXd& node_w, const Eigen::VectorXd& u,
-               std::array<bool, kMaxRestingInputs>& resting) noexcept {
-    moveChannels(m, u, vc);
-    if (m.input_side) nodeWeights(m, us, next_node_w_);
-    driveInputs(m, vc, node_w);
-    stepFilters(m, drive_, state, resting, bank_x_);
-    if (m.input_side) node_w = next_node_w_;
-  }
-
-  // zeta <- each mode's copies merged through the coefficients scheduled at
-  // (us, dir): one number per mode.
-  void mergeModes(const CompiledModel& m, const Eigen::VectorXd& state, const Eigen::VectorXd& us,
-                  const DirectionState& dir, Eigen::VectorXd& zeta) noexcept {
-    const ModalForm& f = m.modal_form;
-    ScheduleBlend blend;
-    m.partition.blend(us, dir, blend);
-    if (blend.count == 1) {  // one region (always on the input side): its row as it is
-      segmentDots(f.coefficient.data() + static_cast<Eigen::Index>(blend.region[0]) * f.coefficient.cols(),
-                  state.data(), f.offset.data(), static_cast<int>(zeta.size()), zeta.data());
-      return;
-    }
-    blended_.setZero();
-    for (int k = 0; k < blend.count; ++k)
-      blended_ += blend.weight[static_cast<std::size_t>(k)] *
-                  f.coefficient.row(blend.region[static_cast<std::size_t>(k)]).transpose();
-    for (Eigen::Index q = 0; q < zeta.size(); ++q) {
-      const int begin = f.offset[static_cast<std::size_t>(q)],
-                width = f.offset[static_cast<std::size_t>(q) + 1] - begin;
-      zeta(q) = blended_.segment(begin, width).dot(state.segment(begin, width));
-    }
-  }
-
-  // dy_o = the sum of output o's modes (modes run input, output, pole).
-  static void sumModes(const CompiledModel& m, const Eigen::VectorXd& zeta, Eigen::VectorXd& dy) noexcept {
-    const int n = m.poles;
-    const double* z = zeta.data();
-    for (int o = 0; o < m.n_y; ++o) dy(o) = 0.0;
-    for (int j = 0; j < m.n_u; ++j)
-      for (int o = 0; o < m.n_y; ++o, z += n) {
-        double acc = 0.0;
-        for (int i = 0; i < n; ++i) acc += z[i];
-        dy(o) += acc;
-      }
-  }
-
-  // dy for the next sample from the filter states, scheduled on (us, dir).
-  void increments(const CompiledModel& m, const Eigen::VectorXd& state, const Eigen::VectorXd& us,
-                  const DirectionState& dir, Eigen::VectorXd& dy) noexcept {
-    if (m.modal) {
-      mergeModes(m, state, us, dir, zeta_);
-      sumModes(m, zeta_, dy);
-      return;
-    }
-    const StateSpaceForm& s = m.state_space;
-    ScheduleBlend blend;
-    m.partition.blend(us, dir, blend);
-    const int n = m.poles;
-    dy.setZero();
-    for (std::size_t b = 0; b < s.bank_output.size(); ++b) {
-      const int o = s.bank_output[b];
-      double dot = 0.0;
-      for (int k = 0; k < blend.count; ++k)
-        dot += blend.weight[static_cast<std::size_t>(k)] *
-               s.coefficient[static_cast<std::size_t>(blend.region[static_cast<std::size_t>(k)])]
-                            [static_cast<std::size_t>(o)]
-                                .segment(s.coefficient_offset[b], n)
-                                .dot(state.segment(static_cast<Eigen::Index>(b) * n, n));
-      dy(o) += dot;
-    }
   }
 
   // predict() in the model's output frame.
@@ -484,14 +356,14 @@ class NStepPredictor {
   // Input side, input held while its lagged schedule still moves: the modes
   // merged at the schedule now, then the closed form (held_lagged.hpp).
   PredictorStatus predictHeldLagged(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
-    mergeModes(m, state_, us_, dir_, zeta_);
+    step_.mergeModes(m, state_, us_, dir_, zeta_);
     held_lagged_.run(m, zeta_, us_, u_, vc_, work_y_, horizon, out);
     return PredictorStatus::kOk;
   }
 
   PredictorStatus predictSettled(const CompiledModel& m, int horizon, Eigen::Ref<Eigen::MatrixXd> out) noexcept {
     const ModalForm& f = m.modal_form;
-    mergeModes(m, state_, u_, dir_, zeta_);
+    step_.mergeModes(m, state_, u_, dir_, zeta_);
     for (int o = 0; o < m.n_y; ++o) {
       const auto& modes = f.modes_of_output[static_cast<std::size_t>(o)];
       auto zeta = zeta_of_output_.head(static_cast<Eigen::Index>(modes.size()));
@@ -514,7 +386,7 @@ class NStepPredictor {
       }
       m.partition.updateDirections(du_, dir);
     }
-    lagSchedule(m, work_u_, work_us_);
+    ModelStep::lagSchedule(m, work_u_, work_us_);
   }
 
   // Input side, modal: the copies merged once into one state per mode; each
@@ -565,7 +437,7 @@ class NStepPredictor {
     const int block = B > 0 ? B : f.block, per_input = m.n_y * m.poles;
     PLSA_DEBUG_ASSERT(block == f.block && block % 4 == 0 && per_input <= block && merged::fits(m));
     PLSA_DEBUG_ASSERT(merged_.size() == static_cast<Eigen::Index>(m.n_u) * block && g_.size() == merged_.size());
-    mergeModes(m, state_, us_, dir_, zeta_);
+    step_.mergeModes(m, state_, us_, dir_, zeta_);
     merged_.setZero();
     for (int j = 0; j < m.n_u; ++j) merged_.segment(j * block, per_input) = zeta_.segment(j * per_input, per_input);
     merged::PlannedSchedule schedule(m, u_, us_, vc_);
@@ -587,12 +459,12 @@ class NStepPredictor {
     DirectionState dir = dir_;
     std::array<bool, kMaxRestingInputs> work_resting = resting_;
     for (int h = 0; h < horizon; ++h) {
-      increments(m, work_state_, work_us_, dir, dy_);
+      step_.increments(m, work_state_, work_us_, dir, dy_);
       work_y_ += dy_;
       out.row(h) = work_y_.transpose();
       if (h + 1 == horizon) break;
       planStep(m, plan, h, dir);
-      advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_, work_resting);
+      step_.advance(m, work_state_, work_vc_, work_us_, work_node_w_, work_u_, work_resting);
     }
     return PredictorStatus::kOk;
   }
@@ -605,16 +477,15 @@ class NStepPredictor {
 
   // Real-time state, all sized at construction.
   Eigen::VectorXd state_, work_state_;  // filter states: modal z, or banks' x, in the model's form
-  Eigen::VectorXd drive_;               // per state: what drives it this step
-  Eigen::VectorXd bank_x_;              // one bank's state (swaps, dense banks)
-  Eigen::VectorXd zeta_, merged_, g_, zeta_of_output_, blended_;
+  ModelStep step_;                      // one sample of the banks, and its workspace
+  Eigen::VectorXd zeta_, merged_, g_, zeta_of_output_;
   std::array<bool, kMaxRestingInputs> resting_{};  // per input: its filter states are all zero
   HeldLaggedForm held_lagged_;                     // held input with a moving lag
   Eigen::VectorXd turn_;                           // tip frame: each predicted row's turn
   Eigen::MatrixXd sens_nominal_;                   // sensitivity(): the nominal prediction
   PlanSensitivity sensitivity_;
-  Eigen::VectorXd node_w_, work_node_w_, next_node_w_;  // input side: node weights now, in predict(), next
-  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, delta_, y_, ym_, y_sim_, work_y_, dy_;
+  Eigen::VectorXd node_w_, work_node_w_;  // input side: node weights now, in predict()
+  Eigen::VectorXd u_, du_, work_u_, us_, work_us_, vc_, work_vc_, y_, ym_, y_sim_, work_y_, dy_;
   DirectionState dir_;
   double t_ = 0.0;
   int behind_ = 0;  // samples in a row behind t_, each after the one before

@@ -24,7 +24,7 @@ class TipReadout {
     return m.modal && m.input_side && m.n_y >= 2 && m.modal_form.readout_mode.size() > 0;
   }
   /// The states' part of outputs 0 and 1: the merged modes `zeta` (mode order,
-  /// as NStepPredictor::mergeModes), the node weights and channel levels.
+  /// as ModelStep::mergeModes), the node weights and channel levels.
   static void statesPart(const CompiledModel& m, const Eigen::VectorXd& zeta, const Eigen::VectorXd& node_w,
                          const Eigen::VectorXd& vc, double part[2]) noexcept {
     const ModalForm& f = m.modal_form;

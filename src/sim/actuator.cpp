@@ -200,11 +200,31 @@ void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
   }
   // Semi-implicit Euler on theta'' = w^2 (target - spring(theta)) - 2 zeta w theta',
   // spring(theta) = theta, or theta (1 + per_rad2 |theta|^2) for a hardening "power" stiffening.
-  Eigen::Vector2d spring = bend_;
-  if (c.stiffening.enabled && stiffening_law_ == StiffeningLaw::kPower && c.stiffening.per_rad2 > 0.0)
-    spring *= 1.0 + c.stiffening.per_rad2 * bend_.squaredNorm();
-  bend_rate_ += (omega * omega * (target - spring) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * dt_;
-  bend_ += bend_rate_ * dt_;
+  const bool hardening =
+      c.stiffening.enabled && stiffening_law_ == StiffeningLaw::kPower && c.stiffening.per_rad2 > 0.0;
+  const int pieces = bendingPieces(omega, hardening ? 1.0 + 3.0 * c.stiffening.per_rad2 * bend_.squaredNorm() : 1.0);
+  const double h = dt_ / pieces;
+  for (int k = 0; k < pieces; ++k) {
+    Eigen::Vector2d spring = bend_;
+    if (hardening) spring *= 1.0 + c.stiffening.per_rad2 * bend_.squaredNorm();
+    bend_rate_ += (omega * omega * (target - spring) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * h;
+    bend_ += bend_rate_ * h;
+  }
+}
+
+// The pieces one substep's bending is integrated in. Semi-implicit Euler on
+// the damped oscillator is stable while a^2 + 4 zeta a < 4 (a = w dt, w the
+// natural frequency with the spring's local stiffening `spring_slope`); a
+// substep is split so that each piece keeps a^2 + 4 zeta a <= 2, so a
+// segment stiffened far past its natural frequency (high pressures, a
+// hardening spring) neither diverges nor rings. One piece wherever that
+// holds at internal_step_s, so those runs are unchanged.
+int Actuator::bendingPieces(double omega, double spring_slope) const {
+  const double zeta = config_.bending.damping_ratio;
+  const double a = omega * std::sqrt(spring_slope) * dt_;
+  const double a_max = std::sqrt(4.0 * zeta * zeta + 2.0) - 2.0 * zeta;  // the root of a^2 + 4 zeta a = 2
+  if (!(a > a_max)) return 1;                                             // also a NaN: nothing to split
+  return static_cast<int>(std::min(std::ceil(a / a_max), static_cast<double>(kMaxBendingPieces)));
 }
 
 void Actuator::substep(const std::array<double, 3>& cmd) {

@@ -82,6 +82,8 @@ class Actuator {
   double hysteresisStrain(std::size_t chamber, double strain);
   double creepStrain(std::size_t chamber, double strain);
   void bendToward(Eigen::Vector2d target, double sum_p);
+  int bendingPieces(double omega, double spring_slope) const;
+  static constexpr int kMaxBendingPieces = 100000;  ///< a bound on the work of one substep
   /// A chamber's pressure past the deadzone (the smooth law out of line).
   double effectivePressure(double p) const {
     if (!config_.deadzone.enabled) return p;

@@ -52,6 +52,20 @@ TEST_F(CsvLogTest, ReadsMetadataHeaderAndRows) {
   EXPECT_EQ(log.columnsOf({"bend_deg", "cmd_1"})(0, 1), 0.1);
 }
 
+// Found by a probe: 40 million '#' lines (80 MB) took 2.5 GB, every comment kept.
+TEST_F(CsvLogTest, KeepsAThousandCommentLinesAndCountsTheRest) {
+  std::string text;
+  for (int i = 0; i < 5000; ++i) text += "# comment " + std::to_string(i) + "\n# key" + std::to_string(i) + ": v\n";
+  const auto log = plsa::io::readCsvLog(write(text + "# key3: later\ntime_s,y\n0,1\n0.1,2\n"));
+  EXPECT_EQ(log.comments.size(), plsa::io::kKeptCommentLines);
+  EXPECT_EQ(log.metadata.size(), plsa::io::kKeptCommentLines);
+  EXPECT_EQ(log.metadata.at("key3"), "later");  // a key kept takes its later value
+  EXPECT_EQ(log.comments.back(), "comment 999");
+  ASSERT_EQ(log.warnings.size(), 1u);
+  EXPECT_NE(log.warnings[0].find("8000 '#' lines past the first 1000"), std::string::npos) << log.warnings[0];
+  EXPECT_EQ(log.samples(), 2);
+}
+
 TEST_F(CsvLogTest, RoundTripsExactly) {
   plsa::io::Log log;
   log.columns = {"time_s", "y"};
@@ -77,6 +91,13 @@ TEST_F(CsvLogTest, RejectsMalformedFilesWithLineAndReason) {
   expectError("time_s,y,y\n0,1,1\n", ":1: header names column 'y' twice");
   expectError("time_s,y\x01z\n0,1\n", ":1: header column 2 has the control character U+0001 at byte 1 of its name");
   expectError("time_s,y\x7f\n0,1\n", ":1: header column 2 has the control character U+007F at byte 1");
+  // Found by a probe: a name outside UTF-8 was read, and failed only in the model's JSON after the whole fit.
+  expectError("time_s,y\xffz\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1 of its name");
+  expectError("time_s,y\xc2\x85\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");  // C1 control U+0085
+  expectError("time_s,y\xe2\x82\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");  // cut sequence
+  EXPECT_EQ(plsa::io::readCsvLog(write("time_s,\xce\xb8_deg\n0,1\n")).columns[1], "\xce\xb8_deg");  // theta reads
+  // A 100 kB cell is quoted by its first 40 bytes and its size, not echoed whole.
+  expectError("time_s,y\n0," + std::string(100000, '7') + "x\n", "'7777777777777777777777777777777777777777...' (100001 bytes) is not a number");
   expectError("# only a comment\n", "no header line");
   expectError("time_s,y\n", "no data rows");
 }

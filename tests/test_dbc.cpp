@@ -94,6 +94,8 @@ TEST(Dbc, WhatASignalMapCannotCarryIsNamedWithItsLine) {
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\" A\n SG_ counter : 16|8@1+ (2,0) [0|0] \"\" A\n",
        "a counter or checksum is one unsigned byte"},
       {head + " SG_ a : 0|16@1+ (x,0) [0|0] \"\" A\n", "scale 'x' is not a number"},
+      {head + " SG_ a : 0|16@1+ (0x10,0) [0|0] \"\" A\n", "scale '0x10' is not a decimal number"},  // read as 16
+      {head + " SG_ a : 0|16@1+ (1e308,0) [0|0] \"\" A\n", "raw range past the largest double"},
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] A\n", ":4: not a DBC signal line"},
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\" A\nSIG_VALTYPE_ 256 a : 1;\n", "a float signal (SIG_VALTYPE_)"},
       {"BO_ 256 m: 9 A\n", "dlc 9 (classic CAN: 0..8)"},

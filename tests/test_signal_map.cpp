@@ -89,6 +89,12 @@ TEST(SignalMap, SignedBigEndianSignalsAndJsonErrors) {
   EXPECT_NE(errorOf("77.276e25776e257LF{").find("not valid JSON"), std::string::npos);
   EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1e999})")).find("map.json"),
             std::string::npos);
+  // Found by a probe: a finite scale whose raw range overflows decoded every frame as inf (written to CSV, exit 0).
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 16, "scale": 1e308})")).find("largest double"),
+            std::string::npos);
+  EXPECT_NE(errorOf(withSignals(R"({"name": "a", "byte": 0, "bits": 8, "scale": 1e305, "offset": 1.797e308})"))
+                .find("largest double"),
+            std::string::npos);
   // Found by fuzz_signal_map under UBSan: a float too large for the id's
   // integer type was converted before any check. Integer fields are now
   // type- and range-checked first.

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plsa/core/printable_text.hpp"
+
 namespace plsa::can {
 
 namespace {
@@ -28,6 +30,8 @@ double number(const std::string& text, const std::string& what, const std::strin
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v))
     rejectDbcLine(source, line, what + " '" + text + "' is not a number");
+  if (text.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16; a DBC's numbers are decimal
+    rejectDbcLine(source, line, what + " '" + text + "' is not a decimal number");
   return v;
 }
 
@@ -40,28 +44,12 @@ bool togglesQuote(const std::string& line) {
   return odd;
 }
 
-// Whether text is well-formed UTF-8 (no overlong forms, surrogates or code
-// points past U+10FFFF) without control characters, double quotes or
-// backslashes: a unit both a DBC string and JSON carry as it is.
+// Whether text is well-formed UTF-8 (no overlong forms, surrogates, code
+// points past U+10FFFF or C1 controls) without control characters, double
+// quotes or backslashes: a unit both a DBC string and JSON carry as it is.
 bool printableUtf8(const std::string& text) {
-  for (std::size_t k = 0; k < text.size();) {
-    const auto c = static_cast<unsigned char>(text[k]);
-    if (c < 0x80) {
-      if (c < 0x20 || c == 0x7F || c == '"' || c == '\\') return false;
-      ++k;
-      continue;
-    }
-    const std::size_t more = c >= 0xC2 && c <= 0xDF ? 1 : c >= 0xE0 && c <= 0xEF ? 2 : c >= 0xF0 && c <= 0xF4 ? 3 : 0;
-    if (more == 0 || k + more >= text.size()) return false;  // a lead byte, and all its continuation bytes
-    const auto next = static_cast<unsigned char>(text[k + 1]);
-    if ((c == 0xE0 && next < 0xA0) || (c == 0xED && next >= 0xA0) || (c == 0xF0 && next < 0x90) ||
-        (c == 0xF4 && next >= 0x90))
-      return false;
-    for (std::size_t i = 1; i <= more; ++i)
-      if ((static_cast<unsigned char>(text[k + i]) >> 6) != 0x2) return false;
-    k += more + 1;
-  }
-  return true;
+  return utf8ProblemAt(text) == std::string::npos && controlCharacterAt(text) == std::string::npos &&
+         text.find_first_of("\"\\") == std::string::npos;
 }
 
 struct SignalLine {

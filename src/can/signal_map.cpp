@@ -100,6 +100,10 @@ void SignalMap::validate() const {
         throw std::invalid_argument(where + "signal '" + s.name + "': bits must be 8, 16 or 32 (byte-aligned signals)");
       if (!(s.scale != 0.0) || !std::isfinite(s.scale) || !std::isfinite(s.offset))
         throw std::invalid_argument(where + "signal '" + s.name + "': scale must be finite and non-zero");
+      const PhysicalRange range = physicalRange(s);
+      if (!std::isfinite(range.lo) || !std::isfinite(range.hi))
+        throw std::invalid_argument(where + "signal '" + s.name +
+                                    "': its scale and offset take the raw range past the largest double");
       for (int b = 0; b < s.bits / 8; ++b) claim(s.byte + b, "signal '" + s.name + "'");
     }
   }

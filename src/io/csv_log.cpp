@@ -119,13 +119,23 @@ class LineReader {
 
 // A '#' line: "# key: value" (no blank before the colon) is metadata, any
 // other a comment.
-void readCommentLine(const std::string& t, Log& log) {
+// Up to kKeptCommentLines of each are kept (a key already kept takes a
+// later value); the rest are counted (`dropped`), so a file of millions of
+// '#' lines costs no memory beyond them.
+void readCommentLine(const std::string& t, Log& log, std::size_t& dropped) {
   const std::string body = trim(t.substr(1));
   const auto colon = body.find(':');
-  if (colon != std::string::npos && colon > 0 && body.find_first_of(" \t") > colon)
-    log.metadata[trim(body.substr(0, colon))] = trim(body.substr(colon + 1));
-  else
+  if (colon != std::string::npos && colon > 0 && body.find_first_of(" \t") > colon) {
+    const std::string key = trim(body.substr(0, colon));
+    if (log.metadata.size() < kKeptCommentLines || log.metadata.count(key) > 0)
+      log.metadata[key] = trim(body.substr(colon + 1));
+    else
+      ++dropped;
+  } else if (log.comments.size() < kKeptCommentLines) {
     log.comments.push_back(body);
+  } else {
+    ++dropped;
+  }
 }
 
 // The header: every column named once, the required ones present; returns
@@ -142,6 +152,10 @@ int readHeader(std::vector<std::string> fields, const std::string& path, std::si
            "header column " + std::to_string(i + 1) + " has the control character " +
                controlCharacterName(fields[i][at]) + " at byte " + std::to_string(at) +
                " of its name (column names are printable text)");
+    if (const std::size_t at = utf8ProblemAt(fields[i]); at != std::string::npos)
+      fail(path, lineno,  // written into a model's JSON, it would fail there after the whole identification
+           "header column " + std::to_string(i + 1) + " is not UTF-8 text at byte " + std::to_string(at) +
+               " of its name (a C1 control or a byte outside UTF-8; column names are printable text)");
     if (!seen.insert(fields[i]).second) fail(path, lineno, "header names column '" + fields[i] + "' twice");
   }
   log.columns = fields;
@@ -149,6 +163,12 @@ int readHeader(std::vector<std::string> fields, const std::string& path, std::si
     if (!log.hasColumn(r)) fail(path, lineno, "header has no column '" + r + "' (it has: " + columnList(fields) + ")");
   if (!options.time_column.empty() && log.hasColumn(options.time_column)) return log.columnIndex(options.time_column);
   return -1;
+}
+
+// A cell as a message quotes it: at most 48 bytes of it (a 1 MiB cell is not echoed whole).
+std::string quotedCell(const std::string& f) {
+  if (f.size() <= 48) return "'" + f + "'";
+  return "'" + f.substr(0, 40) + "...' (" + std::to_string(f.size()) + " bytes)";
 }
 
 // A data row: as many finite numbers as the header has columns, appended to `values`.
@@ -163,10 +183,10 @@ void readRow(const std::vector<std::string>& fields, const std::string& path, st
     errno = 0;
     const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
     if (f.empty() || end != f.c_str() + f.size())
-      fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a number");
+      fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a number");
     if (f.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16: a hex-coded column misread
-      fail(path, lineno, "column '" + log.columns[i] + "': '" + f + "' is not a decimal number");
-    if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value '" + f + "' is not finite");
+      fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a decimal number");
+    if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value " + quotedCell(f) + " is not finite");
     values.push_back(v);
   }
 }
@@ -189,6 +209,7 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
   int time_col = -1;
   double last_time = -std::numeric_limits<double>::infinity();
   Eigen::Index rows = 0;
+  std::size_t dropped_comments = 0;
   while (lines.next(line)) {
     const std::size_t lineno = lines.number();
     // A UTF-8 byte-order mark (spreadsheets write one) would hide the first column's name.
@@ -198,7 +219,7 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
     if (t.find('\r') != std::string::npos)
       fail(path, lineno, "a carriage return inside the line: lines end in CR alone (convert them to LF or CR LF)");
     if (t[0] == '#') {
-      readCommentLine(t, log);
+      readCommentLine(t, log, dropped_comments);
       continue;
     }
     const std::vector<std::string> fields = splitFields(t);
@@ -224,6 +245,9 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
     log.warnings.push_back(path + ":" + std::to_string(lines.number()) +
                            ": the file ends without a newline; its last row may have been cut short (check its "
                            "last value)");
+  if (dropped_comments > 0)
+    log.warnings.push_back(path + ": " + std::to_string(dropped_comments) + " '#' lines past the first " +
+                           std::to_string(kKeptCommentLines) + " comments and metadata keys not kept");
   const auto cols = static_cast<Eigen::Index>(log.columns.size());
   log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(values.data(),
                                                                                                       rows, cols);

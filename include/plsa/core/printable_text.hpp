@@ -24,4 +24,27 @@ inline std::string controlCharacterName(char c) {
   return code;
 }
 
+/// Index of the first byte of `s` that is not well-formed UTF-8 (an
+/// overlong form, a surrogate, a code point past U+10FFFF or a cut
+/// sequence) or that starts a C1 control character (U+0080-U+009F), or npos.
+inline std::size_t utf8ProblemAt(std::string_view s) noexcept {
+  for (std::size_t k = 0; k < s.size();) {
+    const auto c = static_cast<unsigned char>(s[k]);
+    if (c < 0x80) {
+      ++k;
+      continue;
+    }
+    const std::size_t more = c >= 0xC2 && c <= 0xDF ? 1 : c >= 0xE0 && c <= 0xEF ? 2 : c >= 0xF0 && c <= 0xF4 ? 3 : 0;
+    if (more == 0 || k + more >= s.size()) return k;  // a lead byte, and all its continuation bytes
+    const auto next = static_cast<unsigned char>(s[k + 1]);
+    if ((c == 0xE0 && next < 0xA0) || (c == 0xED && next >= 0xA0) || (c == 0xF0 && next < 0x90) ||
+        (c == 0xF4 && next >= 0x90) || (c == 0xC2 && next < 0xA0))
+      return k;
+    for (std::size_t i = 1; i <= more; ++i)
+      if ((static_cast<unsigned char>(s[k + i]) >> 6) != 0x2) return k;
+    k += more + 1;
+  }
+  return std::string_view::npos;
+}
+
 }  // namespace plsa

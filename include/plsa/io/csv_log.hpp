@@ -56,6 +56,8 @@ struct CsvReadOptions {
 /// Longest line the reader takes: a log's rows are a few hundred bytes, and a
 /// file without line breaks (binary data, a wrong path) must not fill memory.
 inline constexpr std::size_t kMaxCsvLineBytes = std::size_t{1} << 20;
+/// Comment lines, and metadata keys, a log keeps; further ones are counted in a warning.
+inline constexpr std::size_t kKeptCommentLines = 1000;
 
 /// Reads a log; throws std::runtime_error "FILE:LINE: reason" on any defect
 /// (missing file, no header, duplicate or missing column, ragged row, text or

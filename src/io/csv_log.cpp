@@ -258,17 +258,43 @@ void writeCsvLog(const std::string& path, const Log& log) {
   if (static_cast<Eigen::Index>(log.columns.size()) != log.data.cols())
     throw std::invalid_argument("writeCsvLog: " + std::to_string(log.columns.size()) + " column names for " +
                                 std::to_string(log.data.cols()) + " columns");
-  std::ostringstream out;
-  for (const auto& [k, v] : log.metadata) out << "# " << k << ": " << v << '\n';
-  for (const auto& c : log.comments) out << "# " << c << '\n';
-  for (std::size_t i = 0; i < log.columns.size(); ++i) out << (i ? "," : "") << log.columns[i];
-  out << '\n';
-  for (Eigen::Index r = 0; r < log.data.rows(); ++r) {
-    for (Eigen::Index c = 0; c < log.data.cols(); ++c) out << (c ? "," : "") << shortest(log.data(r, c));
-    out << '\n';
-  }
-  writeFileAtomically(path, out.str(), "log");
+  // Written a megabyte at a time: a 10-million-row log is not held twice as text.
+  writeFileAtomicallyFrom(path, "log", [&](const auto& emit) {
+    std::string text;
+    for (const auto& [k, v] : log.metadata) text += "# " + k + ": " + v + '\n';
+    for (const auto& c : log.comments) text += "# " + c + '\n';
+    for (std::size_t i = 0; i < log.columns.size(); ++i) text += (i ? "," : "") + log.columns[i];
+    text += '\n';
+    for (Eigen::Index r = 0; r < log.data.rows(); ++r) {
+      for (Eigen::Index c = 0; c < log.data.cols(); ++c) (text += (c ? "," : "")) += shortest(log.data(r, c));
+      text += '\n';
+      if (text.size() >= (std::size_t{1} << 20)) {
+        emit(text);
+        text.clear();
+      }
+    }
+    emit(text);
+  });
 }
+
+namespace {
+
+// A dropped sample or two is a logger's hiccup; more than 1% of the
+// intervals over 1.5 sample times is a log with samples dropped throughout
+// or recorded at a second rate, whose k-step horizons would mean other times.
+void refuseDroppedSamples(const Log& log, const std::vector<double>& dt, double median) {
+  std::size_t long_ones = 0, first = 0;
+  for (std::size_t k = 0; k < dt.size(); ++k)
+    if (dt[k] > 1.5 * median && long_ones++ == 0) first = k;
+  if (long_ones <= 2 || long_ones * 100 <= dt.size()) return;
+  std::ostringstream msg;
+  msg << log.source << ": " << long_ones << " of " << dt.size() << " sample intervals (the first before data row "
+      << first + 2 << ") are over 1.5 times the median sample time " << median
+      << " s: samples dropped throughout or a second rate; resample the log to one rate";
+  throw std::runtime_error(msg.str());
+}
+
+}  // namespace
 
 double checkedSampleTime(const Log& log, const std::string& time_column, double max_gap_factor) {
   const Eigen::VectorXd t = log.column(time_column);
@@ -278,6 +304,13 @@ double checkedSampleTime(const Log& log, const std::string& time_column, double 
   std::vector<double> sorted = dt;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
   const double median = sorted[sorted.size() / 2];
+  if (!(median >= kMinSampleTimeS && median <= kMaxSampleTimeS)) {
+    std::ostringstream msg;
+    msg << log.source << ": median sample time " << median << " s of column '" << time_column << "' is outside "
+        << kMinSampleTimeS << " to " << kMaxSampleTimeS << " s (is the time column in seconds?)";
+    throw std::runtime_error(msg.str());
+  }
+  refuseDroppedSamples(log, dt, median);
   for (std::size_t k = 0; k < dt.size(); ++k) {
     if (dt[k] > max_gap_factor * median) {
       std::ostringstream msg;

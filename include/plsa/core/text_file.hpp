@@ -64,16 +64,19 @@ inline std::string folderOf(const std::string& path) {
 /// The path that means standard output, as command-line tools take it.
 inline constexpr const char* kStandardOutput = "-";
 
-/// Writes `bytes` to `path` atomically: into a temporary file beside it,
-/// fsync'ed, then renamed over `path` (and the folder fsync'ed). A path that
-/// exists and is not a regular file (a FIFO, /dev/null) is written in place;
-/// "-" (kStandardOutput) is standard output.
-/// Throws std::runtime_error "PATH: cannot write the WHAT: reason"; on any
-/// failure the temporary file is removed and `path` is left as it was.
-inline void writeFileAtomically(const std::string& path, std::string_view bytes, const std::string& what) {
+/// Writes what `produce` emits to `path` atomically: into a temporary file
+/// beside it, fsync'ed, then renamed over `path` (and the folder fsync'ed).
+/// `produce(emit)` calls `emit(std::string_view)` for each piece in order, so
+/// a large output is written as it is made rather than held whole. A path
+/// that exists and is not a regular file (a FIFO, /dev/null) is written in
+/// place; "-" (kStandardOutput) is standard output. Throws
+/// std::runtime_error "PATH: cannot write the WHAT: reason"; on any failure
+/// the temporary file is removed and `path` is left as it was.
+template <class Produce>
+void writeFileAtomicallyFrom(const std::string& path, const std::string& what, Produce&& produce) {
   if (path == kStandardOutput) {
     std::fflush(stdout);  // whatever was printed before comes first
-    detail::writeAll(STDOUT_FILENO, bytes, "standard output", what);
+    produce([&](std::string_view piece) { detail::writeAll(STDOUT_FILENO, piece, "standard output", what); });
     return;
   }
   struct stat st {};
@@ -81,7 +84,7 @@ inline void writeFileAtomically(const std::string& path, std::string_view bytes,
     const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd < 0) throw std::runtime_error(path + ": cannot write the " + what + ": " + std::strerror(errno));
     try {
-      detail::writeAll(fd, bytes, path, what);
+      produce([&](std::string_view piece) { detail::writeAll(fd, piece, path, what); });
     } catch (...) {
       ::close(fd);
       throw;
@@ -104,9 +107,13 @@ inline void writeFileAtomically(const std::string& path, std::string_view bytes,
   ::umask(mask);
   ::fchmod(fd, static_cast<mode_t>(0666 & ~mask));
   try {
-    detail::writeAll(fd, bytes, path, what);
+    produce([&](std::string_view piece) { detail::writeAll(fd, piece, path, what); });
   } catch (const std::runtime_error&) {
     fail(errno);
+  } catch (...) {  // the producer's own failure: no file is left behind either
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
   }
   if (::fsync(fd) != 0) fail(errno);
   const int closed = ::close(fd);
@@ -122,6 +129,11 @@ inline void writeFileAtomically(const std::string& path, std::string_view bytes,
     ::fsync(dir);  // the rename itself reaches the disk
     ::close(dir);
   }
+}
+
+/// Writes `bytes` to `path` atomically (writeFileAtomicallyFrom, in one piece).
+inline void writeFileAtomically(const std::string& path, std::string_view bytes, const std::string& what) {
+  writeFileAtomicallyFrom(path, what, [&](const auto& emit) { emit(bytes); });
 }
 
 /// Writes `text` to `path` atomically (writeFileAtomically).

@@ -106,6 +106,10 @@ TEST(CandumpLog, MalformedLinesAreNamedWithTheirLineNumber) {
       {"(1764150000.000100) can0", "not a candump log line"},
       {"(1764150000.000100) can0 200#00 X", "not a candump log line"},
       {"(1764150000.000100) can0 200#00" + std::string(300, ' '), "longer than 256 bytes"},
+      // Found by a probe: a name with escape sequences reached the terminal in a warning, one with a NUL cut it.
+      {"(1764150000.000100) \x1b]0;pwned\x07\x1b[2J 200#00", "the interface name is not 1 to 15 printable ASCII"},
+      {std::string("(1764150000.000100) ca\0n1 200#00", 32), "the interface name is not 1 to 15 printable ASCII"},
+      {"(1764150000.000100) can0123456789abcdef 200#00", "the interface name is not 1 to 15 printable ASCII"},
   };
   test::expectEachRefused<std::runtime_error>(
       second_lines, [&](const std::string& line) { read(good + line + "\n"); }, "bus.log:2: ");

@@ -155,6 +155,15 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   // "nan" passes a range check (its comparisons are all false): refused by name.
   EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --fuzziness nan --out " + file("x.json")), 2);
   EXPECT_NE(err_.find("'nan' is not a finite number"), std::string::npos) << err_;
+  // Its range said "Value 1.0000000001 not in range 1.000000 to 100.000000", a value inside what it printed.
+  EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --fuzziness 1.0000000001 --out " + file("x.json")), 2);
+  EXPECT_NE(err_.find("'1.0000000001' is not a fuzziness m over 1 (at least 1 + 1e-9) and at most 100"),
+            std::string::npos)
+      << err_;
+  // A slow pole under the sample time failed after the structure search as "tiedSlowMode: ... (0, 1)".
+  EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --slow-pole 0.001 --out " + file("x.json")), 1);
+  EXPECT_NE(err_.find("identify: --slow-pole 0.001 s is shorter than the 0.0125 s sample time"), std::string::npos)
+      << err_;
   EXPECT_EQ(run("identify --log " + file("val.lcmlog") + " --play-coupling 0.1,nan --out " + file("x.json")), 2);
   EXPECT_NE(err_.find("'nan' is not a finite number"), std::string::npos) << err_;
   EXPECT_EQ(run("validate --help"), 0);
@@ -378,6 +387,10 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
   EXPECT_FALSE(fs::exists(file("m.json")));
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,12,1"), 1);
   EXPECT_NE(err_.find("crossval: horizon 1 is given twice"), std::string::npos) << err_;
+  std::string many = "1";  // each horizon costs a prediction per sample: 4000 took validate 2.1 GB
+  for (int k = 2; k <= 33; ++k) many += "," + std::to_string(k);
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons " + many), 1);
+  EXPECT_NE(err_.find("crossval: 33 horizons given; at most 32"), std::string::npos) << err_;
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,477"), 1);
   EXPECT_NE(err_.find("j1.csv: 480 samples are too few to score horizon 477 after ARX's 4 lags"), std::string::npos)
       << err_;

@@ -203,6 +203,27 @@ TEST_F(CsvLogTest, SampleTimeAndGaps) {
     EXPECT_NE(std::string(e.what()).find("time gap"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("row 4"), std::string::npos) << e.what();
   }
+  // Found by a probe: every other sample dropped in a log's second half (a
+  // second rate) passed as 80 Hz; so did a time column scaled by 1e250.
+  auto refusal = [&](const std::string& text) -> std::string {
+    try {
+      plsa::io::checkedSampleTime(plsa::io::readCsvLog(write(text)), "time_s", plsa::io::kToleratedGapFactor);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  std::string two_rates = "time_s,y\n", dropouts = "time_s,y\n";
+  for (int k = 0; k < 400; ++k) two_rates += std::to_string(k < 200 ? 0.0125 * k : 2.5 + 0.025 * (k - 200)) + ",1\n";
+  for (int k = 0; k < 400; ++k) dropouts += std::to_string(0.0125 * (k + (k > 100 ? 1 : 0) + (k > 300 ? 1 : 0))) + ",1\n";
+  EXPECT_NE(refusal(two_rates).find("199 of 399 sample intervals (the first before data row 202) are over 1.5 times"),
+            std::string::npos)
+      << refusal(two_rates);
+  EXPECT_EQ(refusal(dropouts), "accepted");  // two dropped samples: a hiccup, as the real arm's logs have
+  EXPECT_NE(refusal("time_s,y\n0,1\n1e248,1\n2e248,1\n").find("median sample time 1e+248 s of column 'time_s' is "
+                                                                 "outside 1e-05 to 60 s"),
+            std::string::npos);
+  EXPECT_NE(refusal("time_s,y\n0,1\n1e-9,1\n2e-9,1\n").find("is outside"), std::string::npos);
 }
 
 TEST(RealData, Bruder2021TrialsParse) {

@@ -106,6 +106,9 @@ TEST(SearchSample, TheChosenStructureIsFittedOnEverySample) {
                         "--cv-chunk 1e+18 s puts every sample in one cross-validation fold");
   bad.cv_chunk_s = 25.0;  // one chunk per 25 s window: fold 0 holds everything
   expectThrowContaining([&] { identifyModel({train}, bad); }, "lasts 25 s; give a chunk under that");
+  bad.cv_chunk_s = 0.001;  // found by a probe: one-sample chunks were scored (the folds leak), 15x slower
+  expectThrowContaining([&] { identifyModel({train}, bad); },
+                        "--cv-chunk 0.001 s is 1 sample(s) at 0.0125 s; give at least 0.2 s (16 samples)");
   bad.cv_chunk_s = 20.0;  // two chunks per window: the third fold is empty and left out of the scores
   EXPECT_NO_THROW(identifyModel({train}, bad));
   bad = o;

@@ -249,6 +249,12 @@ CandumpLine parseCandumpLine(const std::string& line, const std::string& source,
   CandumpLine out;
   out.time_s = timeStamp(fields[0], source, line_number);
   out.interface = fields[1];
+  // A network interface's name: warnings quote it, so escape sequences or a NUL must not pass.
+  if (out.interface.size() > 15 || std::any_of(out.interface.begin(), out.interface.end(), [](char c) {
+        return static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e;
+      }))
+    rejectLine(source, line_number, "the interface name is not 1 to 15 printable ASCII characters (a network "
+                                    "interface's name)");
   frameField(fields[2], out, source, line_number);
   return out;
 }

@@ -77,6 +77,9 @@ void IdentificationRun::applyPlay(const std::vector<PlayChannel>& set) {
 // Interleaved: chunks dealt to the folds in turn, held-out rows weighted out;
 // a search window's warm-up rows (sampleForSearch) in every fold's fit, scored
 // in none.
+// The fewest samples an interleaved cross-validation chunk holds.
+constexpr double kMinChunkRows = 16.0;
+
 void IdentificationRun::cutFolds() {
   PLSA_CHECK(o.play_selection_folds >= 2, "identify: cross-validation needs at least 2 folds");
   interleaved = o.cv_layout == CvLayout::kInterleaved;
@@ -95,6 +98,12 @@ void IdentificationRun::cutFolds() {
     Eigen::Index longest = 0;
     for (const auto& u : U) longest = std::max(longest, u.rows());
     const double chunk_rows = std::max(1.0, std::round(o.cv_chunk_s / dt));
+    // Chunks of a few samples hold every scored sample out beside fitted
+    // neighbours: the folds leak, and each score costs many times more.
+    PLSA_CHECK(chunk_rows >= kMinChunkRows, "identify: --cv-chunk " + formatNumber(o.cv_chunk_s) + " s is " +
+                                                formatNumber(chunk_rows) + " sample(s) at " + formatNumber(dt) +
+                                                " s; give at least " + formatNumber(kMinChunkRows * dt) +
+                                                " s (" + formatNumber(kMinChunkRows) + " samples)");
     if (chunk_rows >= static_cast<double>(longest))
       unusable_folds = "identify: --cv-chunk " + formatNumber(o.cv_chunk_s) +
                        " s puts every sample in one cross-validation fold, leaving the others nothing to fit on: the "

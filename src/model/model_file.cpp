@@ -11,7 +11,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plsa/core/number_text.hpp"
 #include "plsa/core/text_file.hpp"
+#include "plsa/io/csv_log.hpp"
+#include "plsa/io/standard_columns.hpp"
 #include "plsa/io/strict_json.hpp"
 
 namespace plsa {
@@ -142,6 +145,9 @@ class ModelReader {
     io::requireKnownKeysIn(j_, kTopKeys, "", source_);
     DioPwlObfModel m;
     m.sample_time_s = number(at(j_, "sample_time_s", ""), "sample_time_s");
+    if (!(m.sample_time_s >= io::kMinSampleTimeS && m.sample_time_s <= io::kMaxSampleTimeS))
+      bad("sample_time_s " + significantDigits(m.sample_time_s, 6) + " is outside " + significantDigits(io::kMinSampleTimeS, 6) + " to " +
+          significantDigits(io::kMaxSampleTimeS, 6) + " s");
     m.inputs = names("inputs");
     m.outputs = names("outputs");
     readUnits(m);
@@ -213,6 +219,8 @@ class ModelReader {
     for (const auto& s : array(at(j_, key, ""), key)) {
       out.push_back(string(s, key + "[]"));
       if (out.back().empty()) bad("'" + key + "' has an empty name");
+      if (out.back() == io::standard_columns::kTime)
+        bad("'" + key + "' names '" + out.back() + "', the logs' time, not an input or output");
       if (std::count(out.begin(), out.end(), out.back()) > 1) bad("'" + key + "' names '" + out.back() + "' twice");
     }
     return out;

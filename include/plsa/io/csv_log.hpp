@@ -73,8 +73,15 @@ Log readCsvLog(std::istream& in, const std::string& source, const CsvReadOptions
 /// atomically (a temporary file renamed over `path`).
 void writeCsvLog(const std::string& path, const Log& log);
 
-/// Median sample time of the time column; throws if any step is more than
-/// `max_gap_factor` times the median, naming the row and the gap.
+/// Sample times the tools take (100 kHz to one sample a minute).
+inline constexpr double kMinSampleTimeS = 1e-5;
+inline constexpr double kMaxSampleTimeS = 60.0;
+
+/// Median sample time of the time column; throws if it lies outside
+/// [kMinSampleTimeS, kMaxSampleTimeS], if more than 1% of the intervals (and
+/// more than two) exceed 1.5 times it (samples dropped throughout, a second
+/// rate), or if any step is more than `max_gap_factor` times the median,
+/// naming the row and the gap.
 double checkedSampleTime(const Log& log, const std::string& time_column = standard_columns::kTime,
                          double max_gap_factor = 1.5);
 

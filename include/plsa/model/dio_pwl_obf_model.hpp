@@ -129,6 +129,25 @@ struct DioPwlObfModel {
     return input_ranges.empty() ? std::array<double, 2>{input_min, input_max} : input_ranges[input];
   }
 
+  /// The shaping against the training range (when the model has one), at
+  /// most what identification fits: the threshold under the top level, the
+  /// coupling and softening times the level span above it at most 1 and 0.5
+  /// (beyond them every channel reads zero, or the coupled level overflows
+  /// or folds back inside the range the model was fitted on).
+  void validateShapingRange() const {
+    if (!std::isfinite(input_max) || input_max <= 0.0) return;
+    PLSA_CHECK(shaping.threshold < input_max, "model: play_threshold " + std::to_string(shaping.threshold) +
+                                                  " is not below the top of input_range (" +
+                                                  std::to_string(input_max) + "): every channel would read 0");
+    const double above = input_max - shaping.threshold;
+    PLSA_CHECK(shaping.coupling * above <= 1.0,
+               "model: play_coupling times the input span above play_threshold is " +
+                   std::to_string(shaping.coupling * above) + ", over 1");
+    PLSA_CHECK(shaping.softening * above <= 0.5,
+               "model: play_softening times the input span above play_threshold is " +
+                   std::to_string(shaping.softening * above) + ", over 0.5 (the level would fold back)");
+  }
+
   /// Throws std::invalid_argument naming the first inconsistency.
   void validate() const {
     PLSA_CHECK(sample_time_s > 0 && std::isfinite(sample_time_s), "model: sample_time_s must be positive");
@@ -148,6 +167,7 @@ struct DioPwlObfModel {
                  "model: every input_ranges entry must be finite with min <= max");
     PLSA_CHECK(poles.size() == outputs.size(), "model: need one row of pole sets per output");
     shaping.validate(inputs.size());
+    validateShapingRange();
     PLSA_CHECK(std::isfinite(schedule_lag_s) && schedule_lag_s >= 0, "model: schedule_lag_s must be finite and >= 0");
     PLSA_CHECK(output_level.empty() || schedule_side == ScheduleSide::kInput,
                "model: output_level needs input-side scheduling (only there is the level a function of the inputs)");

@@ -26,6 +26,7 @@ struct ConvertArgs {
 
 void runConvert(const ConvertArgs& a) {
   refuseOverwritingInputs(a.out, "--out", {a.in, a.can_profile}, "plsa convert");
+  refuseMissingOutputFolder(a.out, "--out", "plsa convert");
   logPaths({a.in}, "convert", false);  // a file or a pipe; a device is no log
   io::ReadOptions ro;
   ro.lcm_channel = a.channel;
@@ -45,6 +46,7 @@ struct CanProfileArgs {
 
 void runCanProfile(const CanProfileArgs& a) {
   refuseOverwritingInputs(a.out, "--out", {a.in}, "plsa can-profile");
+  refuseMissingOutputFolder(a.out, "--out", "plsa can-profile");
   const can::SignalMap map = a.in.empty() ? can::defaultSignalMap() : can::loadSignalMap(a.in);
   for (const std::string& w : can::driverProfileWarnings(map))
     std::fprintf(stderr, "plsa can-profile: warning: %s\n", w.c_str());

@@ -88,6 +88,7 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
   std::vector<std::string> read = files;
   read.push_back(a.can_profile);
   refuseOverwritingInputs(a.json, "--json", read, "plsa crossval");
+  refuseMissingOutputFolder(a.json, "--json", "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
   const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
   const int lags = std::max(a.arx_na, a.arx_nb);

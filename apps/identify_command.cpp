@@ -97,6 +97,7 @@ void runIdentify(IdentifyArgs& a) {
   std::vector<std::string> read = a.logs;
   read.push_back(a.can_profile);
   refuseOverwritingInputs(a.out, "--out", read, "plsa identify");
+  refuseMissingOutputFolder(a.out, "--out", "plsa identify");
   const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
   if (a.structure == "paper") {  // the peers the demo and generalise score plsa against
     const auto progress = o.progress;

@@ -5,6 +5,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "plsa/core/text_file.hpp"
 #include "plsa/io/log_readers.hpp"
 
 namespace fs = std::filesystem;
@@ -71,6 +72,15 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
       throw std::invalid_argument(tool + ": " + option + " " + output + " is " +
                                   (in == output ? std::string("an input") : "the input " + in) +
                                   "; plsa never writes over what it reads (choose another output path)");
+}
+
+void refuseMissingOutputFolder(const std::string& output, const std::string& option, const std::string& tool) {
+  if (output.empty() || output == kStandardOutput) return;
+  const fs::path folder = fs::path(output).parent_path();
+  std::error_code ec;
+  if (!folder.empty() && !fs::is_directory(folder, ec))
+    throw std::invalid_argument(tool + ": " + option + " " + output + ": the folder " + folder.string() +
+                                " does not exist (create it first)");
 }
 
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool) {

@@ -25,6 +25,11 @@ namespace plsa::app {
 void refuseOverwritingInputs(const std::string& output, const std::string& option,
                              const std::vector<std::string>& inputs, const std::string& tool);
 
+/// Throws std::invalid_argument naming `option` when `output`'s folder does
+/// not exist (or is not a folder), so a mistyped path fails before the work,
+/// not at the write after it. "" and "-" (standard output) pass.
+void refuseMissingOutputFolder(const std::string& output, const std::string& option, const std::string& tool);
+
 /// Reads a log in any format this build reads (io::logReaders(): CSV, and LCM
 /// event logs in a build with LCM), printing its warnings as "TOOL: warning: ...".
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);

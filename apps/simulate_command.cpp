@@ -24,6 +24,7 @@ struct SimulateOptions {
 
 void runSimulate(const SimulateOptions& o) {
   refuseOverwritingInputs(o.out, "--out", {o.config}, "plsa simulate");
+  refuseMissingOutputFolder(o.out, "--out", "plsa simulate");
   const sim::SimConfig config = o.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(o.config);
   sim::ExperimentOptions eo;
   eo.sample_rate_hz = config.sample_rate_hz;

@@ -127,8 +127,10 @@ std::string describeSimulation(const DioPwlObfModel& model, const eval::Simulati
 }
 
 void runValidate(const ValidateArgs& a) {
-  for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}})
+  for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}}) {
     refuseOverwritingInputs(out, option, {a.model, a.log, a.can_profile}, "plsa validate");
+    refuseMissingOutputFolder(out, option, "plsa validate");
+  }
   if (a.csv != kStandardOutput) refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
   if (a.json == kStandardOutput && a.csv == kStandardOutput)
     throw std::invalid_argument("plsa validate: --json and --csv cannot both be '-' (standard output)");

@@ -85,6 +85,16 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
   EXPECT_EQ(run("validate --model /dev/zero --log " + file("j.csv")), 1);
   EXPECT_NE(err_.find("/dev/zero: the model file is larger than 64 MiB"), std::string::npos) << err_;
 
+  // An output in a folder that does not exist is named before the work (a probe: identify and validate
+  // failed at the write, after all of it).
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --out " + file("no/such/m.json")), 1);
+  EXPECT_NE(err_.find("plsa identify: --out " + file("no/such/m.json") + ": the folder " + file("no/such") +
+                      " does not exist"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(err_.find("[2/5]"), std::string::npos) << "identification ran: " << err_;
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --json " + file("no/v.json")), 1);
+  EXPECT_NE(err_.find("plsa validate: --json " + file("no/v.json") + ": the folder"), std::string::npos) << err_;
   // Outputs never replace inputs: the training log, the model, the validation log.
   EXPECT_EQ(run("identify --log " + file("j.csv") + " --out " + file("j.csv")), 1);
   EXPECT_NE(err_.find("--out " + file("j.csv") + " is an input"), std::string::npos) << err_;

@@ -141,6 +141,19 @@ TEST(CandumpLog, TooFewSensorFramesOrAnotherBusSaySo) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("older than the one before it"), std::string::npos) << e.what();
   }
+  // Every frame logged twice (found by a probe) was said to "share one time stamp".
+  std::string twice;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) twice += line + "\n" + line + "\n";
+  try {
+    read(twice);
+    ADD_FAILURE();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("half or more of the pressure_sensor frames repeat the time stamp before "
+                                         "them (frames logged twice?)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(CandumpLog, TheRegistryKnowsItByContentAndTheProfileDecidesTheIds) {

@@ -102,6 +102,8 @@ TEST(Dbc, WhatASignalMapCannotCarryIsNamedWithItsLine) {
       {" SG_ a : 0|16@1+ (1,0) [0|0] \"\" A\n", ":1: a signal outside any message"},
       {head + " SG_ a : 56|16@1+ (1,0) [0|0] \"\" A\n", "lies beyond the frame's 8 bytes"},
       {"VERSION \"\"\n", "no BO_ messages"},
+      {"CM_ \"a stray quote\n" + head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\" A\n",  // found by a probe
+       ":1: a string opened here is never closed"},
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"d\xE9g\" A\n", "the unit is not printable UTF-8"},  // Latin-1
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\xED\xA0\x80\" A\n", "the unit is not printable UTF-8"},
       {head + " SG_ a : 0|16@1+ (1,0) [0|0] \"\\\" A\n", "the unit is not printable UTF-8"},

@@ -355,6 +355,29 @@ TEST(Pipeline, StillColumnsAreRefusedNamingThem) {
       << "one input moving is enough";
 }
 
+// Found by a probe: outputs times 1e300 failed as "fitCoefficients: the
+// regressors are all zero", outputs near 1e-299 as "the measured signal is
+// constant"; each is named by its magnitude now, before any work.
+TEST(Pipeline, ColumnsBeyondWhatAFitTakesAreRefusedNamingThem) {
+  const auto whyRefused = [](const io::Log& log) {
+    try {
+      identifyModel({log}, partitionOnly({"p_1", "p_2", "p_3"}, {"y"}));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  io::Log huge = randomChambersLog(120.0), tiny = huge, huge_input = huge;
+  huge.data.col(4) *= 1e300;
+  tiny.data.col(4) *= 1e-300;
+  huge_input.data.col(2) *= 1e200;
+  EXPECT_NE(whyRefused(huge).find("identify: column 'y' reaches "), std::string::npos) << whyRefused(huge);
+  EXPECT_NE(whyRefused(huge).find("values beyond 1e150 cannot be fitted"), std::string::npos);
+  EXPECT_NE(whyRefused(huge_input).find("identify: column 'p_2' reaches "), std::string::npos)
+      << whyRefused(huge_input);
+  EXPECT_NE(whyRefused(tiny).find("identify: output 'y' moves by only "), std::string::npos) << whyRefused(tiny);
+}
+
 // A column named twice among the inputs and outputs, or the time as one of
 // them, is refused before any work (before, after the whole identification,
 // by the model file; the time identified as a signal).

@@ -178,7 +178,12 @@ io::Log gridded(std::vector<MappedMessage>& messages, const std::string& source,
     throw std::runtime_error(source + ": " + std::to_string(sensor.size()) +
                              " pressure_sensor frames; a log needs at least 3 (is the signal map the bus's?)");
   const double dt = sensorPeriod(sensor);
-  if (!(dt > 0.0)) throw std::runtime_error(source + ": the pressure_sensor frames share one time stamp");
+  if (!(dt > 0.0)) {
+    const bool one_stamp = sensor.back() == sensor.front();
+    throw std::runtime_error(source + (one_stamp ? ": the pressure_sensor frames share one time stamp"
+                                                 : ": half or more of the pressure_sensor frames repeat the time "
+                                                   "stamp before them (frames logged twice?)"));
+  }
   std::size_t first = 0;
   for (const MappedMessage* m : present)
     while (first < sensor.size() && !(m->times.front() < sensor[first] + 0.5 * dt)) ++first;

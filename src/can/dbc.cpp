@@ -151,12 +151,16 @@ SignalMap signalMapFromDbc(const std::string& text, const std::string& source, c
   std::istringstream lines(text);
   std::string line;
   bool in_string = false, skipping = false, in_message = false;
+  std::size_t string_opened = 0;  // the line a string still open began on
   std::set<std::pair<unsigned long long, std::string>> floats;
   for (std::size_t number = 1; std::getline(lines, line); ++number) {
     if (line.size() > kMaxDbcLineBytes) rejectDbcLine(source, number, "line longer than 4096 bytes");
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const bool was_in_string = in_string;
-    if (togglesQuote(line)) in_string = !in_string;
+    if (togglesQuote(line)) {
+      in_string = !in_string;
+      if (in_string) string_opened = number;
+    }
     if (was_in_string) continue;  // the rest of a comment from an earlier line
     std::istringstream words(line);
     std::string keyword;
@@ -195,6 +199,8 @@ SignalMap signalMapFromDbc(const std::string& text, const std::string& source, c
       in_message = skipping = false;  // anything else ends a message's signal lines
     }
   }
+  if (in_string)  // every line after it was read as the string's: say so, not "no BO_ messages"
+    rejectDbcLine(source, string_opened, "a string opened here is never closed (a '\"' missing)");
   for (const auto& [id, name] : floats)
     for (const MessageLayout& message : map.messages)
       if (message.id == id)

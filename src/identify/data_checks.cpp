@@ -68,4 +68,33 @@ void IdentificationRun::refuseStillColumns() const {
                                 "(check --inputs)");
 }
 
+// Columns whose values a least-squares fit cannot take: beyond 1e150 their
+// squares overflow (the fits then fail as "regressors all zero"), and an
+// output that moves by under 1e-150 has a spread whose square underflows.
+// Refused before any work, naming the column.
+void IdentificationRun::refuseUnfittableMagnitudes() const {
+  auto check = [](const std::vector<Eigen::MatrixXd>& blocks, const std::vector<std::string>& names, bool output) {
+    for (std::size_t j = 0; j < names.size(); ++j) {
+      double largest = 0.0, lo = INFINITY, hi = -INFINITY;
+      for (const auto& b : blocks) {
+        if (b.rows() == 0) continue;
+        const auto c = b.col(static_cast<Eigen::Index>(j));
+        largest = std::max(largest, c.cwiseAbs().maxCoeff());
+        lo = std::min(lo, c.minCoeff());
+        hi = std::max(hi, c.maxCoeff());
+      }
+      if (largest > kLargestFittable)
+        throw std::invalid_argument("identify: column '" + names[j] + "' reaches " + formatNumber(largest) +
+                                    "; values beyond 1e150 cannot be fitted (their squares overflow): is it in "
+                                    "the right unit?");
+      if (output && hi > lo && hi - lo < 1.0 / kLargestFittable)
+        throw std::invalid_argument("identify: output '" + names[j] + "' moves by only " + formatNumber(hi - lo) +
+                                    "; under 1e-150 a fit cannot be computed (its square underflows): is it in "
+                                    "the right unit?");
+    }
+  };
+  check(U, o.inputs, false);
+  check(Y, o.outputs, true);
+}
+
 }  // namespace plsa::identify

@@ -201,6 +201,8 @@ struct IdentificationRun {
   void applyPlay(const std::vector<PlayChannel>& set);
   void stepResolution();
   void refuseStillColumns() const;
+  void refuseUnfittableMagnitudes() const;
+  static constexpr double kLargestFittable = 1e150;
   void say(const std::string& line);
   PairPoles& pairAt(int in_i, int out_i);
 

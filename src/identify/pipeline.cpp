@@ -226,6 +226,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
     Ref.push_back(log.columnsOf(reference));
     times.push_back(log.column(io::standard_columns::kTime));
   }
+  refuseUnfittableMagnitudes();
   refuseStillColumns();
   for (double tau : o.slow_pole_candidates)  // exp(-dt / tau) would be 0 or a fast pole, not a slow one
     PLSA_CHECK(tau == 0.0 || tau >= dt, "identify: --slow-pole " + formatNumber(tau) + " s is shorter than the " +

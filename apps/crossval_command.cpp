@@ -97,6 +97,13 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
       throw std::invalid_argument("crossval: " + files[i] + ": " + std::to_string(logs[i].samples()) +
                                   " samples are too few to score horizon " + std::to_string(longest) + " after ARX's " +
                                   std::to_string(lags) + " lags (a fit needs 2 samples); give a shorter horizon");
+  // A copy under another name would be held out while itself trains (found by a probe).
+  for (std::size_t i = 0; i < logs.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (logs[i].columns == logs[j].columns && logs[i].data.rows() == logs[j].data.rows() &&
+          logs[i].data == logs[j].data)
+        throw std::invalid_argument("crossval: " + files[i] + " holds the same samples as " + files[j] +
+                                    "; a trial held out would train on its copy (remove one)");
   requireOneSampleTime(logs, files);
   return logs;
 }

@@ -385,6 +385,12 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
             1);
   EXPECT_NE(err_.find("is given twice (also as " + file("runs/j1.csv") + ")"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(file("m.json")));
+  fs::copy_file(file("runs/j1.csv"), file("runs/j1_copy.csv"));
+  EXPECT_EQ(run("crossval --log " + file("runs")), 1);
+  EXPECT_NE(err_.find("crossval: " + file("runs/j1_copy.csv") + " holds the same samples as " + file("runs/j1.csv")),
+            std::string::npos)
+      << err_;
+  fs::remove(file("runs/j1_copy.csv"));
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,12,1"), 1);
   EXPECT_NE(err_.find("crossval: horizon 1 is given twice"), std::string::npos) << err_;
   std::string many = "1";  // each horizon costs a prediction per sample: 4000 took validate 2.1 GB

@@ -176,14 +176,15 @@ void addPoleOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
                  "on (default): FKcM ends with a minimax on rho itself from its centres, kept where it lowers rho; "
                  "off: the paper's FKcM alone");
   id->add_option("--fuzziness", a->options.clustering.fuzziness, "FKcM fuzziness m > 1")
-      ->check(finiteNumber() & CLI::Validator(
-                                   [](std::string& v) {
-            double m = NAN;
-            return parseNonNegative(v, m) && m >= 1.0 + 1e-9 && m <= 100.0
-                       ? std::string()
-                       : "'" + v + "' is not a fuzziness m over 1 (at least 1 + 1e-9) and at most 100 (e.g. 2)";
-          },
-          "M"));
+      ->check(finiteNumber() &
+              CLI::Validator(
+                  [](std::string& v) {
+                    double m = NAN;
+                    return parseNonNegative(v, m) && m >= 1.0 + 1e-9 && m <= 100.0
+                               ? std::string()
+                               : "'" + v + "' is not a fuzziness m over 1 (at least 1 + 1e-9) and at most 100 (e.g. 2)";
+                  },
+                  "M"));
   id->add_option("--window-poles-below", a->options.window_poles_below,
                  "An output with fewer usable step poles than --poles: local windows' poles are tried with its "
                  "steps' when the steps' model scores below this held-out fit % (default 0; 100: always)")

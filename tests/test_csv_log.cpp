@@ -93,11 +93,12 @@ TEST_F(CsvLogTest, RejectsMalformedFilesWithLineAndReason) {
   expectError("time_s,y\x7f\n0,1\n", ":1: header column 2 has the control character U+007F at byte 1");
   // Found by a probe: a name outside UTF-8 was read, and failed only in the model's JSON after the whole fit.
   expectError("time_s,y\xffz\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1 of its name");
-  expectError("time_s,y\xc2\x85\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");  // C1 control U+0085
-  expectError("time_s,y\xe2\x82\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");  // cut sequence
+  expectError("time_s,y\xc2\x85\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");        // C1 control U+0085
+  expectError("time_s,y\xe2\x82\n0,1\n", ":1: header column 2 is not UTF-8 text at byte 1");        // cut sequence
   EXPECT_EQ(plsa::io::readCsvLog(write("time_s,\xce\xb8_deg\n0,1\n")).columns[1], "\xce\xb8_deg");  // theta reads
   // A 100 kB cell is quoted by its first 40 bytes and its size, not echoed whole.
-  expectError("time_s,y\n0," + std::string(100000, '7') + "x\n", "'7777777777777777777777777777777777777777...' (100001 bytes) is not a number");
+  expectError("time_s,y\n0," + std::string(100000, '7') + "x\n",
+              "'7777777777777777777777777777777777777777...' (100001 bytes) is not a number");
   expectError("# only a comment\n", "no header line");
   expectError("time_s,y\n", "no data rows");
 }
@@ -215,13 +216,15 @@ TEST_F(CsvLogTest, SampleTimeAndGaps) {
   };
   std::string two_rates = "time_s,y\n", dropouts = "time_s,y\n";
   for (int k = 0; k < 400; ++k) two_rates += std::to_string(k < 200 ? 0.0125 * k : 2.5 + 0.025 * (k - 200)) + ",1\n";
-  for (int k = 0; k < 400; ++k) dropouts += std::to_string(0.0125 * (k + (k > 100 ? 1 : 0) + (k > 300 ? 1 : 0))) + ",1\n";
+  for (int k = 0; k < 400; ++k)
+    dropouts += std::to_string(0.0125 * (k + (k > 100 ? 1 : 0) + (k > 300 ? 1 : 0))) + ",1\n";
   EXPECT_NE(refusal(two_rates).find("199 of 399 sample intervals (the first before data row 202) are over 1.5 times"),
             std::string::npos)
       << refusal(two_rates);
   EXPECT_EQ(refusal(dropouts), "accepted");  // two dropped samples: a hiccup, as the real arm's logs have
-  EXPECT_NE(refusal("time_s,y\n0,1\n1e248,1\n2e248,1\n").find("median sample time 1e+248 s of column 'time_s' is "
-                                                                 "outside 1e-05 to 60 s"),
+  EXPECT_NE(refusal("time_s,y\n0,1\n1e248,1\n2e248,1\n")
+                .find("median sample time 1e+248 s of column 'time_s' is "
+                      "outside 1e-05 to 60 s"),
             std::string::npos);
   EXPECT_NE(refusal("time_s,y\n0,1\n1e-9,1\n2e-9,1\n").find("is outside"), std::string::npos);
 }

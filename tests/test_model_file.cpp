@@ -273,50 +273,48 @@ std::vector<FieldCase> fieldCases() {
                     {"a sample time that is text", false, [](J& j) { j["sample_time_s"] = "fast"; }, "sample_time_s"},
                 }});
 
-  cases.push_back(FieldCase{"UnitsAndAcceptedRange",
-                            [](DioPwlObfModel& m) {
-                              m.input_unit = "kPa";
-                              m.output_unit = "rad";
-                              m.input_min = 0.0;
-                              m.input_max = 300.0;
-                            },
-                            [](const DioPwlObfModel&, const DioPwlObfModel& back) {
-                              EXPECT_EQ(back.input_unit, "kPa");
-                              EXPECT_EQ(back.output_unit, "rad");
-                              EXPECT_EQ(back.input_min, 0.0);
-                              EXPECT_EQ(back.input_max, 300.0);
-                            },
-                            "",
-                            {},
-                            nullptr,
-                            {
-                                {"a unit that is a number", false, [](J& j) { j["units"]["inputs"] = 1; }, "units"},
-                                {"a range of one entry", false, [](J& j) { j["input_range"] = {0.0}; },
-                                 "'input_range' must have two entries"},
-                                {"a range upside down", false,
-                                 [](J& j) {
-                                   j["input_range"] = {300.0, 0.0};
-                                 },
-                                 "input_min must be below input_max"},
-                                // Found by a probe: each loaded, and validate scored it with exit 0
-                                // (fits of -3.4e7) or ended in an error naming no file.
-                                {"a threshold at the top of the range", false,
-                                 [](J& j) { j["play_threshold"] = 300.0; },
-                                 "play_threshold 300.000000 is not below the top of input_range"},
-                                {"a coupling over 1 across the range", false, [](J& j) { j["play_coupling"] = 0.01; },
-                                 "play_coupling times the input span above play_threshold is 3.000000, over 1"},
-                                {"a softening that folds the level back", false,
-                                 [](J& j) { j["play_softening"] = 0.002; },
-                                 "play_softening times the input span above play_threshold is 0.600000, over 0.5"},
-                                {"a sample time of 1e300 s", false, [](J& j) { j["sample_time_s"] = 1e300; },
-                                 "m.json: sample_time_s 1e+300 is outside 1e-05 to 60 s"},
-                                {"a sample time of 5e-324 s", false, [](J& j) { j["sample_time_s"] = 5e-324; },
-                                 "sample_time_s 4.94066e-324 is outside"},
-                                {"the time as an output", false, [](J& j) { j["outputs"] = {"time_s"}; },
-                                 "'outputs' names 'time_s', the logs' time, not an input or output"},
-                                {"the time as an input", false, [](J& j) { j["inputs"] = {"time_s"}; },
-                                 "'inputs' names 'time_s'"},
-                            }});
+  cases.push_back(
+      FieldCase{"UnitsAndAcceptedRange",
+                [](DioPwlObfModel& m) {
+                  m.input_unit = "kPa";
+                  m.output_unit = "rad";
+                  m.input_min = 0.0;
+                  m.input_max = 300.0;
+                },
+                [](const DioPwlObfModel&, const DioPwlObfModel& back) {
+                  EXPECT_EQ(back.input_unit, "kPa");
+                  EXPECT_EQ(back.output_unit, "rad");
+                  EXPECT_EQ(back.input_min, 0.0);
+                  EXPECT_EQ(back.input_max, 300.0);
+                },
+                "",
+                {},
+                nullptr,
+                {
+                    {"a unit that is a number", false, [](J& j) { j["units"]["inputs"] = 1; }, "units"},
+                    {"a range of one entry", false, [](J& j) { j["input_range"] = {0.0}; },
+                     "'input_range' must have two entries"},
+                    {"a range upside down", false,
+                     [](J& j) {
+                       j["input_range"] = {300.0, 0.0};
+                     },
+                     "input_min must be below input_max"},
+                    // Found by a probe: each loaded, and validate scored it with exit 0
+                    // (fits of -3.4e7) or ended in an error naming no file.
+                    {"a threshold at the top of the range", false, [](J& j) { j["play_threshold"] = 300.0; },
+                     "play_threshold 300.000000 is not below the top of input_range"},
+                    {"a coupling over 1 across the range", false, [](J& j) { j["play_coupling"] = 0.01; },
+                     "play_coupling times the input span above play_threshold is 3.000000, over 1"},
+                    {"a softening that folds the level back", false, [](J& j) { j["play_softening"] = 0.002; },
+                     "play_softening times the input span above play_threshold is 0.600000, over 0.5"},
+                    {"a sample time of 1e300 s", false, [](J& j) { j["sample_time_s"] = 1e300; },
+                     "m.json: sample_time_s 1e+300 is outside 1e-05 to 60 s"},
+                    {"a sample time of 5e-324 s", false, [](J& j) { j["sample_time_s"] = 5e-324; },
+                     "sample_time_s 4.94066e-324 is outside"},
+                    {"the time as an output", false, [](J& j) { j["outputs"] = {"time_s"}; },
+                     "'outputs' names 'time_s', the logs' time, not an input or output"},
+                    {"the time as an input", false, [](J& j) { j["inputs"] = {"time_s"}; }, "'inputs' names 'time_s'"},
+                }});
 
   cases.push_back(FieldCase{
       "InputRanges",

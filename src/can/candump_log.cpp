@@ -258,8 +258,9 @@ CandumpLine parseCandumpLine(const std::string& line, const std::string& source,
   if (out.interface.size() > 15 || std::any_of(out.interface.begin(), out.interface.end(), [](char c) {
         return static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e;
       }))
-    rejectLine(source, line_number, "the interface name is not 1 to 15 printable ASCII characters (a network "
-                                    "interface's name)");
+    rejectLine(source, line_number,
+               "the interface name is not 1 to 15 printable ASCII characters (a network "
+               "interface's name)");
   frameField(fields[2], out, source, line_number);
   return out;
 }

@@ -102,8 +102,8 @@ void IdentificationRun::cutFolds() {
     // neighbours: the folds leak, and each score costs many times more.
     PLSA_CHECK(chunk_rows >= kMinChunkRows, "identify: --cv-chunk " + formatNumber(o.cv_chunk_s) + " s is " +
                                                 formatNumber(chunk_rows) + " sample(s) at " + formatNumber(dt) +
-                                                " s; give at least " + formatNumber(kMinChunkRows * dt) +
-                                                " s (" + formatNumber(kMinChunkRows) + " samples)");
+                                                " s; give at least " + formatNumber(kMinChunkRows * dt) + " s (" +
+                                                formatNumber(kMinChunkRows) + " samples)");
     if (chunk_rows >= static_cast<double>(longest))
       unusable_folds = "identify: --cv-chunk " + formatNumber(o.cv_chunk_s) +
                        " s puts every sample in one cross-validation fold, leaving the others nothing to fit on: the "

@@ -186,7 +186,8 @@ void readRow(const std::vector<std::string>& fields, const std::string& path, st
       fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a number");
     if (f.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16: a hex-coded column misread
       fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a decimal number");
-    if (!std::isfinite(v)) fail(path, lineno, "column '" + log.columns[i] + "': value " + quotedCell(f) + " is not finite");
+    if (!std::isfinite(v))
+      fail(path, lineno, "column '" + log.columns[i] + "': value " + quotedCell(f) + " is not finite");
     values.push_back(v);
   }
 }

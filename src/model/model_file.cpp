@@ -146,8 +146,8 @@ class ModelReader {
     DioPwlObfModel m;
     m.sample_time_s = number(at(j_, "sample_time_s", ""), "sample_time_s");
     if (!(m.sample_time_s >= io::kMinSampleTimeS && m.sample_time_s <= io::kMaxSampleTimeS))
-      bad("sample_time_s " + significantDigits(m.sample_time_s, 6) + " is outside " + significantDigits(io::kMinSampleTimeS, 6) + " to " +
-          significantDigits(io::kMaxSampleTimeS, 6) + " s");
+      bad("sample_time_s " + significantDigits(m.sample_time_s, 6) + " is outside " +
+          significantDigits(io::kMinSampleTimeS, 6) + " to " + significantDigits(io::kMaxSampleTimeS, 6) + " s");
     m.inputs = names("inputs");
     m.outputs = names("outputs");
     readUnits(m);

@@ -223,7 +223,7 @@ int Actuator::bendingPieces(double omega, double spring_slope) const {
   const double zeta = config_.bending.damping_ratio;
   const double a = omega * std::sqrt(spring_slope) * dt_;
   const double a_max = std::sqrt(4.0 * zeta * zeta + 2.0) - 2.0 * zeta;  // the root of a^2 + 4 zeta a = 2
-  if (!(a > a_max)) return 1;                                             // also a NaN: nothing to split
+  if (!(a > a_max)) return 1;                                            // also a NaN: nothing to split
   return static_cast<int>(std::min(std::ceil(a / a_max), static_cast<double>(kMaxBendingPieces)));
 }
 

@@ -295,9 +295,9 @@ io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
     log.data.row(k) << s.time_s, s.command_bar[0], s.command_bar[1], s.command_bar[2], s.pressure_bar[0],
         s.pressure_bar[1], s.pressure_bar[2], s.bend_deg, s.steer_deg;
     if (!log.data.row(k).allFinite())
-      throw std::runtime_error("simulate: the simulated actuator's state stopped being a finite number at t = " +
-                               std::to_string(s.time_s) + " s (" + experiment.name +
-                               "); no log is written. A shorter internal_step_s in the configuration may help");
+      throw std::runtime_error(
+          "simulate: the simulated actuator's state stopped being a finite number at t = " + std::to_string(s.time_s) +
+          " s (" + experiment.name + "); no log is written. A shorter internal_step_s in the configuration may help");
   }
   const SimConfig& c = actuator.config();
   std::ostringstream rate;

@@ -137,15 +137,14 @@ struct DioPwlObfModel {
   void validateShapingRange() const {
     if (!std::isfinite(input_max) || input_max <= 0.0) return;
     PLSA_CHECK(shaping.threshold < input_max, "model: play_threshold " + std::to_string(shaping.threshold) +
-                                                  " is not below the top of input_range (" +
-                                                  std::to_string(input_max) + "): every channel would read 0");
+                                                  " is not below the top of input_range (" + std::to_string(input_max) +
+                                                  "): every channel would read 0");
     const double above = input_max - shaping.threshold;
-    PLSA_CHECK(shaping.coupling * above <= 1.0,
-               "model: play_coupling times the input span above play_threshold is " +
-                   std::to_string(shaping.coupling * above) + ", over 1");
-    PLSA_CHECK(shaping.softening * above <= 0.5,
-               "model: play_softening times the input span above play_threshold is " +
-                   std::to_string(shaping.softening * above) + ", over 0.5 (the level would fold back)");
+    PLSA_CHECK(shaping.coupling * above <= 1.0, "model: play_coupling times the input span above play_threshold is " +
+                                                    std::to_string(shaping.coupling * above) + ", over 1");
+    PLSA_CHECK(shaping.softening * above <= 0.5, "model: play_softening times the input span above play_threshold is " +
+                                                     std::to_string(shaping.softening * above) +
+                                                     ", over 0.5 (the level would fold back)");
   }
 
   /// Throws std::invalid_argument naming the first inconsistency.

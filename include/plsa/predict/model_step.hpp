@@ -161,10 +161,10 @@ class ModelStep {
       }
   }
 
-  Eigen::VectorXd delta_;        // per played channel: how far it moved this step
-  Eigen::VectorXd drive_;        // per state: what drives it this step
-  Eigen::VectorXd next_node_w_;  // input side: the node weights after this step
-  Eigen::VectorXd bank_x_;       // one bank's state (swaps, dense banks)
+  Eigen::VectorXd delta_;           // per played channel: how far it moved this step
+  Eigen::VectorXd drive_;           // per state: what drives it this step
+  Eigen::VectorXd next_node_w_;     // input side: the node weights after this step
+  Eigen::VectorXd bank_x_;          // one bank's state (swaps, dense banks)
   Eigen::VectorXd zeta_, blended_;  // increments(): the merged modes, the blended coefficients
 };
 

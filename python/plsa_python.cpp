@@ -123,6 +123,10 @@ py::object diagnose(const std::string& sim, const std::vector<std::string>& real
                     std::optional<std::vector<std::string>> candidates, std::optional<int> evaluations, int threads,
                     std::function<void(const std::string&)> progress, std::optional<std::string> out) {
   if (real.empty()) throw std::invalid_argument("diagnose: no real runs given");
+  if (evaluations && (*evaluations < 20 || *evaluations > 100000))  // the command line's range
+    throw std::invalid_argument("diagnose: evaluations must be 20 to 100000, got " + std::to_string(*evaluations));
+  if (threads < 1 || threads > 64)
+    throw std::invalid_argument("diagnose: threads must be 1 to 64, got " + std::to_string(threads));
   if (out)
     for (const std::string& input : real)
       for (const char* name : plsa::diagnose::kDiagnosisFiles)
@@ -165,6 +169,11 @@ py::dict simulate(const std::string& experiment, const std::optional<std::string
                   double duration_s) {
   plsa::sim::ExperimentOptions eo;
   eo.seed = seed;
+  if (!(std::isfinite(duration_s) && duration_s >= 0.0))  // -5 and NaN fell back to 60 s without a word
+    throw std::invalid_argument("simulate: duration_s must be a finite number of seconds >= 0 (0: the default)");
+  if (duration_s > 0 && experiment != "joystick")
+    throw std::invalid_argument("simulate: duration_s sets the joystick run's length; " + experiment +
+                                " has its own (leave duration_s at 0)");
   if (duration_s > 0) eo.joystick_duration_s = duration_s;
   plsa::sim::Experiment e;
   if (experiment == "grid2")
@@ -216,7 +225,7 @@ class PyPredictor {
   // current state and this plan, each timed on its own (ns).
   double timePredictNs(int horizon, const Eigen::Ref<const RowMajor>& plan, int calls) {
     checkHorizon(horizon);
-    if (calls < 1) throw std::invalid_argument("_time_predict: calls >= 1");
+    if (calls < 1 || calls > 10'000'000) throw std::invalid_argument("_time_predict: calls 1 to 10^7");
     const Eigen::Index rows = takePlan(plan);
     auto out = out_.topRows(horizon);
     std::vector<double> ns(static_cast<std::size_t>(calls));
@@ -231,6 +240,14 @@ class PyPredictor {
 
   py::object sensitivity(int horizon, const Eigen::MatrixXd& plan, bool with_prediction) {
     checkHorizon(horizon);
+    // The Jacobian grows with the square of the horizon (7000 took 2.3 GB): checked before it is allocated.
+    if (horizon > kMaxSensitivityHorizon)
+      throw std::invalid_argument("sensitivity: horizon " + std::to_string(horizon) + " is over " +
+                                  std::to_string(kMaxSensitivityHorizon) + " (its Jacobian grows with its square)");
+    if (plan.rows() < horizon - 1 || plan.cols() != p_.inputCount())
+      throw std::invalid_argument("sensitivity: the plan needs at least " + std::to_string(horizon - 1) + " rows of " +
+                                  std::to_string(p_.inputCount()) + " inputs, got " + std::to_string(plan.rows()) +
+                                  " x " + std::to_string(plan.cols()));
     Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(horizon) * p_.outputCount(),
                              static_cast<Eigen::Index>(horizon - 1) * p_.inputCount());
     if (!with_prediction) {
@@ -253,6 +270,7 @@ class PyPredictor {
   int outputs() const { return p_.outputCount(); }
 
  private:
+  static constexpr int kMaxSensitivityHorizon = 1000;
   static plsa::PredictorOptions optionsFor(int max_horizon) {
     plsa::PredictorOptions o;
     o.max_horizon = max_horizon;

@@ -119,7 +119,11 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --json " +
                 file("no_such_dir/fits.json")),
             1);
-  EXPECT_NE(err_.find("no_such_dir/fits.json: cannot write the fits file"), std::string::npos) << err_;
+  EXPECT_NE(err_.find("no_such_dir/fits.json: the folder " + file("no_such_dir") + " does not exist"),
+            std::string::npos)
+      << err_;  // before the work, not at the write after it
+  EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --json /dev/full"), 1);
+  EXPECT_NE(err_.find("/dev/full: cannot write the fits file"), std::string::npos) << err_;
   // A horizon as long as the log leaves nothing to score: said in the tool's words, before any work.
   const std::string validate = "validate --model " + file("model.json") + " --log " + file("val.lcmlog");
   EXPECT_EQ(run(validate + " --horizons 40,100000"), 1);

@@ -211,6 +211,27 @@ def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     assert np.array_equal(p.predict(10, plan[::-1][::-1]), expected)
     assert p.predict(10, np.zeros((9, 3), dtype=np.int64)).shape == (10, 2)
     assert not np.array_equal(p.predict(10, plan[:4]), expected), "a shorter plan holds its last row"
+    # Found by a probe of this module: each was taken without a word, or grew memory without bound.
+    with pytest.raises(ValueError, match="duration_s must be a finite number of seconds >= 0"):
+        plsa.simulate("joystick", duration_s=-5.0)
+    with pytest.raises(ValueError, match="grid2 has its own"):
+        plsa.simulate("grid2", duration_s=10.0)
+    with pytest.raises(ValueError, match="poles per pair must be 1 to 20"):
+        plsa.identify([str(runs[0])], poles=2**31 - 1)
+    with pytest.raises(ValueError, match="NUL byte"):
+        plsa.read_log(str(runs[0]) + "\0.csv")
+    with pytest.raises(ValueError, match="NUL byte"):
+        plsa.Model.load(str(tmp_path / "m.json") + "\0x")
+    with pytest.raises(ValueError, match="threads must be 1 to 64, got 0"):
+        plsa.diagnose(str(tmp_path / "sim.json"), [str(runs[0])], threads=0)
+    with pytest.raises(ValueError, match="evaluations must be 20 to 100000, got -1"):
+        plsa.diagnose(str(tmp_path / "sim.json"), [str(runs[0])], evaluations=-1)
+    long = plsa.Predictor(model, max_horizon=5000)
+    long.update(0.0, np.array([0.2, 0.2, 0.0]), np.array([1.0, 0.0]))
+    with pytest.raises(ValueError, match="horizon 1001 is over 1000"):
+        long.sensitivity(1001, np.zeros((1000, 3)))
+    with pytest.raises(ValueError, match="the plan needs at least 9 rows of 3 inputs, got 2 x 3"):
+        long.sensitivity(10, np.zeros((2, 3)))
 
 
 def test_read_log_decodes_a_candump_bus_log(tmp_path):

@@ -114,7 +114,8 @@ PairPoles& IdentificationRun::pairAt(int in_i, int out_i) {
 void IdentificationRun::checkOptions(const std::vector<io::Log>& logs) const {
   PLSA_CHECK(!logs.empty(), "identify: no logs given");
   PLSA_CHECK(!o.inputs.empty() && !o.outputs.empty(), "identify: need at least one input and one output column");
-  PLSA_CHECK(o.poles_per_pair >= 1, "identify: poles per pair must be >= 1");
+  PLSA_CHECK(o.poles_per_pair >= 1 && o.poles_per_pair <= 20,  // 2^31 - 1 grew to 22 GB before any check
+             "identify: poles per pair must be 1 to 20, got " + std::to_string(o.poles_per_pair));
   refuseRepeatedColumns();
   PLSA_CHECK(!o.angle_unit || *o.angle_unit == "deg" || *o.angle_unit == "rad",
              "identify: the angle unit must be deg or rad, got '" + o.angle_unit.value_or("") + "'");

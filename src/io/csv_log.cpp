@@ -195,6 +195,7 @@ void readRow(const std::vector<std::string>& fields, const std::string& path, st
 }  // namespace
 
 Log readCsvLog(const std::string& path, const CsvReadOptions& options) {
+  refuseNulInPath(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open for reading");
   return readCsvLog(in, path, options);

@@ -167,6 +167,7 @@ Log LogReaderRegistry::read(std::istream& in, const std::string& source, const R
 }
 
 Log LogReaderRegistry::read(const std::string& path, const ReadOptions& options) const {
+  refuseNulInPath(path);
   // A pipe can be read once: take it whole (bounded), then look at its first bytes.
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {

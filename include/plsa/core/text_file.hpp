@@ -24,19 +24,29 @@ namespace plsa {
 /// signal map): 64 MiB, about a hundred times the largest model plsa writes.
 inline constexpr std::size_t kMaxTextFileBytes = std::size_t{64} << 20;
 
+/// Throws std::invalid_argument when `path` holds a NUL byte: the system
+/// would read it as the shorter name before the NUL, another file (a Python
+/// or other caller's string can hold one; a command line cannot).
+inline void refuseNulInPath(const std::string& path) {
+  if (path.find('\0') != std::string::npos)
+    throw std::invalid_argument("a path with a NUL byte after '" + std::string(path.c_str()) + "' is not a file name");
+}
+
 /// Reads at most `max_bytes`; throws std::invalid_argument "PATH: cannot open
-/// the WHAT" if unreadable, and "PATH: the WHAT is larger than ..." beyond it.
+/// the WHAT" if unreadable, and "PATH: the WHAT is larger than ..." beyond it
+/// (before the text grows past the limit).
 inline std::string readTextFile(const std::string& path, const std::string& what,
                                 std::size_t max_bytes = kMaxTextFileBytes) {
+  refuseNulInPath(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot open the " + what);
   std::string text;
   char chunk[1 << 16];
   while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
-    text.append(chunk, static_cast<std::size_t>(in.gcount()));
-    if (text.size() > max_bytes)
+    if (text.size() + static_cast<std::size_t>(in.gcount()) > max_bytes)
       throw std::invalid_argument(path + ": the " + what + " is larger than " + std::to_string(max_bytes >> 20) +
                                   " MiB, the most plsa reads (is this the right file?)");
+    text.append(chunk, static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) throw std::invalid_argument(path + ": cannot read the " + what);
   return text;
@@ -74,6 +84,7 @@ inline constexpr const char* kStandardOutput = "-";
 /// the temporary file is removed and `path` is left as it was.
 template <class Produce>
 void writeFileAtomicallyFrom(const std::string& path, const std::string& what, Produce&& produce) {
+  refuseNulInPath(path);
   if (path == kStandardOutput) {
     std::fflush(stdout);  // whatever was printed before comes first
     produce([&](std::string_view piece) { detail::writeAll(STDOUT_FILENO, piece, "standard output", what); });

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -216,9 +217,12 @@ class NStepPredictor {
   /// next update(), the filter states carried into its bases.
   void install(const DioPwlObfModel& model) { install(compileModel(model, options_)); }
   /// The same with an already compiled model (shared, e.g. by many segments).
+  /// Installs from several threads at once take turns (a lock on the
+  /// install side only): the model offered last is the one adopted.
   void install(std::shared_ptr<const CompiledModel> model) {
     PLSA_CHECK(model != nullptr && sameStructure(*shape_, *model),
                "Predictor::install: the new model's structure differs from the running one");
+    const std::lock_guard<std::mutex> one_at_a_time(install_mutex_);
     handoff_.offer(std::move(model), ++installs_);
   }
   /// Frees a model the real-time thread has let go of (install() does this too).
@@ -472,7 +476,8 @@ class NStepPredictor {
   PredictorOptions options_;
   ModelHandOff<CompiledModel> handoff_;
   std::shared_ptr<const CompiledModel> shape_;  // the first model: structure reference for install()
-  std::uint64_t installs_ = 0;                  // install() side only
+  std::mutex install_mutex_;                    // install() side only: offers in turn, ids in offer order
+  std::uint64_t installs_ = 0;                  // install() side only, under install_mutex_
   double accept_min_ = 0.0, accept_max_ = 0.0;  // the first model's: a swap does not move them
 
   // Real-time state, all sized at construction.

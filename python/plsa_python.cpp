@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <memory>
 #include <filesystem>
 #include <optional>
@@ -24,12 +25,46 @@
 #include "plsa/io/log_readers.hpp"
 #include "plsa/model/model_file.hpp"
 #include "plsa/can/candump_log.hpp"
+#if PLSA_WITH_LCM
+#include "plsa/lcm/lcm_log.hpp"
+#endif
 #include "plsa/predict/predictor.hpp"
 #include "plsa/sim/actuator.hpp"
 #include "plsa/sim/experiment.hpp"
 #include "plsa/sim/sim_config.hpp"
 
 namespace py = pybind11;
+
+namespace {
+class PyPredictor;
+}
+
+// An object made by `Model.__new__(Model)` (or Predictor's) has no C++ value:
+// pybind11 would hand each method uninitialised memory (a segfault). Every
+// Model and Predictor argument, `self` included, is checked here first.
+namespace pybind11::detail {
+template <class T>
+class ConstructedOnlyCaster : public type_caster_base<T> {
+ public:
+  bool load(handle src, bool convert) {
+    if (src && isinstance<T>(src)) {
+      auto* inst = reinterpret_cast<instance*>(src.ptr());
+      const value_and_holder v = inst->get_value_and_holder(get_type_info(typeid(T)), false);
+      if (v.inst != nullptr && !v.holder_constructed()) {
+        const std::string type = Py_TYPE(src.ptr())->tp_name;  // plsa._plsa.Model
+        throw type_error("this plsa." + type.substr(type.rfind('.') + 1) +
+                         " was made by __new__ without __init__ and holds nothing (make a model with "
+                         "plsa.Model.load or plsa.identify, a predictor with plsa.Predictor(model))");
+      }
+    }
+    return type_caster_base<T>::load(src, convert);
+  }
+};
+template <>
+class type_caster<plsa::DioPwlObfModel> : public ConstructedOnlyCaster<plsa::DioPwlObfModel> {};
+template <>
+class type_caster<PyPredictor> : public ConstructedOnlyCaster<PyPredictor> {};
+}  // namespace pybind11::detail
 
 namespace {
 
@@ -156,11 +191,26 @@ py::object diagnose(const std::string& sim, const std::vector<std::string>& real
   return py::module_::import("json").attr("loads")(plsa::diagnose::toJson(d));
 }
 
-// The log as {column: array}.
+// The log as {column: array}, by index (a lookup by name per column was
+// quadratic: 140k columns took 14 s).
 py::dict columnsOf(const plsa::io::Log& log) {
   py::dict columns;
-  for (const std::string& name : log.columns) columns[py::str(name)] = Eigen::VectorXd(log.column(name));
+  for (std::size_t i = 0; i < log.columns.size(); ++i)
+    columns[py::str(log.columns[i])] = Eigen::VectorXd(log.data.col(static_cast<Eigen::Index>(i)));
   return columns;
+}
+
+// A message as a Python exception; bytes that are not UTF-8 (a path or a
+// name quoted from a file) are kept as \x escapes, not lost with the message.
+void raise(PyObject* type, const char* what) {
+  PyObject* text = PyUnicode_DecodeUTF8(what, static_cast<Py_ssize_t>(std::strlen(what)), "backslashreplace");
+  if (!text) {
+    PyErr_Clear();
+    PyErr_SetString(type, "(a message that could not be decoded)");
+    return;
+  }
+  PyErr_SetObject(type, text);
+  Py_DECREF(text);
 }
 
 py::dict readLog(const std::string& path) { return columnsOf(plsa::io::readLog(path)); }
@@ -355,8 +405,8 @@ void bindTools(py::module_& m) {
       "returns what diagnosis.json holds (verdict, ranking, gaps, where), and writes the report folder to out "
       "when given; pressures=[] when none were measured");
   m.def("read_log", &readLog, py::arg("path"),
-        "A log (CSV, or a candump bus log decoded with plsa's CAN profile) as {column: array}, read (and "
-        "checked) as the library reads it");
+        "A log (CSV, a candump bus log decoded with plsa's CAN profile, or, in a build with LCM, an LCM event "
+        "log's PLSA_STATE messages) as {column: array}, read (and checked) as the library reads it");
   m.def("simulate", &simulate, py::arg("experiment"), py::arg("path") = py::none(), py::arg("seed") = 1,
         py::arg("duration_s") = 0.0,
         "Run the built-in simulated actuator (all effects on) through grid2 or joystick (duration_s: the "
@@ -391,13 +441,18 @@ void bindPredictor(py::module_& m) {
 PYBIND11_MODULE(_plsa, m) {
   m.doc() = "plsa: identification and prediction of pneumatic soft actuators (DIO-PWL-OBF)";
   plsa::can::registerLogFormats();  // candump bus logs, as the tools read them
+#if PLSA_WITH_LCM
+  plsa::lcm::registerLogFormats();  // LCM event logs, as the tools read them
+#endif
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const py::builtin_exception& e) {  // pybind11's own (type_error, value_error): as they are
+      e.set_error();
     } catch (const std::invalid_argument& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      raise(PyExc_ValueError, e.what());
     } catch (const std::runtime_error& e) {
-      PyErr_SetString(PyExc_RuntimeError, e.what());
+      raise(PyExc_RuntimeError, e.what());
     }
   });
 

@@ -211,6 +211,9 @@ def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
     assert np.array_equal(p.predict(10, plan[::-1][::-1]), expected)
     assert p.predict(10, np.zeros((9, 3), dtype=np.int64)).shape == (10, 2)
     assert not np.array_equal(p.predict(10, plan[:4]), expected), "a shorter plan holds its last row"
+    # A plan is taken as update takes an input (it was predicted without a word).
+    with pytest.raises(ValueError, match="predict: input .or a planned one. outside the accepted range"):
+        p.predict(10, np.full((9, 3), 50.0))
     # Found by a probe of this module: each was taken without a word, or grew memory without bound.
     with pytest.raises(ValueError, match="duration_s must be a finite number of seconds >= 0"):
         plsa.simulate("joystick", duration_s=-5.0)
@@ -232,6 +235,44 @@ def test_bad_input_gets_a_clear_error(model, runs, tmp_path):
         long.sensitivity(1001, np.zeros((1000, 3)))
     with pytest.raises(ValueError, match="the plan needs at least 9 rows of 3 inputs, got 2 x 3"):
         long.sensitivity(10, np.zeros((2, 3)))
+    # A message quoting bytes that are not UTF-8 keeps its text (it arrived empty).
+    bad = tmp_path / "bad.csv"
+    bad.write_bytes(b"time_s,a\n0,1\n0.1,\xff\xfe\n")
+    with pytest.raises(RuntimeError, match=r"bad.csv:3: column 'a': '\\xff\\xfe' is not a number"):
+        plsa.read_log(str(bad))
+
+
+def test_objects_made_without_init_raise_instead_of_crashing(model):
+    """Model.__new__(Model) makes an object with no C++ value behind it; any
+    use of it (a method, or as an argument) crashed the interpreter."""
+    script = """
+import plsa, sys
+m = plsa.Model.load(sys.argv[1])
+uses = [lambda: plsa.Predictor.__new__(plsa.Predictor).update(0.0, [0.0] * 3, [0.0] * 2),
+        lambda: plsa.Predictor.__new__(plsa.Predictor).inputs,
+        lambda: plsa.Model.__new__(plsa.Model).inputs,
+        lambda: repr(plsa.Model.__new__(plsa.Model)),
+        lambda: plsa.Predictor(plsa.Model.__new__(plsa.Model)),
+        lambda: plsa.Predictor(m).install(plsa.Model.__new__(plsa.Model))]
+for use in uses:
+    try:
+        use()
+        print("no error")
+    except TypeError as e:
+        print("TypeError", e)
+print(plsa.Predictor(m).inputs)
+"""
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "model.json")
+        model.save(path)
+        run = subprocess.run([sys.executable, "-c", script, path], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    assert len(lines) == 7, run.stdout
+    for line in lines[:6]:
+        assert line.startswith("TypeError this plsa.") and "made by __new__ without __init__" in line, line
+    assert lines[6] == "3"
 
 
 def test_read_log_decodes_a_candump_bus_log(tmp_path):
@@ -291,6 +332,10 @@ def test_the_lcm_types_decode_what_plsa_records(tmp_path):
                    capture_output=True)
     as_csv = plsa.read_log(str(csv))
     assert len(states) == len(as_csv["bend_deg"]) >= 160  # 2 s at 80 Hz at least
+    direct = plsa.read_log(str(log))  # the event log itself, as the tools read it
+    assert list(direct) == list(as_csv)
+    for name in as_csv:
+        assert np.allclose(direct[name], as_csv[name], rtol=1e-12, atol=1e-9), name
     assert [s.seq for s in states[:3]] == [states[0].seq, states[0].seq + 1, states[0].seq + 2]
     assert np.allclose([s.bend_deg for s in states], as_csv["bend_deg"])
     assert np.allclose([s.pressure_bar[0] for s in states], as_csv["p_1"])

@@ -291,9 +291,21 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
       plan(row, 0) = bad;
       EXPECT_EQ(p.predict(40, plan, out), PredictorStatus::kNotFinite) << bad << " at row " << row;
     }
+  // The largest finite values are finite (not NaN to the vector sum), and
+  // outside the accepted range: a plan is taken as update() takes an input.
+  for (const double big : {std::numeric_limits<double>::max(), -std::numeric_limits<double>::max()}) {
+    Eigen::MatrixXd plan = Eigen::MatrixXd::Constant(39, 1, 0.3);
+    plan(3, 0) = big;
+    EXPECT_EQ(p.predict(40, plan, out), PredictorStatus::kInputOutOfRange) << big;
+  }
+  for (const double edge : {0.751, -0.151}) {  // as update() above
+    Eigen::MatrixXd plan = Eigen::MatrixXd::Constant(39, 1, 0.3);
+    plan(38, 0) = edge;
+    EXPECT_EQ(p.predict(40, plan, out), PredictorStatus::kInputOutOfRange) << edge;
+  }
   Eigen::MatrixXd extreme = Eigen::MatrixXd::Constant(39, 1, 0.3);
-  extreme(3, 0) = std::numeric_limits<double>::max();
-  extreme(4, 0) = -std::numeric_limits<double>::max();
+  extreme(3, 0) = 0.749;
+  extreme(4, 0) = -0.149;
   extreme(5, 0) = -0.0;
   extreme(6, 0) = std::numeric_limits<double>::denorm_min();
   EXPECT_EQ(p.predict(40, extreme, out), PredictorStatus::kOk);
@@ -312,6 +324,25 @@ TEST(PredictorHandBuilt, StatusCodesRejectBadAndStaleSamplesAndKeepTheState) {
 // samples behind the last accepted time are rejected until kClockStepSamples
 // of them advance in a row; then it restarts at rest. A stale or repeated
 // sample alone changes nothing.
+// A model whose numbers are out of all proportion (a coefficient of 1.8e308,
+// as a model file may hold) predicts beyond double range: the status says so
+// instead of handing a controller inf with "ok".
+TEST(PredictorHandBuilt, APredictionBeyondDoubleRangeIsNotOk) {
+  Predictor<1> p(onePole(0.99, std::numeric_limits<double>::max()));
+  const Eigen::VectorXd u = run().u.col(0), y = run().y.col(0);
+  for (Eigen::Index k = 0; k < 20; ++k) ASSERT_EQ(p.update(k * kDt, u.row(k), y.row(k)), PredictorStatus::kOk);
+  Eigen::MatrixXd out(40, 1), jacobian(40, 39);
+  const Eigen::MatrixXd plan = Eigen::MatrixXd::Constant(39, 1, 0.6);
+  EXPECT_EQ(p.predict(40, plan, out), PredictorStatus::kPredictionNotFinite);
+  EXPECT_EQ(p.sensitivity(40, plan, jacobian), PredictorStatus::kPredictionNotFinite);
+  EXPECT_STREQ(toString(PredictorStatus::kPredictionNotFinite),
+               "prediction is not finite (the model's numbers overflow)");
+  // The same model scaled to sense predicts.
+  Predictor<1> q(onePole(0.99, 1.7));
+  for (Eigen::Index k = 0; k < 20; ++k) ASSERT_EQ(q.update(k * kDt, u.row(k), y.row(k)), PredictorStatus::kOk);
+  EXPECT_EQ(q.predict(40, plan, out), PredictorStatus::kOk);
+}
+
 TEST(PredictorHandBuilt, RecoversFromAJumpInTimeButRejectsAStaleSample) {
   Predictor<1> p(onePole(0.8, 1.7));
   const Eigen::VectorXd u = run().u.col(0), y = run().y.col(0);

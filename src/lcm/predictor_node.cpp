@@ -239,7 +239,7 @@ class PredictorNode {
   std::string last_problem_;
   PredictorNodeStats stats_;
   plsa_lcm::actuator_state_t state_;
-  static constexpr int kReasons = 8;
+  static constexpr int kReasons = 10;
   std::array<std::int64_t, kReasons> rejected_by_{};  // by -PredictorStatus
   std::int64_t malformed_ = 0, restarts_ = 0;
   Clock::time_point last_status_ = Clock::now();

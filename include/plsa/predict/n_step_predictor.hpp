@@ -185,7 +185,7 @@ class NStepPredictor {
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
         jacobian.cols() != steps * m.n_u)
       return PredictorStatus::kBadShape;
-    if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
+    if (const PredictorStatus taken = planStatus(plan); taken != PredictorStatus::kOk) return taken;
     auto nominal = sens_nominal_.topRows(horizon);
     work_y_ = options_.simulate ? y_sim_ : y_;
     const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
@@ -331,7 +331,7 @@ class NStepPredictor {
     if (horizon < 1 || horizon > options_.max_horizon) return PredictorStatus::kHorizonOutOfRange;
     if (out.rows() < horizon || out.cols() != m.n_y || (plan.rows() > 0 && plan.cols() != m.n_u))
       return PredictorStatus::kBadShape;
-    if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
+    if (const PredictorStatus taken = planStatus(plan); taken != PredictorStatus::kOk) return taken;
     work_y_ = options_.simulate ? y_sim_ : y_;
     // A held input keeps the schedule fixed once its lag has settled: every
     // mode then decays on its own, y(k+1+h) = y(k) + sum_q zeta_q sum_{s<=h} lambda_q^s.
@@ -347,7 +347,17 @@ class NStepPredictor {
       status = predictStepByStep(m, horizon, plan, out);
     if (status == PredictorStatus::kOk && m.frame == OutputFrame::kTipCartesian)
       turnIncrements(yaw_.turn(), y_(0), y_(1), horizon, out);  // never turned in simulation mode
+    if (status == PredictorStatus::kOk && !finiteEverywhere(out.topRows(horizon)))
+      return PredictorStatus::kPredictionNotFinite;
     return status;
+  }
+
+  // A plan is taken as update() takes an input: finite, inside the accepted range.
+  PredictorStatus planStatus(const Eigen::Ref<const Eigen::MatrixXd>& plan) const noexcept {
+    if (plan.size() == 0) return PredictorStatus::kOk;
+    if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
+    if (plan.minCoeff() < accept_min_ || plan.maxCoeff() > accept_max_) return PredictorStatus::kInputOutOfRange;
+    return PredictorStatus::kOk;
   }
 
   // A prediction's first `horizon` rows from the model's frame into the

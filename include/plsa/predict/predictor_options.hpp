@@ -10,14 +10,15 @@ enum class PredictorStatus : int {
   kOk = 0,
   kTimeGap = 1,             ///< time jumped ahead: the filters restarted at rest at this sample
   kClockStepBack = 2,       ///< time went back for kClockStepSamples samples in a row: restarted at rest
-  kNotFinite = -1,          ///< a NaN or Inf in the sample: rejected, state kept
-  kInputOutOfRange = -2,    ///< an input outside the accepted range: rejected, state kept
+  kNotFinite = -1,          ///< a NaN or Inf in the sample (or the plan): rejected, state kept
+  kInputOutOfRange = -2,    ///< an input (or a planned one) outside the accepted range: rejected, state kept
   kTimeNotIncreasing = -3,  ///< time did not advance: rejected, state kept
   kHorizonOutOfRange = -5,  ///< horizon below 1 (sensitivity: 2) or above the capacity set at construction
   kHorizonTooLong [[deprecated("use kHorizonOutOfRange")]] = kHorizonOutOfRange,
-  kBadShape = -6,     ///< plan or output buffer of the wrong size
-  kNotReady = -7,     ///< predict() before the first accepted sample
-  kUnsupported = -8,  ///< not available for this model (sensitivity: no modal form)
+  kBadShape = -6,             ///< plan or output buffer of the wrong size
+  kNotReady = -7,             ///< predict() before the first accepted sample
+  kUnsupported = -8,          ///< not available for this model (sensitivity: no modal form)
+  kPredictionNotFinite = -9,  ///< the prediction overflowed (a model whose numbers are out of all proportion)
 };
 
 /// What Predictor::sensitivity writes. Column (s, j) of the Jacobian moves
@@ -40,7 +41,7 @@ inline const char* toString(PredictorStatus s) {
     case PredictorStatus::kNotFinite:
       return "sample has NaN or Inf";
     case PredictorStatus::kInputOutOfRange:
-      return "input outside the accepted range";
+      return "input (or a planned one) outside the accepted range";
     case PredictorStatus::kTimeNotIncreasing:
       return "time did not increase";
     case PredictorStatus::kHorizonOutOfRange:
@@ -51,6 +52,8 @@ inline const char* toString(PredictorStatus s) {
       return "no sample yet";
     case PredictorStatus::kUnsupported:
       return "not available for this model";
+    case PredictorStatus::kPredictionNotFinite:
+      return "prediction is not finite (the model's numbers overflow)";
   }
   return "unknown";
 }

@@ -59,7 +59,27 @@ TEST(LcmLog, MalformedFilesAreClearErrors) {
               std::string::npos)
         << e.what();
   }
+  in_us.data(1, 0) = 1e10;  // seconds, but past 2^53 us: read back, it would lose microseconds
+  EXPECT_THROW(plsa::lcm::writeLcmLog(good, in_us), std::invalid_argument);
   plsa::lcm::writeLcmLog(good, log);
+  {  // A utime near 2^62 written by another tool: named, not read as a rate that wanders by a millisecond.
+    std::string bytes;
+    {
+      std::ifstream in(good, std::ios::binary);
+      bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::size_t utime_at = 28 + std::string("PLSA_STATE").size() + 8;  // header, channel, type hash
+    for (int b = 0; b < 8; ++b) bytes[utime_at + static_cast<std::size_t>(b)] = b == 0 ? '\x40' : '\0';
+    const std::string far = tempPath("far.lcmlog");
+    std::ofstream(far, std::ios::binary) << bytes;
+    try {
+      plsa::lcm::readLcmLog(far);
+      ADD_FAILURE() << "a utime of 2^62 us was read";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("utime 4611686018427387904 us is beyond 2^53 us"), std::string::npos)
+          << e.what();
+    }
+  }
   try {
     plsa::lcm::readLcmLog(good, "OTHER_CHANNEL");
     FAIL();

@@ -7,6 +7,7 @@
 #include <ostream>
 
 #include "support/identify_fixtures.hpp"
+#include "plsa/io/strict_json.hpp"
 
 using namespace plsa;
 using namespace plsa::test_fixtures;
@@ -469,4 +470,24 @@ TEST(ModelFile, ANumberBeyondDoubleRangeIsNamed) {
   text.replace(at + key.size(), end - at - key.size(), "1e400");
   expectThrowContaining([&] { modelFromJson(text, "m.json"); }, "m.json: not valid JSON");
   expectThrowContaining([&] { modelFromJson(text, "m.json"); }, "1e400");
+}
+
+// Objects and arrays cost about 40 times their text in memory: a document of
+// more than kMaxJsonContainers is refused in the checking pass, before the
+// document is built (64 MB of "{}" took 2.2 GB). A model-sized one is read.
+TEST(ModelFile, ADocumentOfMillionsOfObjectsIsRefusedBeforeItIsBuilt) {
+  std::string text = "[";
+  for (long i = 0; i <= io::kMaxJsonContainers; ++i) text += i == 0 ? "{}" : ",{}";
+  text += "]";
+  expectThrowContaining([&] { modelFromJson(text, "m.json"); },
+                        "m.json: more than 4000000 objects and arrays (is this the right file?)");
+  text = "[";
+  for (long i = 0; i + 2 < io::kMaxJsonContainers; ++i) text += i == 0 ? "{}" : ",{}";
+  text += "]";  // within the limit: the check passes, the model reader names what is wrong
+  expectThrowContaining([&] { modelFromJson(text, "m.json"); }, "m.json");
+  try {
+    modelFromJson(text, "m.json");
+  } catch (const std::exception& e) {
+    EXPECT_EQ(std::string(e.what()).find("objects and arrays"), std::string::npos) << e.what();
+  }
 }

@@ -167,11 +167,11 @@ void writeLcmLog(const std::string& path, const io::Log& log, const std::string&
   std::vector<char> buf;
   for (Eigen::Index r = 0; r < cols.rows(); ++r) {
     plsa_lcm::actuator_state_t m;
-    // utime is int64 microseconds: beyond about 9.2e12 s, llround has no answer.
-    if (!(std::abs(cols(r, 0)) < 9e12))
+    // utime is int64 microseconds, read back only up to kMaxLogUtime.
+    if (!(std::abs(cols(r, 0)) * 1e6 <= static_cast<double>(kMaxLogUtime)))
       throw std::invalid_argument(path + ": row " + std::to_string(r + 1) + " of " + log.source + ": time_s " +
                                   std::to_string(cols(r, 0)) +
-                                  " s is beyond what an LCM utime (int64 microseconds) holds (|time_s| < 9e12)");
+                                  " s is beyond what an LCM event log holds (|time_s| <= 2^53 us, 285 years)");
     m.utime = static_cast<std::int64_t>(std::llround(cols(r, 0) * 1e6));
     m.seq = r;
     m.n_chambers = 3;

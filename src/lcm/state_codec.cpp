@@ -32,6 +32,9 @@ void toRow(const plsa_lcm::actuator_state_t& m, double row[9]) {
   if (m.n_chambers != 3 || m.command_bar.size() != 3 || m.pressure_bar.size() != 3)
     throw std::invalid_argument("actuator state has " + std::to_string(m.n_chambers) +
                                 " chambers; the standard columns need 3");
+  if (m.utime > kMaxLogUtime || m.utime < -kMaxLogUtime)
+    throw std::invalid_argument("utime " + std::to_string(m.utime) +
+                                " us is beyond 2^53 us (285 years), where time in seconds loses microseconds");
   row[0] = static_cast<double>(m.utime) * 1e-6;
   for (int i = 0; i < 3; ++i) {
     row[1 + i] = m.command_bar[static_cast<std::size_t>(i)];

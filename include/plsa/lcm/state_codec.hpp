@@ -20,8 +20,14 @@ std::int64_t epochMicroseconds();
 plsa_lcm::actuator_state_t toMessage(const sim::ActuatorSample& s, std::int64_t seq, bool vented,
                                      std::int64_t origin_us = 0);
 
+/// The largest |utime| a log row takes: 2^53 microseconds (285 years), below
+/// which seconds as a double keep every microsecond (at 2^63 they step by 1 ms,
+/// and an 80 Hz log reads as irregular).
+inline constexpr std::int64_t kMaxLogUtime = std::int64_t{1} << 53;
+
 /// The standard log columns of a state message, in order:
-/// time_s, cmd_1..3, p_1..3, bend_deg, steer_deg. Throws if it has not 3 chambers.
+/// time_s, cmd_1..3, p_1..3, bend_deg, steer_deg. Throws if it has not 3
+/// chambers, or a utime beyond kMaxLogUtime.
 void toRow(const plsa_lcm::actuator_state_t& m, double row[9]);
 
 }  // namespace plsa::lcm

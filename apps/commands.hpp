@@ -52,6 +52,12 @@ inline CLI::Validator finiteNumber(bool infinities = false) {
 }
 inline const CLI::Validator kNonNegative = finiteNumberAtLeast(0.0, false);
 
+/// A path to write: an empty one is refused by name (`--csv ''` was taken as
+/// "not given", and the run ended without the file asked for).
+inline const CLI::Validator kOutputPath = CLI::Validator(
+    [](std::string& text) -> std::string { return text.empty() ? "an empty path names no file" : std::string(); },
+    "PATH");
+
 /// A random seed as digits only: CLI11 reads "-3" as 2^64 - 3 and clamps an
 /// overlong one to 2^64 - 1, each a different run from the one asked for.
 inline const CLI::Validator kSeed = CLI::Validator(

@@ -25,8 +25,7 @@ struct ConvertArgs {
 };
 
 void runConvert(const ConvertArgs& a) {
-  refuseOverwritingInputs(a.out, "--out", {a.in, a.can_profile}, "plsa convert");
-  refuseMissingOutputFolder(a.out, "--out", "plsa convert");
+  checkOutputPath(a.out, "--out", {a.in, a.can_profile}, "plsa convert");
   logPaths({a.in}, "convert", false);  // a file or a pipe; a device is no log
   io::ReadOptions ro;
   ro.lcm_channel = a.channel;
@@ -45,8 +44,7 @@ struct CanProfileArgs {
 };
 
 void runCanProfile(const CanProfileArgs& a) {
-  refuseOverwritingInputs(a.out, "--out", {a.in}, "plsa can-profile");
-  refuseMissingOutputFolder(a.out, "--out", "plsa can-profile");
+  checkOutputPath(a.out, "--out", {a.in}, "plsa can-profile");
   const can::SignalMap map = a.in.empty() ? can::defaultSignalMap() : can::loadSignalMap(a.in);
   for (const std::string& w : can::driverProfileWarnings(map))
     std::fprintf(stderr, "plsa can-profile: warning: %s\n", w.c_str());
@@ -62,7 +60,7 @@ void addCanProfileCommand(CLI::App& app) {
   auto* c = app.add_subcommand("can-profile", "Write a CAN signal map as DBC (.dbc) or plsa's JSON (any other name)");
   c->add_option("--in", a->in, "Signal map to read: a DBC file (.dbc) or JSON (default: plsa's profile)")
       ->check(CLI::ExistingFile);
-  c->add_option("--out", a->out, "File to write: .dbc for DBC, else JSON")->required();
+  c->add_option("--out", a->out, "File to write: .dbc for DBC, else JSON")->required()->check(kOutputPath);
   c->callback([a] { runCanProfile(*a); });
 }
 
@@ -72,7 +70,9 @@ void addConvertCommand(CLI::App& app) {
   c->add_option("--in", a->in, "Log to read (its format known by content or name)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--out", a->out, "Log to write: .csv, .candump, or .lcmlog in a build with LCM")->required();
+  c->add_option("--out", a->out, "Log to write: .csv, .candump, or .lcmlog in a build with LCM")
+      ->required()
+      ->check(kOutputPath);
   addLogFormatOptions(c, a->channel, a->can_profile);
   c->callback([a] { runConvert(*a); });
 }

@@ -87,8 +87,7 @@ std::vector<io::Log> readFoldLogs(const CrossvalArgs& a, const std::vector<std::
   std::vector<io::Log> logs;
   std::vector<std::string> read = files;
   read.push_back(a.can_profile);
-  refuseOverwritingInputs(a.json, "--json", read, "plsa crossval");
-  refuseMissingOutputFolder(a.json, "--json", "plsa crossval");
+  checkOutputPath(a.json, "--json", read, "plsa crossval");
   for (const auto& f : files) logs.push_back(readLogWithWarnings(f, ro, "crossval"));
   const int longest = *std::max_element(a.horizons.begin(), a.horizons.end());
   const int lags = std::max(a.arx_na, a.arx_nb);
@@ -251,7 +250,7 @@ void addCrossvalCommand(CLI::App& app) {
   addPlayBankOptions(c, a->options);
   c->add_option("--arx-na", a->arx_na, "ARX output lags")->check(CLI::Range(0, 64));
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags")->check(CLI::Range(1, 64));
-  c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)");
+  c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)")->check(kOutputPath);
   addLogFormatOptions(c, a->channel, a->can_profile);
   c->callback([a] { runCrossval(*a); });
 }

@@ -364,7 +364,7 @@ void runDemo(const DemoOptions& opt) {
 void addDemoCommand(CLI::App& app) {
   auto opt = std::make_shared<DemoOptions>();
   CLI::App* cmd = app.add_subcommand("demo", "Identify and validate a model on the built-in simulated actuator");
-  cmd->add_option("--out", opt->out_dir, "Folder for the model, fits and report");
+  cmd->add_option("--out", opt->out_dir, "Folder for the model, fits and report")->check(kOutputPath);
   cmd->add_option("--config", opt->config, "Simulator configuration (default: built-in, all effects on)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--seed", opt->seed, "Seed of the simulated runs")->check(kSeed);

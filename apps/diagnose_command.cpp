@@ -160,7 +160,9 @@ void addDiagnoseCommand(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   addLogFormatOptions(c, a->channel, a->can_profile);
-  c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")->required();
+  c->add_option("--out", a->out, "Output directory (diagnosis.json, report.html, calibrated_sim.json)")
+      ->required()
+      ->check(kOutputPath);
   c->add_option("--inputs", a->columns.inputs, "Chamber command columns (1-3)")->delimiter(',');
   c->add_option("--outputs", a->columns.outputs, "Two output columns")->delimiter(',');
   c->add_option("--pressures", a->pressures, "Measured chamber pressure columns, or 'none'")->delimiter(',');
@@ -228,7 +230,7 @@ void addSelfcheckCommand(CLI::App& app) {
   addCalibrationBudget(sc, s->options.diagnose);
   sc->add_option("--threads", s->options.diagnose.threads, "Candidates calibrated in parallel")
       ->check(CLI::Range(1, 64));
-  sc->add_option("--out", s->out, "Results as JSON");
+  sc->add_option("--out", s->out, "Results as JSON")->check(kOutputPath);
   sc->add_flag("--verbose", s->options.verbose, "Show each diagnosis's progress");
   sc->add_option("--save-runs", s->options.save_runs_dir,
                  "Write every case's training and held-out runs to this directory as CSV logs (for plsa diagnose)")

@@ -404,7 +404,7 @@ void addGeneraliseCommand(CLI::App& app) {
                   "Cases to run (effect.law, nominal or all, or nominal@Ndeg / all@Ndeg for N in 2, 50, 100: the "
                   "segment's lever rescaled so that the grid run bends at most N deg; default every one)");
   cmd->add_flag("--quick", a->quick, "Three cases (nominal, hysteresis.bouc_wen, all), one seed");
-  cmd->add_option("--json", a->json, "Write every row and the summary here");
+  cmd->add_option("--json", a->json, "Write every row and the summary here")->check(kOutputPath);
   cmd->add_option("--save-runs", a->save_runs,
                   "Write every case's training and validation runs to this directory as CSV logs "
                   "(CASE_sSEED_grid2.csv, CASE_sSEED_joystick.csv, CASE_sSEED_joystick_beyond.csv; for plsa identify "

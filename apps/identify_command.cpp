@@ -96,8 +96,7 @@ void runIdentify(IdentifyArgs& a) {
   required.insert(required.end(), a.outputs.begin(), a.outputs.end());
   std::vector<std::string> read = a.logs;
   read.push_back(a.can_profile);
-  refuseOverwritingInputs(a.out, "--out", read, "plsa identify");
-  refuseMissingOutputFolder(a.out, "--out", "plsa identify");
+  checkOutputPath(a.out, "--out", read, "plsa identify");
   const auto logs = readLogs(a.logs, required, "identify", a.channel, a.can_profile);
   if (a.structure == "paper") {  // the peers the demo and generalise score plsa against
     const auto progress = o.progress;
@@ -352,7 +351,7 @@ void addIdentifyCommand(CLI::App& app) {
                  "outputs as logged) or global-linear (plsa's poles and play, one region: the linear baseline)")
       ->check(CLI::IsMember({"plsa", "paper", "global-linear"}))
       ->capture_default_str();
-  id->add_option("--out", a->out, "Model file (JSON)")->required();
+  id->add_option("--out", a->out, "Model file (JSON)")->required()->check(kOutputPath);
   id->callback([a] { runIdentify(*a); });
 }
 

@@ -1,6 +1,7 @@
 #include "log_paths.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -12,16 +13,33 @@ namespace fs = std::filesystem;
 
 namespace plsa::app {
 
+namespace {
+
+// Files of a log folder that are not logs are said, not passed over in silence
+// (a trial saved as .txt would otherwise just be missing from the results).
+void noteLeftOut(std::vector<std::string> names, const std::string& folder, const std::string& tool) {
+  if (names.empty()) return;
+  std::sort(names.begin(), names.end());
+  std::fprintf(stderr, "%s: note: %s: %zu file%s not read, not being logs %s: %s\n", tool.c_str(), folder.c_str(),
+               names.size(), names.size() == 1 ? "" : "s", io::logReaders().logFileKinds().c_str(),
+               io::columnList(names).c_str());
+}
+
+}  // namespace
+
 std::vector<std::string> logPaths(const std::vector<std::string>& paths, const std::string& tool, bool folders) {
   std::vector<std::string> files;
   for (const auto& p : paths) {
     if (folders && fs::is_directory(p)) {
-      std::vector<std::string> in;
+      std::vector<std::string> in, left_out;
       for (const auto& e : fs::directory_iterator(p))
-        if (e.is_regular_file() && io::logReaders().looksLikeLog(e.path().string())) in.push_back(e.path().string());
+        if (e.is_regular_file())
+          (io::logReaders().looksLikeLog(e.path().string()) ? in : left_out).push_back(e.path().filename().string());
       if (in.empty())
         throw std::invalid_argument(tool + ": " + p + ": no logs in this folder " + io::logReaders().logFileKinds());
+      noteLeftOut(left_out, p, tool);
       std::sort(in.begin(), in.end());
+      for (std::string& name : in) name = (fs::path(p) / name).string();
       files.insert(files.end(), in.begin(), in.end());
     } else if (fs::is_regular_file(p) || fs::is_fifo(p)) {
       files.push_back(p);
@@ -72,6 +90,12 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
       throw std::invalid_argument(tool + ": " + option + " " + output + " is " +
                                   (in == output ? std::string("an input") : "the input " + in) +
                                   "; plsa never writes over what it reads (choose another output path)");
+}
+
+void checkOutputPath(const std::string& output, const std::string& option, const std::vector<std::string>& inputs,
+                     const std::string& tool) {
+  refuseOverwritingInputs(output, option, inputs, tool);
+  refuseMissingOutputFolder(output, option, tool);
 }
 
 void refuseMissingOutputFolder(const std::string& output, const std::string& option, const std::string& tool) {

@@ -30,6 +30,11 @@ void refuseOverwritingInputs(const std::string& output, const std::string& optio
 /// not at the write after it. "" and "-" (standard output) pass.
 void refuseMissingOutputFolder(const std::string& output, const std::string& option, const std::string& tool);
 
+/// Both checks an output path gets before the work (refuseOverwritingInputs,
+/// then refuseMissingOutputFolder).
+void checkOutputPath(const std::string& output, const std::string& option, const std::vector<std::string>& inputs,
+                     const std::string& tool);
+
 /// Reads a log in any format this build reads (io::logReaders(): CSV, and LCM
 /// event logs in a build with LCM), printing its warnings as "TOOL: warning: ...".
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);

@@ -23,8 +23,7 @@ struct SimulateOptions {
 };
 
 void runSimulate(const SimulateOptions& o) {
-  refuseOverwritingInputs(o.out, "--out", {o.config}, "plsa simulate");
-  refuseMissingOutputFolder(o.out, "--out", "plsa simulate");
+  checkOutputPath(o.out, "--out", {o.config}, "plsa simulate");
   const sim::SimConfig config = o.config.empty() ? sim::SimConfig{} : sim::loadSimConfig(o.config);
   sim::ExperimentOptions eo;
   eo.sample_rate_hz = config.sample_rate_hz;
@@ -100,13 +99,14 @@ void addSimulateCommands(CLI::App& app) {
       ->check(kPositive);
   cmd->add_option("--seed", o->seed, "Random seed (noise, joystick); same seed, same file")->check(kSeed);
   cmd->add_option("--out", o->out, "Output log: .csv, or .lcmlog for an LCM event log ('-': CSV on standard output)")
-      ->required();
+      ->required()
+      ->check(kOutputPath);
   cmd->add_option("--channel", o->channel, "LCM event log: the channel the actuator-state messages go on");
   cmd->callback([o] { runSimulate(*o); });
 
   auto path = std::make_shared<std::string>();
   CLI::App* cfg = app.add_subcommand("sim-config", "Write the default simulator configuration (JSON)");
-  cfg->add_option("--out", *path, "Output file")->required();
+  cfg->add_option("--out", *path, "Output file")->required()->check(kOutputPath);
   cfg->callback(
       [path] { writeTextFile(*path, sim::simConfigToJson(sim::SimConfig{}) + "\n", "simulator configuration"); });
 }

@@ -128,8 +128,7 @@ std::string describeSimulation(const DioPwlObfModel& model, const eval::Simulati
 
 void runValidate(const ValidateArgs& a) {
   for (const auto& [out, option] : {std::pair{a.json, "--json"}, std::pair{a.csv, "--csv"}}) {
-    refuseOverwritingInputs(out, option, {a.model, a.log, a.can_profile}, "plsa validate");
-    refuseMissingOutputFolder(out, option, "plsa validate");
+    checkOutputPath(out, option, {a.model, a.log, a.can_profile}, "plsa validate");
   }
   if (a.csv != kStandardOutput) refuseOverwritingInputs(a.csv, "--csv", {a.json}, "plsa validate");
   if (a.json == kStandardOutput && a.csv == kStandardOutput)
@@ -207,8 +206,8 @@ void addValidateCommand(CLI::App& app) {
   va->add_option("--horizons", v->horizons, "Comma-separated horizons in samples")
       ->delimiter(',')
       ->check(CLI::Range(1, 1000000));
-  va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)");
-  va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)");
+  va->add_option("--json", v->json, "Write fits as JSON ('-': standard output)")->check(kOutputPath);
+  va->add_option("--csv", v->csv, "Write measured vs predicted as CSV ('-': standard output)")->check(kOutputPath);
   addLogFormatOptions(va, v->channel, v->can_profile);
   va->add_option("--yaw-registration", v->start.yaw_registration_s,
                  "tip_cartesian models with an output level: seconds at the log's start on which the sensor's yaw is "

@@ -395,7 +395,12 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
             std::string::npos)
       << err_;
   fs::remove(file("runs/j1_copy.csv"));
+  // A file of the folder that is not a log is named, not passed over in silence.
+  std::ofstream(file("runs/notes.txt")) << "trial 3 was cut short\n";
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 1,12,1"), 1);
+  EXPECT_NE(err_.find("crossval: note: " + file("runs") + ": 1 file not read, not being logs (.csv"), std::string::npos)
+      << err_;
+  EXPECT_NE(err_.find("by content): notes.txt"), std::string::npos) << err_;
   EXPECT_NE(err_.find("crossval: horizon 1 is given twice"), std::string::npos) << err_;
   std::string many = "1";  // each horizon costs a prediction per sample: 4000 took validate 2.1 GB
   for (int k = 2; k <= 33; ++k) many += "," + std::to_string(k);

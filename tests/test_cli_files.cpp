@@ -95,6 +95,11 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
   EXPECT_EQ(err_.find("[2/5]"), std::string::npos) << "identification ran: " << err_;
   EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --json " + file("no/v.json")), 1);
   EXPECT_NE(err_.find("plsa validate: --json " + file("no/v.json") + ": the folder"), std::string::npos) << err_;
+  // An empty output path is a usage error naming the option (`--csv ''` was taken as not given).
+  EXPECT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --csv ''"), 2);
+  EXPECT_NE(err_.find("--csv: an empty path names no file"), std::string::npos) << err_;
+  EXPECT_EQ(run("identify --log " + file("j.csv") + " --out ''"), 2);
+  EXPECT_NE(err_.find("--out: an empty path names no file"), std::string::npos) << err_;
   // Outputs never replace inputs: the training log, the model, the validation log.
   EXPECT_EQ(run("identify --log " + file("j.csv") + " --out " + file("j.csv")), 1);
   EXPECT_NE(err_.find("--out " + file("j.csv") + " is an input"), std::string::npos) << err_;

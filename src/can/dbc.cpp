@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "plsa/core/number_text.hpp"
 #include "plsa/core/printable_text.hpp"
 
 namespace plsa::can {
@@ -26,13 +27,10 @@ constexpr unsigned long long kIndependentSignals = 0xC0000000ull;
 }
 
 double number(const std::string& text, const std::string& what, const std::string& source, std::size_t line) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v))
-    rejectDbcLine(source, line, what + " '" + text + "' is not a number");
-  if (text.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16; a DBC's numbers are decimal
-    rejectDbcLine(source, line, what + " '" + text + "' is not a decimal number");
-  return v;
+  const ParsedDecimal n = parseDecimal(text);
+  if (n.kind == DecimalText::kNotDecimal) rejectDbcLine(source, line, what + " '" + text + "' is not a decimal number");
+  if (n.kind != DecimalText::kNumber) rejectDbcLine(source, line, what + " '" + text + "' is not a number");
+  return n.value;
 }
 
 // Unescaped double quotes in a line: an odd count opens (or closes) a string

@@ -229,9 +229,12 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   }
   refuseUnfittableMagnitudes();
   refuseStillColumns();
-  for (double tau : o.slow_pole_candidates)  // exp(-dt / tau) would be 0 or a fast pole, not a slow one
+  for (double tau : o.slow_pole_candidates) {  // under dt, exp(-dt / tau) would be 0 or a fast pole, not a slow one
+    PLSA_CHECK(tau == 0.0 || (std::isfinite(tau) && tau > 0.0),
+               "identify: --slow-pole " + formatNumber(tau) + ": a time constant is 0 (none) or a finite time in s");
     PLSA_CHECK(tau == 0.0 || tau >= dt, "identify: --slow-pole " + formatNumber(tau) + " s is shorter than the " +
                                             formatNumber(dt) + " s sample time (a slow pole lasts many samples)");
+  }
   // Local fits see the outputs in the model's frame; every other step takes them as logged.
   rep.output_frame = o.output_frame ? givenOutputFrame() : chooseOutputFrame(o.outputs, Y, o.angle_unit);
   frame = rep.output_frame.frame;

@@ -77,8 +77,6 @@ bool IdentificationRun::judgeSlowPole(const SlowPoleTrial& best, const std::vect
 void IdentificationRun::searchSlowPole(const std::optional<HeldOutScore>& as_it_stands) {
   if (model.schedule_side != ScheduleSide::kInput || o.slow_pole_candidates.empty()) return;
   PLSA_CHECK(o.slow_pole_count >= 1 && o.slow_pole_count <= 2, "identify: the slow pole count must be 1 or 2");
-  for (double tau : o.slow_pole_candidates)
-    PLSA_CHECK(tau >= 0 && std::isfinite(tau), "identify: slow pole time constants must be finite and >= 0");
   poles_before_slow = model.poles;
   std::vector<double> taus;
   for (double tau : o.slow_pole_candidates)

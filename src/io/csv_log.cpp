@@ -13,6 +13,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "plsa/core/number_text.hpp"
 #include "plsa/core/printable_text.hpp"
 #include "plsa/core/text_file.hpp"
 
@@ -179,16 +180,14 @@ void readRow(const std::vector<std::string>& fields, const std::string& path, st
          "row has " + std::to_string(fields.size()) + " fields, header has " + std::to_string(log.columns.size()));
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const std::string& f = fields[i];
-    char* end = nullptr;
-    errno = 0;
-    const double v = f.empty() ? 0.0 : std::strtod(f.c_str(), &end);
-    if (f.empty() || end != f.c_str() + f.size())
+    const ParsedDecimal n = parseDecimal(f);
+    if (n.kind == DecimalText::kNotANumber)
       fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a number");
-    if (f.find_first_of("xX") != std::string::npos)  // strtod reads 0x10 as 16: a hex-coded column misread
+    if (n.kind == DecimalText::kNotDecimal)  // a hex-coded column would be misread
       fail(path, lineno, "column '" + log.columns[i] + "': " + quotedCell(f) + " is not a decimal number");
-    if (!std::isfinite(v))
+    if (n.kind == DecimalText::kNotFinite)
       fail(path, lineno, "column '" + log.columns[i] + "': value " + quotedCell(f) + " is not finite");
-    values.push_back(v);
+    values.push_back(n.value);
   }
 }
 

@@ -15,7 +15,10 @@ namespace plsa::diagnose {
 Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const { return (v * M.topRows<2>()).rowwise() + M.row(2); }
 
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
-                        double preroll_s) {
+                        double preroll_s, Eigen::Index unrecorded) {
+  if (unrecorded < 0 || unrecorded >= commands.rows())
+    throw std::invalid_argument("replayCommands: " + std::to_string(unrecorded) + " unrecorded of " +
+                                std::to_string(commands.rows()) + " commands");
   // A run's long holds bring the simulator's pressure errors, rates and
   // creep states into the subnormal range; calibrated physics that does so
   // cost 1.8x the CPU time on the real arm (the same diagnosis, 133 against
@@ -25,12 +28,14 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};
   const auto preroll = static_cast<int>(std::lround(preroll_s * config.sample_rate_hz));
   for (int k = 0; k < preroll; ++k) a.stepReading(first);
+  for (Eigen::Index i = 0; i < unrecorded; ++i) a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)});
   SimTrace t;
-  const Eigen::Index n = commands.rows();
+  const Eigen::Index n = commands.rows() - unrecorded;
   t.outputs.resize(n, 2);
   t.pressures.resize(n, 3);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const sim::BendingReading r = a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)});
+    const Eigen::Index k = unrecorded + i;
+    const sim::BendingReading r = a.stepReading({commands(k, 0), commands(k, 1), commands(k, 2)});
     t.outputs.row(i) = r.bending_deg.transpose();
     for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = r.pressure_bar[static_cast<std::size_t>(j)];
   }
@@ -42,7 +47,11 @@ SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double pr
   c.sensor.noise_deg = 0.0;
   c.sample_rate_hz = 1.0 / run.sample_time_s;
   c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
-  return replayCommands(c, run.commands, 1, run.start == RunStart::kSettled ? preroll_s : 0.0);
+  const double preroll = run.start == RunStart::kSettled ? preroll_s : 0.0;
+  if (run.lead_in.rows() == 0) return replayCommands(c, run.commands, 1, preroll);
+  Eigen::MatrixXd all(run.lead_in.rows() + run.commands.rows(), 3);
+  all << run.lead_in, run.commands;
+  return replayCommands(c, all, 1, preroll, run.lead_in.rows());
 }
 
 namespace {

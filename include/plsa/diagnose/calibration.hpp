@@ -23,13 +23,15 @@ struct SimTrace {
 
 /// Drives the simulator with `commands` (samples x 3, bar) at its own sample
 /// rate, after holding the first command for `preroll_s` unrecorded; sensor
-/// noise as configured, seeded with `seed`.
+/// noise as configured, seeded with `seed`. The first `unrecorded` rows are
+/// stepped but not recorded (the trace has the rest).
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
-                        double preroll_s = 3.0);
+                        double preroll_s = 3.0, Eigen::Index unrecorded = 0);
 
 /// replayCommands at the run's sample rate with the simulator's own sensor
 /// noise off: from rest, or after `preroll_s` at the first command when the
-/// run started settled (RunData::start).
+/// run started settled (RunData::start); the run's lead-in, if any, replayed
+/// unrecorded first.
 SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s = 3.0);
 
 /// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.

@@ -43,7 +43,12 @@ struct RunData {
   Eigen::MatrixXd commands;            ///< samples x 3, bar
   Eigen::MatrixXd outputs;             ///< samples x 2: bending vector (deg) for kAngles, raw outputs for kAffine
   Eigen::MatrixXd pressures;           ///< samples x 3 (bar) or no columns
-  RunStart start = RunStart::kAtRest;  ///< kAtRest or kSettled
+  RunStart start = RunStart::kAtRest;  ///< kAtRest or kSettled (of the lead-in's first command when there is one)
+  /// Commands replayed before the run, unrecorded (samples x 3, bar; none by
+  /// default): the held-out part of a single run replays the part before it,
+  /// so the simulator carries the state the run had built up there
+  /// (hysteresis, creep, a sensor's drift) instead of starting afresh.
+  Eigen::MatrixXd lead_in;
 
   Eigen::Index samples() const { return commands.rows(); }
   bool hasPressures() const { return pressures.cols() == 3; }
@@ -65,7 +70,8 @@ RunStart detectRunStart(const RunData& run, OutputMap map);
 /// Bend and steer (deg) -> bending vector (deg): steer wraps, the vector does not.
 Eigen::MatrixXd bendingVector(const Eigen::VectorXd& bend_deg, const Eigen::VectorXd& steer_deg);
 
-/// The first (1 - heldout_fraction) of a run and the rest.
+/// The first (1 - heldout_fraction) of a run and the rest, the rest with the
+/// first part as its lead-in.
 std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction);
 
 }  // namespace plsa::diagnose

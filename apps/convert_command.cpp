@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "log_paths.hpp"
@@ -35,8 +36,19 @@ void runConvert(const ConvertArgs& a) {
   wo.lcm_channel = a.channel;
   wo.can_profile = a.can_profile;
   io::writeLog(a.out, log, wo);
+  // What the file holds, read back as the tools will read it: a format that
+  // carries fixed columns (LCM's standard state, a signal map's signals)
+  // leaves the others out, and that is said (a probe's cmd_4 and p_4 went
+  // missing under a message listing them as written).
+  const io::Log written = io::readLog(a.out, ro);
+  std::vector<std::string> left_out;
+  for (const std::string& c : log.columns)
+    if (!written.hasColumn(c)) left_out.push_back(c);
+  if (!left_out.empty())
+    std::fprintf(stderr, "plsa convert: warning: %s holds no column for %s (its format carries only %s)\n",
+                 a.out.c_str(), io::columnList(left_out).c_str(), io::columnList(written.columns).c_str());
   std::printf("plsa convert: %s -> %s: %lld rows, columns %s\n", a.in.c_str(), a.out.c_str(),
-              static_cast<long long>(log.samples()), io::columnList(log.columns).c_str());
+              static_cast<long long>(written.samples()), io::columnList(written.columns).c_str());
 }
 
 struct CanProfileArgs {

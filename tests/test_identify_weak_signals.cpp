@@ -378,6 +378,29 @@ TEST(Pipeline, ColumnsBeyondWhatAFitTakesAreRefusedNamingThem) {
   EXPECT_NE(whyRefused(tiny).find("identify: output 'y' moves by only "), std::string::npos) << whyRefused(tiny);
 }
 
+// A log given twice (from Python, where no path check runs) or a copy under
+// another name: its samples would sit in the training and the held-out folds
+// at once. Refused naming both; another log of the same length is taken.
+TEST(Pipeline, ALogGivenTwiceIsRefused) {
+  io::Log a = randomChambersLog(120.0);
+  a.source = "a.csv";
+  io::Log copy = a;
+  copy.source = "a_copy.csv";
+  try {
+    identifyModel({a, copy}, partitionOnly({"p_1", "p_2", "p_3"}, {"y"}));
+    ADD_FAILURE() << "a copy was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("identify: a_copy.csv holds the same samples as a.csv (a log given twice, or "
+                                         "a copy)"),
+              std::string::npos)
+        << e.what();
+  }
+  io::Log other = a;
+  other.source = "b.csv";
+  other.data.col(4).array() += 0.01;  // the same commands, another response
+  EXPECT_NO_THROW(identifyModel({a, other}, partitionOnly({"p_1", "p_2", "p_3"}, {"y"})));
+}
+
 // A column named twice among the inputs and outputs, or the time as one of
 // them, is refused before any work (before, after the whole identification,
 // by the model file; the time identified as a signal).

@@ -6,6 +6,9 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
+
+#include <sys/stat.h>
 
 #include "plsa/io/log_readers.hpp"
 
@@ -110,6 +113,23 @@ TEST_F(LogReadersTest, RefusesAnUnknownFormatNamingTheFileAndWhatItReads) {
   const std::string what = message([&] { r.read(path); });
   EXPECT_EQ(what, path + ": not a log format this build knows; it reads: tsv, bin");
   EXPECT_THROW(r.read(path), std::invalid_argument);
+}
+
+// A device or a folder is no log: refused by name before a byte is read (a
+// probe's read_log("/dev/zero") took a gigabyte, the pipe limit, first). A
+// pipe is read whole, as before.
+TEST_F(LogReadersTest, ADeviceOrAFolderIsRefusedBeforeItIsRead) {
+  LogReaderRegistry r;
+  r.add(fakeFormat("tsv", {".tsv"}));
+  EXPECT_EQ(message([&] { r.read("/dev/zero"); }), "/dev/zero: not a log file (a folder, a device or a socket)");
+  const std::string folder = (dir_ / "folder.tsv").string();
+  fs::create_directories(folder);
+  EXPECT_EQ(message([&] { r.read(folder); }), folder + ": not a log file (a folder, a device or a socket)");
+  const std::string fifo = (dir_ / "pipe.tsv").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] { std::ofstream(fifo) << "time_s\tx\n"; });
+  EXPECT_EQ(r.read(fifo).metadata.at("format"), "tsv");
+  writer.join();
 }
 
 TEST_F(LogReadersTest, ABuildWithoutTheLcmCodecNamesAnLcmLogItCannotRead) {

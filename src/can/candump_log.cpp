@@ -347,6 +347,26 @@ void checkResolution(const std::string& path, const io::Log& log, const MessageL
   }
 }
 
+// Which value of a row a message's signals cannot carry, named with its
+// column and the signal's range (a frame that cannot be encoded).
+std::invalid_argument uncarried(const std::string& path, const io::Log& log, Eigen::Index row, const MessageLayout& m,
+                                const std::vector<int>& columns) {
+  std::ostringstream msg;
+  msg.precision(9);
+  msg << path << ": row " << row + 1 << " of " << log.source << ": " << m.name;
+  for (std::size_t s = 0; s < columns.size(); ++s) {
+    const double v = log.data(row, columns[s]);
+    const PhysicalRange range = physicalRange(m.signals[s]);
+    if (!(v >= range.lo && v <= range.hi)) {
+      msg << "." << m.signals[s].name << " cannot carry " << log.columns[static_cast<std::size_t>(columns[s])] << " = "
+          << v << " (its range is " << range.lo << " to " << range.hi << ")";
+      return std::invalid_argument(msg.str());
+    }
+  }
+  msg << " cannot carry its values (a signal out of its range, or not finite)";
+  return std::invalid_argument(msg.str());
+}
+
 }  // namespace
 
 void writeCandumpLog(const std::string& path, const io::Log& log, const SignalMap& map) {
@@ -375,9 +395,7 @@ void writeCandumpLog(const std::string& path, const io::Log& log, const SignalMa
       for (std::size_t s = 0; s < columns[k].size(); ++s) v[s] = log.data(r, columns[k][s]);
       CanFrame f;
       const MessageLayout& m = *written[k]->layout;
-      if (!encodeFrame(m, v.data(), counter[k]++, f))
-        throw std::invalid_argument(path + ": row " + std::to_string(r + 1) + " of " + log.source + ": " + m.name +
-                                    " cannot carry its values (a signal out of its range, or not finite)");
+      if (!encodeFrame(m, v.data(), counter[k]++, f)) throw uncarried(path, log, r, m, columns[k]);
       // candump's (seconds.micros) field: seconds since 1970 at most, never negative (its reader refuses a sign).
       if (!(log.data(r, time) >= 0.0 && log.data(r, time) < 1e11))
         throw std::invalid_argument(path + ": row " + std::to_string(r + 1) + " of " + log.source +

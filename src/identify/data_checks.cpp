@@ -68,6 +68,19 @@ void IdentificationRun::refuseStillColumns() const {
                                 "(check --inputs)");
 }
 
+// A log given twice, or a copy under another name, would sit in the training
+// and the held-out folds at once: cross-validation would score it on itself
+// and choose a structure that only fits (a probe: Python's identify took the
+// same path twice; the command line took a copy).
+void IdentificationRun::refuseRepeatedLogs(const std::vector<io::Log>& logs) const {
+  for (std::size_t i = 0; i < U.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (U[i].rows() == U[j].rows() && U[i] == U[j] && Y[i] == Y[j])
+        throw std::invalid_argument("identify: " + logs[i].source + " holds the same samples as " + logs[j].source +
+                                    " (a log given twice, or a copy): cross-validation would score it on itself "
+                                    "(give each once)");
+}
+
 // Columns whose values a least-squares fit cannot take: beyond 1e150 their
 // squares overflow (the fits then fail as "regressors all zero"), and an
 // output that moves by under 1e-150 has a spread whose square underflows.

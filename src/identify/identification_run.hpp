@@ -202,6 +202,7 @@ struct IdentificationRun {
   void stepResolution();
   void refuseStillColumns() const;
   void refuseUnfittableMagnitudes() const;
+  void refuseRepeatedLogs(const std::vector<io::Log>& logs) const;
   static constexpr double kLargestFittable = 1e150;
   void say(const std::string& line);
   PairPoles& pairAt(int in_i, int out_i);

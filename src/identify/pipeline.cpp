@@ -229,6 +229,7 @@ void IdentificationRun::readData(const std::vector<io::Log>& logs) {
   }
   refuseUnfittableMagnitudes();
   refuseStillColumns();
+  refuseRepeatedLogs(logs);
   for (double tau : o.slow_pole_candidates) {  // under dt, exp(-dt / tau) would be 0 or a fast pole, not a slow one
     PLSA_CHECK(tau == 0.0 || (std::isfinite(tau) && tau > 0.0),
                "identify: --slow-pole " + formatNumber(tau) + ": a time constant is 0 (none) or a finite time in s");

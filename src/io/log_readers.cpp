@@ -171,6 +171,9 @@ Log LogReaderRegistry::read(const std::string& path, const ReadOptions& options)
   // A pipe can be read once: take it whole (bounded), then look at its first bytes.
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
+    // A device (/dev/zero) would be read up to the pipe limit, a gigabyte, before it was refused.
+    if (std::filesystem::exists(path, ec) && !std::filesystem::is_fifo(path, ec))
+      throw std::invalid_argument(path + ": not a log file (a folder, a device or a socket)");
     std::istringstream piped(readTextFile(path, "log", kMaxPipedLogBytes));
     return read(piped, path, options);
   }

@@ -365,6 +365,14 @@ TEST_F(Cli, DemoWritesWhatItReportsAndValidateReproducesItsFits) {
                   " --yaw-tracking " + bad),
               2)
         << bad;
+  // A memory under a sample time or beyond 1e9 s rounds to no tracking: refused, not run as none (a probe).
+  for (const std::string bad : {"1e-6", "1e300"}) {
+    EXPECT_EQ(run("validate --model " + file("demo/model.json") + " --log " + file("demo/validate_joystick.csv") +
+                  " --yaw-tracking " + bad),
+              1)
+        << bad;
+    EXPECT_NE(err_.find("is neither 0 (none) nor from the 0.012500 s sample time to 1e9 s"), std::string::npos) << err_;
+  }
   ASSERT_EQ(run("validate --model " + file("demo/baseline_paper.json") + " --log " +
                 file("demo/validate_joystick.csv") + " --horizons 40 --json " + file("v.json")),
             0)

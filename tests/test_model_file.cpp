@@ -368,6 +368,12 @@ std::vector<FieldCase> fieldCases() {
                                    j["partition"]["levels"][0] = {0.8, 0.2};
                                  },
                                  "must increase strictly"},
+                                {"one input scheduled twice", false,
+                                 [](J& j) {
+                                   j["partition"]["inputs"] = {0, 0};
+                                   j["partition"]["levels"] = {{0.2, 0.8}, {0.2, 0.8}};
+                                 },
+                                 "'partition.inputs' names input 0 twice"},
                                 {"a switched partition on the input side", false,
                                  [](J& j) {
                                    j["partition"]["scheduling"] = "switched";
@@ -399,6 +405,8 @@ std::vector<FieldCase> fieldCases() {
           {"a fallback from a region it does not have", false,
            [](J& j) { j["regions"][1]["fallback_from"] = static_cast<int>(j["regions"].size()); },
            "regions[1].fallback_from"},
+          {"a fallback from itself", false, [](J& j) { j["regions"][1]["fallback_from"] = 1; },
+           "'regions[1].fallback_from' names the region itself"},
           {"a negative sample count", false, [](J& j) { j["regions"][0]["samples"] = -1; }, "regions[0].samples"},
           {"a note that is a number", false, [](J& j) { j["regions"][0]["note"] = 5; }, "regions[0].note"},
       }});

@@ -59,6 +59,16 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
   EXPECT_NE(error(R"({"elongation": {"quadratic": -1.0}})").find("stops rising at 0.375 bar"), std::string::npos);
   EXPECT_EQ(error(R"({"elongation": {"quadratic": -0.9}})"), "accepted");
   EXPECT_EQ(error(R"({"elongation": {"quadratic": -1.0}, "max_pressure_bar": 0.35})"), "accepted");
+  // Chamber directions: angles, three apart (a probe: 1e300 and [0, 0, 0] were taken).
+  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, 120, 1e300]}})")
+                .find("geometry.bend_direction_deg[2] = 1e+300 is outside [-360, 360] deg"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, 0, 0]}})")
+                .find("geometry.bend_direction_deg[0] and [1] are under 1 deg apart"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"geometry": {"bend_direction_deg": [0, 120, 359.5]}})").find("[0] and [2] are under 1 deg apart"),
+            std::string::npos);
+  EXPECT_EQ(error(R"({"geometry": {"bend_direction_deg": [-90, 30, 150]}})"), "accepted");
 }
 
 TEST(SimConfig, ParametersAreAddressableByModule) {

@@ -81,9 +81,8 @@ SensorYawTrack trackSensorYaw(const DioPwlObfModel& model, const Eigen::MatrixXd
              "SimulationStart: the yaw registration's least bend must be finite and >= 0 deg, got " +
                  std::to_string(start.yaw_registration_min_bend_deg));
   const int window = static_cast<int>(yawRegistrationSamples(model, start));
-  PLSA_CHECK(std::isfinite(start.yaw_tracking_s) && start.yaw_tracking_s >= 0,
-             "SimulationStart: the yaw tracking's memory must be finite and >= 0 s, got " +
-                 std::to_string(start.yaw_tracking_s));
+  const std::string tracking = yawTrackingProblem(start.yaw_tracking_s, model.sample_time_s);
+  PLSA_CHECK(tracking.empty(), "SimulationStart: " + tracking);
   yaw.configure(window, carriedYawRate(model, start) * model.radiansPerAngleUnit() * model.sample_time_s,
                 static_cast<long>(settleSamples(model, start)), leastBend(model, start),
                 trackingForget(start.yaw_tracking_s, model.sample_time_s));

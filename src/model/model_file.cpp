@@ -330,8 +330,11 @@ class ModelReader {
     io::requireKnownKeys(part, {"inputs", "scheduling", key, "direction_split", "direction_threshold"}, "partition.",
                          source_);
     std::vector<int> sched;
-    for (const auto& v : array(at(part, "inputs", "partition."), "partition.inputs"))
+    for (const auto& v : array(at(part, "inputs", "partition."), "partition.inputs")) {
       sched.push_back(static_cast<int>(io::integerIn(v, 0, 1 << 20, "partition.inputs[]", source_)));
+      if (std::count(sched.begin(), sched.end(), sched.back()) > 1)  // [0, 0] scheduled on p_1 twice, on p_2 never
+        bad("'partition.inputs' names input " + std::to_string(sched.back()) + " twice");
+    }
     std::vector<std::vector<double>> bps;
     for (const auto& list : array(at(part, key, "partition."), "partition." + key))
       bps.push_back(numbers(list, "partition." + key + "[]"));
@@ -360,6 +363,7 @@ class ModelReader {
       fit.fallback_from =
           static_cast<int>(io::integerIn(at(regions[r], "fallback_from", path), -2,
                                          static_cast<long long>(regions.size()) - 1, path + "fallback_from", source_));
+      if (fit.fallback_from == static_cast<int>(r)) bad("'" + path + "fallback_from' names the region itself");
       fit.note = string(at(regions[r], "note", path), path + "note");
       std::vector<Eigen::VectorXd> coefs;
       for (const auto& c : array(at(regions[r], "coefficients", path), path + "coefficients")) {

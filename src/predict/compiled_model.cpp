@@ -40,6 +40,8 @@ void compileCommon(const DioPwlObfModel& m, const PredictorOptions& o, CompiledM
     c.angle_unit_per_rad = angleUnitsPerRadian(m.output_unit);
   }
   c.sample_time = m.sample_time_s;
+  const std::string tracking = yawTrackingProblem(o.yaw_tracking_s, m.sample_time_s);
+  PLSA_CHECK(tracking.empty(), "Predictor: " + tracking);
   c.output_level = m.output_level;
   if (m.output_frame == OutputFrame::kTipCartesian && m.schedule_side == ScheduleSide::kInput &&
       !m.output_level.empty() && !o.simulate) {

@@ -159,6 +159,22 @@ void SimConfig::validate() const {
       throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " + list);
     }
   }
+  // Chamber directions: angles on the circle (1e300 was taken), the three apart (at one direction the
+  // segment bends in one plane and the steering subspaces are empty).
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double d = geometry.bend_direction_deg[i];
+    if (!(std::isfinite(d) && std::abs(d) <= 360.0)) {
+      std::ostringstream msg;
+      msg << "sim config: geometry.bend_direction_deg[" << i << "] = " << d << " is outside [-360, 360] deg";
+      throw std::invalid_argument(msg.str());
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      const double apart = std::fmod(std::abs(d - geometry.bend_direction_deg[j]), 360.0);
+      if (std::min(apart, 360.0 - apart) < 1.0)
+        throw std::invalid_argument("sim config: geometry.bend_direction_deg[" + std::to_string(j) + "] and [" +
+                                    std::to_string(i) + "] are under 1 deg apart (three chambers around the axis)");
+    }
+  }
   // A chamber that shortened under more pressure would bend the segment backwards: a typo, not a device.
   const double a = elongation.strain_per_bar, q = elongation.quadratic;
   if (a + 2.0 * q * max_pressure_bar <= 0.0) {

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <Eigen/Dense>
 
@@ -238,6 +239,19 @@ class SensorYaw {
   long samples_ = 0, bent_ = 0;
   bool window_registered_ = false;
 };
+
+/// The longest yaw-tracking memory taken: past it exp(-dt / s) rounds to 1 at
+/// any sample time, which would be no tracking under another name.
+inline constexpr double kMaxYawTrackingS = 1e9;
+
+/// Why `seconds` is not a yaw-tracking memory at `sample_time` ("" when it
+/// is): 0 (none), or from one sample time (under it, the forgetting factor
+/// rounds to 0, also no tracking) to kMaxYawTrackingS.
+inline std::string yawTrackingProblem(double seconds, double sample_time) {
+  if (seconds == 0.0 || (std::isfinite(seconds) && seconds >= sample_time && seconds <= kMaxYawTrackingS)) return {};
+  return "the yaw tracking's memory of " + std::to_string(seconds) + " s is neither 0 (none) nor from the " +
+         std::to_string(sample_time) + " s sample time to 1e9 s (outside, it rounds to no tracking)";
+}
 
 /// The per-sample forgetting factor of a yaw tracked with `seconds` of memory
 /// (a sample's terms weigh e^-1 after them) at `sample_time`; 1 (none) for 0.

@@ -1,6 +1,7 @@
 #include "log_paths.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -96,6 +97,28 @@ void checkOutputPath(const std::string& output, const std::string& option, const
                      const std::string& tool) {
   refuseOverwritingInputs(output, option, inputs, tool);
   refuseMissingOutputFolder(output, option, tool);
+}
+
+namespace {
+
+bool mentionsWord(const std::string& text, const std::string& word) {
+  const auto boundary = [](char c) { return !std::isalnum(static_cast<unsigned char>(c)) && c != '_'; };
+  for (std::size_t at = text.find(word); at != std::string::npos; at = text.find(word, at + 1))
+    if ((at == 0 || boundary(text[at - 1])) && (at + word.size() == text.size() || boundary(text[at + word.size()])))
+      return true;
+  return false;
+}
+
+}  // namespace
+
+void warnOfDeclaredUnits(const io::Log& log, const std::string& input_unit, const std::string& output_unit,
+                         const std::string& tool) {
+  const auto declared = log.metadata.find("units");
+  if (declared == log.metadata.end()) return;
+  for (const auto& [unit, side] : {std::pair{input_unit, "inputs"}, std::pair{output_unit, "outputs"}})
+    if (!unit.empty() && !mentionsWord(declared->second, unit))
+      std::fprintf(stderr, "%s: warning: %s declares '# units: %s', which never says %s: the model's %s are in %s\n",
+                   tool.c_str(), log.source.c_str(), declared->second.c_str(), unit.c_str(), side, unit.c_str());
 }
 
 void refuseMissingOutputFolder(const std::string& output, const std::string& option, const std::string& tool) {

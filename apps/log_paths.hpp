@@ -39,6 +39,13 @@ void checkOutputPath(const std::string& output, const std::string& option, const
 /// event logs in a build with LCM), printing its warnings as "TOOL: warning: ...".
 io::Log readLogWithWarnings(const std::string& path, const io::CsvReadOptions& options, const std::string& tool);
 
+/// Prints a warning when `log` declares its units (a `# units:` line) and they
+/// do not mention the model's input or output unit as a word: the model's
+/// numbers would be read in another unit than the log's (a probe's kPa log
+/// validated against a bar model without a word).
+void warnOfDeclaredUnits(const io::Log& log, const std::string& input_unit, const std::string& output_unit,
+                         const std::string& tool);
+
 /// Every log of `paths` (files or folders, logPaths) with readLogWithWarnings,
 /// each needing the `required` columns.
 std::vector<io::Log> readLogs(const std::vector<std::string>& paths, const std::vector<std::string>& required,

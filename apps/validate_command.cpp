@@ -140,6 +140,7 @@ void runValidate(const ValidateArgs& a) {
   required.insert(required.end(), model.outputs.begin(), model.outputs.end());
   required.push_back(io::standard_columns::kTime);  // the sample rate and gaps are checked against the model's
   const io::Log log = readLogs({a.log}, required, "validate", a.channel, a.can_profile).front();
+  warnOfDeclaredUnits(log, model.input_unit, model.output_unit, "plsa validate");
   if (a.refuse_outliers) {
     const std::string outlier = identify::grossOutlier(log, {required.begin(), required.end() - 1});
     if (!outlier.empty())

@@ -78,6 +78,22 @@ TEST_F(Cli, HostileFilesAndOverwritesEndInNamedErrors) {
   ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --horizons 40"), 0) << err_;
   const std::string log_before = slurp(file("j.csv")), model_before = slurp(file("m.json"));
 
+  {  // A log declaring other units than the model's is warned of (a probe: validated without a word).
+    std::string text = log_before;
+    const std::string bar = "p_* bar gauge";
+    ASSERT_NE(text.find(bar), std::string::npos);
+    text.replace(text.find(bar), bar.size(), "p_* kPa");
+    std::ofstream(file("kpa.csv")) << text;
+  }
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("kpa.csv") + " --horizons 40"), 0) << err_;
+  EXPECT_NE(err_.find("plsa validate: warning: " + file("kpa.csv") + " declares '# units: time_s s; cmd_*, p_* kPa; " +
+                      "bend_deg, steer_deg deg', which never says bar: the model's inputs are in bar"),
+            std::string::npos)
+      << err_;
+  EXPECT_EQ(err_.find("which never says deg"), std::string::npos) << err_;
+  ASSERT_EQ(run("validate --model " + file("m.json") + " --log " + file("j.csv") + " --horizons 40"), 0) << err_;
+  EXPECT_EQ(err_.find("never says"), std::string::npos) << err_;
+
   // Zero samples once ended in SIGSEGV.
   EXPECT_EQ(run("simulate --experiment joystick --duration 0.006 --out " + file("x.csv")), 1);
   EXPECT_NE(err_.find("joystick: a duration of 0.006 s is under two samples at 80 Hz"), std::string::npos) << err_;

@@ -52,6 +52,21 @@ TEST_F(CsvLogTest, ReadsMetadataHeaderAndRows) {
   EXPECT_EQ(log.columnsOf({"bend_deg", "cmd_1"})(0, 1), 0.1);
 }
 
+// A declared sample rate the time column contradicts is warned of (a probe:
+// '# sample_rate_hz: 100' over an 80 Hz time column was read without a
+// word); one that agrees, or is no number, says nothing.
+TEST_F(CsvLogTest, ADeclaredRateTheTimeColumnContradictsIsWarnedOf) {
+  std::string rows = "time_s,y\n";
+  for (int k = 0; k < 20; ++k) rows += std::to_string(k * 0.0125) + ",1\n";
+  const auto wrong = plsa::io::readCsvLog(write("# sample_rate_hz: 100\n" + rows));
+  ASSERT_EQ(wrong.warnings.size(), 1u);
+  EXPECT_NE(wrong.warnings[0].find("its '# sample_rate_hz: 100' disagrees with its time column, which steps at 80 Hz"),
+            std::string::npos)
+      << wrong.warnings[0];
+  EXPECT_TRUE(plsa::io::readCsvLog(write("# sample_rate_hz: 80\n" + rows)).warnings.empty());
+  EXPECT_TRUE(plsa::io::readCsvLog(write("# sample_rate_hz: about 80\n" + rows)).warnings.empty());
+}
+
 // Found by a probe: 40 million '#' lines (80 MB) took 2.5 GB, every comment kept.
 TEST_F(CsvLogTest, KeepsAThousandCommentLinesAndCountsTheRest) {
   std::string text;

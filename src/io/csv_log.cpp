@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <unordered_set>
+#include <vector>
 
 #include "plsa/core/number_text.hpp"
 #include "plsa/core/printable_text.hpp"
@@ -172,6 +173,25 @@ std::string quotedCell(const std::string& f) {
   return "'" + f.substr(0, 40) + "...' (" + std::to_string(f.size()) + " bytes)";
 }
 
+// A `# sample_rate_hz:` line that the time column contradicts is warned of:
+// the time column is what every tool reads (a log declaring 100 Hz and
+// stamped at 80 Hz was read at 80 Hz without a word).
+void warnOfDeclaredRate(Log& log, int time_col) {
+  const auto declared = log.metadata.find("sample_rate_hz");
+  if (declared == log.metadata.end() || log.data.rows() < 3) return;
+  const ParsedDecimal hz = parseDecimal(declared->second);
+  if (hz.kind != DecimalText::kNumber || !(hz.value > 0.0)) return;
+  const Eigen::VectorXd t = log.data.col(time_col);
+  std::vector<double> steps(static_cast<std::size_t>(t.size() - 1));
+  for (Eigen::Index i = 0; i + 1 < t.size(); ++i) steps[static_cast<std::size_t>(i)] = t(i + 1) - t(i);
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  const double measured = 1.0 / steps[steps.size() / 2];
+  if (std::abs(measured - hz.value) > 0.01 * measured)
+    log.warnings.push_back(log.source + ": its '# sample_rate_hz: " + declared->second +
+                           "' disagrees with its time column, which steps at " + significantDigits(measured, 6) +
+                           " Hz (the time column is what plsa reads)");
+}
+
 // A data row: as many finite numbers as the header has columns, appended to `values`.
 void readRow(const std::vector<std::string>& fields, const std::string& path, std::size_t lineno, const Log& log,
              std::vector<double>& values) {
@@ -252,6 +272,7 @@ Log readCsvLog(std::istream& in, const std::string& path, const CsvReadOptions& 
   const auto cols = static_cast<Eigen::Index>(log.columns.size());
   log.data = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(values.data(),
                                                                                                       rows, cols);
+  if (time_col >= 0) warnOfDeclaredRate(log, time_col);
   return log;
 }
 

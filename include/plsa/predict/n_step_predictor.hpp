@@ -352,12 +352,21 @@ class NStepPredictor {
     return status;
   }
 
-  // A plan is taken as update() takes an input: finite, inside the accepted range.
+  // A plan is taken as update() takes an input: finite, inside the accepted
+  // range. One branch-free pass on the common path (a NaN fails both
+  // comparisons, so it counts as outside); what is wrong is told apart only
+  // when something is.
   PredictorStatus planStatus(const Eigen::Ref<const Eigen::MatrixXd>& plan) const noexcept {
-    if (plan.size() == 0) return PredictorStatus::kOk;
+    Eigen::Index inside = 0;
+    for (Eigen::Index c = 0; c < plan.cols(); ++c) {
+      const double* v = plan.col(c).data();
+      for (Eigen::Index r = 0; r < plan.rows(); ++r)
+        inside += static_cast<Eigen::Index>((v[r] >= accept_min_) & (v[r] <= accept_max_));
+    }
+    const bool finite_range = std::isfinite(accept_min_) && std::isfinite(accept_max_);
+    if (inside == plan.size() && finite_range) return PredictorStatus::kOk;
     if (!finiteEverywhere(plan)) return PredictorStatus::kNotFinite;
-    if (plan.minCoeff() < accept_min_ || plan.maxCoeff() > accept_max_) return PredictorStatus::kInputOutOfRange;
-    return PredictorStatus::kOk;
+    return inside == plan.size() ? PredictorStatus::kOk : PredictorStatus::kInputOutOfRange;
   }
 
   // A prediction's first `horizon` rows from the model's frame into the

@@ -1,11 +1,13 @@
 // Numbers as progress lines print them (whole, never cut to a width), and
-// number fields as the readers take them.
+// number fields as the readers take them, and the median the readers share.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "plsa/core/median.hpp"
 #include "plsa/core/number_text.hpp"
 
 using namespace plsa;
@@ -38,4 +40,13 @@ TEST(NumberText, ParseDecimalTakesWholeFiniteDecimalsOnly) {
     EXPECT_EQ(parseDecimal(text).kind, DecimalText::kNotDecimal) << text;
   for (const std::string text : {"inf", "-Infinity", "nan", "1e400"})
     EXPECT_EQ(parseDecimal(text).kind, DecimalText::kNotFinite) << text;
+}
+
+// The median several readers share: the middle of an odd count, the upper
+// middle of an even one, whatever the order; NaN for an empty list.
+TEST(Median, TakesTheMiddleOfAnyOrderAndNaNForNone) {
+  EXPECT_EQ(plsa::median({3.0, -1.0, 2.0}), 2.0);
+  EXPECT_EQ(plsa::median({4.0, 1.0, 3.0, 2.0}), 3.0);
+  EXPECT_EQ(plsa::median({0.0125, 0.0125, 0.5, 0.0125}), 0.0125);  // a gap does not move a sample time
+  EXPECT_TRUE(std::isnan(plsa::median({})));
 }

@@ -402,6 +402,28 @@ TEST(Predictor, RejectsMismatchedModelsAtSetUp) {
   EXPECT_THROW((Predictor<5>{d.switched, bad}), std::invalid_argument);
 }
 
+// A yaw-tracking memory is 0 (none) or from one sample time to 1e9 s; any
+// other value, not a number included, is refused with the range.
+TEST(Predictor, RefusesAYawTrackingMemoryOutsideItsRange) {
+  const Data& d = data();
+  const double dt = d.input_side.sample_time_s;
+  for (const double seconds : {std::nan(""), -1.0, std::numeric_limits<double>::infinity(), 0.5 * dt, 2e9}) {
+    PredictorOptions o;
+    o.yaw_tracking_s = seconds;
+    try {
+      Predictor<5> p(d.input_side, o);
+      ADD_FAILURE() << "yaw_tracking_s " << seconds << " was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("yaw tracking's memory"), std::string::npos) << e.what();
+    }
+  }
+  for (const double seconds : {0.0, dt, 30.0}) {
+    PredictorOptions o;
+    o.yaw_tracking_s = seconds;
+    EXPECT_NO_THROW((Predictor<5>{d.input_side, o})) << seconds;
+  }
+}
+
 // Two threads: one ticks, one swaps models. Every prediction must equal that
 // of the model the predictor says it used, exactly: a torn model would not.
 TEST(Predictor, HotSwapUnderLoadIsNeverTorn) {

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "plsa/core/median.hpp"
 #include "plsa/core/text_file.hpp"
 #include "plsa/io/standard_columns.hpp"
 
@@ -158,10 +159,9 @@ void decodeLine(const CandumpLine& l, std::vector<MappedMessage>& messages, Tall
 double sensorPeriod(const std::vector<double>& t) {
   std::vector<double> d;
   for (std::size_t k = 1; k < t.size(); ++k) d.push_back(t[k] - t[k - 1]);
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  const double median = d[d.size() / 2], span = t.back() - t.front();
-  if (!(median > 0.0)) return median;
-  return span / std::max(1.0, std::round(span / median));
+  const double interval = median(std::move(d)), span = t.back() - t.front();
+  if (!(interval > 0.0)) return interval;
+  return span / std::max(1.0, std::round(span / interval));
 }
 
 // The uniform grid: one row per bus cycle of the pressure sensor (its median

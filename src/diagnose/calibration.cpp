@@ -7,6 +7,7 @@
 
 #include <nlopt.hpp>
 
+#include "plsa/core/median.hpp"
 #include "plsa/core/subnormals_flushed.hpp"
 #include "plsa/sim/actuator.hpp"
 
@@ -122,8 +123,7 @@ Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& o) {
     for (Eigen::Index c = 0; c < m.cols(); ++c) {
       std::vector<double> d;
       for (Eigen::Index i = 2; i < m.rows(); ++i) d.push_back(std::abs(m(i, c) - 2 * m(i - 1, c) + m(i - 2, c)));
-      std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-      const double sigma = 1.4826 * d[d.size() / 2] / std::sqrt(6.0);
+      const double sigma = 1.4826 * median(std::move(d)) / std::sqrt(6.0);
       sum += sigma * sigma * static_cast<double>(m.rows());
     }
     return sum;

@@ -1,5 +1,6 @@
 #include "plsa/diagnose/run_data.hpp"
 #include "plsa/core/angle_units.hpp"
+#include "plsa/core/median.hpp"
 #include "plsa/core/number_text.hpp"
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/io/csv_log.hpp"
@@ -125,9 +126,7 @@ RunStart detectRunStart(const RunData& run, OutputMap map) {
   if (map != OutputMap::kAngles) return RunStart::kAtRest;
   std::vector<double> lengths(static_cast<std::size_t>(run.samples()));
   for (Eigen::Index i = 0; i < run.samples(); ++i) lengths[static_cast<std::size_t>(i)] = run.outputs.row(i).norm();
-  std::nth_element(lengths.begin(), lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2), lengths.end());
-  const double median = lengths[lengths.size() / 2];
-  return run.outputs.row(0).norm() < 0.15 * median ? RunStart::kAtRest : RunStart::kSettled;
+  return run.outputs.row(0).norm() < 0.15 * median(std::move(lengths)) ? RunStart::kAtRest : RunStart::kSettled;
 }
 
 std::pair<RunData, RunData> splitByTime(const RunData& run, double heldout_fraction) {

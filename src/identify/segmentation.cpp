@@ -5,6 +5,7 @@
 #include <map>
 
 #include "plsa/core/check.hpp"
+#include "plsa/core/median.hpp"
 
 namespace plsa::identify {
 
@@ -40,9 +41,7 @@ double differenceNoise(const Eigen::VectorXd& u) {
   if (u.size() < 3) return 0.0;
   std::vector<double> d(static_cast<std::size_t>(u.size() - 1));
   for (Eigen::Index k = 1; k < u.size(); ++k) d[static_cast<std::size_t>(k - 1)] = std::abs(u(k) - u(k - 1));
-  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return 1.4826 * *mid / std::sqrt(2.0);
+  return 1.4826 * median(std::move(d)) / std::sqrt(2.0);
 }
 
 struct SteadyRun {

@@ -14,6 +14,7 @@
 #include <unordered_set>
 #include <vector>
 
+#include "plsa/core/median.hpp"
 #include "plsa/core/number_text.hpp"
 #include "plsa/core/printable_text.hpp"
 #include "plsa/core/text_file.hpp"
@@ -173,6 +174,13 @@ std::string quotedCell(const std::string& f) {
   return "'" + f.substr(0, 40) + "...' (" + std::to_string(f.size()) + " bytes)";
 }
 
+// The intervals between consecutive entries of a time column (at least two entries).
+std::vector<double> sampleIntervals(const Eigen::Ref<const Eigen::VectorXd>& t) {
+  std::vector<double> dt(static_cast<std::size_t>(t.size() - 1));
+  for (Eigen::Index k = 1; k < t.size(); ++k) dt[static_cast<std::size_t>(k - 1)] = t(k) - t(k - 1);
+  return dt;
+}
+
 // A `# sample_rate_hz:` line that the time column contradicts is warned of:
 // the time column is what every tool reads (a log declaring 100 Hz and
 // stamped at 80 Hz was read at 80 Hz without a word).
@@ -181,11 +189,7 @@ void warnOfDeclaredRate(Log& log, int time_col) {
   if (declared == log.metadata.end() || log.data.rows() < 3) return;
   const ParsedDecimal hz = parseDecimal(declared->second);
   if (hz.kind != DecimalText::kNumber || !(hz.value > 0.0)) return;
-  const Eigen::VectorXd t = log.data.col(time_col);
-  std::vector<double> steps(static_cast<std::size_t>(t.size() - 1));
-  for (Eigen::Index i = 0; i + 1 < t.size(); ++i) steps[static_cast<std::size_t>(i)] = t(i + 1) - t(i);
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-  const double measured = 1.0 / steps[steps.size() / 2];
+  const double measured = 1.0 / median(sampleIntervals(log.data.col(time_col)));
   if (std::abs(measured - hz.value) > 0.01 * measured)
     log.warnings.push_back(log.source + ": its '# sample_rate_hz: " + declared->second +
                            "' disagrees with its time column, which steps at " + significantDigits(measured, 6) +
@@ -321,27 +325,24 @@ void refuseDroppedSamples(const Log& log, const std::vector<double>& dt, double 
 double checkedSampleTime(const Log& log, const std::string& time_column, double max_gap_factor) {
   const Eigen::VectorXd t = log.column(time_column);
   if (t.size() < 2) throw std::invalid_argument(log.source + ": need two samples to find the sample time");
-  std::vector<double> dt(static_cast<std::size_t>(t.size() - 1));
-  for (Eigen::Index k = 1; k < t.size(); ++k) dt[static_cast<std::size_t>(k - 1)] = t(k) - t(k - 1);
-  std::vector<double> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
-  const double median = sorted[sorted.size() / 2];
-  if (!(median >= kMinSampleTimeS && median <= kMaxSampleTimeS)) {
+  const std::vector<double> dt = sampleIntervals(t);
+  const double sample_time = median(dt);
+  if (!(sample_time >= kMinSampleTimeS && sample_time <= kMaxSampleTimeS)) {
     std::ostringstream msg;
-    msg << log.source << ": median sample time " << median << " s of column '" << time_column << "' is outside "
+    msg << log.source << ": median sample time " << sample_time << " s of column '" << time_column << "' is outside "
         << kMinSampleTimeS << " to " << kMaxSampleTimeS << " s (is the time column in seconds?)";
     throw std::runtime_error(msg.str());
   }
-  refuseDroppedSamples(log, dt, median);
+  refuseDroppedSamples(log, dt, sample_time);
   for (std::size_t k = 0; k < dt.size(); ++k) {
-    if (dt[k] > max_gap_factor * median) {
+    if (dt[k] > max_gap_factor * sample_time) {
       std::ostringstream msg;
       msg << log.source << ": time gap of " << dt[k] << " s before data row " << k + 2 << " (median sample time "
-          << median << " s); split the log at the gap";
+          << sample_time << " s); split the log at the gap";
       throw std::runtime_error(msg.str());
     }
   }
-  return median;
+  return sample_time;
 }
 
 }  // namespace plsa::io

@@ -26,8 +26,6 @@ void checkOptions(const PredictorOptions& o) {
              "Predictor: yaw_registration_s must be finite and >= 0");
   PLSA_CHECK(std::isfinite(o.yaw_registration_min_bend_deg) && o.yaw_registration_min_bend_deg >= 0,
              "Predictor: yaw_registration_min_bend_deg must be finite and >= 0");
-  PLSA_CHECK(std::isfinite(o.yaw_tracking_s) && o.yaw_tracking_s >= 0,
-             "Predictor: yaw_tracking_s must be finite and >= 0");
 }
 
 // Stage 1: what every form shares.

@@ -185,10 +185,8 @@ class NStepPredictor {
     if (plan.rows() != steps || plan.cols() != m.n_u || jacobian.rows() != horizon * m.n_y ||
         jacobian.cols() != steps * m.n_u)
       return PredictorStatus::kBadShape;
-    if (const PredictorStatus taken = planStatus(plan); taken != PredictorStatus::kOk) return taken;
     auto nominal = sens_nominal_.topRows(horizon);
-    work_y_ = options_.simulate ? y_sim_ : y_;
-    const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);
+    const PredictorStatus status = predictInModelFrame(horizon, plan, nominal);  // checks the plan first
     if (status != PredictorStatus::kOk) return status;
     sensitivity_.compute(m, horizon, plan, us_, dir_, node_w_, vc_, nominal, yaw_.turn(), jacobian, fill);
     return PredictorStatus::kOk;

@@ -1,0 +1,21 @@
+// The median of a list of values, the robust centre several readers and
+// estimators use (a log's sample time, a noise level from differences).
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace plsa {
+
+/// The median of `values` (of an even count, the upper of the two middle
+/// values), found on the copy it is given in linear time; NaN for none.
+inline double median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+}  // namespace plsa

@@ -173,6 +173,28 @@ TEST(SimEffects, SensorBiasOffsetsAndDrifts) {
   EXPECT_NEAR(r.back().true_steer_deg, r[10 * 80].true_steer_deg, 1e-9);
 }
 
+// The sensor's drifts count from the start of the recording: two actuators
+// held 10 s and 40 s before recording read the same from their first
+// recorded sample (without startRecording, 30 s of yaw drift and of each
+// component's drift apart: 0.6 deg of steering, 0.3 and 0.6 deg of offset).
+TEST(SimEffects, SensorDriftsCountFromTheStartOfTheRecording) {
+  SimConfig c = only("sensor_bias");
+  c.sensor.noise_deg = 0.0;
+  c.sensor_bias.drift_x_deg_per_s = 0.01;
+  c.sensor_bias.drift_y_deg_per_s = -0.02;
+  Actuator brief(c, 1), long_hold(c, 1);
+  hold(brief, {0.3, 0, 0}, 10.0);
+  hold(long_hold, {0.3, 0, 0}, 40.0);
+  brief.startRecording();
+  long_hold.startRecording();
+  for (int k = 0; k < 80; ++k) {
+    const ActuatorSample a = brief.step({0.3, 0, 0}), b = long_hold.step({0.3, 0, 0});
+    ASSERT_NEAR(a.true_bend_deg, b.true_bend_deg, 1e-6);  // the tip itself settled in both
+    EXPECT_NEAR(a.bend_deg, b.bend_deg, 1e-6) << k;
+    EXPECT_NEAR(a.steer_deg, b.steer_deg, 1e-6) << k;
+  }
+}
+
 // --- kinematics and sensor equations -----------------------------------------
 
 TEST(SimKinematics, SensorEquationsRecoverBendAndSteer) {

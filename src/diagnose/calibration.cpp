@@ -29,6 +29,7 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};
   const auto preroll = static_cast<int>(std::lround(preroll_s * config.sample_rate_hz));
   for (int k = 0; k < preroll; ++k) a.stepReading(first);
+  a.startRecording();  // the run's lead-in and recorded part are its recording
   for (Eigen::Index i = 0; i < unrecorded; ++i) a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)});
   SimTrace t;
   const Eigen::Index n = commands.rows() - unrecorded;
@@ -43,12 +44,19 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   return t;
 }
 
-SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s) {
+double settlingTime(const sim::SimConfig& config) {
+  constexpr double kBaseS = 3.0, kMostS = 60.0;
+  if (!config.creep.enabled) return kBaseS;
+  const double slowest = config.creep.time_constant_s * (config.creep.formulation == "two_rate" ? 2.0 : 1.0);
+  return std::clamp(5.0 * slowest, kBaseS, kMostS);
+}
+
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run) {
   sim::SimConfig c = config;
   c.sensor.noise_deg = 0.0;
   c.sample_rate_hz = 1.0 / run.sample_time_s;
   c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
-  const double preroll = run.start == RunStart::kSettled ? preroll_s : 0.0;
+  const double preroll = run.start == RunStart::kSettled ? settlingTime(config) : 0.0;
   if (run.lead_in.rows() == 0) return replayCommands(c, run.commands, 1, preroll);
   Eigen::MatrixXd all(run.lead_in.rows() + run.commands.rows(), 3);
   all << run.lead_in, run.commands;

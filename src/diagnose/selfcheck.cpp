@@ -69,8 +69,8 @@ std::vector<std::string> independentLawsOutside(const std::string& effect, bool 
 
 RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
                   const std::string& name, bool from_rest) {
-  // From rest, or settled for the 3 s the diagnosis then replays; sensor noise on.
-  SimTrace t = replayCommands(truth, commands, seed, from_rest ? 0.0 : 3.0);
+  // From rest, or settled as the diagnosis then replays; sensor noise on.
+  SimTrace t = replayCommands(truth, commands, seed, from_rest ? 0.0 : settlingTime(truth));
   RunData r;
   r.name = name;
   r.sample_time_s = 1.0 / truth.sample_rate_hz;

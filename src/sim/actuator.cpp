@@ -250,7 +250,7 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
 // steady drift, or plus one step of its random walk (one draw).
 double Actuator::sensorYawDeg() {
   const auto& b = config_.sensor_bias;
-  if (!random_walk_bias_) return b.yaw_deg + b.yaw_drift_deg_per_s * time_s_;
+  if (!random_walk_bias_) return b.yaw_deg + b.yaw_drift_deg_per_s * sensorTime();
   yaw_walk_deg_ += std::abs(b.yaw_drift_deg_per_s) * 3.0 * std::sqrt(1.0 / config_.sample_rate_hz) * normal_(rng_);
   return b.yaw_deg + yaw_walk_deg_;
 }
@@ -309,16 +309,16 @@ Eigen::Vector2d Actuator::bendingWithoutNoise() {
     bending = std::acos(std::clamp(x.z(), -1.0, 1.0)) / kRadPerDeg / across * Eigen::Vector2d(x.x(), x.y());
   if (bias) {
     const auto& b = c.sensor_bias;
-    bending +=
-        Eigen::Vector2d(b.offset_x_deg + b.drift_x_deg_per_s * time_s_, b.offset_y_deg + b.drift_y_deg_per_s * time_s_);
+    bending += Eigen::Vector2d(b.offset_x_deg + b.drift_x_deg_per_s * sensorTime(),
+                               b.offset_y_deg + b.drift_y_deg_per_s * sensorTime());
   }
   return bending;
 }
 
 void Actuator::addBendingOffset(double& bend_deg, double& steer_deg) const {
   const auto& b = config_.sensor_bias;
-  const double x = bend_deg * std::cos(steer_deg * kRadPerDeg) + b.offset_x_deg + b.drift_x_deg_per_s * time_s_;
-  const double y = bend_deg * std::sin(steer_deg * kRadPerDeg) + b.offset_y_deg + b.drift_y_deg_per_s * time_s_;
+  const double x = bend_deg * std::cos(steer_deg * kRadPerDeg) + b.offset_x_deg + b.drift_x_deg_per_s * sensorTime();
+  const double y = bend_deg * std::sin(steer_deg * kRadPerDeg) + b.offset_y_deg + b.drift_y_deg_per_s * sensorTime();
   if (x == 0.0 && y == 0.0 && bend_deg == 0.0) return;
   bend_deg = std::hypot(x, y);
   steer_deg = std::atan2(y, x) / kRadPerDeg;

@@ -285,6 +285,7 @@ io::Log runExperiment(Actuator& actuator, const Experiment& experiment) {
   PLSA_CHECK(first >= 0 && T >= 1, "runExperiment: the experiment records no samples");
   for (Eigen::Index k = 0; k < first; ++k)
     actuator.step({experiment.commands(k, 0), experiment.commands(k, 1), experiment.commands(k, 2)});
+  actuator.startRecording();
   io::Log log;
   log.source = "plsa simulate (" + experiment.name + ")";
   log.columns = io::standard_columns::recorded();

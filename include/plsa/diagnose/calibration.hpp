@@ -28,11 +28,18 @@ struct SimTrace {
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
                         double preroll_s = 3.0, Eigen::Index unrecorded = 0);
 
+/// How long a run that began settled is replayed at its first command,
+/// unrecorded, so that the simulator's states are settled too: 3 s (the
+/// bending mode and the chambers), or five of its creep's slowest time
+/// constants when creep is on (a log recorded after a long hold holds no
+/// creep transient), at most 60 s.
+double settlingTime(const sim::SimConfig& config);
+
 /// replayCommands at the run's sample rate with the simulator's own sensor
-/// noise off: from rest, or after `preroll_s` at the first command when the
-/// run started settled (RunData::start); the run's lead-in, if any, replayed
-/// unrecorded first.
-SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, double preroll_s = 3.0);
+/// noise off: from rest, or after settlingTime(config) at the first command
+/// when the run started settled (RunData::start); the run's lead-in, if any,
+/// replayed unrecorded first.
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run);
 
 /// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.
 struct OutputFit {

@@ -24,7 +24,7 @@ enum class OutputMap {
 /// at its first command. The simulator replays each the same way.
 enum class RunStart {
   kAtRest,   ///< replayed from rest, no pre-roll
-  kSettled,  ///< replayed after holding the first command for 3 s, unrecorded
+  kSettled,  ///< replayed after holding the first command until settled (settlingTime), unrecorded
   kAuto,     ///< runFromLog: decided from the data (detectRunStart)
 };
 

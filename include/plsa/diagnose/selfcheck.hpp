@@ -50,7 +50,7 @@ struct SelfcheckOptions {
   int null_cases = 4;
   double nominal_perturbation = 0.15;  ///< own laws: each nominal parameter scaled by 1 +- this (uniform)
   /// Runs recorded from rest, as a user records (the simulator replays them
-  /// from rest); false: settled at the first command for 3 s first.
+  /// from rest); false: settled at the first command first (settlingTime).
   bool from_rest = true;
   double train_s = 60.0, heldout_s = 40.0;
   std::uint64_t seed = 1;

@@ -67,6 +67,15 @@ class Actuator {
   BendingReading stepReading(const std::array<double, 3>& command_bar);
   /// Vent: command zero in every chamber.
   ActuatorSample vent() { return step({0.0, 0.0, 0.0}); }
+  /// The recording starts here: the sensor's drifts (sensor_bias: the yaw's
+  /// drift or random walk, the offsets' drifts) count from this sample, as a
+  /// tip sensor zeroed when the logger starts. Without it they count from
+  /// construction, so an unrecorded pre-roll of unknown length would leave
+  /// its drift in the first recorded sample.
+  void startRecording() {
+    sensor_epoch_s_ = time_s_;
+    yaw_walk_deg_ = 0.0;
+  }
 
   const SimConfig& config() const { return config_; }
   double time() const { return time_s_; }
@@ -96,6 +105,7 @@ class Actuator {
   /// (deg), through vectors rather than measure()'s rotation matrices.
   Eigen::Vector2d bendingWithoutNoise();
   void addBendingOffset(double& bend_deg, double& steer_deg) const;  ///< sensor_bias offsets and drifts
+  double sensorTime() const { return time_s_ - sensor_epoch_s_; }    ///< seconds the sensor has drifted
 
   SimConfig config_;
   std::mt19937_64 rng_;
@@ -103,6 +113,7 @@ class Actuator {
   int substeps_ = 1;
   double dt_ = 0.001;
   double time_s_ = 0.0;
+  double sensor_epoch_s_ = 0.0;  ///< startRecording()'s time: the sensor's drifts count from it
   std::int64_t sample_count_ = 0;
   std::array<double, 3> pressure_{};
   std::array<std::vector<double>, 3> play_{};  ///< play operator states per chamber

@@ -13,6 +13,7 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
+#include "plsa/io/csv_log.hpp"
 #include "plsa/sim/sim_config.hpp"
 #include "plsa/io/standard_columns.hpp"
 
@@ -50,14 +51,24 @@ void runDiagnose(DiagnoseArgs& a) {
   a.columns.map = a.output_map == "affine" ? diagnose::OutputMap::kAffine : diagnose::OutputMap::kAngles;
   a.columns.pressures = a.pressures.size() == 1 && a.pressures[0] == "none" ? std::vector<std::string>{} : a.pressures;
   a.options.calibration.gap.map = a.columns.map;
+  // Pressure columns named on the command line must be there (a typo ran
+  // the diagnosis without pressures, silently); the default names may be
+  // absent, and a note says the gap then compares the outputs alone.
+  const bool pressures_named = !a.columns.pressures.empty() && a.pressures != io::standard_columns::pressures();
   std::vector<diagnose::RunData> runs;
   for (const auto& path : logPaths(a.real, "diagnose", false)) {
     io::CsvReadOptions ro;
     ro.required = a.columns.inputs;
     ro.required.insert(ro.required.end(), a.columns.outputs.begin(), a.columns.outputs.end());
+    if (pressures_named) ro.required.insert(ro.required.end(), a.columns.pressures.begin(), a.columns.pressures.end());
     ro.lcm_channel = a.channel;
     ro.can_profile = a.can_profile;
     runs.push_back(diagnose::runFromLog(readLogWithWarnings(path, ro, "diagnose"), a.columns, config.max_pressure_bar));
+    if (!a.columns.pressures.empty() && !runs.back().hasPressures())
+      std::fprintf(stderr,
+                   "plsa diagnose: note: %s has no pressure columns %s: its gap compares the outputs alone "
+                   "(--pressures names other columns; --pressures none says so)\n",
+                   path.c_str(), io::columnList(a.columns.pressures).c_str());
   }
   a.options.log = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);

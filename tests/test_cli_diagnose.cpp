@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -80,6 +82,44 @@ TEST_F(DiagnoseOnLogs, RejectsBadOnes) {
             1);
   EXPECT_NE(err_.find("diagnose: " + file("a.csv") + " is given twice"), std::string::npos) << err_;
   EXPECT_FALSE(fs::exists(file("d3")));
+  // Pressure columns named on the command line must be there (a typo ran without pressures, silently).
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a.csv") + " --real " + file("b.csv") +
+                " --pressures pa,pb,pc --out " + file("d4")),
+            1);
+  EXPECT_NE(err_.find("'pa'"), std::string::npos) << err_;
+  // A log stamped every 2 s is named, not the simulator's configuration.
+  std::ofstream(file("slow.csv")) << "time_s,cmd_1,cmd_2,cmd_3,bend_deg,steer_deg\n";
+  {
+    std::ofstream f(file("slow.csv"), std::ios::app);
+    for (int i = 0; i < 100; ++i) f << 2.0 * i << "," << (i % 10 < 5 ? 0.1 : 0.3) << ",0,0," << i % 7 << ",0\n";
+  }
+  EXPECT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("slow.csv") + " --out " + file("d5")), 1);
+  EXPECT_NE(err_.find(file("slow.csv") + "': its time column steps every 2 s (0.5 Hz)"), std::string::npos) << err_;
+}
+
+// A log without the default pressure columns is diagnosed on its outputs, and a note says so.
+TEST_F(DiagnoseOnLogs, NotesALogWithoutPressures) {
+  for (const char* name : {"a", "b"}) {
+    std::ifstream in(file(std::string(name) + ".csv"));
+    std::ofstream out(file(std::string(name) + "_nop.csv"));
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string cell; std::getline(ss, cell, ',');) f.push_back(cell);
+      ASSERT_EQ(f.size(), 9u) << line;  // time, 3 commands, 3 pressures, 2 angles
+      out << f[0] << ',' << f[1] << ',' << f[2] << ',' << f[3] << ',' << f[7] << ',' << f[8] << '\n';
+    }
+  }
+  ASSERT_EQ(run("diagnose --sim " + file("sim.json") + " --real " + file("a_nop.csv") + " --real " + file("b_nop.csv") +
+                " --candidates hysteresis --evaluations 20 --evaluations-per-parameter 0 --screen-evaluations 0 "
+                "--no-identified-reference --out " +
+                file("d6")),
+            0)
+      << err_;
+  EXPECT_NE(err_.find("note: " + file("a_nop.csv") + " has no pressure columns"), std::string::npos) << err_;
+  const auto d = nlohmann::json::parse(slurp(file("d6/diagnosis.json")));
+  EXPECT_EQ(d["gap_before_detail"]["pressures"].get<double>(), 0.0);
 }
 
 TEST_F(Cli, DiagnoseSelfcheckMeetsItsTargetsOnASmallSet) {

@@ -5,6 +5,7 @@
 #include "plsa/identify/pipeline.hpp"
 #include "plsa/io/csv_log.hpp"
 #include "plsa/io/standard_columns.hpp"
+#include "plsa/sim/sim_config.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -102,6 +103,12 @@ RunData runFromLog(const io::Log& log, const RunColumns& c, double max_pressure_
   r.name = log.source;
   r.sample_time_s = io::checkedSampleTime(log, io::standard_columns::kTime, io::kToleratedGapFactor);
   if (!(r.sample_time_s > 0)) throw std::invalid_argument(where + "time does not increase");
+  const double rate_hz = 1.0 / r.sample_time_s;
+  if (!(rate_hz >= sim::kMinSampleRateHz && rate_hz <= sim::kMaxSampleRateHz))
+    throw std::invalid_argument(where + "its time column steps every " + significantDigits(r.sample_time_s, 6) +
+                                " s (" + significantDigits(rate_hz, 6) + " Hz); the simulator replays runs at " +
+                                significantDigits(sim::kMinSampleRateHz, 6) + " to " +
+                                significantDigits(sim::kMaxSampleRateHz, 6) + " Hz (is the time column in seconds?)");
   r.commands = commandsOf(log, c, max_pressure_bar, where);
   checkMeasured(log, c, where);
   const Eigen::MatrixXd y = log.columnsOf(c.outputs);

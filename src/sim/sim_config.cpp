@@ -25,7 +25,7 @@ struct Field {
 
 std::vector<Field> fields(SimConfig& c) {
   return {
-      {"", {"sample_rate_hz", &c.sample_rate_hz, 1.0, 10000.0, "Hz"}},
+      {"", {"sample_rate_hz", &c.sample_rate_hz, kMinSampleRateHz, kMaxSampleRateHz, "Hz"}},
       {"", {"internal_step_s", &c.internal_step_s, 1e-5, 0.01, "s"}},
       {"", {"max_pressure_bar", &c.max_pressure_bar, 0.01, 1.0, "bar"}},
       {"geometry", {"length_m", &c.geometry.length_m, 0.01, 1.0, "m"}},

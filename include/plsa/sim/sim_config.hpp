@@ -25,6 +25,9 @@ struct ParamRef {
   std::string unit;
 };
 
+/// The sample rates the simulator runs at (SimConfig::sample_rate_hz).
+inline constexpr double kMinSampleRateHz = 1.0, kMaxSampleRateHz = 10000.0;
+
 struct SimConfig {
   double sample_rate_hz = 80.0;
   double internal_step_s = 0.001;

@@ -23,7 +23,7 @@ RunData startingAt(const sim::SimConfig& truth, double first_bar, std::uint64_t 
   r.commands = excitationCommands(10, truth.sample_rate_hz, seed);
   r.commands.topRows(80).setZero();
   r.commands.topRows(80).col(0).setConstant(first_bar);
-  const SimTrace t = replayCommands(truth, r.commands, seed);
+  const SimTrace t = replayCommands(truth, r.commands, seed, settlingTime(truth));
   r.outputs = t.outputs;
   r.pressures = t.pressures;
   r.start = RunStart::kSettled;

@@ -22,11 +22,12 @@ struct SimTrace {
 };
 
 /// Drives the simulator with `commands` (samples x 3, bar) at its own sample
-/// rate, after holding the first command for `preroll_s` unrecorded; sensor
+/// rate, after holding the first command for `preroll_s` unrecorded (0: from
+/// rest; settlingTime(config): settled as the diagnosis replays); sensor
 /// noise as configured, seeded with `seed`. The first `unrecorded` rows are
 /// stepped but not recorded (the trace has the rest).
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
-                        double preroll_s = 3.0, Eigen::Index unrecorded = 0);
+                        double preroll_s, Eigen::Index unrecorded = 0);
 
 /// How long a run that began settled is replayed at its first command,
 /// unrecorded, so that the simulator's states are settled too: 3 s (the

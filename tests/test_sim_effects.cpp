@@ -260,6 +260,54 @@ TEST(SimKinematics, StepReadingIsTheMeasuredBendingVector) {
   }
 }
 
+// Past 180 deg of bend the sensor's eqs. (5)-(6) fold (190 deg reads as 170
+// deg the other way); the unfolded reading follows the segment: exact, it
+// is the segment's bending vector; with a steady sensor bias, that vector
+// turned by the mount's yaw plus the offsets; with noise, within a few of
+// its sigmas, away from 180 deg. Below 170 deg both branches read the same.
+TEST(SimKinematics, AnUnfoldedReadingFollowsTheSegmentPast180Deg) {
+  enum class Sensor { kExact, kBias, kNoise };
+  for (const Sensor sensor : {Sensor::kExact, Sensor::kBias, Sensor::kNoise}) {
+    SimConfig c;
+    c.geometry.length_m *= 10.0;
+    c.sensor.noise_deg = sensor == Sensor::kNoise ? 0.05 : 0.0;
+    c.sensor_bias.enabled = sensor == Sensor::kBias;
+    c.sensor_bias.tilt_deg = 0.0, c.sensor_bias.yaw_drift_deg_per_s = 0.0;  // a steady turn and offsets
+    c.sensor_bias.yaw_deg = 7.0;
+    c.sensor_bias.offset_x_deg = 2.0, c.sensor_bias.offset_y_deg = -1.0;
+    Actuator truth(c, 3), folded(c, 3), unfolded(c, 3);
+    int past_190 = 0, differ = 0;
+    for (int k = 0; k < 400; ++k) {
+      const double t = 0.05 * k;
+      const std::array<double, 3> cmd{0.3 * std::max(0.0, std::sin(t)), 0.3 * std::max(0.0, std::sin(t - 2.1)),
+                                      0.3 * std::max(0.0, std::sin(t - 4.2))};
+      const ActuatorSample s = truth.step(cmd);
+      const Eigen::Vector2d a = folded.stepReading(cmd, ReadingBranch::kSensor).bending_deg;
+      const Eigen::Vector2d b = unfolded.stepReading(cmd, ReadingBranch::kUnfolded).bending_deg;
+      const double phi = s.true_steer_deg * M_PI / 180.0;
+      Eigen::Vector2d segment = s.true_bend_deg * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+      if (sensor == Sensor::kBias)
+        segment = Eigen::Rotation2Dd(7.0 * M_PI / 180.0) * segment + Eigen::Vector2d(2.0, -1.0);
+      // The noise turns the sensor's axis by about 0.05 deg, which moves the
+      // bending vector by up to theta / sin(theta) times that (the vector's
+      // direction is undefined at 180 deg, where no branch can be read).
+      const double theta = s.true_bend_deg * M_PI / 180.0;
+      if (sensor == Sensor::kNoise && std::abs(std::sin(theta)) < 0.1) continue;
+      const double tolerance =
+          sensor == Sensor::kNoise ? 0.25 * std::max(1.0, theta / std::abs(std::sin(theta))) : 1e-6;
+      EXPECT_NEAR((b - segment).norm(), 0.0, tolerance) << "sensor " << static_cast<int>(sensor) << ", sample " << k;
+      EXPECT_LE(a.norm(), 180.0 + 3.0);  // the sensor's branch folds (plus the bias's offsets)
+      if (s.true_bend_deg < 170.0) {
+        EXPECT_NEAR((a - b).norm(), 0.0, tolerance) << "sample " << k;
+      }
+      past_190 += s.true_bend_deg > 190.0;
+      differ += (a - b).norm() > 20.0;
+    }
+    EXPECT_GT(past_190, 20) << "the segment must bend well past 180 deg";
+    EXPECT_GT(differ, 20) << "the branches must part past 180 deg";
+  }
+}
+
 TEST(SimKinematics, TipPositionIsWebsterJonesArc) {
   const double l = 0.09;
   const Eigen::Vector3d straight = tipPosition(l, 0.0, 0.3);

@@ -16,7 +16,7 @@ namespace plsa::diagnose {
 Eigen::MatrixXd OutputFit::apply(const Eigen::MatrixXd& v) const { return (v * M.topRows<2>()).rowwise() + M.row(2); }
 
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
-                        double preroll_s, Eigen::Index unrecorded) {
+                        double preroll_s, Eigen::Index unrecorded, sim::ReadingBranch branch) {
   if (unrecorded < 0 || unrecorded >= commands.rows())
     throw std::invalid_argument("replayCommands: " + std::to_string(unrecorded) + " unrecorded of " +
                                 std::to_string(commands.rows()) + " commands");
@@ -28,16 +28,16 @@ SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& com
   sim::Actuator a(config, seed);
   const auto first = std::array<double, 3>{commands(0, 0), commands(0, 1), commands(0, 2)};
   const auto preroll = static_cast<int>(std::lround(preroll_s * config.sample_rate_hz));
-  for (int k = 0; k < preroll; ++k) a.stepReading(first);
+  for (int k = 0; k < preroll; ++k) a.stepReading(first, branch);
   a.startRecording();  // the run's lead-in and recorded part are its recording
-  for (Eigen::Index i = 0; i < unrecorded; ++i) a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)});
+  for (Eigen::Index i = 0; i < unrecorded; ++i) a.stepReading({commands(i, 0), commands(i, 1), commands(i, 2)}, branch);
   SimTrace t;
   const Eigen::Index n = commands.rows() - unrecorded;
   t.outputs.resize(n, 2);
   t.pressures.resize(n, 3);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Index k = unrecorded + i;
-    const sim::BendingReading r = a.stepReading({commands(k, 0), commands(k, 1), commands(k, 2)});
+    const sim::BendingReading r = a.stepReading({commands(k, 0), commands(k, 1), commands(k, 2)}, branch);
     t.outputs.row(i) = r.bending_deg.transpose();
     for (Eigen::Index j = 0; j < 3; ++j) t.pressures(i, j) = r.pressure_bar[static_cast<std::size_t>(j)];
   }
@@ -51,16 +51,21 @@ double settlingTime(const sim::SimConfig& config) {
   return std::clamp(5.0 * slowest, kBaseS, kMostS);
 }
 
-SimTrace simulateRun(const sim::SimConfig& config, const RunData& run) {
+sim::ReadingBranch readingBranchFor(OutputMap map) {
+  return map == OutputMap::kAffine ? sim::ReadingBranch::kUnfolded : sim::ReadingBranch::kSensor;
+}
+
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, OutputMap map) {
   sim::SimConfig c = config;
   c.sensor.noise_deg = 0.0;
   c.sample_rate_hz = 1.0 / run.sample_time_s;
   c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
   const double preroll = run.start == RunStart::kSettled ? settlingTime(config) : 0.0;
-  if (run.lead_in.rows() == 0) return replayCommands(c, run.commands, 1, preroll);
+  const sim::ReadingBranch branch = readingBranchFor(map);
+  if (run.lead_in.rows() == 0) return replayCommands(c, run.commands, 1, preroll, 0, branch);
   Eigen::MatrixXd all(run.lead_in.rows() + run.commands.rows(), 3);
   all << run.lead_in, run.commands;
-  return replayCommands(c, all, 1, preroll, run.lead_in.rows());
+  return replayCommands(c, all, 1, preroll, run.lead_in.rows(), branch);
 }
 
 namespace {
@@ -92,7 +97,7 @@ Gap measureGap(const sim::SimConfig& config, const std::vector<RunData>& runs, c
   if (runs.empty()) throw std::invalid_argument("measureGap: no runs");
   const bool pressures = std::all_of(runs.begin(), runs.end(), [](const RunData& r) { return r.hasPressures(); });
   std::vector<SimTrace> traces;
-  for (const auto& r : runs) traces.push_back(simulateRun(config, r));
+  for (const auto& r : runs) traces.push_back(simulateRun(config, r, o.map));
   OutputFit local;
   OutputFit& f = fit ? *fit : local;
   if (o.map == OutputMap::kAffine && (refit || !fit)) {

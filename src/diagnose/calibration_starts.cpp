@@ -50,13 +50,13 @@ void clampToRanges(sim::SimConfig& c, const std::string& effect) {
 // A sensor-bias start read off the residual: the mount's yaw that turns the
 // simulated bending vector onto the measured one best (least squares, within
 // its range), then per bending-vector component the least-squares offset and
-// drift of what remains over time.
+// drift of what remains over time. Outputs as angles (bending vectors).
 sim::SimConfig biasFromResidual(sim::SimConfig c, const std::vector<RunData>& train) {
   setNeutral(c, "sensor_bias");
   std::vector<SimTrace> traces;
   double across = 0.0, along = 0.0;  // sums of sim x measured and sim . measured
   for (const auto& run : train) {
-    traces.push_back(simulateRun(c, run));
+    traces.push_back(simulateRun(c, run, OutputMap::kAngles));  // spreadFor asks only for angles
     const Eigen::MatrixXd& s = traces.back().outputs;
     across += (s.col(0).array() * run.outputs.col(1).array() - s.col(1).array() * run.outputs.col(0).array()).sum();
     along += (s.array() * run.outputs.array()).sum();
@@ -113,7 +113,7 @@ std::vector<sim::SimConfig> nominalStarts(const sim::SimConfig& simulator, const
   sim::SimConfig scaled = simulator;
   double num = 0.0, den = 0.0;
   for (const auto& run : train) {
-    const SimTrace t = simulateRun(simulator, run);
+    const SimTrace t = simulateRun(simulator, run, g.map);
     num += (run.outputs.array() * t.outputs.array()).sum();
     den += t.outputs.squaredNorm();
   }
@@ -165,7 +165,7 @@ void enableEffect(sim::SimConfig& c, const std::string& effect, bool flexible) {
 // and fixed bands; for sensor bias the residual's offset and drift; for
 // the pneumatic lag's power law the fill law of the logged pressures.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train, const FillLawEstimate& fill) {
+                                      const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map) {
   std::vector<sim::SimConfig> spread = {c};
   if (effect == "pneumatic_lag") lagTimesAtNominal(spread[0]);
   for (double u : {0.2, 0.6}) {
@@ -187,7 +187,7 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
         h.fixed_band_share = fixed;
         spread.push_back(trial);
       }
-  if (effect == "sensor_bias") spread.push_back(biasFromResidual(c, train));
+  if (effect == "sensor_bias" && map == OutputMap::kAngles) spread.push_back(biasFromResidual(c, train));
   if (effect == "pneumatic_lag" && c.pneumatic_lag.formulation == "power" && fill.found)
     spread.push_back(lagFromPressures(c, fill.lag));
   return spread;
@@ -225,7 +225,7 @@ sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effec
   quick.progress = nullptr;
   double best_gap = INFINITY;
   sim::SimConfig best = c;
-  for (const auto& s : spreadFor(c, effect, train, fill)) {
+  for (const auto& s : spreadFor(c, effect, train, fill, o.gap.map)) {
     try {
       if (screen.evaluations <= 0) {
         const double gap = measureGap(s, train, o.gap).total;

@@ -17,10 +17,11 @@ void enableCandidate(sim::SimConfig& c, const std::string& effect, const Diagnos
 
 /// Spread points for an effect (the simulator's own values, points across
 /// each parameter's range, designed hysteresis points, sensor bias from the
-/// residual, the pneumatic lag from `fill` when found); the first is the
-/// configuration itself.
+/// residual when the outputs are angles (an affine map's residual is in the
+/// outputs' units), the pneumatic lag from `fill` when found); the first is
+/// the configuration itself.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train, const FillLawEstimate& fill);
+                                      const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map);
 
 /// The screening stage: a short calibration of `evaluations` simulator runs
 /// from each spread point, with the simulator's internal step at least

@@ -34,7 +34,7 @@ struct Residuals {
 Residuals residualsOf(const sim::SimConfig& c, const std::vector<RunData>& runs, const OutputFit& fit, OutputMap map) {
   Residuals r;
   for (const auto& run : runs) {
-    const SimTrace t = simulateRun(c, run);
+    const SimTrace t = simulateRun(c, run, map);
     const Eigen::MatrixXd yhat = map == OutputMap::kAffine ? fit.apply(t.outputs) : t.outputs;
     r.residual.push_back(run.outputs - yhat);
     r.sim.push_back(t.outputs);
@@ -245,7 +245,7 @@ Gap recalibratedWithNothingAdded(const CalibratedState& s, const std::vector<std
     for (const auto& e : remaining) {
       sim::SimConfig c = s.config;
       enableCandidate(c, e, o);
-      points = std::max(points, spreadFor(c, e, x.runs.train, x.fill).size());
+      points = std::max(points, spreadFor(c, e, x.runs.train, x.fill, x.map).size());
     }
     CalibrationOptions screening = o.calibration;
     screening.max_evaluations = screen.evaluations * static_cast<int>(points);

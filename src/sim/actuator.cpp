@@ -307,18 +307,19 @@ Eigen::Vector2d Actuator::bendingWithoutNoise() {
   Eigen::Vector2d bending = Eigen::Vector2d::Zero();
   if (across > 0.0)
     bending = std::acos(std::clamp(x.z(), -1.0, 1.0)) / kRadPerDeg / across * Eigen::Vector2d(x.x(), x.y());
-  if (bias) {
-    const auto& b = c.sensor_bias;
-    bending += Eigen::Vector2d(b.offset_x_deg + b.drift_x_deg_per_s * sensorTime(),
-                               b.offset_y_deg + b.drift_y_deg_per_s * sensorTime());
-  }
-  return bending;
+  return bending + sensorOffset();
+}
+
+Eigen::Vector2d Actuator::sensorOffset() const {
+  const auto& b = config_.sensor_bias;
+  if (!b.enabled) return Eigen::Vector2d::Zero();
+  return {b.offset_x_deg + b.drift_x_deg_per_s * sensorTime(), b.offset_y_deg + b.drift_y_deg_per_s * sensorTime()};
 }
 
 void Actuator::addBendingOffset(double& bend_deg, double& steer_deg) const {
-  const auto& b = config_.sensor_bias;
-  const double x = bend_deg * std::cos(steer_deg * kRadPerDeg) + b.offset_x_deg + b.drift_x_deg_per_s * sensorTime();
-  const double y = bend_deg * std::sin(steer_deg * kRadPerDeg) + b.offset_y_deg + b.drift_y_deg_per_s * sensorTime();
+  const Eigen::Vector2d offset = sensorOffset();
+  const double x = bend_deg * std::cos(steer_deg * kRadPerDeg) + offset.x();
+  const double y = bend_deg * std::sin(steer_deg * kRadPerDeg) + offset.y();
   if (x == 0.0 && y == 0.0 && bend_deg == 0.0) return;
   bend_deg = std::hypot(x, y);
   steer_deg = std::atan2(y, x) / kRadPerDeg;
@@ -340,22 +341,39 @@ std::array<double, 3> Actuator::advance(const std::array<double, 3>& command_bar
 
 ActuatorSample Actuator::step(const std::array<double, 3>& command_bar) { return measure(advance(command_bar)); }
 
-BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar) {
+BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar, ReadingBranch branch) {
   const std::array<double, 3> cmd = advance(command_bar);
   BendingReading r;
   r.pressure_bar = pressure_;
-  if (config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled && bend_.norm() < 0.5 * kPi) {
+  const bool exact = config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled;
+  if (exact && (bend_.norm() < 0.5 * kPi || branch == ReadingBranch::kUnfolded)) {
     r.bending_deg = bend_ / kRadPerDeg;
     return r;
   }
   if (config_.sensor.noise_deg == 0.0) {
     r.bending_deg = bendingWithoutNoise();
-    return r;
+  } else {
+    const ActuatorSample s = measure(cmd);
+    const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
+    r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
   }
-  const ActuatorSample s = measure(cmd);
-  const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
-  r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
+  if (branch == ReadingBranch::kUnfolded) r.bending_deg = unfolded(r.bending_deg);
   return r;
+}
+
+// The sensor's axis reading of length m along d (the reading without the
+// bias's offsets, which add after the angles) stands for any bend m + 360 j
+// along d (j < 0: 360 |j| - m the other way): the axis is the same after a
+// whole turn. The branch nearest the segment's own bending vector is its
+// unfolding.
+Eigen::Vector2d Actuator::unfolded(const Eigen::Vector2d& reading_deg) const {
+  const Eigen::Vector2d offset = sensorOffset();
+  const Eigen::Vector2d axis = reading_deg - offset;
+  const double m = axis.norm();
+  if (!(m > 0.0)) return reading_deg;
+  const Eigen::Vector2d d = axis / m;
+  const double turns = std::round(((bend_ / kRadPerDeg).dot(d) - m) / 360.0);
+  return reading_deg + 360.0 * turns * d;
 }
 
 }  // namespace plsa::sim

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "plsa/diagnose/run_data.hpp"
+#include "plsa/sim/actuator.hpp"
 #include "plsa/sim/sim_config.hpp"
 
 namespace plsa::diagnose {
@@ -25,9 +26,17 @@ struct SimTrace {
 /// rate, after holding the first command for `preroll_s` unrecorded (0: from
 /// rest; settlingTime(config): settled as the diagnosis replays); sensor
 /// noise as configured, seeded with `seed`. The first `unrecorded` rows are
-/// stepped but not recorded (the trace has the rest).
+/// stepped but not recorded (the trace has the rest). `branch`: the sensor's
+/// folded reading, or unfolded past 180 deg of bend.
 SimTrace replayCommands(const sim::SimConfig& config, const Eigen::MatrixXd& commands, std::uint64_t seed,
-                        double preroll_s, Eigen::Index unrecorded = 0);
+                        double preroll_s, Eigen::Index unrecorded = 0,
+                        sim::ReadingBranch branch = sim::ReadingBranch::kSensor);
+
+/// The reading a run's outputs are compared with: angles are the sensor's,
+/// folded past 180 deg of bend as a real sensor's are; an affine image of
+/// the bending vector (a tip position) does not fold, so it is fitted to the
+/// unfolded reading.
+sim::ReadingBranch readingBranchFor(OutputMap map);
 
 /// How long a run that began settled is replayed at its first command,
 /// unrecorded, so that the simulator's states are settled too: 3 s (the
@@ -39,8 +48,8 @@ double settlingTime(const sim::SimConfig& config);
 /// replayCommands at the run's sample rate with the simulator's own sensor
 /// noise off: from rest, or after settlingTime(config) at the first command
 /// when the run started settled (RunData::start); the run's lead-in, if any,
-/// replayed unrecorded first.
-SimTrace simulateRun(const sim::SimConfig& config, const RunData& run);
+/// replayed unrecorded first; read on readingBranchFor(map).
+SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, OutputMap map);
 
 /// Affine output map y = [v 1] * M (3 x 2) for OutputMap::kAffine; identity otherwise.
 struct OutputFit {

@@ -74,6 +74,7 @@ void runDiagnose(DiagnoseArgs& a) {
   const diagnose::Diagnosis d = diagnose::runDiagnosis(config, runs, a.options);
   diagnose::writeDiagnosisFolder(d, a.out);
   std::printf("%s\n", d.verdict.c_str());
+  for (const auto& n : d.notes) std::printf("note: %s\n", n.c_str());
   std::printf("where (held out, after nominal calibration):\n");
   for (const auto& p : d.where.top_places) std::printf("  %s\n", p.words.c_str());
   std::printf("ranking (held-out gap %.1f%% before):\n", d.gap_before.percent());

@@ -147,6 +147,37 @@ TEST(Diagnose, AnAffineImageOfABendPast180DegIsNotFolded) {
   EXPECT_GT(measureGap(truth, {as_angles}, angles).percent(), 10.0);
 }
 
+// What looks wrong in the input is said: angles in radians (the simulator
+// bends 57 times as far), a simulator with every effect already on (nothing
+// to try, said so rather than "the best candidate (none)"), runs sampled at
+// different rates. Each in the notes, the JSON and the verdict's words.
+TEST(Diagnose, SaysWhatLooksWrongInTheInput) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.sensor.noise_deg = 0.0;
+  RunData a = recorded(truth, 20, 1), b = recorded(truth, 20, 2);
+  for (RunData* r : {&a, &b}) r->outputs *= M_PI / 180.0;  // radians given as degrees
+  DiagnoseOptions o = quick();
+  o.candidates = {"deadzone"};
+  const Diagnosis radians = runDiagnosis(truth, {a, b}, o);
+  ASSERT_EQ(radians.notes.size(), 1u);
+  EXPECT_NE(radians.notes[0].find("bends 57.3 times as far as the measured outputs"), std::string::npos)
+      << radians.notes[0];
+  EXPECT_NE(toJson(radians).find("are the outputs in degrees"), std::string::npos);
+
+  sim::SimConfig slower = truth;
+  slower.sample_rate_hz = 40.0;
+  const RunData c = recorded(truth, 20, 3), d40 = recorded(slower, 20, 4);
+  const sim::SimConfig every_effect = sim::SimConfig{};
+  const Diagnosis all_on = runDiagnosis(every_effect, {c, d40}, quick());
+  EXPECT_TRUE(all_on.ranking.empty());
+  EXPECT_NE(all_on.verdict.find("No candidate effect to try: every effect the simulator has is already on"),
+            std::string::npos)
+      << all_on.verdict;
+  ASSERT_EQ(all_on.notes.size(), 1u);
+  EXPECT_NE(all_on.notes[0].find("different rates (run3 at 80 Hz, run4 at 40 Hz)"), std::string::npos)
+      << all_on.notes[0];
+}
+
 TEST(Diagnose, ShrinkAboveNoiseCountsOnlyTheGapAModelCanClose) {
   sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.sensor.noise_deg = 0.0;
@@ -258,6 +289,15 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   o.candidates = {"friction"};
   EXPECT_THROW(runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o),
                std::invalid_argument);
+  o.candidates = {"creep"};
+  o.max_selected = 0;  // nothing could be kept, and the verdict would blame the candidates
+  try {
+    runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
+    ADD_FAILURE() << "max_selected 0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_selected = 0"), std::string::npos) << e.what();
+  }
+  o.max_selected = 3;
   o.candidates = {"creep", "deadzone", "creep"};  // tried twice, it would be its own runner-up
   try {
     runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
@@ -466,6 +506,12 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   EXPECT_EQ(d.calibration_step_s, sim::probes::everyEffectOff().internal_step_s);
   EXPECT_TRUE(d.selected.empty()) << d.verdict;
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
+  // It names the bar the best candidate did not clear, with both gaps.
+  ASSERT_FALSE(d.ranking.empty());
+  EXPECT_NE(d.verdict.find("The best candidate, " + d.ranking[0].effect + ", takes it to"), std::string::npos)
+      << d.verdict;
+  EXPECT_NE(d.verdict.find("re-calibrating with nothing added to"), std::string::npos) << d.verdict;
+  EXPECT_TRUE(d.notes.empty()) << d.notes[0];
   EXPECT_EQ(d.confidence, "none");
   EXPECT_EQ(d.verdict.find("misses something"), std::string::npos) << "the gap is at the noise floor";
 

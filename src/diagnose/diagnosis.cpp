@@ -193,6 +193,44 @@ FillLaw chambersOf(const sim::SimConfig& c) {
   return law;
 }
 
+// A note when the simulator as given bends ten times as far as the measured
+// angles, or a tenth as far (RMS of the bending vector over the training
+// runs): outputs in radians, or commands not in bar, give gaps of
+// thousands of percent that no calibration or candidate can close.
+void noteImplausibleScale(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
+  if (x.map != OutputMap::kAngles) return;  // an affine map takes any scale
+  const Residuals r = residualsOf(simulator, x.runs.train, OutputFit{}, x.map);
+  double measured = 0.0, simulated = 0.0;
+  for (std::size_t k = 0; k < r.sim.size(); ++k) {
+    measured += x.runs.train[k].outputs.squaredNorm();
+    simulated += r.sim[k].squaredNorm();
+  }
+  const double ratio = std::sqrt(simulated / measured);
+  if (!(measured > 0.0) || (ratio < 10.0 && ratio > 0.1)) return;
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "the simulator as given bends %.3g times as far as the measured outputs (RMS of the bending "
+                "vector, training runs): are the outputs in degrees and the commands in bar (--input-scale)?",
+                ratio);
+  d.notes.push_back(line);
+  say(x.o, std::string("plsa diagnose: note: ") + line);
+}
+
+// A note when the runs were sampled at different rates: each is simulated at
+// its own, but their noise floors and the identified reference differ.
+void noteMixedSampleRates(const std::vector<RunData>& runs, const DiagnoseOptions& o, Diagnosis& d) {
+  const auto [lo, hi] = std::minmax_element(
+      runs.begin(), runs.end(), [](const RunData& a, const RunData& b) { return a.sample_time_s < b.sample_time_s; });
+  if (hi->sample_time_s <= 1.01 * lo->sample_time_s) return;
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "the runs were sampled at different rates (%s at %.4g Hz, %s at %.4g Hz): each is simulated at "
+                "its own rate",
+                lo->name.c_str(), 1.0 / lo->sample_time_s, hi->name.c_str(), 1.0 / hi->sample_time_s);
+  d.notes.push_back(line);
+  say(o, std::string("plsa diagnose: note: ") + line);
+}
+
 // Noise floor, the simulator as given, then the
 // nominal calibration: the baseline every candidate is measured against.
 CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
@@ -203,6 +241,7 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
   OutputFit raw_fit;
   measureGap(simulator, r.train, g, &raw_fit);
   d.heldout_uncalibrated = measureGap(simulator, r.held, g, &raw_fit, false);
+  noteImplausibleScale(simulator, x, d);
   say(o, "plsa diagnose: " + std::to_string(r.train.size()) + " training / " + std::to_string(r.held.size()) +
              " held-out run(s); held-out gap of the simulator as given " + pct(d.heldout_uncalibrated.percent()) +
              ", noise floor " + pct(d.noise.percent()));
@@ -438,30 +477,46 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   return true;
 }
 
+// The verdict when nothing was kept: no candidate to try (every effect on),
+// or the best one's gap against re-calibrating with nothing added, which is
+// the bar a candidate must clear by the margin.
+std::string nothingKeptVerdict(const Diagnosis& d, const DiagnoseOptions& o) {
+  char v[640];
+  if (d.ranking.empty()) {
+    std::snprintf(v, sizeof v,
+                  "No candidate effect to try: every effect the simulator has is already on. The calibrated "
+                  "simulator's held-out gap is %.1f%% against a noise floor of %.1f%%.",
+                  d.gap_before.percent(), d.noise.percent());
+    return v;
+  }
+  const CandidateResult& best = d.ranking[0];
+  std::snprintf(v, sizeof v,
+                "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is "
+                "%.1f%% against a noise floor of %.1f%%. The best candidate, %s, takes it to %.1f%%, and "
+                "re-calibrating with nothing added to %.1f%%; a candidate counts only if it beats that by more "
+                "than %g times the noise floor and %.0f%% of that gap (mean squares).",
+                d.gap_before.percent(), d.noise.percent(), best.effect.c_str(), best.heldout_after.percent(),
+                d.recalibrated_round1.percent(), o.margin, 100.0 * o.min_relative);
+  return v;
+}
+
 // The verdict in words, with its confidence's qualification.
 std::string verdictOf(const Diagnosis& d, const DiagnoseOptions& o) {
-  char v[768];
+  std::string verdict;
   if (d.selected.empty()) {
-    std::snprintf(
-        v, sizeof v,
-        "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is %.1f%% "
-        "against a noise floor of %.1f%%, and the best candidate (%s) shrinks it by %.1f%%, less than the "
-        "margin.",
-        d.gap_before.percent(), d.noise.percent(), d.ranking.empty() ? "none" : d.ranking[0].effect.c_str(),
-        d.ranking.empty() ? 0.0 : d.ranking[0].shrink_percent);
+    verdict = nothingKeptVerdict(d, o);
   } else {
     std::string list;
     for (const auto& s : d.selected) list += (list.empty() ? "" : ", then ") + s;
+    char v[512];
     std::snprintf(v, sizeof v,
                   "The gap is explained by %s: adding %s shrinks the held-out gap from %.1f%% to %.1f%% "
                   "(noise floor %.1f%%",
                   d.selected[0].c_str(), list.c_str(), d.gap_before.percent(), d.gap_after.percent(),
                   d.noise.percent());
+    const double closed = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
+    verdict = v + (std::isfinite(closed) ? ", " + pct(closed) + " of the gap above it closed)." : std::string(")."));
   }
-  std::string verdict = v;
-  const double closed = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
-  if (!d.selected.empty())
-    verdict += std::isfinite(closed) ? ", " + pct(closed) + " of the gap above it closed)." : ").";
   if (d.confidence == "uncertain")
     verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
                d.selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";
@@ -513,12 +568,16 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   refuseRepeatedRuns(runs);
   simulator.validate();
   std::vector<std::string> remaining = checkedCandidates(simulator, o);
+  if (o.max_selected < 1)
+    throw std::invalid_argument("diagnose: max_selected = " + std::to_string(o.max_selected) +
+                                ": at least one effect must be allowed");
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);
   refuseUnusableSplit(split.train, split.held);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
+  noteMixedSampleRates(runs, o, d);
   SelectionContext x{split, o, d.map, 0.0, {}};
   x.fill = fillLawFromPressures(split.train, chambersOf(simulator), 120, o.threads);
   std::future<IdentifiedReference> reference;

@@ -125,6 +125,7 @@ std::string toJson(const Diagnosis& d) {
   j["where"] = breakdownJson(d.where);
   j["where_after"] = breakdownJson(d.where_after);
   j["verdict"] = d.verdict;
+  j["notes"] = d.notes;
   j["identified_reference"] = {{"available", d.reference.available},
                                {"heldout_gap_percent", d.reference.gap.percent()},
                                {"note", d.reference.note}};
@@ -143,8 +144,10 @@ std::string outputUnit(const Diagnosis& d) {
   return d.map == OutputMap::kAngles ? "deg, bending vector" : "output units";
 }
 
+// An empty cell where there is no number (a gap-map cell without samples, no
+// map with the selected effects): what spreadsheets and pandas read as missing.
 std::string csvNumber(double v) {
-  if (!std::isfinite(v)) return "nan";
+  if (!std::isfinite(v)) return "";
   char b[40];
   std::snprintf(b, sizeof b, "%.17g", v);
   return b;
@@ -198,6 +201,7 @@ void writeVerdict(std::ostream& h, const Diagnosis& d) {
        "f6f8ff;"
     << "padding:1em;border-left:4px solid #4060c0}.note{color:#666;font-size:.9em}</style></head><body>\n";
   h << "<h1>Sim-to-real gap diagnosis</h1>\n<p class=\"verdict\" id=\"verdict\">" << escape(d.verdict) << "</p>\n";
+  for (const auto& n : d.notes) h << "<p class=\"verdict\">Note: " << escape(n) << "</p>\n";
   h << "<p class=\"note\">Gap: 100 &times; sqrt(normalised mean squared residual) on held-out data ("
     << d.heldout_runs.size() << " run(s)); 0 is a perfect match, 100 no better than the mean. Simulator as given: "
     << fmt(d.heldout_uncalibrated.percent()) << "%; nominal physics calibrated: " << fmt(d.gap_before.percent())

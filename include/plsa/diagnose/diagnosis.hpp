@@ -114,6 +114,11 @@ struct Diagnosis {
   std::vector<std::pair<std::string, double>> final_params;
   Breakdown where, where_after;
   std::string verdict;  ///< in words
+  /// What looks wrong in the input, in words (also logged): the simulator
+  /// as given bending ten times as far as the measured angles or a tenth
+  /// as far (units: radians for degrees, --input-scale), runs at different
+  /// sample rates.
+  std::vector<std::string> notes;
   /// How firmly the evidence backs the first kept effect (round 1):
   /// "confident", "uncertain" (the runner-up comes within uncertain_margin of
   /// the best's drop over re-calibration, so the data do not separate the
@@ -135,9 +140,11 @@ struct Diagnosis {
 };
 
 /// `runs` with two or more entries: split by run (the last third, at least
-/// one, held out); one run: split by time. Throws std::invalid_argument on
-/// unusable input (no runs, no candidates, an unknown candidate or one
-/// named twice, the same run twice, training commands that drive nothing:
+/// one, held out); one run: split by time. A simulator with every effect
+/// already on is calibrated and its gap reported, with nothing to try.
+/// Throws std::invalid_argument on unusable input (no runs, max_selected
+/// under 1, an unknown candidate or one named twice, one already switched
+/// on, the same run twice, training commands that drive nothing:
 /// constant on runs replayed settled, all at one level; less data than
 /// kMinTrainingSeconds / kMinHeldOutSeconds: run_checks.hpp), naming the
 /// runs or effect.

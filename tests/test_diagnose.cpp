@@ -398,6 +398,11 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   const auto j = nlohmann::json::parse(toJson(d));
   for (const char* key : {"gap_before", "ranking", "selected", "where", "noise_floor", "gap_after"})
     EXPECT_TRUE(j.contains(key)) << key;
+  // Each kept step: its held-out gap as round 1 chose it, and after the polish.
+  ASSERT_EQ(d.steps.size(), d.selected.size());
+  EXPECT_EQ(d.steps[0].heldout_chosen.total, d.ranking[0].heldout_after.total);
+  EXPECT_EQ(j["steps"][0]["heldout_gap_chosen"], d.ranking[0].heldout_after.percent());
+  EXPECT_EQ(j["steps"][0]["heldout_gap_after"], d.steps[0].heldout.percent());
   for (const char* key : {"effect", "heldout_gap_before", "heldout_gap_after", "shrink_percent", "params"})
     EXPECT_TRUE(j["ranking"][0].contains(key)) << key;
   EXPECT_EQ(j["ranking"][0]["effect"], "deadzone");

@@ -427,6 +427,22 @@ void polishKept(CalibratedState& s, const std::vector<std::string>& selected, co
   d.final_params = refit.values;
 }
 
+// A note when polishing a kept effect on the training runs raised its
+// held-out gap by more than the margin a candidate must clear: the later
+// rounds start from a baseline that generalises worse than the one chosen,
+// and a candidate can win them by undoing the polish.
+void notePolishThatGeneralisesWorse(const Diagnosis::KeptStep& k, const DiagnoseOptions& o, Diagnosis& d) {
+  const double rise = k.heldout.total - k.heldout_chosen.total;
+  if (!(rise > o.margin * d.noise.total && rise > o.min_relative * k.heldout_chosen.total)) return;
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "polishing %s's calibration on the training runs raised its held-out gap from %.1f%% to %.1f%%: "
+                "later rounds start from a baseline that generalises worse than the one chosen",
+                k.effect.c_str(), k.heldout_chosen.percent(), k.heldout.percent());
+  d.notes.push_back(line);
+  say(o, std::string("plsa diagnose: note: ") + line);
+}
+
 // One round of forward selection: every remaining candidate and the
 // nothing-added bar in parallel, ranked by held-out gap; the best is kept
 // (moved from `remaining` to `selected`, `s` updated and polished) when it
@@ -472,7 +488,8 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   d.final_params = best.result.params;
   remaining.erase(std::find(remaining.begin(), remaining.end(), kept));
   polishKept(s, selected, x, d);
-  d.steps.push_back({kept, s.heldout});
+  d.steps.push_back({kept, best.result.heldout_after, s.heldout});
+  notePolishThatGeneralisesWorse(d.steps.back(), o, d);
   say(o, "plsa diagnose: keeping " + kept + " (calibration polished); held-out gap now " + pct(s.heldout.percent()));
   return true;
 }

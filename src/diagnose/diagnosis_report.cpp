@@ -118,7 +118,10 @@ std::string toJson(const Diagnosis& d) {
   j["later_rounds"] = arrayOf(d.later_rounds, candidate);
   j["selected"] = d.selected;
   j["steps"] = json::array();
-  for (const auto& [e, gap] : d.steps) j["steps"].push_back({{"effect", e}, {"heldout_gap_after", gap.percent()}});
+  for (const auto& k : d.steps)
+    j["steps"].push_back({{"effect", k.effect},
+                          {"heldout_gap_chosen", k.heldout_chosen.percent()},
+                          {"heldout_gap_after", k.heldout.percent()}});
   j["gap_after"] = d.gap_after.percent();
   j["shrink_above_noise_percent"] = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
   j["final_params"] = paramsJson(d.final_params);

@@ -408,9 +408,9 @@ void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, Selfcheck
         c.true_effect_shrink_above_noise = shrinkAboveNoise(r.heldout_before, r.heldout_after, d.noise);
       }
     // Kept first: its gap once its calibration is polished.
-    if (!d.steps.empty() && d.steps[0].first == spec.withheld[0]) {
-      c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].second.percent() / std::max(1e-12, c.gap_before));
-      c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.steps[0].second, d.noise);
+    if (!d.steps.empty() && d.steps[0].effect == spec.withheld[0]) {
+      c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].heldout.percent() / std::max(1e-12, c.gap_before));
+      c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.steps[0].heldout, d.noise);
     }
     c.pass = first == spec.withheld[0] && c.true_effect_shrink >= 60.0 && c.spurious == 0;
     ++res.single_cases;

@@ -108,8 +108,15 @@ struct Diagnosis {
   std::vector<CandidateResult> ranking;  ///< round 1, best first
   std::vector<CandidateResult> later_rounds;
   std::vector<std::string> selected;
-  /// Held-out gap after each kept effect, its calibration polished.
-  std::vector<std::pair<std::string, Gap>> steps;
+  /// Each kept effect, in order: its held-out gap as its round chose it,
+  /// and after its calibration was polished on the training runs (the next
+  /// round's baseline). A polish that raises the held-out gap is noted.
+  struct KeptStep {
+    std::string effect;
+    Gap heldout_chosen;
+    Gap heldout;
+  };
+  std::vector<KeptStep> steps;
   Gap gap_after;  ///< held out, with the selected effects
   std::vector<std::pair<std::string, double>> final_params;
   Breakdown where, where_after;

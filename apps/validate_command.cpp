@@ -35,6 +35,14 @@ struct ValidateArgs {
 // Seconds as the table prints them (printf's %g: 6 significant digits).
 std::string seconds(double s) { return significantDigits(s, 6); }
 
+// A fit in its column: two decimals, or significant digits past a million
+// (a model whose simulation diverges scores -1e149, 150 characters wide).
+std::string fitCell(double fit) {
+  char b[32];
+  std::snprintf(b, sizeof b, std::abs(fit) < 1e6 ? "%9.2f" : "%9.3g", fit);
+  return b;
+}
+
 // The fits and rms errors as a table a person reads, and into `j`.
 void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<int>& horizons, nlohmann::json& j) {
   std::fprintf(table, "%-12s", "output");
@@ -43,10 +51,10 @@ void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<i
   for (const auto& o : v.outputs) {
     std::fprintf(table, "%-12s", o.name.c_str());
     for (int k : horizons) {
-      std::fprintf(table, " %9.2f", o.fit_k.at(k));
+      std::fprintf(table, " %s", fitCell(o.fit_k.at(k)).c_str());
       j["outputs"][o.name]["fit_k" + std::to_string(k)] = o.fit_k.at(k);
     }
-    std::fprintf(table, " %9.2f\n", o.fit_sim);
+    std::fprintf(table, " %s\n", fitCell(o.fit_sim).c_str());
     j["outputs"][o.name]["fit_sim"] = o.fit_sim;
   }
   // The same errors in the outputs' units, beside the spread the fit divides by.
@@ -70,7 +78,7 @@ void printFits(FILE* table, const eval::ValidationResult& v, const std::vector<i
   for (const auto& o : v.outputs) {
     std::fprintf(table, "%-12s", o.name.c_str());
     for (int k : horizons) {
-      std::fprintf(table, " %9.2f", o.sim_error_kept.at(k));
+      std::fprintf(table, " %s", fitCell(o.sim_error_kept.at(k)).c_str());
       j["outputs"][o.name]["sim_error_kept_k" + std::to_string(k)] = o.sim_error_kept.at(k);
     }
     std::fprintf(table, "\n");

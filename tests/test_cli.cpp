@@ -114,6 +114,20 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   }
   const std::string printed = slurp(file("stdout.txt"));
   EXPECT_NE(printed.find("measured std"), std::string::npos) << printed;
+  // A model whose simulation diverges (one coefficient of 1e150, a hostile
+  // file) is scored and warned about, its table still a table: no cell of
+  // 150 digits.
+  auto wild = nlohmann::json::parse(slurp(file("model.json")));
+  wild["regions"][0]["coefficients"][0][3] = 1e150;
+  std::ofstream(file("wild.json")) << wild.dump();
+  ASSERT_EQ(run("validate --model " + file("wild.json") + " --log " + file("val.lcmlog") + " --horizons 40,80"), 0)
+      << err_;
+  EXPECT_NE(err_.find("leaves the measured range"), std::string::npos) << err_;
+  std::istringstream table(slurp(file("stdout.txt")));
+  for (std::string row; std::getline(table, row);)
+    if (row.rfind("bend_deg", 0) == 0 || row.rfind("steer_deg", 0) == 0) {
+      EXPECT_LT(row.size(), 60u) << row;
+    }
   EXPECT_NE(slurp(file("pred.csv")).find("bend_deg_k40"), std::string::npos);
   // An output that cannot be written is an error that names it, not a silent loss.
   EXPECT_EQ(run("validate --model " + file("model.json") + " --log " + file("val.lcmlog") + " --json " +

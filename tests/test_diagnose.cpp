@@ -515,7 +515,8 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   ASSERT_FALSE(d.ranking.empty());
   EXPECT_NE(d.verdict.find("The best candidate, " + d.ranking[0].effect + ", takes it to"), std::string::npos)
       << d.verdict;
-  EXPECT_NE(d.verdict.find("re-calibrating with nothing added to"), std::string::npos) << d.verdict;
+  EXPECT_NE(d.verdict.find("the simulator without it, re-calibrated with the same budget"), std::string::npos)
+      << d.verdict;
   EXPECT_TRUE(d.notes.empty()) << d.notes[0];
   EXPECT_EQ(d.confidence, "none");
   EXPECT_EQ(d.verdict.find("misses something"), std::string::npos) << "the gap is at the noise floor";

@@ -206,12 +206,17 @@ void noteImplausibleScale(const sim::SimConfig& simulator, const SelectionContex
     simulated += r.sim[k].squaredNorm();
   }
   const double ratio = std::sqrt(simulated / measured);
-  if (!(measured > 0.0) || (ratio < 10.0 && ratio > 0.1)) return;
+  if (!std::isfinite(ratio) || (ratio < 10.0 && ratio > 0.1)) return;
   char line[320];
-  std::snprintf(line, sizeof line,
-                "the simulator as given bends %.3g times as far as the measured outputs (RMS of the bending "
-                "vector, training runs): are the outputs in degrees and the commands in bar (--input-scale)?",
-                ratio);
+  if (ratio == 0.0)
+    std::snprintf(line, sizeof line,
+                  "the simulator as given does not bend for the training runs' commands: are the commands in "
+                  "bar (--input-scale)?");
+  else
+    std::snprintf(line, sizeof line,
+                  "the simulator as given bends %.3g times as far as the measured outputs (RMS of the bending "
+                  "vector, training runs): are the outputs in degrees and the commands in bar (--input-scale)?",
+                  ratio);
   d.notes.push_back(line);
   say(x.o, std::string("plsa diagnose: note: ") + line);
 }
@@ -509,9 +514,10 @@ std::string nothingKeptVerdict(const Diagnosis& d, const DiagnoseOptions& o) {
   const CandidateResult& best = d.ranking[0];
   std::snprintf(v, sizeof v,
                 "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is "
-                "%.1f%% against a noise floor of %.1f%%. The best candidate, %s, takes it to %.1f%%, and "
-                "re-calibrating with nothing added to %.1f%%; a candidate counts only if it beats that by more "
-                "than %g times the noise floor and %.0f%% of that gap (mean squares).",
+                "%.1f%% against a noise floor of %.1f%%. The best candidate, %s, takes it to %.1f%%, and the "
+                "simulator without it, re-calibrated with the same budget (or as it was, if that is better), to "
+                "%.1f%%; a candidate counts only if it beats that by more than %g times the noise floor and "
+                "%.0f%% of that gap (mean squares).",
                 d.gap_before.percent(), d.noise.percent(), best.effect.c_str(), best.heldout_after.percent(),
                 d.recalibrated_round1.percent(), o.margin, 100.0 * o.min_relative);
   return v;

@@ -345,35 +345,34 @@ BendingReading Actuator::stepReading(const std::array<double, 3>& command_bar, R
   const std::array<double, 3> cmd = advance(command_bar);
   BendingReading r;
   r.pressure_bar = pressure_;
-  const bool exact = config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled;
-  if (exact && (bend_.norm() < 0.5 * kPi || branch == ReadingBranch::kUnfolded)) {
+  if (branch == ReadingBranch::kUnfolded) {
+    r.bending_deg = unfoldedReading();
+    return r;
+  }
+  if (config_.sensor.noise_deg == 0.0 && !config_.sensor_bias.enabled && bend_.norm() < 0.5 * kPi) {
     r.bending_deg = bend_ / kRadPerDeg;
     return r;
   }
   if (config_.sensor.noise_deg == 0.0) {
     r.bending_deg = bendingWithoutNoise();
-  } else {
-    const ActuatorSample s = measure(cmd);
-    const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
-    r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
+    return r;
   }
-  if (branch == ReadingBranch::kUnfolded) r.bending_deg = unfolded(r.bending_deg);
+  const ActuatorSample s = measure(cmd);
+  const double steer = s.steer_deg * kPi / 180.0;  // as diagnose::bendingVector rounds it
+  r.bending_deg = s.bend_deg * Eigen::Vector2d(std::cos(steer), std::sin(steer));
   return r;
 }
 
-// The sensor's axis reading of length m along d (the reading without the
-// bias's offsets, which add after the angles) stands for any bend m + 360 j
-// along d (j < 0: 360 |j| - m the other way): the axis is the same after a
-// whole turn. The branch nearest the segment's own bending vector is its
-// unfolding.
-Eigen::Vector2d Actuator::unfolded(const Eigen::Vector2d& reading_deg) const {
-  const Eigen::Vector2d offset = sensorOffset();
-  const Eigen::Vector2d axis = reading_deg - offset;
-  const double m = axis.norm();
-  if (!(m > 0.0)) return reading_deg;
-  const Eigen::Vector2d d = axis / m;
-  const double turns = std::round(((bend_ / kRadPerDeg).dot(d) - m) / 360.0);
-  return reading_deg + 360.0 * turns * d;
+// ReadingBranch::kUnfolded: the segment's bending vector turned by the
+// mount's yaw, plus the offsets and their drifts, plus the sensor's noise on
+// each axis. The mount's tilt is left out: a tilted axis passes beside the
+// pole at 180 deg of bend, where no unfolding is continuous, and at small
+// bends it adds about a constant, which an affine map absorbs.
+Eigen::Vector2d Actuator::unfoldedReading() {
+  Eigen::Vector2d v = bend_ / kRadPerDeg;
+  if (config_.sensor_bias.enabled) v = Eigen::Rotation2Dd(sensorYawDeg() * kRadPerDeg) * v + sensorOffset();
+  if (config_.sensor.noise_deg > 0.0) v += config_.sensor.noise_deg * Eigen::Vector2d(normal_(rng_), normal_(rng_));
+  return v;
 }
 
 }  // namespace plsa::sim

@@ -110,7 +110,8 @@ struct Diagnosis {
   std::vector<std::string> selected;
   /// Each kept effect, in order: its held-out gap as its round chose it,
   /// and after its calibration was polished on the training runs (the next
-  /// round's baseline). A polish that raises the held-out gap is noted.
+  /// round's baseline). A polish that raises the held-out gap by more than
+  /// a candidate's margin is noted (notes).
   struct KeptStep {
     std::string effect;
     Gap heldout_chosen;
@@ -121,10 +122,11 @@ struct Diagnosis {
   std::vector<std::pair<std::string, double>> final_params;
   Breakdown where, where_after;
   std::string verdict;  ///< in words
-  /// What looks wrong in the input, in words (also logged): the simulator
-  /// as given bending ten times as far as the measured angles or a tenth
-  /// as far (units: radians for degrees, --input-scale), runs at different
-  /// sample rates.
+  /// What looks wrong in the input or the search, in words (also logged):
+  /// the simulator as given bending ten times as far as the measured angles
+  /// or a tenth as far (units: radians for degrees, --input-scale), runs at
+  /// different sample rates, a kept effect whose polish raised its held-out
+  /// gap by more than a candidate's margin.
   std::vector<std::string> notes;
   /// How firmly the evidence backs the first kept effect (round 1):
   /// "confident", "uncertain" (the runner-up comes within uncertain_margin of

@@ -35,13 +35,16 @@ struct BendingReading {
   std::array<double, 3> pressure_bar{};
 };
 
-/// Which bending vector a reading gives past 180 deg of bend. The sensor's
-/// eqs. (5)-(6) fold there (a bend of 190 deg reads as 170 deg the other
-/// way), as a real tip sensor's angles do; outputs that are an image of the
-/// segment's shape (a tip position) do not fold.
+/// Which bending vector a reading gives. The sensor's eqs. (5)-(6) fold at
+/// 180 deg of bend (190 deg reads as 170 deg the other way), as a real tip
+/// sensor's angles do; outputs that are an image of the segment's shape (a
+/// tip position) do not fold.
 enum class ReadingBranch {
-  kSensor,    ///< the sensor's reading, folded into [0, 180] deg of bend
-  kUnfolded,  ///< the same reading moved by whole turns to the segment's own bending vector
+  kSensor,  ///< the sensor's reading, folded into [0, 180] deg of bend
+  /// The segment's bending vector turned by the sensor's yaw, plus its
+  /// offsets, drifts and noise (white, on each axis); without the mount's
+  /// tilt, which has no continuous unfolding near 180 deg.
+  kUnfolded,
 };
 
 /// Deflection and steering (deg) from a sensor rotation B_A_G, paper eqs. (5), (6).
@@ -72,8 +75,7 @@ class Actuator {
   /// and steering the state holds, to rounding); without noise, step()'s
   /// reading through vectors, not its matrices and angles (the same to
   /// rounding); with noise, step()'s measurement, converted (the same
-  /// random draws). kUnfolded moves the reading along its direction by the
-  /// whole turns (360 deg) that bring it nearest the segment's bending vector.
+  /// random draws). kUnfolded: see ReadingBranch (its noise draws differ).
   BendingReading stepReading(const std::array<double, 3>& command_bar, ReadingBranch branch = ReadingBranch::kSensor);
   /// Vent: command zero in every chamber.
   ActuatorSample vent() { return step({0.0, 0.0, 0.0}); }
@@ -115,9 +117,9 @@ class Actuator {
   /// (deg), through vectors rather than measure()'s rotation matrices.
   Eigen::Vector2d bendingWithoutNoise();
   Eigen::Vector2d sensorOffset() const;  ///< sensor_bias's offsets and their drifts now (deg; 0 when off)
-  void addBendingOffset(double& bend_deg, double& steer_deg) const;    ///< sensorOffset() added to the angles
-  Eigen::Vector2d unfolded(const Eigen::Vector2d& reading_deg) const;  ///< ReadingBranch::kUnfolded
-  double sensorTime() const { return time_s_ - sensor_epoch_s_; }      ///< seconds the sensor has drifted
+  void addBendingOffset(double& bend_deg, double& steer_deg) const;  ///< sensorOffset() added to the angles
+  Eigen::Vector2d unfoldedReading();  ///< ReadingBranch::kUnfolded (a random walk's yaw draws once)
+  double sensorTime() const { return time_s_ - sensor_epoch_s_; }  ///< seconds the sensor has drifted
 
   SimConfig config_;
   std::mt19937_64 rng_;

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "calibration_starts.hpp"
+#include "verdict.hpp"
 #include "plsa/core/parallel_for.hpp"
 
 namespace plsa::diagnose {
@@ -21,10 +22,11 @@ void say(const DiagnoseOptions& o, const std::string& line) {
   if (o.log) o.log(line);
 }
 
-std::string pct(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.1f%%", v);
-  return b;
+// A note (none when empty) kept in the diagnosis and logged.
+void addNote(const DiagnoseOptions& o, Diagnosis& d, const std::string& note) {
+  if (note.empty()) return;
+  d.notes.push_back(note);
+  say(o, "plsa diagnose: note: " + note);
 }
 
 struct Residuals {
@@ -52,33 +54,6 @@ Breakdown breakdownFor(const sim::SimConfig& c, const std::vector<RunData>& runs
   in.bend_direction_deg = c.geometry.bend_direction_deg;
   in.max_pressure_bar = c.max_pressure_bar;
   return breakdownGap(in);
-}
-
-// The gap left is over qualified_noise_multiple noise floors. (The
-// identified reference is reported beside it, not used to decide: on short
-// random excitations its free simulation can be far worse than the
-// calibrated simulator, and it would then hide a real shortfall.)
-bool farAboveWhatTheDataAllow(const Diagnosis& d, const Gap& left, const DiagnoseOptions& o) {
-  return left.percent() > o.qualified_noise_multiple * d.noise.percent();
-}
-
-// Round 1's confidence: margins over re-calibration and over the runner-up.
-void judgeConfidence(Diagnosis& d, const Gap& bar, const DiagnoseOptions& o) {
-  if (d.selected.empty() || d.ranking.empty()) return;
-  const double best = d.ranking[0].heldout_after.total;
-  const double drop = std::max(1e-12, bar.total - best);
-  d.margin_over_recalibration = drop / std::max(1e-12, bar.total);
-  d.margin_over_runner_up = 1.0;
-  if (d.ranking.size() > 1) {
-    d.runner_up = d.ranking[1].effect;
-    d.margin_over_runner_up = std::clamp((d.ranking[1].heldout_after.total - best) / drop, 0.0, 1.0);
-  }
-  if (d.margin_over_runner_up < o.uncertain_margin)
-    d.confidence = "uncertain";
-  else if (farAboveWhatTheDataAllow(d, d.gap_after, o))
-    d.confidence = "qualified";
-  else
-    d.confidence = "confident";
 }
 
 // The candidates asked for, or every effect the simulator has off; each known, off and named once.
@@ -193,49 +168,6 @@ FillLaw chambersOf(const sim::SimConfig& c) {
   return law;
 }
 
-// A note when the simulator as given bends ten times as far as the measured
-// angles, or a tenth as far (RMS of the bending vector over the training
-// runs): outputs in radians, or commands not in bar, give gaps of
-// thousands of percent that no calibration or candidate can close.
-void noteImplausibleScale(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
-  if (x.map != OutputMap::kAngles) return;  // an affine map takes any scale
-  const Residuals r = residualsOf(simulator, x.runs.train, OutputFit{}, x.map);
-  double measured = 0.0, simulated = 0.0;
-  for (std::size_t k = 0; k < r.sim.size(); ++k) {
-    measured += x.runs.train[k].outputs.squaredNorm();
-    simulated += r.sim[k].squaredNorm();
-  }
-  const double ratio = std::sqrt(simulated / measured);
-  if (!std::isfinite(ratio) || (ratio < 10.0 && ratio > 0.1)) return;
-  char line[320];
-  if (ratio == 0.0)
-    std::snprintf(line, sizeof line,
-                  "the simulator as given does not bend for the training runs' commands: are the commands in "
-                  "bar (--input-scale)?");
-  else
-    std::snprintf(line, sizeof line,
-                  "the simulator as given bends %.3g times as far as the measured outputs (RMS of the bending "
-                  "vector, training runs): are the outputs in degrees and the commands in bar (--input-scale)?",
-                  ratio);
-  d.notes.push_back(line);
-  say(x.o, std::string("plsa diagnose: note: ") + line);
-}
-
-// A note when the runs were sampled at different rates: each is simulated at
-// its own, but their noise floors and the identified reference differ.
-void noteMixedSampleRates(const std::vector<RunData>& runs, const DiagnoseOptions& o, Diagnosis& d) {
-  const auto [lo, hi] = std::minmax_element(
-      runs.begin(), runs.end(), [](const RunData& a, const RunData& b) { return a.sample_time_s < b.sample_time_s; });
-  if (hi->sample_time_s <= 1.01 * lo->sample_time_s) return;
-  char line[320];
-  std::snprintf(line, sizeof line,
-                "the runs were sampled at different rates (%s at %.4g Hz, %s at %.4g Hz): each is simulated at "
-                "its own rate",
-                lo->name.c_str(), 1.0 / lo->sample_time_s, hi->name.c_str(), 1.0 / hi->sample_time_s);
-  d.notes.push_back(line);
-  say(o, std::string("plsa diagnose: note: ") + line);
-}
-
 // Noise floor, the simulator as given, then the
 // nominal calibration: the baseline every candidate is measured against.
 CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const SelectionContext& x, Diagnosis& d) {
@@ -246,7 +178,7 @@ CalibratedState calibrateBaseline(const sim::SimConfig& simulator, const Selecti
   OutputFit raw_fit;
   measureGap(simulator, r.train, g, &raw_fit);
   d.heldout_uncalibrated = measureGap(simulator, r.held, g, &raw_fit, false);
-  noteImplausibleScale(simulator, x, d);
+  addNote(o, d, implausibleScaleNote(simulator, r.train, x.map));
   say(o, "plsa diagnose: " + std::to_string(r.train.size()) + " training / " + std::to_string(r.held.size()) +
              " held-out run(s); held-out gap of the simulator as given " + pct(d.heldout_uncalibrated.percent()) +
              ", noise floor " + pct(d.noise.percent()));
@@ -432,22 +364,6 @@ void polishKept(CalibratedState& s, const std::vector<std::string>& selected, co
   d.final_params = refit.values;
 }
 
-// A note when polishing a kept effect on the training runs raised its
-// held-out gap by more than the margin a candidate must clear: the later
-// rounds start from a baseline that generalises worse than the one chosen,
-// and a candidate can win them by undoing the polish.
-void notePolishThatGeneralisesWorse(const Diagnosis::KeptStep& k, const DiagnoseOptions& o, Diagnosis& d) {
-  const double rise = k.heldout.total - k.heldout_chosen.total;
-  if (!(rise > o.margin * d.noise.total && rise > o.min_relative * k.heldout_chosen.total)) return;
-  char line[320];
-  std::snprintf(line, sizeof line,
-                "polishing %s's calibration on the training runs raised its held-out gap from %.1f%% to %.1f%%: "
-                "later rounds start from a baseline that generalises worse than the one chosen",
-                k.effect.c_str(), k.heldout_chosen.percent(), k.heldout.percent());
-  d.notes.push_back(line);
-  say(o, std::string("plsa diagnose: note: ") + line);
-}
-
 // One round of forward selection: every remaining candidate and the
 // nothing-added bar in parallel, ranked by held-out gap; the best is kept
 // (moved from `remaining` to `selected`, `s` updated and polished) when it
@@ -481,7 +397,7 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   const Gap bar = null_gap.total < s.heldout.total ? null_gap : s.heldout;
   if (round == 1) d.recalibrated_round1 = bar;
   const double drop = bar.total - best.result.heldout_after.total;
-  if (!(drop > o.margin * d.noise.total && drop > o.min_relative * bar.total)) {
+  if (!clearsMargin(drop, bar, d.noise, o)) {
     say(o, "plsa diagnose: round " + std::to_string(round) + ": the best, " + best.result.effect +
                ", does not beat the noise level by the margin over re-calibrating without it; stopping");
     return false;
@@ -494,66 +410,9 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   remaining.erase(std::find(remaining.begin(), remaining.end(), kept));
   polishKept(s, selected, x, d);
   d.steps.push_back({kept, best.result.heldout_after, s.heldout});
-  notePolishThatGeneralisesWorse(d.steps.back(), o, d);
+  addNote(o, d, polishNote(d.steps.back(), d.noise, o));
   say(o, "plsa diagnose: keeping " + kept + " (calibration polished); held-out gap now " + pct(s.heldout.percent()));
   return true;
-}
-
-// The verdict when nothing was kept: no candidate to try (every effect on),
-// or the best one's gap against re-calibrating with nothing added, which is
-// the bar a candidate must clear by the margin.
-std::string nothingKeptVerdict(const Diagnosis& d, const DiagnoseOptions& o) {
-  char v[640];
-  if (d.ranking.empty()) {
-    std::snprintf(v, sizeof v,
-                  "No candidate effect to try: every effect the simulator has is already on. The calibrated "
-                  "simulator's held-out gap is %.1f%% against a noise floor of %.1f%%.",
-                  d.gap_before.percent(), d.noise.percent());
-    return v;
-  }
-  const CandidateResult& best = d.ranking[0];
-  std::snprintf(v, sizeof v,
-                "No candidate effect explains the held-out gap beyond noise: the calibrated simulator's gap is "
-                "%.1f%% against a noise floor of %.1f%%. The best candidate, %s, takes it to %.1f%%, and the "
-                "simulator without it, re-calibrated with the same budget (or as it was, if that is better), to "
-                "%.1f%%; a candidate counts only if it beats that by more than %g times the noise floor and "
-                "%.0f%% of that gap (mean squares).",
-                d.gap_before.percent(), d.noise.percent(), best.effect.c_str(), best.heldout_after.percent(),
-                d.recalibrated_round1.percent(), o.margin, 100.0 * o.min_relative);
-  return v;
-}
-
-// The verdict in words, with its confidence's qualification.
-std::string verdictOf(const Diagnosis& d, const DiagnoseOptions& o) {
-  std::string verdict;
-  if (d.selected.empty()) {
-    verdict = nothingKeptVerdict(d, o);
-  } else {
-    std::string list;
-    for (const auto& s : d.selected) list += (list.empty() ? "" : ", then ") + s;
-    char v[512];
-    std::snprintf(v, sizeof v,
-                  "The gap is explained by %s: adding %s shrinks the held-out gap from %.1f%% to %.1f%% "
-                  "(noise floor %.1f%%",
-                  d.selected[0].c_str(), list.c_str(), d.gap_before.percent(), d.gap_after.percent(),
-                  d.noise.percent());
-    const double closed = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
-    verdict = v + (std::isfinite(closed) ? ", " + pct(closed) + " of the gap above it closed)." : std::string(")."));
-  }
-  if (d.confidence == "uncertain")
-    verdict += " Uncertain: " + d.runner_up + " comes within " + pct(100 * d.margin_over_runner_up) + " of " +
-               d.selected[0] + "'s gain over re-calibrating without either; the data do not separate the two.";
-  const std::string reached = d.reference.available && d.reference.gap.percent() < d.gap_after.percent()
-                                  ? " and above the " + pct(d.reference.gap.percent()) + " an identified model reaches"
-                                  : "";
-  const std::string times = std::to_string(static_cast<int>(o.qualified_noise_multiple)) + " times the noise floor";
-  if (d.confidence == "qualified")
-    verdict += " Qualified: the gap left, " + pct(d.gap_after.percent()) + ", is over " + times + reached +
-               ": part of the gap is something no candidate models.";
-  if (d.selected.empty() && farAboveWhatTheDataAllow(d, d.gap_before, o))
-    verdict += " But the gap, " + pct(d.gap_before.percent()) + ", is over " + times + reached +
-               ": the simulator misses something no candidate models.";
-  return verdict;
 }
 
 // The first held-out run as measured, as the nominal calibration simulates
@@ -600,7 +459,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   refuseUnusableSplit(split.train, split.held);
   for (const auto& r : split.train) d.train_runs.push_back(r.name);
   for (const auto& r : split.held) d.heldout_runs.push_back(r.name);
-  noteMixedSampleRates(runs, o, d);
+  addNote(o, d, mixedSampleRatesNote(runs));
   SelectionContext x{split, o, d.map, 0.0, {}};
   x.fill = fillLawFromPressures(split.train, chambersOf(simulator), 120, o.threads);
   std::future<IdentifiedReference> reference;

@@ -453,8 +453,8 @@ TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
   }
   EXPECT_GT(differs, 0.05);  // other weights give another loop
   EXPECT_EQ(flexibleFormulationOf("hysteresis"), "weighted_pi");
-  EXPECT_EQ(pi.parameters("hysteresis").size(), 5u);
-  for (const ParamRef& p : pi.parameters("hysteresis")) {  // calibration may turn each play's loop over
+  EXPECT_EQ(pi.parameters("hysteresis").size(), 8u);       // width, 3 weights, fixed share, the smooth element's 3
+  for (const ParamRef& p : pi.parameters("hysteresis")) {  // calibration may turn each loop over
     if (p.name.rfind("weight_", 0) == 0) {
       EXPECT_EQ(p.lower, -1.0) << p.name;
     }
@@ -467,13 +467,7 @@ namespace {
 struct Loop {
   double up, down, vented;
 };
-Loop loopOf(double weight, double fixed_band_share) {
-  SimConfig c = only("hysteresis");
-  c.hysteresis.formulation = "weighted_pi";
-  c.hysteresis.width = 0.1;
-  c.hysteresis.weight_narrow = c.hysteresis.weight_wide = 0.0;
-  c.hysteresis.weight_mid = weight;
-  c.hysteresis.fixed_band_share = fixed_band_share;
+Loop loopOf(const SimConfig& c) {
   Actuator a(c, 1);
   const ActuatorSample up = hold(a, {0.15, 0, 0}, 4.0).back();
   // Signed: along the direction chamber 1 bends the segment (a strain below
@@ -487,6 +481,28 @@ Loop loopOf(double weight, double fixed_band_share) {
   l.down = along(hold(a, {0.15, 0, 0}, 4.0).back());
   l.vented = along(hold(a, {0.0, 0, 0}, 4.0).back());
   return l;
+}
+SimConfig weightedPi() {
+  SimConfig c = only("hysteresis");
+  c.hysteresis.formulation = "weighted_pi";
+  c.hysteresis.weight_narrow = c.hysteresis.weight_mid = c.hysteresis.weight_wide = 0.0;
+  return c;
+}
+// The mid play alone.
+Loop loopOf(double weight, double fixed_band_share) {
+  SimConfig c = weightedPi();
+  c.hysteresis.width = 0.1;
+  c.hysteresis.weight_mid = weight;
+  c.hysteresis.fixed_band_share = fixed_band_share;
+  return loopOf(c);
+}
+// The smooth element alone.
+Loop smoothLoopOf(double weight, double asymmetry) {
+  SimConfig c = weightedPi();
+  c.hysteresis.weight_smooth = weight;
+  c.hysteresis.smooth_saturation = 0.3;
+  c.hysteresis.smooth_asymmetry = asymmetry;
+  return loopOf(c);
 }
 }  // namespace
 
@@ -503,6 +519,24 @@ TEST(SimEffects, WeightedPrandtlIshlinskiisSignTurnsTheLoopAndFixedBandsLeaveRem
   const Loop fixed_play = loopOf(0.5, 1.0), fixed_stop = loopOf(-0.5, 1.0);
   EXPECT_GT(fixed_play.vented, 0.2) << fixed_play.vented;
   EXPECT_LT(fixed_stop.vented, -0.2) << fixed_stop.vented;
+}
+
+// The smooth element (Bouc-Wen of exponent 1) softens on loading and comes
+// back elastically: below the way up on the way down and past zero when
+// vented; a steeper unloading (asymmetry > 0) leaves more of that remanent
+// bend; the weight's sign turns the loop over; weight 0 is no hysteresis.
+TEST(SimEffects, TheSmoothElementsLoopTurnsWithItsWeightAndDeepensWithAsymmetry) {
+  const Loop lag = smoothLoopOf(0.5, 0.0), turned = smoothLoopOf(-0.5, 0.0);
+  EXPECT_LT(lag.down - lag.up, -0.2) << lag.up << " " << lag.down;
+  EXPECT_GT(turned.down - turned.up, 0.2) << turned.up << " " << turned.down;
+  EXPECT_LT(lag.vented, -0.1) << lag.vented;
+  EXPECT_GT(turned.vented, 0.1) << turned.vented;
+  const Loop steep = smoothLoopOf(0.5, 0.6), shallow = smoothLoopOf(0.5, -0.6);
+  EXPECT_LT(steep.vented, lag.vented - 0.05) << steep.vented << " " << lag.vented;
+  EXPECT_GT(shallow.vented, lag.vented + 0.05) << shallow.vented << " " << lag.vented;
+  const Loop none = smoothLoopOf(0.0, 0.6);
+  EXPECT_NEAR(none.down, none.up, 1e-3);
+  EXPECT_NEAR(none.vented, 0.0, 1e-3);
 }
 
 TEST(SimEffects, SensorMountYawTurnsTheReading) {

@@ -159,16 +159,29 @@ void enableEffect(sim::SimConfig& c, const std::string& effect, bool flexible) {
 }  // namespace
 
 // Spread points for an effect: the simulator's own values and two points
-// across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis
-// both loop orientations (plays: the output lags; stops: steeper on
-// unloading, as elastoplastic or Bouc-Wen laws) with bands closing at zero
-// and fixed bands; for sensor bias the residual's offset and drift; for
-// the pneumatic lag's power law the fill law of the logged pressures.
+// across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis,
+// in place of those two, the smooth element alone in both orientations,
+// then plays in both orientations (plays: the output lags; stops: steeper
+// on unloading, as elastoplastic laws) with bands closing at zero and fixed
+// bands; for sensor bias the residual's offset and drift; for the
+// pneumatic lag's power law the fill law of the logged pressures.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map) {
   std::vector<sim::SimConfig> spread = {c};
   if (effect == "pneumatic_lag") lagTimesAtNominal(spread[0]);
+  const bool weighted_pi = effect == "hysteresis" && c.hysteresis.formulation == "weighted_pi";
+  if (weighted_pi)
+    for (double weight : {0.4, -0.4}) {
+      sim::SimConfig trial = c;
+      auto& h = trial.hysteresis;
+      h.weight_narrow = h.weight_mid = h.weight_wide = 0.0;
+      h.weight_smooth = weight;
+      h.smooth_saturation = 0.5;
+      h.smooth_asymmetry = 0.0;
+      spread.push_back(trial);
+    }
   for (double u : {0.2, 0.6}) {
+    if (weighted_pi) continue;
     sim::SimConfig trial = c;
     for (const sim::ParamRef& p : trial.parameters(effect)) {
       const bool log = p.lower > 0 && p.upper / p.lower > 20;
@@ -177,7 +190,7 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
     if (effect == "pneumatic_lag") trial.pneumatic_lag.delay_s = u * 0.1;
     spread.push_back(trial);
   }
-  if (effect == "hysteresis" && c.hysteresis.formulation == "weighted_pi")
+  if (weighted_pi)
     for (double weight : {-0.4, 0.4})
       for (double fixed : {0.0, 1.0}) {
         sim::SimConfig trial = c;

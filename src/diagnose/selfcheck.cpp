@@ -57,13 +57,16 @@ std::vector<std::string> lawsOutsideTheCandidate(const std::string& effect, bool
 }
 
 // The independent actuator's laws of an effect that lie outside the
-// candidate's family: Duffing stiffening (a cubic spring in the bending
-// angle) is the flexible stiffening's bend hardening, so it is left out
-// when the diagnosis calibrates flexible laws.
+// candidate's family, so left out when the diagnosis calibrates flexible
+// laws: Duffing stiffening (a cubic spring in the bending angle) is the
+// flexible stiffening's bend hardening, and Bouc-Wen of exponent 1 on the
+// strain is the weighted Prandtl-Ishlinskii law's smooth element.
 std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible) {
   std::vector<std::string> out;
-  for (const std::string& law : sim::independentLawsOf(effect))
-    if (!(flexible && effect == "stiffening" && law == "duffing")) out.push_back(law);
+  for (const std::string& law : sim::independentLawsOf(effect)) {
+    const bool inside = (effect == "stiffening" && law == "duffing") || (effect == "hysteresis" && law == "bouc_wen");
+    if (!(flexible && inside)) out.push_back(law);
+  }
   return out;
 }
 

@@ -51,14 +51,16 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   substeps_ = std::max(1, static_cast<int>(std::lround(period / config_.internal_step_s)));
   dt_ = period / substeps_;
   const std::string& hyst = config_.hysteresis.formulation;
-  const std::size_t n_play = hyst == "prandtl_ishlinskii" ? kPiOperators : hyst == "weighted_pi" ? 3 : 1;
+  // weighted_pi: three plays, then the smooth element's z and the strain it last saw.
+  const std::size_t n_play = hyst == "prandtl_ishlinskii" ? kPiOperators : hyst == "weighted_pi" ? 5 : 1;
   weighted_pi_ = hyst == "weighted_pi";
   if (weighted_pi_) {
     const auto& h = config_.hysteresis;
-    pi_weights_ = {h.weight_narrow, h.weight_mid, h.weight_wide};
+    pi_weights_ = {h.weight_narrow, h.weight_mid, h.weight_wide, h.weight_smooth};
     const double p = config_.max_pressure_bar;
     full_strain_ = std::abs(config_.elongation.strain_per_bar * p + config_.elongation.quadratic * p * p);
-    const double sum = std::abs(pi_weights_[0]) + std::abs(pi_weights_[1]) + std::abs(pi_weights_[2]);
+    double sum = 0.0;
+    for (double w : pi_weights_) sum += std::abs(w);
     if (sum > 1.0)
       for (double& w : pi_weights_) w /= sum;
   }
@@ -154,6 +156,7 @@ double Actuator::hysteresisStrain(std::size_t chamber, double strain) {
       plays[k] = std::clamp(plays[k], strain - r, strain + r);
       out += pi_weights_[k] * (plays[k] - strain);
     }
+    if (pi_weights_[3] != 0.0) out += pi_weights_[3] * (smoothElement(plays[3], plays[4], strain) - strain);
     return out;
   }
   // Play operator(s): output moves only once the input leaves a band around it.
@@ -168,6 +171,20 @@ double Actuator::hysteresisStrain(std::size_t chamber, double strain) {
     out += plays[k];
   }
   return out / static_cast<double>(plays.size());
+}
+
+// The weighted-PI law's smooth element one step on: z follows the strain
+// and saturates at smooth_saturation times the strain at full pressure,
+// unloading steeper or shallower by smooth_asymmetry (Bouc-Wen, exponent 1).
+double Actuator::smoothElement(double& z, double& last_strain, double strain) const {
+  const SimConfig::Hysteresis& h = config_.hysteresis;
+  const double bound = std::max(h.smooth_saturation * full_strain_, 1e-12);
+  const double beta = 0.5 * (1.0 + h.smooth_asymmetry) / bound, gamma = 0.5 * (1.0 - h.smooth_asymmetry) / bound;
+  const double ds = strain - last_strain;
+  last_strain = strain;
+  z += ds - (beta * std::abs(ds) * z + gamma * ds * std::abs(z));
+  z = std::clamp(z, -bound, bound);  // a step longer than the bound cannot overshoot it
+  return z;
 }
 
 // A chamber's strain with its creep (one or two first-order lags) added.

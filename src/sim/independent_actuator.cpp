@@ -17,7 +17,7 @@ constexpr int kPreisachLevels = 10;  // 55 relays per chamber
 const std::map<std::string, std::vector<std::string>>& laws() {
   static const std::map<std::string, std::vector<std::string>> l = {
       {"deadzone", {"logistic", "cubic_onset", "sticking"}},
-      {"hysteresis", {"bouc_wen", "preisach", "backlash"}},
+      {"hysteresis", {"bouc_wen", "bouc_wen_sharp", "preisach", "backlash"}},
       {"stiffening", {"duffing", "tanh_strain", "saturating_exp", "limiting_stretch"}},
       {"coupling", {"exponential", "quadratic", "crosstalk"}},
       {"pneumatic_lag", {"two_volume", "pressure_dependent", "quantised_valve"}},
@@ -67,6 +67,7 @@ const std::vector<std::string>& independentLawsOf(const std::string& effect) {
 std::pair<double, double> independentStrengthRange(const std::string& effect, const std::string& law) {
   static const std::map<std::string, std::pair<double, double>> r = {{"deadzone", {0.04, 0.10}},
                                                                      {"hysteresis.bouc_wen", {0.25, 0.5}},
+                                                                     {"hysteresis.bouc_wen_sharp", {0.25, 0.5}},
                                                                      {"hysteresis.preisach", {0.25, 0.5}},
                                                                      {"hysteresis.backlash", {0.05, 0.15}},
                                                                      {"stiffening.duffing", {0.4, 1.2}},
@@ -174,6 +175,16 @@ double IndependentActuator::hysteretic(std::size_t i, double s, double dt) {
     bw_z_[i] += ds - (beta * std::abs(ds) * bw_z_[i] + gamma * ds * std::abs(bw_z_[i]));
     last_strain_[i] = s;
     return (1.0 - h) * s + h * bw_z_[i];
+  }
+  if (ph_.hysteresis == "bouc_wen_sharp") {
+    // Exponent 2: z' = s' - (beta |s'| z |z| + gamma s' z^2), a sharper knee toward the same bound.
+    const double ds = s - last_strain_[i];
+    const double beta = 0.75 / (top * top), gamma = 0.25 / (top * top);
+    double& z = bw_z_[i];
+    z += ds - (beta * std::abs(ds) * z * std::abs(z) + gamma * ds * z * z);
+    z = std::clamp(z, -top, top);
+    last_strain_[i] = s;
+    return (1.0 - h) * s + h * z;
   }
   if (ph_.hysteresis == "preisach") {
     int on = 0, k = 0;

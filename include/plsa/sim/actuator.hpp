@@ -101,6 +101,7 @@ class Actuator {
   std::array<double, 3> delayedCommand(const std::array<double, 3>& cmd);
   std::array<double, 3> fillChambers(const std::array<double, 3>& delayed);  ///< effective pressures
   double hysteresisStrain(std::size_t chamber, double strain);
+  double smoothElement(double& z, double& last_strain, double strain) const;
   double creepStrain(std::size_t chamber, double strain);
   void bendToward(Eigen::Vector2d target, double sum_p);
   int bendingPieces(double omega, double spring_slope) const;
@@ -146,8 +147,8 @@ class Actuator {
   /// The sensor's x axis tilted by sensor_bias (x and z of Ry(tilt - pi/2) e_x), computed once.
   std::array<double, 2> tilted_x_axis_{};
   bool weighted_pi_ = false;
-  double full_strain_ = 0.0;  ///< |strain| at max_pressure_bar (weighted_pi's fixed bands)
-  std::array<double, 3> pi_weights_{};
+  double full_strain_ = 0.0;                        ///< |strain| at max_pressure_bar (weighted_pi's fixed bands)
+  std::array<double, 4> pi_weights_{};              ///< narrow, mid, wide play, smooth element
   Eigen::Vector2d bend_ = Eigen::Vector2d::Zero();  ///< theta * (cos phi, sin phi), rad
   Eigen::Vector2d bend_rate_ = Eigen::Vector2d::Zero();
   std::vector<std::array<double, 3>> delay_line_;

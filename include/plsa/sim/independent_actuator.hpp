@@ -45,10 +45,11 @@ struct IndependentPhysics {
   /// "sticking" (opens above t, closes below t/2); strength: t (bar).
   std::string deadzone;
   double deadzone_bar = 0.06;
-  /// hysteresis: "bouc_wen" (on each chamber's strain), "preisach" (a
+  /// hysteresis: "bouc_wen" (exponent 1, on each chamber's strain),
+  /// "bouc_wen_sharp" (exponent 2: a sharper knee), "preisach" (a
   /// triangle of relays), "backlash" (mechanical play of the bending
-  /// vector); strength: fraction of the strain (bouc_wen, preisach) or
-  /// degrees / 10 (backlash: 0.1 = 1 deg).
+  /// vector); strength: fraction of the strain (bouc_wen, bouc_wen_sharp,
+  /// preisach) or degrees / 10 (backlash: 0.1 = 1 deg).
   std::string hysteresis;
   double hysteresis_strength = 0.12;
   /// stiffening: "duffing" (a cubic spring in the bending angle),

@@ -74,8 +74,13 @@ struct SimConfig {
     /// 2 width (|weights| scaled to sum to at most 1; the rest is the linear
     /// part). A positive weight adds a loop whose output lags the strain (a
     /// play); a negative one the opposite loop, steeper on unloading (a
-    /// stop: elastoplastic, as Bouc-Wen's). It contains "play" (weights 0,
-    /// 1, 0) and no hysteresis (0, 0, 0).
+    /// stop: elastoplastic). Beside the plays, a smooth element z (Bouc-Wen
+    /// of exponent 1 on the strain, dz = ds - beta |ds| z - gamma ds |z|)
+    /// adds weight_smooth (z - strain): z saturates at smooth_saturation
+    /// times the strain at full pressure, and smooth_asymmetry (beta -
+    /// gamma) / (beta + gamma) makes unloading steeper (> 0) or shallower.
+    /// It contains "play" (weights 0, 1, 0, smooth 0) and no hysteresis
+    /// (all weights 0).
     std::string formulation = "play";
     double width = 0.12;                                              ///< play half-width as a fraction of the strain
     double weight_narrow = 0.0, weight_mid = 1.0, weight_wide = 0.0;  ///< only for "weighted_pi"
@@ -84,6 +89,9 @@ struct SimConfig {
     /// the strain. 0: the loop closes at zero; 1: classic plays of fixed
     /// width, which leave a remanent strain when the chamber vents.
     double fixed_band_share = 0.0;
+    double weight_smooth = 0.0;      ///< only for "weighted_pi": the smooth element's weight (in the |weights| sum)
+    double smooth_saturation = 0.5;  ///< only for "weighted_pi": z's bound, a fraction of the strain at full pressure
+    double smooth_asymmetry = 0.0;   ///< only for "weighted_pi": (beta - gamma) / (beta + gamma)
   } hysteresis;
   struct Stiffening {
     bool enabled = true;

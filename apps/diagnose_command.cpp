@@ -231,7 +231,8 @@ void addSelfcheckCommand(CLI::App& app) {
       "--fixed-laws", [s](std::int64_t n) { s->options.diagnose.flexible_laws = n == 0; },
       "Diagnose with each candidate's configured formulation instead of its flexible law");
   sc->add_option("--seeds", s->options.seeds_per_effect,
-                 "Cases per effect (independent: its three laws in turn; own: odd ones with a law the candidate's "
+                 "Cases per effect (independent: its laws outside the candidate's family in turn; own: odd ones with a "
+                 "law the candidate's "
                  "cannot express); default 4")
       ->check(CLI::Range(1, 20));
   sc->add_flag("--no-pairs", s->no_pairs, "Skip the pairs of withheld effects");

@@ -17,6 +17,7 @@
 #include "plsa/diagnose/diagnosis.hpp"
 #include "plsa/diagnose/fill_law_estimate.hpp"
 #include "plsa/diagnose/selfcheck.hpp"
+#include "plsa/sim/independent_actuator.hpp"
 #include "support/headless_chromium.hpp"
 #include "support/sim_probes.hpp"
 
@@ -47,6 +48,24 @@ DiagnoseOptions quick() {
 }
 
 }  // namespace
+
+// The self-check draws "real" laws outside the candidate's family: with
+// flexible laws it leaves out those the family contains, and every other
+// law of the independent actuator stays; with fixed laws it draws them all.
+TEST(Diagnose, TheSelfcheckLeavesOutTheLawsInsideTheCandidatesFamily) {
+  auto has = [](const std::vector<std::string>& laws, const std::string& law) {
+    return std::find(laws.begin(), laws.end(), law) != laws.end();
+  };
+  const auto hysteresis = independentLawsOutside("hysteresis", true);
+  EXPECT_FALSE(has(hysteresis, "bouc_wen"));
+  EXPECT_TRUE(has(hysteresis, "bouc_wen_sharp"));
+  EXPECT_TRUE(has(hysteresis, "preisach"));
+  EXPECT_FALSE(has(independentLawsOutside("stiffening", true), "duffing"));
+  for (const std::string& effect : sim::effectNames()) {
+    EXPECT_EQ(independentLawsOutside(effect, false), sim::independentLawsOf(effect)) << effect;
+    EXPECT_GE(independentLawsOutside(effect, true).size(), 3u) << effect;
+  }
+}
 
 TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) {
   sim::SimConfig truth = sim::probes::everyEffectOff();

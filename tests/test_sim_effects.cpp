@@ -453,7 +453,8 @@ TEST(SimEffects, WeightedPrandtlIshlinskiiContainsThePlayAndNoHysteresis) {
   }
   EXPECT_GT(differs, 0.05);  // other weights give another loop
   EXPECT_EQ(flexibleFormulationOf("hysteresis"), "weighted_pi");
-  EXPECT_EQ(pi.parameters("hysteresis").size(), 8u);       // width, 3 weights, fixed share, the smooth element's 3
+  // width, 3 weights, fixed share, the smooth element's weight and bound (its asymmetry is set by hand)
+  EXPECT_EQ(pi.parameters("hysteresis").size(), 7u);
   for (const ParamRef& p : pi.parameters("hysteresis")) {  // calibration may turn each loop over
     if (p.name.rfind("weight_", 0) == 0) {
       EXPECT_EQ(p.lower, -1.0) << p.name;
@@ -526,17 +527,41 @@ TEST(SimEffects, WeightedPrandtlIshlinskiisSignTurnsTheLoopAndFixedBandsLeaveRem
 // vented; a steeper unloading (asymmetry > 0) leaves more of that remanent
 // bend; the weight's sign turns the loop over; weight 0 is no hysteresis.
 TEST(SimEffects, TheSmoothElementsLoopTurnsWithItsWeightAndDeepensWithAsymmetry) {
-  const Loop lag = smoothLoopOf(0.5, 0.0), turned = smoothLoopOf(-0.5, 0.0);
-  EXPECT_LT(lag.down - lag.up, -0.2) << lag.up << " " << lag.down;
+  const Loop elastoplastic = smoothLoopOf(0.5, 0.0), turned = smoothLoopOf(-0.5, 0.0);
+  EXPECT_LT(elastoplastic.down - elastoplastic.up, -0.2) << elastoplastic.up << " " << elastoplastic.down;
   EXPECT_GT(turned.down - turned.up, 0.2) << turned.up << " " << turned.down;
-  EXPECT_LT(lag.vented, -0.1) << lag.vented;
+  EXPECT_LT(elastoplastic.vented, -0.1) << elastoplastic.vented;
   EXPECT_GT(turned.vented, 0.1) << turned.vented;
   const Loop steep = smoothLoopOf(0.5, 0.6), shallow = smoothLoopOf(0.5, -0.6);
-  EXPECT_LT(steep.vented, lag.vented - 0.05) << steep.vented << " " << lag.vented;
-  EXPECT_GT(shallow.vented, lag.vented + 0.05) << shallow.vented << " " << lag.vented;
+  EXPECT_LT(steep.vented, elastoplastic.vented - 0.05) << steep.vented << " " << elastoplastic.vented;
+  EXPECT_GT(shallow.vented, elastoplastic.vented + 0.05) << shallow.vented << " " << elastoplastic.vented;
   const Loop none = smoothLoopOf(0.0, 0.6);
   EXPECT_NEAR(none.down, none.up, 1e-3);
   EXPECT_NEAR(none.vented, 0.0, 1e-3);
+}
+
+// The smooth element is bounded: a small bound saturates it at once and a
+// large one lets it follow the strain, so its loop is deepest between; its
+// weight is scaled with the plays' (weights 1 and 1 are 0.5 and 0.5).
+TEST(SimEffects, TheSmoothElementsBoundShapesItsLoopAndItsWeightSharesTheSum) {
+  auto depth = [](double saturation) {
+    SimConfig c = weightedPi();
+    c.hysteresis.weight_smooth = 0.5;
+    c.hysteresis.smooth_saturation = saturation;
+    const Loop l = loopOf(c);
+    return l.up - l.down;
+  };
+  const double tight = depth(0.05), mid = depth(0.3), loose = depth(2.0);
+  EXPECT_GT(mid, tight + 0.1) << tight << " " << mid;
+  EXPECT_GT(mid, loose + 0.1) << loose << " " << mid;
+  SimConfig summed = weightedPi(), halved = weightedPi();
+  summed.hysteresis.weight_mid = summed.hysteresis.weight_smooth = 1.0;
+  halved.hysteresis.weight_mid = halved.hysteresis.weight_smooth = 0.5;
+  Actuator a(summed, 1), b(halved, 1);
+  for (std::array<double, 3> cmd : {std::array<double, 3>{0.3, 0.1, 0}, {0.05, 0, 0.2}, {0.0, 0.0, 0.0}}) {
+    const auto ra = hold(a, cmd, 1.0), rb = hold(b, cmd, 1.0);
+    for (std::size_t k = 0; k < ra.size(); ++k) ASSERT_NEAR(ra[k].bend_deg, rb[k].bend_deg, 1e-12) << k;
+  }
 }
 
 TEST(SimEffects, SensorMountYawTurnsTheReading) {

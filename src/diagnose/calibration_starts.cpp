@@ -25,7 +25,10 @@ void lagTimesAtNominal(sim::SimConfig& c) {
 
 void setNeutral(sim::SimConfig& c, const std::string& effect) {
   if (effect == "deadzone") c.deadzone.threshold_bar = 0.0;
-  if (effect == "hysteresis") c.hysteresis.width = 0.0;
+  if (effect == "hysteresis") {
+    c.hysteresis.width = 0.0;  // every play follows the strain
+    c.hysteresis.weight_smooth = 0.0;
+  }
   if (effect == "stiffening") c.stiffening.per_bar = c.stiffening.per_rad2 = 0.0;
   if (effect == "coupling") c.coupling.per_bar = 0.0;
   if (effect == "pneumatic_lag") {
@@ -181,18 +184,18 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
       spread.push_back(trial);
     }
   for (double u : {0.2, 0.6}) {
-    if (weighted_pi) continue;
     sim::SimConfig trial = c;
     for (const sim::ParamRef& p : trial.parameters(effect)) {
       const bool log = p.lower > 0 && p.upper / p.lower > 20;
       *p.value = log ? p.lower * std::pow(p.upper / p.lower, u) : p.lower + u * (p.upper - p.lower);
     }
     if (effect == "pneumatic_lag") trial.pneumatic_lag.delay_s = u * 0.1;
+    if (weighted_pi) trial.hysteresis.weight_smooth = 0.0;  // the plays alone: the smooth element has its own starts
     spread.push_back(trial);
   }
   if (weighted_pi)
     for (double weight : {-0.4, 0.4})
-      for (double fixed : {0.0, 1.0}) {
+      for (double fixed : {0.0}) {
         sim::SimConfig trial = c;
         auto& h = trial.hysteresis;
         h.weight_narrow = h.weight_mid = h.weight_wide = weight / 3.0;

@@ -56,20 +56,6 @@ std::vector<std::string> lawsOutsideTheCandidate(const std::string& effect, bool
   return out;
 }
 
-// The independent actuator's laws of an effect that lie outside the
-// candidate's family, so left out when the diagnosis calibrates flexible
-// laws: Duffing stiffening (a cubic spring in the bending angle) is the
-// flexible stiffening's bend hardening, and Bouc-Wen of exponent 1 on the
-// strain is the weighted Prandtl-Ishlinskii law's smooth element.
-std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible) {
-  std::vector<std::string> out;
-  for (const std::string& law : sim::independentLawsOf(effect)) {
-    const bool inside = (effect == "stiffening" && law == "duffing") || (effect == "hysteresis" && law == "bouc_wen");
-    if (!(flexible && inside)) out.push_back(law);
-  }
-  return out;
-}
-
 RunData recordRun(const sim::SimConfig& truth, const Eigen::MatrixXd& commands, std::uint64_t seed,
                   const std::string& name, bool from_rest) {
   // From rest, or settled as the diagnosis then replays; sensor noise on.
@@ -100,6 +86,18 @@ Eigen::Index samplesOf(double duration_s, double rate_hz, const char* who) {
   return static_cast<Eigen::Index>(std::lround(duration_s * rate_hz));
 }
 }  // namespace
+
+// Duffing stiffening (a cubic spring in the bending angle) is the flexible
+// stiffening's bend hardening; Bouc-Wen of exponent 1 on the strain is the
+// weighted Prandtl-Ishlinskii law's smooth element unloading more steeply.
+std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible) {
+  std::vector<std::string> out;
+  for (const std::string& law : sim::independentLawsOf(effect)) {
+    const bool inside = (effect == "stiffening" && law == "duffing") || (effect == "hysteresis" && law == "bouc_wen");
+    if (!(flexible && inside)) out.push_back(law);
+  }
+  return out;
+}
 
 Eigen::MatrixXd excitationCommands(double duration_s, double rate_hz, std::uint64_t seed) {
   const Eigen::Index n = samplesOf(duration_s, rate_hz, "excitationCommands");

@@ -52,7 +52,10 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   dt_ = period / substeps_;
   const std::string& hyst = config_.hysteresis.formulation;
   // weighted_pi: three plays, then the smooth element's z and the strain it last saw.
-  const std::size_t n_play = hyst == "prandtl_ishlinskii" ? kPiOperators : hyst == "weighted_pi" ? 5 : 1;
+  constexpr std::size_t kWeightedPiStates = 5;
+  const std::size_t n_play = hyst == "prandtl_ishlinskii" ? kPiOperators
+                             : hyst == "weighted_pi"      ? kWeightedPiStates
+                                                          : 1;
   weighted_pi_ = hyst == "weighted_pi";
   if (weighted_pi_) {
     const auto& h = config_.hysteresis;

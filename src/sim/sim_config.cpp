@@ -21,6 +21,7 @@ struct Field {
   std::string module;  // "" for top level
   ParamRef ref;
   std::string only_for = "";  // a formulation that alone uses it
+  bool calibrated = true;     // among parameters(), which calibration moves
 };
 
 std::vector<Field> fields(SimConfig& c) {
@@ -46,7 +47,7 @@ std::vector<Field> fields(SimConfig& c) {
       {"hysteresis", {"fixed_band_share", &c.hysteresis.fixed_band_share, 0.0, 1.0, ""}, "weighted_pi"},
       {"hysteresis", {"weight_smooth", &c.hysteresis.weight_smooth, -1.0, 1.0, ""}, "weighted_pi"},
       {"hysteresis", {"smooth_saturation", &c.hysteresis.smooth_saturation, 0.05, 2.0, "fraction"}, "weighted_pi"},
-      {"hysteresis", {"smooth_asymmetry", &c.hysteresis.smooth_asymmetry, -0.9, 0.9, ""}, "weighted_pi"},
+      {"hysteresis", {"smooth_asymmetry", &c.hysteresis.smooth_asymmetry, -0.9, 0.9, ""}, "weighted_pi", false},
       {"stiffening", {"per_bar", &c.stiffening.per_bar, 0.0, 60.0, "1/bar"}},
       {"stiffening", {"exponent", &c.stiffening.exponent, 0.5, 3.0, ""}, "power"},
       {"stiffening", {"static_share", &c.stiffening.static_share, 0.0, 1.0, ""}, "power"},
@@ -135,7 +136,7 @@ std::vector<ParamRef> SimConfig::parameters(const std::string& module) {
   for (auto& f : fields(*this)) {
     const bool is_nominal = module == "nominal" && std::find(nominal.begin(), nominal.end(), f.module) != nominal.end();
     const bool used = f.only_for.empty() || *formulation(*this, f.module) == f.only_for;
-    if ((is_nominal || f.module == module) && used) out.push_back(f.ref);
+    if ((is_nominal || f.module == module) && used && f.calibrated) out.push_back(f.ref);
   }
   if (out.empty() && module != "nominal") enabledFlag(*this, module);  // throws for unknown names
   return out;

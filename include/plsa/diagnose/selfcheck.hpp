@@ -133,6 +133,12 @@ Eigen::MatrixXd excitationCommands(double duration_s, double sample_rate_hz, std
 /// a negative or non-finite duration or a rate that is not positive.
 Eigen::MatrixXd joystickCommands(double duration_s, double sample_rate_hz, std::uint64_t seed);
 
+/// The independent actuator's laws of `effect` that the self-check draws:
+/// every one, less those inside or next to the candidate's family when the
+/// diagnosis calibrates flexible laws (Duffing stiffening, Bouc-Wen of
+/// exponent 1).
+std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible_laws);
+
 SelfcheckResult runSelfcheck(const SelfcheckOptions& options);
 
 }  // namespace plsa::diagnose

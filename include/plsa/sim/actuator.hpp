@@ -131,7 +131,8 @@ class Actuator {
   double sensor_epoch_s_ = 0.0;  ///< startRecording()'s time: the sensor's drifts count from it
   std::int64_t sample_count_ = 0;
   std::array<double, 3> pressure_{};
-  std::array<std::vector<double>, 3> play_{};  ///< play operator states per chamber
+  /// Per chamber: play operator states (weighted_pi: three plays, then the smooth element's z and last strain).
+  std::array<std::vector<double>, 3> play_{};
   std::array<double, 3> creep_{};
   std::array<double, 3> creep_slow_{};  ///< second state of two-rate creep
   double yaw_walk_deg_ = 0.0;           ///< random-walk sensor yaw

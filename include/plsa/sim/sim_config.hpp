@@ -77,8 +77,9 @@ struct SimConfig {
     /// stop: elastoplastic). Beside the plays, a smooth element z (Bouc-Wen
     /// of exponent 1 on the strain, dz = ds - beta |ds| z - gamma ds |z|)
     /// adds weight_smooth (z - strain): z saturates at smooth_saturation
-    /// times the strain at full pressure, and smooth_asymmetry (beta -
-    /// gamma) / (beta + gamma) makes unloading steeper (> 0) or shallower.
+    /// times the strain at full pressure; smooth_asymmetry, (beta - gamma) /
+    /// (beta + gamma), sets its unloading slope, 1 + asymmetry z / bound:
+    /// steeper than its first loading's 1 above 0, shallower below.
     /// It contains "play" (weights 0, 1, 0, smooth 0) and no hysteresis
     /// (all weights 0).
     std::string formulation = "play";
@@ -91,7 +92,7 @@ struct SimConfig {
     double fixed_band_share = 0.0;
     double weight_smooth = 0.0;      ///< only for "weighted_pi": the smooth element's weight (in the |weights| sum)
     double smooth_saturation = 0.5;  ///< only for "weighted_pi": z's bound, a fraction of the strain at full pressure
-    double smooth_asymmetry = 0.0;   ///< only for "weighted_pi": (beta - gamma) / (beta + gamma)
+    double smooth_asymmetry = 0.0;   ///< only for "weighted_pi": (beta - gamma) / (beta + gamma); not calibrated
   } hysteresis;
   struct Stiffening {
     bool enabled = true;

@@ -162,12 +162,12 @@ void enableEffect(sim::SimConfig& c, const std::string& effect, bool flexible) {
 }  // namespace
 
 // Spread points for an effect: the simulator's own values and two points
-// across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis,
-// in place of those two, the smooth element alone in both orientations,
-// then plays in both orientations (plays: the output lags; stops: steeper
-// on unloading, as elastoplastic laws) with bands closing at zero and fixed
-// bands; for sensor bias the residual's offset and drift; for the
-// pneumatic lag's power law the fill law of the logged pressures.
+// across each parameter's range; for weighted Prandtl-Ishlinskii hysteresis
+// the smooth element alone in both orientations, the two range points
+// with the plays alone, and the plays in both orientations (plays: the
+// output lags; stops: steeper on unloading, as elastoplastic laws) with
+// bands closing at zero; for sensor bias the residual's offset and drift;
+// for the pneumatic lag's power law the fill law of the logged pressures.
 std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
                                       const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map) {
   std::vector<sim::SimConfig> spread = {c};
@@ -194,15 +194,14 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
     spread.push_back(trial);
   }
   if (weighted_pi)
-    for (double weight : {-0.4, 0.4})
-      for (double fixed : {0.0}) {
-        sim::SimConfig trial = c;
-        auto& h = trial.hysteresis;
-        h.weight_narrow = h.weight_mid = h.weight_wide = weight / 3.0;
-        h.width = 0.15;
-        h.fixed_band_share = fixed;
-        spread.push_back(trial);
-      }
+    for (double weight : {-0.4, 0.4}) {
+      sim::SimConfig trial = c;
+      auto& h = trial.hysteresis;
+      h.weight_narrow = h.weight_mid = h.weight_wide = weight / 3.0;
+      h.width = 0.15;
+      h.fixed_band_share = 0.0;
+      spread.push_back(trial);
+    }
   if (effect == "sensor_bias" && map == OutputMap::kAngles) spread.push_back(biasFromResidual(c, train));
   if (effect == "pneumatic_lag" && c.pneumatic_lag.formulation == "power" && fill.found)
     spread.push_back(lagFromPressures(c, fill.lag));

@@ -207,6 +207,11 @@ std::vector<FieldCase> fieldCases() {
                      "training_output_drift"},
                     {"a rate that is text", false, [](J& j) { j["training_output_drift"]["rate_per_s"] = {"fast"}; },
                      "training_output_drift.rate_per_s"},
+                    // Finite, and every sample would turn the predictor's yaw by it.
+                    {"a rate of 1e300 deg/s", false, [](J& j) { j["training_output_drift"]["rate_per_s"] = {1e300}; },
+                     "rate of 1e+300 deg/s is a turn a second or more"},
+                    {"a rate of a turn a second", false,
+                     [](J& j) { j["training_output_drift"]["rate_per_s"] = {-360.0}; }, "a turn a second or more"},
                     {"no reference time", false,
                      [](J& j) {
                        j["training_output_drift"]["rate_per_s"] = {0.01};

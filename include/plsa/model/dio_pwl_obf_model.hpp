@@ -14,6 +14,7 @@
 #include <Eigen/Dense>
 
 #include "plsa/core/check.hpp"
+#include "plsa/core/number_text.hpp"
 #include "plsa/core/pole_set.hpp"
 #include "plsa/model/input_shaping.hpp"
 #include "plsa/model/output_frame.hpp"
@@ -129,6 +130,17 @@ struct DioPwlObfModel {
     return input_ranges.empty() ? std::array<double, 2>{input_min, input_max} : input_ranges[input];
   }
 
+  // Angles drift as a sensor drifts, by degrees a minute: a rate of a turn a
+  // second or more is no drift identification finds, and the predictor turns
+  // the tip's yaw by it every sample (the validation's carried yaw too).
+  void validateDriftRates() const {
+    if (output_unit != "deg" && output_unit != "rad") return;
+    const double turn = 2.0 * kPi / radiansPerAngleUnit();
+    for (double r : training_drift_per_s)
+      PLSA_CHECK(std::abs(r) < turn, "model: a training_output_drift rate of " + significantDigits(r, 3) + " " +
+                                         output_unit + "/s is a turn a second or more, not a sensor's drift");
+  }
+
   /// The shaping against the training range (when the model has one), at
   /// most what identification fits: the threshold under the top level, the
   /// coupling and softening times the level span above it at most 1 and 0.5
@@ -177,6 +189,7 @@ struct DioPwlObfModel {
                "model: training_output_drift needs one rate per output");
     for (double r : training_drift_per_s)
       PLSA_CHECK(std::isfinite(r), "model: training_output_drift rates must be finite");
+    validateDriftRates();
     PLSA_CHECK(std::isfinite(training_drift_reference_s), "model: training_output_drift reference time must be finite");
     PLSA_CHECK(output_frame == OutputFrame::kAsLogged ||
                    (outputs.size() == 2 && (output_unit == "deg" || output_unit == "rad")),

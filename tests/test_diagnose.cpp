@@ -61,6 +61,9 @@ TEST(Diagnose, TheSelfcheckLeavesOutTheLawsInsideTheCandidatesFamily) {
   EXPECT_TRUE(has(hysteresis, "bouc_wen_sharp"));
   EXPECT_TRUE(has(hysteresis, "preisach"));
   EXPECT_FALSE(has(independentLawsOutside("stiffening", true), "duffing"));
+  const auto lag = independentLawsOutside("pneumatic_lag", true);
+  EXPECT_FALSE(has(lag, "two_volume"));
+  EXPECT_TRUE(has(lag, "resonant_line"));
   for (const std::string& effect : sim::effectNames()) {
     EXPECT_EQ(independentLawsOutside(effect, false), sim::independentLawsOf(effect)) << effect;
     EXPECT_GE(independentLawsOutside(effect, true).size(), 3u) << effect;
@@ -675,6 +678,34 @@ TEST(FillLaw, ThePressureDependentLagIsReadOffTheLoggedPressures) {
   EXPECT_LT(e.lag_rms_bar, 0.003) << "the fitted law should leave about the 0.002 bar noise";
   EXPECT_GT(e.nominal_rms_bar, 2.0 * e.lag_rms_bar);
   EXPECT_NEAR(pressureMisfit(e.lag, runs), e.lag_rms_bar * e.lag_rms_bar, 1e-12);
+}
+
+TEST(FillLaw, ASupplyLinesVolumeIsReadOffTheLoggedPressures) {
+  // Two volumes in series, linear: one volume and a delay leave several
+  // times the noise; the estimate finds the line and the chamber.
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.setEffectEnabled("pneumatic_lag", true);
+  truth.pneumatic_lag.formulation = "power";
+  auto& lag = truth.pneumatic_lag;
+  lag.fill_time_constant_s = lag.vent_time_constant_s = 0.05;
+  lag.exponent = 1.0, lag.pressure_per_bar = 0.0, lag.delay_s = 0.0;
+  lag.line_time_constant_s = 0.1;
+  const std::vector<RunData> runs = {withPressureNoise(recorded(truth, 40, 23), 0.002, 3)};
+  FillLaw start;
+  start.fill_time_constant_s = start.vent_time_constant_s = truth.pneumatics.time_constant_s;
+  const FillLawEstimate e = fillLawFromPressures(runs, start);
+  ASSERT_TRUE(e.found);
+  EXPECT_LT(e.lag_rms_bar, 0.003) << "the fitted law should leave about the 0.002 bar noise";
+  EXPECT_GT(e.nominal_rms_bar, 2.0 * e.lag_rms_bar);
+  // Two linear volumes in series are the same whichever comes first.
+  const double shorter = std::min(e.lag.line_time_constant_s, e.lag.fill_time_constant_s);
+  const double longer = std::max(e.lag.line_time_constant_s, e.lag.fill_time_constant_s);
+  EXPECT_NEAR(shorter, 0.05, 0.01);
+  EXPECT_NEAR(longer, 0.1, 0.02);
+  EXPECT_LT(e.lag.delay_s, 0.01);
+  FillLaw no_line = e.lag;
+  no_line.line_time_constant_s = 0.0;
+  EXPECT_GT(pressureMisfit(no_line, runs), 4.0 * pressureMisfit(e.lag, runs));
 }
 
 TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {

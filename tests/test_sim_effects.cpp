@@ -150,6 +150,40 @@ TEST(SimEffects, PowerLawTimeConstantsScaleWithThePressure) {
   }
 }
 
+// A supply line's volume ahead of the chamber: the pressure leaves a step
+// with zero slope (two first-order volumes in series), reaches 63% later
+// than the chamber alone, and settles at the same level; 0 is no line.
+TEST(SimEffects, ASupplyLineDelaysTheFillAsASecondVolume) {
+  auto response = [](double line_s) {
+    SimConfig c = only("pneumatic_lag");
+    c.pneumatic_lag.formulation = "power";
+    c.pneumatic_lag.exponent = 1.0;
+    c.pneumatic_lag.delay_s = 0.0;
+    c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = 0.05;
+    c.pneumatic_lag.line_time_constant_s = line_s;
+    Actuator a(c, 1);
+    return hold(a, {0.3, 0, 0}, 2.0);
+  };
+  auto rise = [](const std::vector<ActuatorSample>& r) {
+    std::size_t k = 0;
+    while (r[k].pressure_bar[0] < 0.3 * 0.63) ++k;
+    return k;
+  };
+  const auto alone = response(0.0), lined = response(0.1);
+  // 12.5 ms in: the chamber alone is at 1 - e^(-1/4) of the step, behind a line far less.
+  EXPECT_NEAR(alone[0].pressure_bar[0], 0.3 * -std::expm1(-0.25), 0.01);
+  EXPECT_LT(lined[0].pressure_bar[0], 0.3 * 0.05);
+  // 63% at 0.05 s alone; two volumes of 0.05 and 0.1 s at 0.158 s (1 - 2 e^(-10 t) + e^(-20 t)).
+  EXPECT_NEAR(static_cast<double>(rise(alone) + 1) / 80.0, 0.05, 0.0126);
+  EXPECT_NEAR(static_cast<double>(rise(lined) + 1) / 80.0, 0.158, 0.0126);
+  EXPECT_NEAR(lined.back().pressure_bar[0], alone.back().pressure_bar[0], 1e-6);
+  // Only the flexible law has the line: with "linear" it is read and ignored.
+  SimConfig linear = only("pneumatic_lag");
+  linear.pneumatic_lag.line_time_constant_s = 0.1;
+  Actuator with(linear, 1), without(only("pneumatic_lag"), 1);
+  EXPECT_EQ(hold(with, {0.3, 0, 0}, 1.0).back().pressure_bar, hold(without, {0.3, 0, 0}, 1.0).back().pressure_bar);
+}
+
 TEST(SimEffects, CreepDriftsUnderConstantPressure) {
   auto drift = [](const SimConfig& c) {
     Actuator a(c, 1);

@@ -36,6 +36,7 @@ void setNeutral(sim::SimConfig& c, const std::string& effect) {
     c.pneumatic_lag.delay_s = 0.0;
     c.pneumatic_lag.exponent = 1.0;  // a power law is the nominal linear one only at 1
     c.pneumatic_lag.pressure_per_bar = 0.0;
+    c.pneumatic_lag.line_time_constant_s = 0.0;
   }
   if (effect == "creep") c.creep.fraction = 0.0;
   if (effect == "sensor_bias") {
@@ -98,6 +99,7 @@ sim::SimConfig lagFromPressures(sim::SimConfig c, const FillLaw& law) {
   lag.exponent = law.exponent;
   lag.pressure_per_bar = law.pressure_per_bar;
   lag.delay_s = law.delay_s;
+  lag.line_time_constant_s = law.line_time_constant_s;
   c.pneumatics.max_rate_bar_per_s = law.max_rate_bar_per_s;
   clampToRanges(c, "pneumatic_lag");
   clampToRanges(c, "nominal");

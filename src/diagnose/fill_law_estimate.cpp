@@ -25,14 +25,16 @@ double chamberMisfit(const FillLaw& law, const RunData& run, Eigen::Index c) {
   const int substeps = std::max(1, static_cast<int>(std::ceil(t / kMaxFillStep - 1e-9)));
   const double h = t / substeps;
   const double before = run.start == RunStart::kSettled ? run.commands(0, c) : 0.0;
-  double p = run.pressures(0, c), sum = 0.0;
+  const double line_blend = law.line_time_constant_s > 0.0 ? -std::expm1(-h / law.line_time_constant_s) : 0.0;
+  double p = run.pressures(0, c), line = p, sum = 0.0;
   for (Eigen::Index i = 0; i + 1 < run.samples(); ++i) {
     for (int s = 0; s < substeps; ++s) {
       // A row's command drives the sample time that ends at the row (the
       // simulator steps, then logs), `delay_s` late.
       const double at = (static_cast<double>(i) * t + (s + 1) * h - law.delay_s) / t;
       const Eigen::Index j = static_cast<Eigen::Index>(std::ceil(at - 1e-9));
-      const double cmd = j < 0 ? before : run.commands(std::min(j, run.samples() - 1), c);
+      double cmd = j < 0 ? before : run.commands(std::min(j, run.samples() - 1), c);
+      if (line_blend > 0.0) cmd = line += (cmd - line) * line_blend;
       const double d = cmd - p;
       if (d == 0.0) continue;
       double tau = d > 0 ? law.fill_time_constant_s : law.vent_time_constant_s;
@@ -67,6 +69,7 @@ const FillAxis kExponent{&FillLaw::exponent, 0.3, 1.0, false};
 const FillAxis kPerBar{&FillLaw::pressure_per_bar, -4.0, 8.0, false};
 const FillAxis kDelay{&FillLaw::delay_s, 0.0, 0.5, false};
 const FillAxis kMaxRate{&FillLaw::max_rate_bar_per_s, 0.05, 100.0, true};
+const FillAxis kLine{&FillLaw::line_time_constant_s, 0.0, 0.5, false};
 
 struct FillFit {
   FillLaw law;
@@ -153,16 +156,26 @@ FillLawEstimate fillLawFromPressures(const std::vector<RunData>& all_runs, const
   FillLaw linear = start;
   linear.exponent = 1.0, linear.pressure_per_bar = 0.0, linear.delay_s = 0.0;
   const FillFit nominal = fitAxes(runs, linear, {kFill, kMaxRate}, true, evaluations);
-  // The full law from the nominal answer, and from a pressure-dependent one
-  // (a time constant growing with the pressure is a basin of its own).
+  // The full law from the nominal answer and from a pressure-dependent one
+  // (a time constant growing with the pressure is a basin of its own), and
+  // two volumes in series (a line's lag is one too: from one volume the fit
+  // meets it with a delay) with linear flows: the line's time constant
+  // trades against the growth and the exponent, so each basin keeps its
+  // own axes and the lowest misfit is kept.
   const std::vector<FillAxis> every = {kFill, kVent, kExponent, kPerBar, kDelay, kMaxRate};
+  const std::vector<FillAxis> lined = {kFill, kVent, kLine, kDelay, kMaxRate};
   FillLaw growing = nominal.law;
   growing.pressure_per_bar = 3.0;
   growing.fill_time_constant_s = growing.vent_time_constant_s = nominal.law.fill_time_constant_s / 2.0;
-  const FillLaw from[2] = {nominal.law, growing};
-  FillFit full[2];
-  parallelFor(2, threads, [&](std::size_t i) { full[i] = fitAxes(runs, from[i], every, false, evaluations); });
-  const FillFit& lag = full[1].misfit < full[0].misfit ? full[1] : full[0];
+  FillLaw two_volumes = nominal.law;  // unequal: at equal times the fit moves both alike
+  two_volumes.fill_time_constant_s = two_volumes.vent_time_constant_s = nominal.law.fill_time_constant_s / 3.0;
+  two_volumes.line_time_constant_s = nominal.law.fill_time_constant_s * 2.0 / 3.0;
+  const FillLaw from[3] = {nominal.law, growing, two_volumes};
+  FillFit full[3];
+  parallelFor(3, threads,
+              [&](std::size_t i) { full[i] = fitAxes(runs, from[i], i < 2 ? every : lined, false, evaluations); });
+  const FillFit& lag = *std::min_element(std::begin(full), std::end(full),
+                                         [](const FillFit& a, const FillFit& b) { return a.misfit < b.misfit; });
   e.found = std::isfinite(nominal.misfit) && std::isfinite(lag.misfit);
   e.nominal = nominal.law;
   e.lag = lag.misfit <= nominal.misfit ? lag.law : nominal.law;

@@ -89,11 +89,13 @@ Eigen::Index samplesOf(double duration_s, double rate_hz, const char* who) {
 
 // Duffing stiffening (a cubic spring in the bending angle) is the flexible
 // stiffening's bend hardening; Bouc-Wen of exponent 1 on the strain is the
-// weighted Prandtl-Ishlinskii law's smooth element unloading more steeply.
+// weighted Prandtl-Ishlinskii law's smooth element unloading more steeply;
+// a two-volume line is the flexible lag's line volume ahead of its chamber.
 std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible) {
   std::vector<std::string> out;
   for (const std::string& law : sim::independentLawsOf(effect)) {
-    const bool inside = (effect == "stiffening" && law == "duffing") || (effect == "hysteresis" && law == "bouc_wen");
+    const bool inside = (effect == "stiffening" && law == "duffing") || (effect == "hysteresis" && law == "bouc_wen") ||
+                        (effect == "pneumatic_lag" && law == "two_volume");
     if (!(flexible && inside)) out.push_back(law);
   }
   return out;

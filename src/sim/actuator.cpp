@@ -79,6 +79,9 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
               : flow == "choked" ? FlowLaw::kChoked
               : flow == "power"  ? FlowLaw::kPower
                                  : FlowLaw::kLinear;
+  const double line_tau = config_.pneumatic_lag.line_time_constant_s;
+  if (config_.pneumatic_lag.enabled && flow_law_ == FlowLaw::kPower && line_tau > 0.0)
+    line_blend_ = -std::expm1(-dt_ / line_tau);
   const std::string& stiff = config_.stiffening.formulation;
   stiffening_law_ = stiff == "quadratic"     ? StiffeningLaw::kQuadratic
                     : stiff == "exponential" ? StiffeningLaw::kExponential
@@ -118,18 +121,21 @@ std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd)
   return delayed;
 }
 
-// Each chamber's pressure one step toward the delayed command, rate-limited;
-// returns the pressures past the deadzone.
+// Each chamber's pressure one step toward the delayed command (through its
+// supply line first, when it has one), rate-limited; returns the pressures
+// past the deadzone.
 std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delayed) {
   const SimConfig& c = config_;
   const bool lag = c.pneumatic_lag.enabled;
   const double max_rate = c.pneumatics.max_rate_bar_per_s, per_bar = c.pneumatic_lag.pressure_per_bar;
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {
+    double source = delayed[i];
+    if (line_blend_ > 0.0) source = line_pressure_[i] += (delayed[i] - line_pressure_[i]) * line_blend_;
     double tau =
-        lag ? (delayed[i] > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
+        lag ? (source > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
             : c.pneumatics.time_constant_s;
-    double drive = delayed[i] - pressure_[i];
+    double drive = source - pressure_[i];
     if (lag) {
       // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
       if (flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);

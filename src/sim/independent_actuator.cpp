@@ -20,7 +20,7 @@ const std::map<std::string, std::vector<std::string>>& laws() {
       {"hysteresis", {"bouc_wen", "bouc_wen_sharp", "preisach", "backlash"}},
       {"stiffening", {"duffing", "tanh_strain", "saturating_exp", "limiting_stretch"}},
       {"coupling", {"exponential", "quadratic", "crosstalk"}},
-      {"pneumatic_lag", {"two_volume", "pressure_dependent", "quantised_valve"}},
+      {"pneumatic_lag", {"two_volume", "pressure_dependent", "quantised_valve", "resonant_line"}},
       {"creep", {"prony", "power_law", "asymmetric"}},
       {"sensor_bias", {"scale_offset", "warm_up", "wandering"}}};
   return l;
@@ -80,6 +80,7 @@ std::pair<double, double> independentStrengthRange(const std::string& effect, co
                                                                      {"pneumatic_lag.two_volume", {0.06, 0.15}},
                                                                      {"pneumatic_lag.pressure_dependent", {1.0, 3.0}},
                                                                      {"pneumatic_lag.quantised_valve", {0.0, 0.0}},
+                                                                     {"pneumatic_lag.resonant_line", {0.1, 0.25}},
                                                                      {"creep", {0.06, 0.15}},
                                                                      {"sensor_bias", {1.0, 3.0}}};
   const auto it = r.find(effect + "." + law);
@@ -252,6 +253,14 @@ std::array<double, 3> IndependentActuator::fillChambers(const std::array<double,
     if (ph.pneumatic_lag == "two_volume") {
       line_[i] += (drive[i] - line_[i]) * (1.0 - std::exp(-dt / std::max(1e-3, ph.pneumatic_strength)));
       source = line_[i];
+    }
+    if (ph.pneumatic_lag == "resonant_line") {
+      // The gas column's inertia: the line's pressure a damped oscillator
+      // (damping ratio 0.35) of period `pneumatic_strength`, semi-implicit.
+      const double w = 2.0 * kPi / std::max(1e-2, ph.pneumatic_strength);
+      line_rate_[i] += (w * w * (drive[i] - line_[i]) - 2.0 * 0.35 * w * line_rate_[i]) * dt;
+      line_[i] += line_rate_[i] * dt;
+      source = std::max(0.0, line_[i]);
     }
     double tau = ph.time_constant_s;
     if (ph.pneumatic_lag == "pressure_dependent") tau *= 1.0 + ph.pneumatic_strength * p_[i] / 0.2;

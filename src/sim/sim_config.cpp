@@ -58,6 +58,7 @@ std::vector<Field> fields(SimConfig& c) {
       {"pneumatic_lag", {"delay_s", &c.pneumatic_lag.delay_s, 0.0, 0.5, "s"}},
       {"pneumatic_lag", {"exponent", &c.pneumatic_lag.exponent, 0.3, 1.0, ""}, "power"},
       {"pneumatic_lag", {"pressure_per_bar", &c.pneumatic_lag.pressure_per_bar, -4.0, 8.0, "1/bar"}, "power"},
+      {"pneumatic_lag", {"line_time_constant_s", &c.pneumatic_lag.line_time_constant_s, 0.0, 0.5, "s"}, "power"},
       {"creep", {"fraction", &c.creep.fraction, 0.0, 0.5, ""}},
       {"creep", {"time_constant_s", &c.creep.time_constant_s, 0.1, 200.0, "s"}},
       {"sensor_bias", {"tilt_deg", &c.sensor_bias.tilt_deg, -15.0, 15.0, "deg"}},

@@ -13,11 +13,14 @@ namespace plsa::diagnose {
 /// docs/simulator.md): dp/dt = sign(d) 0.1 (|d| / 0.1)^exponent / (tau
 /// exp(per_bar p)), limited to +-max_rate, d the command `delay_s` earlier
 /// less the pressure p, tau the fill or the vent time constant by the sign
-/// of d. The nominal law is exponent 1, per_bar 0, no delay, one tau.
+/// of d. With a supply line (line_time_constant_s > 0) the chamber fills
+/// from the line's pressure instead, the line from the command, first-order.
+/// The nominal law is exponent 1, per_bar 0, no delay, no line, one tau.
 struct FillLaw {
   double fill_time_constant_s = 0.05, vent_time_constant_s = 0.05;
   double exponent = 1.0, pressure_per_bar = 0.0, delay_s = 0.0;
   double max_rate_bar_per_s = 8.0;
+  double line_time_constant_s = 0.0;
 };
 
 /// Both fits of the logged pressures; `found` is false when the runs log no
@@ -37,8 +40,10 @@ struct FillLawEstimate {
 double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
 
 /// Fits the nominal law from `start` (its time constant and rate limit),
-/// then the full law from that answer and from a pressure-dependent start
-/// (the better kept; the two on `threads` threads), by bounded BOBYQA on
+/// then the full law but the line from that answer and from a
+/// pressure-dependent start, and two volumes in series with linear flows
+/// from the nominal time constant split 1:2 between them (the best of the
+/// three kept; on `threads` threads), by bounded BOBYQA on
 /// pressureMisfit over the runs' first minute at 80 Hz (4800 samples in
 /// all), at most `evaluations` runs of the law each. A data-derived start,
 /// not a calibration: the simulator's other parameters play no part.

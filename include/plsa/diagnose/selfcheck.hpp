@@ -136,7 +136,7 @@ Eigen::MatrixXd joystickCommands(double duration_s, double sample_rate_hz, std::
 /// The independent actuator's laws of `effect` that the self-check draws:
 /// every one, less those inside or next to the candidate's family when the
 /// diagnosis calibrates flexible laws (Duffing stiffening, Bouc-Wen of
-/// exponent 1).
+/// exponent 1, a two-volume line).
 std::vector<std::string> independentLawsOutside(const std::string& effect, bool flexible_laws);
 
 SelfcheckResult runSelfcheck(const SelfcheckOptions& options);

@@ -131,6 +131,8 @@ class Actuator {
   double sensor_epoch_s_ = 0.0;  ///< startRecording()'s time: the sensor's drifts count from it
   std::int64_t sample_count_ = 0;
   std::array<double, 3> pressure_{};
+  std::array<double, 3> line_pressure_{};  ///< the supply lines' (power flow law with a line volume)
+  double line_blend_ = 0.0;                ///< a line's exact first-order step per substep; 0: no line
   /// Per chamber: play operator states (weighted_pi: three plays, then the smooth element's z and last strain).
   std::array<std::vector<double>, 3> play_{};
   std::array<double, 3> creep_{};

@@ -3,13 +3,14 @@
 // must not test plsa on its own formulations (the diagnosis self-check, the
 // identification generalisation benchmark). Every effect has three or more
 // laws outside the family the diagnosis calibrates for that effect
-// (Bouc-Wen, Preisach and backlash hysteresis; logistic, cubic-onset and
-// sticking deadzones; limiting-stretch, tanh and saturating-exponential
-// stiffening; two-volume, pressure-dependent and quantised-valve pneumatics;
-// Prony-series and asymmetric creep; sensor scale, warm-up and wandering
-// offsets...), plus Duffing stiffening, which the diagnosis's flexible
-// stiffening contains (the self-check leaves it out; identification keeps
-// it). Its nominal physics has the same parts as Actuator's (first-order
+// (sharp Bouc-Wen, Preisach and backlash hysteresis; logistic, cubic-onset
+// and sticking deadzones; limiting-stretch, tanh and saturating-exponential
+// stiffening; pressure-dependent, quantised-valve and resonant-line
+// pneumatics; Prony-series and asymmetric creep; sensor scale, warm-up and
+// wandering offsets...), plus laws the diagnosis's flexible families
+// contain: Duffing stiffening, exponent-1 Bouc-Wen hysteresis and a
+// two-volume line (the self-check leaves them out; identification keeps
+// them). Its nominal physics has the same parts as Actuator's (first-order
 // chambers, a static elongation map, a second-order bending mode, constant
 // curvature), each integrated its own way.
 #pragma once
@@ -66,8 +67,11 @@ struct IndependentPhysics {
   double coupling_strength = 0.8;
   /// pneumatic lag: "two_volume" (a supply line filling the chamber),
   /// "pressure_dependent" (time constant growing with the pressure),
-  /// "quantised_valve" (commands held at 25 Hz and rounded to 0.02 bar);
-  /// strength: the line's time constant (s), the growth per 0.2 bar, unused.
+  /// "quantised_valve" (commands held at 25 Hz and rounded to 0.02 bar),
+  /// "resonant_line" (the gas column of a long line: the line's pressure a
+  /// damped oscillator, damping ratio 0.35, filling the chamber); strength:
+  /// the line's time constant (s), the growth per 0.2 bar, unused, the
+  /// line's period (s).
   std::string pneumatic_lag;
   double pneumatic_strength = 0.08;
   /// creep: "prony" (four Kelvin elements, 0.5 to 500 s, equal shares: a
@@ -155,7 +159,7 @@ class IndependentActuator {
   std::normal_distribution<double> normal_{0.0, 1.0};
   int substeps_ = 1;
   double t_ = 0.0;
-  std::array<double, 3> p_{}, line_{}, held_cmd_{};
+  std::array<double, 3> p_{}, line_{}, line_rate_{}, held_cmd_{};
   double next_valve_update_ = 0.0;
   std::array<bool, 3> open_{};
   std::array<double, 3> bw_z_{}, last_strain_{};

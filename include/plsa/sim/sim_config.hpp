@@ -129,13 +129,19 @@ struct SimConfig {
     /// speed; "power": difference^exponent (equal at 0.1 bar), spanning
     /// orifice (0.5) and linear (1), with time constants that scale by
     /// exp(pressure_per_bar x the chamber's pressure), as a chamber whose
-    /// volume or outflow changes with its pressure.
+    /// volume or outflow changes with its pressure, and a supply line's
+    /// volume ahead of the chamber (line_time_constant_s).
     std::string formulation = "linear";
     double fill_time_constant_s = 0.08;
     double vent_time_constant_s = 0.03;
     double delay_s = 0.03;
     double exponent = 0.75;         ///< only for "power"
     double pressure_per_bar = 0.0;  ///< only for "power"
+    /// Only for "power": a supply line's volume between the valve and the
+    /// chamber, filled first-order with this time constant ahead of the
+    /// chamber's own flow (two volumes in series, as a long tube makes);
+    /// 0: none, the chamber fills from the valve.
+    double line_time_constant_s = 0.0;
   } pneumatic_lag;
   struct Creep {
     bool enabled = true;

@@ -111,19 +111,30 @@ TEST(SimEffects, PneumaticLagFillsSlowerThanVentAfterADelay) {
   EXPECT_GT(first_off, 0.0);
 }
 
+namespace {
+
+// The flexible lag at its linear point: exponent 1, no delay, fill and
+// vent at `tau`.
+SimConfig linearPowerLag(double tau) {
+  SimConfig c = only("pneumatic_lag");
+  c.pneumatic_lag.formulation = "power";
+  c.pneumatic_lag.exponent = 1.0;
+  c.pneumatic_lag.delay_s = 0.0;
+  c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = tau;
+  return c;
+}
+
+}  // namespace
+
 // The power law's pressure-dependent time constant: a chamber filling from 0
 // to 0.3 bar and venting from where it got crosses 0.15 bar when the integral of
 // tau e^(k p) / |target - p| over the pressures passed says (k = 0: tau ln 2).
 TEST(SimEffects, PowerLawTimeConstantsScaleWithThePressure) {
   auto crossing = [](double k) {
-    SimConfig c = only("pneumatic_lag");
+    SimConfig c = linearPowerLag(0.1);
     c.sample_rate_hz = 2000.0;
     c.internal_step_s = 1e-5;
     c.pneumatics.max_rate_bar_per_s = 100.0;
-    c.pneumatic_lag.formulation = "power";
-    c.pneumatic_lag.exponent = 1.0;
-    c.pneumatic_lag.delay_s = 0.0;
-    c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = 0.1;
     c.pneumatic_lag.pressure_per_bar = k;
     Actuator a(c, 1);
     const auto fill = hold(a, {0.3, 0, 0}, 3.0);
@@ -155,11 +166,7 @@ TEST(SimEffects, PowerLawTimeConstantsScaleWithThePressure) {
 // than the chamber alone, and settles at the same level; 0 is no line.
 TEST(SimEffects, ASupplyLineDelaysTheFillAsASecondVolume) {
   auto response = [](double line_s) {
-    SimConfig c = only("pneumatic_lag");
-    c.pneumatic_lag.formulation = "power";
-    c.pneumatic_lag.exponent = 1.0;
-    c.pneumatic_lag.delay_s = 0.0;
-    c.pneumatic_lag.fill_time_constant_s = c.pneumatic_lag.vent_time_constant_s = 0.05;
+    SimConfig c = linearPowerLag(0.05);
     c.pneumatic_lag.line_time_constant_s = line_s;
     Actuator a(c, 1);
     return hold(a, {0.3, 0, 0}, 2.0);

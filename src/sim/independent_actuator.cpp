@@ -20,7 +20,7 @@ const std::map<std::string, std::vector<std::string>>& laws() {
       {"hysteresis", {"bouc_wen", "bouc_wen_sharp", "preisach", "backlash"}},
       {"stiffening", {"duffing", "tanh_strain", "saturating_exp", "limiting_stretch"}},
       {"coupling", {"exponential", "quadratic", "crosstalk"}},
-      {"pneumatic_lag", {"two_volume", "pressure_dependent", "quantised_valve", "resonant_line"}},
+      {"pneumatic_lag", {"two_volume", "resonant_line", "pressure_dependent", "quantised_valve"}},
       {"creep", {"prony", "power_law", "asymmetric"}},
       {"sensor_bias", {"scale_offset", "warm_up", "wandering"}}};
   return l;

@@ -708,6 +708,42 @@ TEST(FillLaw, ASupplyLinesVolumeIsReadOffTheLoggedPressures) {
   EXPECT_GT(pressureMisfit(no_line, runs), 4.0 * pressureMisfit(e.lag, runs));
 }
 
+// Pressures from the independent actuator: its chambers fill first-order
+// (a fill law of the simulator's) unless a law of its valves says otherwise.
+TEST(FillLaw, PressuresNoFillLawFollowsAreNoted) {
+  auto estimate = [](const std::string& law) {
+    sim::IndependentPhysics truth;
+    if (!law.empty()) sim::setIndependentEffect(truth, "pneumatic_lag", law, 0.0);
+    sim::IndependentActuator a(truth, 5);
+    RunData r;
+    r.name = law.empty() ? "nominal" : law;
+    r.sample_time_s = 1.0 / truth.sample_rate_hz;
+    r.commands = excitationCommands(40.0, truth.sample_rate_hz, 5);
+    r.outputs.resize(r.commands.rows(), 2);
+    r.pressures.resize(r.commands.rows(), 3);
+    for (Eigen::Index i = 0; i < r.commands.rows(); ++i) {
+      const sim::IndependentSample smp = a.step({r.commands(i, 0), r.commands(i, 1), r.commands(i, 2)});
+      r.outputs.row(i) = smp.bending_deg.transpose();
+      for (Eigen::Index j = 0; j < 3; ++j) r.pressures(i, j) = smp.pressure_bar[static_cast<std::size_t>(j)];
+    }
+    r.start = RunStart::kAtRest;
+    FillLaw start;
+    return fillLawFromPressures({r}, start);
+  };
+  const FillLawEstimate nominal = estimate(""), quantised = estimate("quantised_valve");
+  ASSERT_TRUE(nominal.found);
+  ASSERT_TRUE(quantised.found);
+  EXPECT_NEAR(nominal.noise_bar, 0.002, 0.0004) << "the independent actuator's pressure noise";
+  EXPECT_NEAR(quantised.noise_bar, 0.002, 0.0004);
+  EXPECT_EQ(unmodelledPneumaticsNote(nominal), "") << nominal.lag_rms_bar << " bar left";
+  // Commands held 40 ms and rounded to 0.02 bar: no fill law follows them.
+  const std::string note = unmodelledPneumaticsNote(quantised);
+  EXPECT_NE(note.find("follow none of the simulator's fill laws"), std::string::npos) << note;
+  EXPECT_GT(quantised.lag_rms_bar, 2.0 * quantised.noise_bar);
+  FillLawEstimate none;
+  EXPECT_EQ(unmodelledPneumaticsNote(none), "") << "nothing fitted: nothing to say";
+}
+
 TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {
   sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.pneumatics.time_constant_s = 0.12;

@@ -462,6 +462,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   addNote(o, d, mixedSampleRatesNote(runs));
   SelectionContext x{split, o, d.map, 0.0, {}};
   x.fill = fillLawFromPressures(split.train, chambersOf(simulator), 120, o.threads);
+  addNote(o, d, unmodelledPneumaticsNote(x.fill));
   std::future<IdentifiedReference> reference;
   if (o.identified_reference)
     reference = startReference(split, o);

@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <stdexcept>
 
 #include <nlopt.hpp>
 
+#include "plsa/core/median.hpp"
 #include "plsa/core/parallel_for.hpp"
 
 namespace plsa::diagnose {
@@ -131,7 +133,40 @@ std::vector<RunData> firstMinute(const std::vector<RunData>& runs) {
   return head;
 }
 
+// The pressures' white noise: second differences of white noise have
+// variance 6 sigma^2; a median keeps the fills' steps from passing for it.
+double pressureNoise(const std::vector<RunData>& runs) {
+  std::vector<double> d;
+  for (const RunData& run : runs)
+    for (Eigen::Index c = 0; c < run.pressures.cols(); ++c)
+      for (Eigen::Index i = 2; i < run.pressures.rows(); ++i)
+        d.push_back(std::abs(run.pressures(i, c) - 2.0 * run.pressures(i - 1, c) + run.pressures(i - 2, c)));
+  return d.empty() ? 0.0 : 1.4826 * median(std::move(d)) / std::sqrt(6.0);
+}
+
+double pressureSpread(const std::vector<RunData>& runs) {
+  double sum = 0.0, sq = 0.0, n = 0.0;
+  for (const RunData& run : runs) {
+    sum += run.pressures.sum();
+    sq += run.pressures.squaredNorm();
+    n += static_cast<double>(run.pressures.size());
+  }
+  return n > 1.0 ? std::sqrt(std::max(0.0, sq / n - (sum / n) * (sum / n))) : 0.0;
+}
+
 }  // namespace
+
+std::string unmodelledPneumaticsNote(const FillLawEstimate& e) {
+  if (!e.found || !(e.lag_rms_bar > 2.0 * e.noise_bar) || !(e.lag_rms_bar > 0.02 * e.spread_bar)) return "";
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "the logged pressures follow none of the simulator's fill laws: the best fitted to them alone "
+                "leaves %.2g bar RMS, %.1f times their noise (%.2g bar): the valves or lines do something no "
+                "pneumatic-lag candidate models (quantisation, a line's resonance, a regulator's own loop, "
+                "leakage), and what it leaves no candidate can close",
+                e.lag_rms_bar, e.lag_rms_bar / std::max(e.noise_bar, 1e-300), e.noise_bar);
+  return line;
+}
 
 double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs) {
   double sum = 0.0;
@@ -181,6 +216,8 @@ FillLawEstimate fillLawFromPressures(const std::vector<RunData>& all_runs, const
   e.lag = lag.misfit <= nominal.misfit ? lag.law : nominal.law;
   e.nominal_rms_bar = std::sqrt(nominal.misfit);
   e.lag_rms_bar = std::sqrt(std::min(lag.misfit, nominal.misfit));
+  e.noise_bar = pressureNoise(runs);
+  e.spread_bar = pressureSpread(runs);
   return e;
 }
 

@@ -3,6 +3,7 @@
 // pneumatic lag's calibration (docs/diagnosis.md).
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "plsa/diagnose/run_data.hpp"
@@ -30,6 +31,8 @@ struct FillLawEstimate {
   FillLaw nominal;                                  ///< one time constant and the rate limit free
   FillLaw lag;                                      ///< every parameter free
   double nominal_rms_bar = 0.0, lag_rms_bar = 0.0;  ///< the fits' pressure residuals
+  double noise_bar = 0.0;   ///< the logged pressures' white noise (second differences, median-based)
+  double spread_bar = 0.0;  ///< the logged pressures' standard deviation
 };
 
 /// The mean squared pressure residual of `law` on the runs: each chamber's
@@ -47,6 +50,13 @@ double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
 /// pressureMisfit over the runs' first minute at 80 Hz (4800 samples in
 /// all), at most `evaluations` runs of the law each. A data-derived start,
 /// not a calibration: the simulator's other parameters play no part.
+/// What the pressures say when no fill law fits them: a note for the
+/// diagnosis when the best law leaves over twice the pressures' noise and
+/// over 2% of their spread (valve quantisation, a line's resonance, a
+/// regulator's own loop: what no pneumatic-lag candidate can close); empty
+/// otherwise or when nothing was fitted.
+std::string unmodelledPneumaticsNote(const FillLawEstimate& estimate);
+
 FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations = 120,
                                      int threads = 1);
 

@@ -731,6 +731,13 @@ TEST(FillLaw, PressuresNoFillLawFollowsAreNoted) {
     return fillLawFromPressures({r}, start);
   };
   const FillLawEstimate nominal = estimate(""), quantised = estimate("quantised_valve");
+  // Held readings: most second differences zero, the note still readable.
+  FillLawEstimate held = quantised;
+  held.noise_bar = 0.0;
+  EXPECT_NE(unmodelledPneumaticsNote(held).find("no measurable noise"), std::string::npos)
+      << unmodelledPneumaticsNote(held);
+  held.lag_rms_bar = 0.01 * held.spread_bar;
+  EXPECT_EQ(unmodelledPneumaticsNote(held), "") << "1% of the spread is within what the fit may leave";
   ASSERT_TRUE(nominal.found);
   ASSERT_TRUE(quantised.found);
   EXPECT_NEAR(nominal.noise_bar, 0.002, 0.0004) << "the independent actuator's pressure noise";
@@ -759,6 +766,7 @@ TEST(FillLaw, ANominalChamberGetsItsTimeConstantAndNoLag) {
   EXPECT_GT(e.lag_rms_bar, 0.95 * e.nominal_rms_bar);
   EXPECT_NEAR(e.lag.pressure_per_bar, 0.0, 0.5);
   EXPECT_LT(e.lag.delay_s, 0.01);
+  EXPECT_LT(e.lag.line_time_constant_s, 0.01) << "one volume: no line";
 
   RunData blind = runs[0];
   blind.pressures.resize(0, 0);

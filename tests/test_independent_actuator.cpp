@@ -2,6 +2,7 @@
 // data): its start, its laws, its refusals.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -72,6 +73,32 @@ TEST(IndependentActuator, EveryLawChangesTheResponseAndEachDiffersFromTheOthers)
       for (std::size_t j = i + 1; j < each.size(); ++j)
         EXPECT_GT((each[i] - each[j]).cwiseAbs().maxCoeff(), 0.05) << effect << ": " << laws[i] << " = " << laws[j];
   }
+}
+
+// A long line's gas column rings: the chamber's pressure overshoots a step
+// and swings back, never below zero; two first-order volumes never overshoot.
+TEST(IndependentActuator, AResonantLineRingsWhereTwoVolumesCreep) {
+  auto step = [](const std::string& law, double strength) {
+    IndependentPhysics p = quietIndependent();
+    p.time_constant_s = 0.01;
+    setIndependentEffect(p, "pneumatic_lag", law, strength);
+    IndependentActuator a(p, 3);
+    auto up = holdIndependent(a, {0.3, 0, 0}, 2.0);
+    const auto down = holdIndependent(a, {0.0, 0, 0}, 2.0);
+    up.insert(up.end(), down.begin(), down.end());
+    return up;
+  };
+  for (double period : {0.1, 0.25}) {
+    const auto r = step("resonant_line", period);
+    double peak = 0.0, least = 1.0;
+    for (const auto& s : r) peak = std::max(peak, s.pressure_bar[0]), least = std::min(least, s.pressure_bar[0]);
+    EXPECT_GT(peak, 0.3 * 1.15) << "period " << period;  // damping 0.35 overshoots about 30%
+    EXPECT_GE(least, 0.0);
+    EXPECT_NEAR(r[159].pressure_bar[0], 0.3, 0.003) << "settled after 2 s";
+  }
+  double peak = 0.0;
+  for (const auto& s : step("two_volume", 0.1)) peak = std::max(peak, s.pressure_bar[0]);
+  EXPECT_LT(peak, 0.3 * 1.01);
 }
 
 TEST(IndependentActuator, RejectsUnknownLawsValuesAndCommands) {

@@ -77,6 +77,13 @@ TEST(SimConfig, ParametersAreAddressableByModule) {
   ASSERT_EQ(p.size(), 3u);
   *p[2].value = 0.07;
   EXPECT_EQ(c.pneumatic_lag.delay_s, 0.07);
+  // The flexible law's: exponent, pressure scaling and the supply line's volume besides.
+  c.pneumatic_lag.formulation = "power";
+  p = c.parameters("pneumatic_lag");
+  ASSERT_EQ(p.size(), 6u);
+  EXPECT_EQ(p.back().name, "line_time_constant_s");
+  *p.back().value = 0.12;
+  EXPECT_EQ(c.pneumatic_lag.line_time_constant_s, 0.12);
   EXPECT_GE(c.parameters("nominal").size(), 6u);
   EXPECT_THROW(c.parameters("friction"), std::invalid_argument);
 }

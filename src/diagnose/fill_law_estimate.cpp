@@ -28,7 +28,7 @@ double chamberMisfit(const FillLaw& law, const RunData& run, Eigen::Index c) {
   const double h = t / substeps;
   const double before = run.start == RunStart::kSettled ? run.commands(0, c) : 0.0;
   const double line_blend = law.line_time_constant_s > 0.0 ? -std::expm1(-h / law.line_time_constant_s) : 0.0;
-  double p = run.pressures(0, c), line = p, sum = 0.0;
+  double p = run.pressures(0, c), line = before, sum = 0.0;
   for (Eigen::Index i = 0; i + 1 < run.samples(); ++i) {
     for (int s = 0; s < substeps; ++s) {
       // A row's command drives the sample time that ends at the row (the
@@ -158,14 +158,19 @@ double pressureSpread(const std::vector<RunData>& runs) {
 
 std::string unmodelledPneumaticsNote(const FillLawEstimate& e) {
   if (!e.found || !(e.lag_rms_bar > 2.0 * e.noise_bar) || !(e.lag_rms_bar > 0.02 * e.spread_bar)) return "";
-  char line[400];
-  std::snprintf(line, sizeof line,
+  // Held or quantised readings can leave most second differences at zero.
+  char noise[96];
+  if (e.noise_bar > 1e-6 * e.spread_bar)
+    std::snprintf(noise, sizeof noise, "%.3g times their noise (%.2g bar)", e.lag_rms_bar / e.noise_bar, e.noise_bar);
+  else
+    std::snprintf(noise, sizeof noise, "and they show no measurable noise");
+  char text[480];
+  std::snprintf(text, sizeof text,
                 "the logged pressures follow none of the simulator's fill laws: the best fitted to them alone "
-                "leaves %.2g bar RMS, %.1f times their noise (%.2g bar): the valves or lines do something no "
-                "pneumatic-lag candidate models (quantisation, a line's resonance, a regulator's own loop, "
-                "leakage), and what it leaves no candidate can close",
-                e.lag_rms_bar, e.lag_rms_bar / std::max(e.noise_bar, 1e-300), e.noise_bar);
-  return line;
+                "leaves %.2g bar RMS, %s: the valves or lines do something no pneumatic-lag candidate models "
+                "(quantisation, a regulator's own loop, leakage), and what it leaves no candidate can close",
+                e.lag_rms_bar, noise);
+  return text;
 }
 
 double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs) {
@@ -189,7 +194,7 @@ FillLawEstimate fillLawFromPressures(const std::vector<RunData>& all_runs, const
   for (const RunData& run : runs) samples += run.samples();
   if (samples < kMinFillSamples) return e;
   FillLaw linear = start;
-  linear.exponent = 1.0, linear.pressure_per_bar = 0.0, linear.delay_s = 0.0;
+  linear.exponent = 1.0, linear.pressure_per_bar = 0.0, linear.delay_s = 0.0, linear.line_time_constant_s = 0.0;
   const FillFit nominal = fitAxes(runs, linear, {kFill, kMaxRate}, true, evaluations);
   // The full law from the nominal answer and from a pressure-dependent one
   // (a time constant growing with the pressure is a basin of its own), and

@@ -29,7 +29,7 @@ struct FillLaw {
 struct FillLawEstimate {
   bool found = false;
   FillLaw nominal;                                  ///< one time constant and the rate limit free
-  FillLaw lag;                                      ///< every parameter free
+  FillLaw lag;                                      ///< the best of the full fits (fillLawFromPressures)
   double nominal_rms_bar = 0.0, lag_rms_bar = 0.0;  ///< the fits' pressure residuals
   double noise_bar = 0.0;   ///< the logged pressures' white noise (second differences, median-based)
   double spread_bar = 0.0;  ///< the logged pressures' standard deviation
@@ -38,8 +38,9 @@ struct FillLawEstimate {
 /// The mean squared pressure residual of `law` on the runs: each chamber's
 /// pressure stepped from its first logged value by the law (explicit steps
 /// of at most 5 ms that never overshoot the command), the command before
-/// the run 0 for a run recorded from rest and its first command for a
-/// settled one. Runs without pressures are skipped.
+/// the run (and the line's pressure, with a line) 0 for a run recorded from
+/// rest and its first command for a settled one. Runs without pressures
+/// are skipped.
 double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
 
 /// Fits the nominal law from `start` (its time constant and rate limit),
@@ -50,14 +51,14 @@ double pressureMisfit(const FillLaw& law, const std::vector<RunData>& runs);
 /// pressureMisfit over the runs' first minute at 80 Hz (4800 samples in
 /// all), at most `evaluations` runs of the law each. A data-derived start,
 /// not a calibration: the simulator's other parameters play no part.
-/// What the pressures say when no fill law fits them: a note for the
-/// diagnosis when the best law leaves over twice the pressures' noise and
-/// over 2% of their spread (valve quantisation, a line's resonance, a
-/// regulator's own loop: what no pneumatic-lag candidate can close); empty
-/// otherwise or when nothing was fitted.
-std::string unmodelledPneumaticsNote(const FillLawEstimate& estimate);
-
 FillLawEstimate fillLawFromPressures(const std::vector<RunData>& runs, const FillLaw& start, int evaluations = 120,
                                      int threads = 1);
+
+/// What the pressures say when no fill law fits them: a note for the
+/// diagnosis when the best law leaves over twice the pressures' noise (or
+/// they have no measurable noise) and over 2% of their spread (a valve's
+/// quantisation, a regulator's own loop: what no pneumatic-lag candidate
+/// can close); empty otherwise or when nothing was fitted.
+std::string unmodelledPneumaticsNote(const FillLawEstimate& estimate);
 
 }  // namespace plsa::diagnose

@@ -128,15 +128,13 @@ Gap measureGap(const sim::SimConfig& config, const std::vector<RunData>& runs, c
 
 Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& o) {
   const bool pressures = std::all_of(runs.begin(), runs.end(), [](const RunData& r) { return r.hasPressures(); });
-  // White noise has second differences of variance 6 sigma^2; a median (MAD)
-  // keeps the steps and transients of the signal from passing for noise.
   auto noiseSq = [](const Eigen::MatrixXd& m) {
     if (m.rows() < 3) return 0.0;
     double sum = 0.0;
     for (Eigen::Index c = 0; c < m.cols(); ++c) {
       std::vector<double> d;
       for (Eigen::Index i = 2; i < m.rows(); ++i) d.push_back(std::abs(m(i, c) - 2 * m(i - 1, c) + m(i - 2, c)));
-      const double sigma = 1.4826 * median(std::move(d)) / std::sqrt(6.0);
+      const double sigma = whiteNoiseFromSecondDifferences(std::move(d));
       sum += sigma * sigma * static_cast<double>(m.rows());
     }
     return sum;

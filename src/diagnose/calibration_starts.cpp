@@ -191,8 +191,8 @@ std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string
       const bool log = p.lower > 0 && p.upper / p.lower > 20;
       *p.value = log ? p.lower * std::pow(p.upper / p.lower, u) : p.lower + u * (p.upper - p.lower);
     }
-    if (effect == "pneumatic_lag")
-      trial.pneumatic_lag.delay_s = u * 0.1;                // the line at 0.1 or 0.3 s, as its range says
+    // The lag's delay at 20 or 60 ms (its range would reach 0.1 and 0.3 s); its line stays at 0.1 or 0.3 s.
+    if (effect == "pneumatic_lag") trial.pneumatic_lag.delay_s = u * 0.1;
     if (weighted_pi) trial.hysteresis.weight_smooth = 0.0;  // the plays alone: the smooth element has its own starts
     spread.push_back(trial);
   }

@@ -133,15 +133,14 @@ std::vector<RunData> firstMinute(const std::vector<RunData>& runs) {
   return head;
 }
 
-// The pressures' white noise: second differences of white noise have
-// variance 6 sigma^2; a median keeps the fills' steps from passing for it.
+// The pressures' white noise, pooled over runs and chambers.
 double pressureNoise(const std::vector<RunData>& runs) {
   std::vector<double> d;
   for (const RunData& run : runs)
     for (Eigen::Index c = 0; c < run.pressures.cols(); ++c)
       for (Eigen::Index i = 2; i < run.pressures.rows(); ++i)
         d.push_back(std::abs(run.pressures(i, c) - 2.0 * run.pressures(i - 1, c) + run.pressures(i - 2, c)));
-  return d.empty() ? 0.0 : 1.4826 * median(std::move(d)) / std::sqrt(6.0);
+  return d.empty() ? 0.0 : whiteNoiseFromSecondDifferences(std::move(d));
 }
 
 double pressureSpread(const std::vector<RunData>& runs) {

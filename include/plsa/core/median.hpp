@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -16,6 +17,14 @@ inline double median(std::vector<double> values) {
   const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
   std::nth_element(values.begin(), mid, values.end());
   return *mid;
+}
+
+/// The standard deviation of white noise on a signal, read off the absolute
+/// values of its second differences (white noise gives them variance
+/// 6 sigma^2) by their median (MAD), so that the signal's steps and
+/// transients do not pass for noise; NaN for none.
+inline double whiteNoiseFromSecondDifferences(std::vector<double> abs_second_differences) {
+  return 1.4826 * median(std::move(abs_second_differences)) / std::sqrt(6.0);
 }
 
 }  // namespace plsa

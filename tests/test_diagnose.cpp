@@ -247,6 +247,43 @@ TEST(Diagnose, CalibrationRecoversPerturbedNominalPhysics) {
       << "a switched-off effect cannot be fitted";
 }
 
+// A start from one part of an effect's family holds the other part: the
+// held parameters keep their start values, are reported with the fitted
+// ones, and a name that is none of the calibrated modules' is refused.
+TEST(Diagnose, AHeldParameterKeepsItsStartValue) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.setEffectEnabled("hysteresis", true);
+  truth.hysteresis.formulation = "weighted_pi";
+  truth.hysteresis.weight_smooth = 0.3;
+  const RunData run = recorded(truth, 20, 5);
+  sim::SimConfig start = truth;
+  start.hysteresis.weight_smooth = 0.0;
+  start.hysteresis.weight_mid = 0.2;
+  CalibrationOptions o;
+  o.max_evaluations = 60;
+  o.evaluations_per_parameter = 0;
+  o.held = {"hysteresis.weight_smooth", "hysteresis.weight_mid"};
+  const CalibrationResult r = calibrate(start, {"hysteresis"}, {run}, o);
+  EXPECT_EQ(r.config.hysteresis.weight_smooth, 0.0);
+  EXPECT_EQ(r.config.hysteresis.weight_mid, 0.2);
+  EXPECT_EQ(r.held, o.held);
+  const auto value = [&](const std::string& name) {
+    const auto v = std::find_if(r.values.begin(), r.values.end(), [&](const auto& p) { return p.first == name; });
+    return v == r.values.end() ? NAN : v->second;
+  };
+  EXPECT_EQ(value("hysteresis.weight_mid"), 0.2) << "a held parameter is reported at its value";
+  EXPECT_EQ(r.values.size(), truth.parameters("hysteresis").size());
+  EXPECT_GT(r.evaluations, 0) << "the rest was calibrated";
+  EXPECT_NE(r.config.hysteresis.weight_narrow, start.hysteresis.weight_narrow);
+  o.held = {"hysteresis.weight_smoth"};
+  try {
+    calibrate(start, {"hysteresis"}, {run}, o);
+    ADD_FAILURE() << "a misspelt held parameter was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'hysteresis.weight_smoth'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
   io::Log log;
   log.source = "r.csv";
@@ -597,6 +634,57 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
   };
   EXPECT_LT(weightSum(found.params), -0.1) << "the loop's orientation: a stop, not a play";
   EXPECT_LT(weightSum(d.final_params), -0.1) << "and still in the kept model";
+}
+
+// A smooth hysteresis loop (the weighted family's smooth element, no
+// plays): on this one the smooth element's own start wins the screening,
+// and it holds the plays at zero weight in the round, in the polish and in
+// the later round's calibrations; the selection stops in that round, whose
+// nothing-added re-calibration lowered the training gap, and the diagnosis
+// ends with that model, reported as it is.
+TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
+  sim::SimConfig truth = sim::probes::everyEffectOff();
+  truth.setEffectEnabled("hysteresis", true);
+  auto& h = truth.hysteresis;
+  h.formulation = "weighted_pi";
+  h.weight_narrow = h.weight_mid = h.weight_wide = 0.0;
+  h.weight_smooth = 0.5;
+  h.smooth_saturation = 0.8;
+  DiagnoseOptions o = quick();
+  o.candidates = {"hysteresis", "deadzone"};
+  std::vector<std::string> log;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  const Diagnosis d =
+      runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 43), recorded(truth, 30, 44)}, o);
+  ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
+  const CandidateResult& found = d.ranking[0];
+  ASSERT_EQ(found.effect, "hysteresis");
+  const std::vector<std::string> plays = {"hysteresis.width", "hysteresis.weight_narrow", "hysteresis.weight_mid",
+                                          "hysteresis.weight_wide", "hysteresis.fixed_band_share"};
+  EXPECT_EQ(found.best_start, 1);
+  EXPECT_EQ(found.held, plays);
+  ASSERT_FALSE(d.later_rounds.empty()) << "deadzone was tried in round 2";
+  EXPECT_EQ(d.later_rounds[0].held, plays) << "the kept model holds them in later rounds";
+  for (const auto& [name, value] : d.final_params) {
+    if (name.rfind("hysteresis.weight_", 0) == 0 && name != "hysteresis.weight_smooth") {
+      EXPECT_EQ(value, 0.0) << name;
+    }
+  }
+  EXPECT_GT(d.final_config.hysteresis.weight_smooth, 0.1);
+  ASSERT_EQ(d.steps.size(), 1u);
+  const bool recalibrated = std::any_of(log.begin(), log.end(), [](const std::string& l) {
+    return l.find("re-calibrated with nothing added lowers its training gap") != std::string::npos;
+  });
+  ASSERT_TRUE(recalibrated) << "this case ends with the nothing-added re-calibration";
+  EXPECT_LT(d.steps[0].heldout_final.total, d.steps[0].heldout.total) << d.verdict;
+  EXPECT_EQ(d.gap_after.total, d.steps[0].heldout_final.total);
+  const Gap again = measureGap(d.final_config, {recorded(truth, 30, 44)}, o.calibration.gap);
+  EXPECT_NEAR(again.percent(), d.gap_after.percent(), 1e-9) << "the final model is the one reported";
+  for (const auto& [name, value] : d.final_params) {
+    if (name == "hysteresis.weight_smooth") {
+      EXPECT_EQ(value, d.final_config.hysteresis.weight_smooth);
+    }
+  }
 }
 
 // A sensor mounted turned about the segment's axis: every reading's

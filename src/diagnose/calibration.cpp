@@ -174,31 +174,51 @@ struct Axis {
   }
 };
 
+// The calibrated parameters of `modules` in `work`: their slots, axes and
+// entries in `values` (which gets every parameter, held ones too).
+struct Axes {
+  std::vector<double*> slots;
+  std::vector<Axis> axes;
+  std::vector<std::size_t> value_of;
+};
+
+Axes calibratedAxes(sim::SimConfig& work, const std::vector<std::string>& modules, const std::vector<std::string>& held,
+                    std::vector<std::pair<std::string, double>>& values) {
+  Axes a;
+  for (const auto& m : modules) {
+    if (m != "nominal" && !work.effectEnabled(m))
+      throw std::invalid_argument("calibrate: effect '" + m + "' is switched off; switch it on to calibrate it");
+    for (const sim::ParamRef& p : work.parameters(m)) {
+      const std::string name = m + "." + p.name;
+      values.emplace_back(name, *p.value);
+      if (std::find(held.begin(), held.end(), name) != held.end()) continue;
+      a.slots.push_back(p.value);
+      a.axes.push_back({name, p.lower, p.upper, p.lower > 0 && p.upper / p.lower > 20});
+      a.value_of.push_back(values.size() - 1);
+    }
+  }
+  for (const auto& h : held)
+    if (std::none_of(values.begin(), values.end(), [&](const auto& v) { return v.first == h; }))
+      throw std::invalid_argument("calibrate: held parameter '" + h + "' is none of the calibrated modules'");
+  return a;
+}
+
 }  // namespace
 
 CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::string>& modules,
                             const std::vector<RunData>& train, const CalibrationOptions& o) {
   sim::SimConfig work = start;
-  std::vector<double*> slots;
-  std::vector<Axis> axes;
-  for (const auto& m : modules) {
-    if (m != "nominal" && !work.effectEnabled(m))
-      throw std::invalid_argument("calibrate: effect '" + m + "' is switched off; switch it on to calibrate it");
-    for (const sim::ParamRef& p : work.parameters(m)) {
-      slots.push_back(p.value);
-      axes.push_back({m + "." + p.name, p.lower, p.upper, p.lower > 0 && p.upper / p.lower > 20});
-    }
-  }
   CalibrationResult best;
   best.config = start;
+  best.held = o.held;
+  const Axes calibrated = calibratedAxes(work, modules, o.held, best.values);
+  const auto& slots = calibrated.slots;
+  const auto& axes = calibrated.axes;
   best.train_gap = measureGap(start, train, o.gap, &best.fit);
   const auto n = static_cast<unsigned>(axes.size());
   if (n == 0) return best;
   std::vector<double> x(n), lo(n, 0.0), hi(n, 1.0);
-  for (unsigned i = 0; i < n; ++i) {
-    x[i] = axes[i].toUnit(*slots[i]);
-    best.values.emplace_back(axes[i].name, *slots[i]);
-  }
+  for (unsigned i = 0; i < n; ++i) x[i] = axes[i].toUnit(*slots[i]);
   int evaluations = 0;
   auto objective = [&](const std::vector<double>& xs) {
     for (unsigned i = 0; i < n; ++i) *slots[i] = axes[i].fromUnit(xs[i]);
@@ -215,7 +235,7 @@ CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::
       best.train_gap = g;
       best.config = work;
       best.fit = fit;
-      for (unsigned i = 0; i < n; ++i) best.values[i].second = *slots[i];
+      for (unsigned i = 0; i < n; ++i) best.values[calibrated.value_of[i]].second = *slots[i];
     }
     if (o.progress && evaluations % 25 == 0) o.progress(evaluations, best.train_gap.total);
     return g.total;

@@ -15,13 +15,22 @@ namespace plsa::diagnose {
 /// A candidate switched on, with its flexible law unless told otherwise.
 void enableCandidate(sim::SimConfig& c, const std::string& effect, const DiagnoseOptions& o);
 
+/// A calibration start: the configuration, and the parameters it holds at
+/// their values (CalibrationOptions::held).
+struct CalibrationStart {
+  sim::SimConfig config;
+  std::vector<std::string> held;
+};
+
 /// Spread points for an effect (the simulator's own values, points across
 /// each parameter's range, designed hysteresis points, sensor bias from the
 /// residual when the outputs are angles (an affine map's residual is in the
 /// outputs' units), the pneumatic lag from `fill` when found); the first is
-/// the configuration itself.
-std::vector<sim::SimConfig> spreadFor(const sim::SimConfig& c, const std::string& effect,
-                                      const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map);
+/// the configuration itself. Of a weighted Prandtl-Ishlinskii hysteresis's
+/// points, those with the smooth element alone hold the plays' parameters,
+/// and the range points (the plays alone) the smooth element's.
+std::vector<CalibrationStart> spreadFor(const sim::SimConfig& c, const std::string& effect,
+                                        const std::vector<RunData>& train, const FillLawEstimate& fill, OutputMap map);
 
 /// The screening stage: a short calibration of `evaluations` simulator runs
 /// from each spread point, with the simulator's internal step at least
@@ -43,12 +52,13 @@ CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, co
 /// A candidate's two calibration starts: neutral (the effect switched on
 /// but doing nothing), and the best spread point, after the screening stage
 /// when `screen.evaluations` > 0, else by its training gap alone
-/// (bestSpreadStart adds the runs it spent to `spent`).
+/// (bestSpreadStart adds the runs it spent to `spent`). The spread point's
+/// held parameters join `o.held` (the current model's).
 sim::SimConfig neutralStart(sim::SimConfig c, const std::string& effect);
-sim::SimConfig bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
-                               const std::vector<std::string>& modules, const std::vector<RunData>& train,
-                               const FillLawEstimate& fill, const CalibrationOptions& o, const Screening& screen,
-                               int& spent);
+CalibrationStart bestSpreadStart(const sim::SimConfig& c, const std::string& effect,
+                                 const std::vector<std::string>& modules, const std::vector<RunData>& train,
+                                 const FillLawEstimate& fill, const CalibrationOptions& o, const Screening& screen,
+                                 int& spent);
 
 /// The nominal physics calibrated from the simulator as given and the best
 /// data-derived starts (`fill`: the chambers' time constant and rate limit

@@ -71,20 +71,22 @@ json breakdownJson(const Breakdown& b) {
 }
 
 json candidateJson(const CandidateResult& c, const Gap& noise) {
-  return {
-      {"effect", c.effect},
-      {"formulation", c.formulation},
-      {"round", c.round},
-      {"heldout_gap_before", c.heldout_before.percent()},
-      {"heldout_gap_after", c.heldout_after.percent()},
-      {"shrink_percent", c.shrink_percent},
-      {"shrink_above_noise_percent", shrinkAboveNoise(c.heldout_before, c.heldout_after, noise)},
-      {"train_gap_after", c.train_after.percent()},
-      {"calibration",
-       {{"starts", c.starts}, {"evaluations", c.evaluations}, {"train_gap_percent_per_start", c.train_gap_per_start}}},
-      {"params", paramsJson(c.params)},
-      {"signature",
-       {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
+  return {{"effect", c.effect},
+          {"formulation", c.formulation},
+          {"round", c.round},
+          {"heldout_gap_before", c.heldout_before.percent()},
+          {"heldout_gap_after", c.heldout_after.percent()},
+          {"shrink_percent", c.shrink_percent},
+          {"shrink_above_noise_percent", shrinkAboveNoise(c.heldout_before, c.heldout_after, noise)},
+          {"train_gap_after", c.train_after.percent()},
+          {"calibration",
+           {{"starts", c.starts},
+            {"evaluations", c.evaluations},
+            {"train_gap_percent_per_start", c.train_gap_per_start},
+            {"held", c.held}}},
+          {"params", paramsJson(c.params)},
+          {"signature",
+           {{"score", c.signature.score}, {"present", c.signature.present}, {"evidence", c.signature.evidence}}}};
 }
 
 std::string fmt(double v, const char* f = "%.1f") {
@@ -121,7 +123,8 @@ std::string toJson(const Diagnosis& d) {
   for (const auto& k : d.steps)
     j["steps"].push_back({{"effect", k.effect},
                           {"heldout_gap_chosen", k.heldout_chosen.percent()},
-                          {"heldout_gap_after", k.heldout.percent()}});
+                          {"heldout_gap_after", k.heldout.percent()},
+                          {"heldout_gap_final", k.heldout_final.percent()}});
   j["gap_after"] = d.gap_after.percent();
   j["shrink_above_noise_percent"] = shrinkAboveNoise(d.gap_before, d.gap_after, d.noise);
   j["final_params"] = paramsJson(d.final_params);

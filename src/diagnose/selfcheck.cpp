@@ -410,10 +410,12 @@ void scoreCase(const Spec& spec, const Diagnosis& d, SelfcheckCase& c, Selfcheck
         c.true_effect_shrink = r.shrink_percent;
         c.true_effect_shrink_above_noise = shrinkAboveNoise(r.heldout_before, r.heldout_after, d.noise);
       }
-    // Kept first: its gap once its calibration is polished.
+    // Kept first: its gap once its calibration is polished (re-calibrated
+    // when the diagnosis stopped with it alone kept and that lowered its
+    // training gap).
     if (!d.steps.empty() && d.steps[0].effect == spec.withheld[0]) {
-      c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].heldout.percent() / std::max(1e-12, c.gap_before));
-      c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.steps[0].heldout, d.noise);
+      c.true_effect_shrink = 100.0 * (1.0 - d.steps[0].heldout_final.percent() / std::max(1e-12, c.gap_before));
+      c.true_effect_shrink_above_noise = shrinkAboveNoise(d.gap_before, d.steps[0].heldout_final, d.noise);
     }
     c.pass = first == spec.withheld[0] && c.true_effect_shrink >= 60.0 && c.spurious == 0;
     ++res.single_cases;

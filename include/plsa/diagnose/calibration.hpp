@@ -97,6 +97,10 @@ struct CalibrationOptions {
   double initial_step = 0.15;  ///< in the normalised (0..1, log for wide positive ranges) parameter space
   GapOptions gap;
   std::function<void(int evaluation, double best_total)> progress;  ///< optional, every 25 evaluations
+  /// Parameters ("module.name", of the calibrated modules) held at their
+  /// start values: a start from one part of an effect's family (the
+  /// hysteresis's smooth element alone) calibrates that part only.
+  std::vector<std::string> held;
 };
 
 struct CalibrationResult {
@@ -104,12 +108,15 @@ struct CalibrationResult {
   Gap train_gap;
   OutputFit fit;
   int evaluations = 0;
-  std::vector<std::pair<std::string, double>> values;  ///< "module.name" -> fitted value
+  std::vector<std::pair<std::string, double>> values;  ///< "module.name" -> fitted value, or the held one
+  std::vector<std::string> held;                       ///< the options' held parameters
 };
 
 /// Fits every parameter of `modules` ("nominal" and effect names; each effect
 /// must be enabled in `start`) to the training runs by bounded BOBYQA from
-/// the start values. Throws std::invalid_argument for unknown modules.
+/// the start values, except those `options.held` names. Throws
+/// std::invalid_argument for unknown modules and held names that are none
+/// of their parameters.
 CalibrationResult calibrate(const sim::SimConfig& start, const std::vector<std::string>& modules,
                             const std::vector<RunData>& train, const CalibrationOptions& options);
 

@@ -77,6 +77,11 @@ struct CandidateResult {
   Gap heldout_before, heldout_after, train_after;
   double shrink_percent = 0.0;                         ///< 100 (1 - gap_after% / gap_before%), held out
   std::vector<std::pair<std::string, double>> params;  ///< its fitted parameters (nominal ones too)
+  /// Those of `params` its calibration held at their start values: a start
+  /// from one part of the effect's family (the weighted Prandtl-Ishlinskii
+  /// hysteresis's plays or smooth element alone) holds the other part, and
+  /// the model it was kept in holds it in later rounds too.
+  std::vector<std::string> held;
   /// How its calibration went: the starts tried (neutral, then the best
   /// after the screening stage of the configured values, spread points and,
   /// for sensor bias, the residual's offset and drift), the simulator runs
@@ -111,11 +116,16 @@ struct Diagnosis {
   /// Each kept effect, in order: its held-out gap as its round chose it,
   /// and after its calibration was polished on the training runs (the next
   /// round's baseline). A polish that raises the held-out gap by more than
-  /// a candidate's margin is noted (notes).
+  /// a candidate's margin is noted (notes). `heldout_final`: the model as
+  /// the diagnosis leaves it: for the last kept effect, when the selection
+  /// stopped in a later round and re-calibrating the kept model with
+  /// nothing added (the bar, a candidate's budget) lowered its training
+  /// gap, that re-calibration's; else the polished one.
   struct KeptStep {
     std::string effect;
     Gap heldout_chosen;
     Gap heldout;
+    Gap heldout_final;
   };
   std::vector<KeptStep> steps;
   Gap gap_after;  ///< held out, with the selected effects

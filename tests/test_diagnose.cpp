@@ -462,6 +462,7 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_EQ(d.steps[0].heldout_chosen.total, d.ranking[0].heldout_after.total);
   EXPECT_EQ(j["steps"][0]["heldout_gap_chosen"], d.ranking[0].heldout_after.percent());
   EXPECT_EQ(j["steps"][0]["heldout_gap_after"], d.steps[0].heldout.percent());
+  EXPECT_EQ(j["steps"][0]["heldout_gap_final"], d.steps[0].heldout_final.percent());
   for (const char* key : {"effect", "heldout_gap_before", "heldout_gap_after", "shrink_percent", "params"})
     EXPECT_TRUE(j["ranking"][0].contains(key)) << key;
   EXPECT_EQ(j["ranking"][0]["effect"], "deadzone");
@@ -499,6 +500,7 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_EQ(d.ranking[0].train_gap_per_start.size(), 2u);
   EXPECT_GE(d.ranking[0].evaluations, 2 * 20);
   EXPECT_EQ(j["ranking"][0]["calibration"]["evaluations"], d.ranking[0].evaluations);
+  EXPECT_EQ(j["ranking"][0]["calibration"]["held"].get<std::vector<std::string>>(), d.ranking[0].held);
   EXPECT_GT(d.nominal_evaluations, 28 + 3 * 20);
   // Round 2 (the deadzone kept) calibrates a candidate that gained nothing in
   // round 1 from the one start that did best for it there, the others from both.

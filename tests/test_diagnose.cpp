@@ -357,6 +357,14 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
     EXPECT_NE(std::string(e.what()).find("max_selected = 0"), std::string::npos) << e.what();
   }
   o.max_selected = 3;
+  o.calibration.held = {"nominal.damping_ratio"};  // the starts choose what their calibrations hold
+  try {
+    runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
+    ADD_FAILURE() << "a held parameter in the options was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'nominal.damping_ratio'"), std::string::npos) << e.what();
+  }
+  o.calibration.held.clear();
   o.candidates = {"creep", "deadzone", "creep"};  // tried twice, it would be its own runner-up
   try {
     runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
@@ -463,6 +471,7 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   EXPECT_EQ(j["steps"][0]["heldout_gap_chosen"], d.ranking[0].heldout_after.percent());
   EXPECT_EQ(j["steps"][0]["heldout_gap_after"], d.steps[0].heldout.percent());
   EXPECT_EQ(j["steps"][0]["heldout_gap_final"], d.steps[0].heldout_final.percent());
+  EXPECT_EQ(d.gap_after.total, d.steps.back().heldout_final.total) << "the last kept step's final gap is the result";
   for (const char* key : {"effect", "heldout_gap_before", "heldout_gap_after", "shrink_percent", "params"})
     EXPECT_TRUE(j["ranking"][0].contains(key)) << key;
   EXPECT_EQ(j["ranking"][0]["effect"], "deadzone");
@@ -682,11 +691,10 @@ TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
   EXPECT_EQ(d.gap_after.total, d.steps[0].heldout_final.total);
   const Gap again = measureGap(d.final_config, {recorded(truth, 30, 44)}, o.calibration.gap);
   EXPECT_NEAR(again.percent(), d.gap_after.percent(), 1e-9) << "the final model is the one reported";
-  for (const auto& [name, value] : d.final_params) {
-    if (name == "hysteresis.weight_smooth") {
-      EXPECT_EQ(value, d.final_config.hysteresis.weight_smooth);
-    }
-  }
+  const auto smooth = std::find_if(d.final_params.begin(), d.final_params.end(),
+                                   [](const auto& p) { return p.first == "hysteresis.weight_smooth"; });
+  ASSERT_NE(smooth, d.final_params.end());
+  EXPECT_EQ(smooth->second, d.final_config.hysteresis.weight_smooth);
 }
 
 // A sensor mounted turned about the segment's axis: every reading's

@@ -390,6 +390,7 @@ void keepRecalibrationAtStop(CalibratedState& s, CalibratedState& recalibrated, 
   recalibrated.where = breakdownFor(recalibrated.config, x.runs.held, recalibrated.fit, x.map);
   d.final_params = recalibrated.values;
   d.steps.back().heldout_final = recalibrated.heldout;
+  addNote(x.o, d, finalRecalibrationNote(d.steps.back(), d.noise, x.o));
   s = std::move(recalibrated);
 }
 
@@ -408,7 +409,7 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   const std::map<std::string, int> only = round == 1 ? std::map<std::string, int>{} : oneStartForThoseWithoutGain(d, o);
   const std::vector<CandidateTrial> trials =
       tryCandidates(s, selected, remaining, round, screen, only, x, recalibrated);
-  const Gap& null_gap = recalibrated.heldout;
+  const Gap null_gap = recalibrated.heldout;
   std::vector<std::size_t> order(trials.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -486,6 +487,9 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   if (o.max_selected < 1)
     throw std::invalid_argument("diagnose: max_selected = " + std::to_string(o.max_selected) +
                                 ": at least one effect must be allowed");
+  if (!o.calibration.held.empty())
+    throw std::invalid_argument("diagnose: calibration.held names '" + o.calibration.held.front() +
+                                "': the diagnosis's starts choose what their calibrations hold; leave it empty");
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);

@@ -142,17 +142,32 @@ std::string mixedSampleRatesNote(const std::vector<RunData>& runs) {
   return line;
 }
 
+namespace {
+
+// "<what> raised its held-out gap from <from> to <to><after>", when the rise
+// clears a candidate's margin; else empty.
+std::string raisedGapNote(const std::string& what, const Gap& from, const Gap& to, const std::string& after,
+                          const Gap& noise, const DiagnoseOptions& o) {
+  if (!clearsMargin(to.total - from.total, from, noise, o)) return "";
+  char gaps[96];
+  std::snprintf(gaps, sizeof gaps, " raised its held-out gap from %.1f%% to %.1f%%", from.percent(), to.percent());
+  return what + gaps + after;
+}
+
+}  // namespace
+
 // After such a polish the later rounds start from a baseline that
 // generalises worse than the one chosen, and a candidate can win them by
 // undoing it.
 std::string polishNote(const Diagnosis::KeptStep& k, const Gap& noise, const DiagnoseOptions& o) {
-  if (!clearsMargin(k.heldout.total - k.heldout_chosen.total, k.heldout_chosen, noise, o)) return "";
-  char line[320];
-  std::snprintf(line, sizeof line,
-                "polishing %s's calibration on the training runs raised its held-out gap from %.1f%% to %.1f%%: "
-                "later rounds start from a baseline that generalises worse than the one chosen",
-                k.effect.c_str(), k.heldout_chosen.percent(), k.heldout.percent());
-  return line;
+  return raisedGapNote("polishing " + k.effect + "'s calibration on the training runs", k.heldout_chosen, k.heldout,
+                       ": later rounds start from a baseline that generalises worse than the one chosen", noise, o);
+}
+
+// Chosen on the training runs, as the polish is: the held-out gap may rise.
+std::string finalRecalibrationNote(const Diagnosis::KeptStep& k, const Gap& noise, const DiagnoseOptions& o) {
+  return raisedGapNote("re-calibrating the kept model when the selection stopped (it lowered the training gap)",
+                       k.heldout, k.heldout_final, "", noise, o);
 }
 
 }  // namespace plsa::diagnose

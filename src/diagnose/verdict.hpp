@@ -28,10 +28,12 @@ std::string verdictOf(const Diagnosis& d, const DiagnoseOptions& o);
 /// Notes, each empty when there is nothing to say: the simulator as given
 /// bending ten times as far as the measured angles or a tenth as far
 /// (training runs; angles only, an affine map takes any scale); runs at
-/// different sample rates; a kept effect whose polish raised its held-out
-/// gap by more than the margin.
+/// different sample rates; a kept effect whose polish, or the kept model's
+/// re-calibration when the selection stopped, raised its held-out gap by
+/// more than the margin.
 std::string implausibleScaleNote(const sim::SimConfig& simulator, const std::vector<RunData>& train, OutputMap map);
 std::string mixedSampleRatesNote(const std::vector<RunData>& runs);
 std::string polishNote(const Diagnosis::KeptStep& k, const Gap& noise, const DiagnoseOptions& o);
+std::string finalRecalibrationNote(const Diagnosis::KeptStep& k, const Gap& noise, const DiagnoseOptions& o);
 
 }  // namespace plsa::diagnose

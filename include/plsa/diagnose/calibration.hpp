@@ -100,6 +100,7 @@ struct CalibrationOptions {
   /// Parameters ("module.name", of the calibrated modules) held at their
   /// start values: a start from one part of an effect's family (the
   /// hysteresis's smooth element alone) calibrates that part only.
+  /// runDiagnosis sets it for each start and refuses it set in its options.
   std::vector<std::string> held;
 };
 

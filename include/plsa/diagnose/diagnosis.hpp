@@ -135,7 +135,8 @@ struct Diagnosis {
   /// What looks wrong in the input or the search, in words (also logged):
   /// the simulator as given bending ten times as far as the measured angles
   /// or a tenth as far (units: radians for degrees, --input-scale), runs at
-  /// different sample rates, a kept effect whose polish raised its held-out
+  /// different sample rates, a kept effect whose polish (or the kept
+  /// model's re-calibration when the selection stopped) raised its held-out
   /// gap by more than a candidate's margin.
   std::vector<std::string> notes;
   /// How firmly the evidence backs the first kept effect (round 1):

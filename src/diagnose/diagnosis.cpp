@@ -360,7 +360,7 @@ std::map<std::string, int> oneStartForThoseWithoutGain(const Diagnosis& d, const
 // Polish the kept model with the nominal fit's budget (chosen on training
 // data): the next round's baseline, so a candidate is never credited with
 // what more optimisation alone buys.
-void polishKept(CalibratedState& s, const std::vector<std::string>& selected, const SelectionContext& x, Diagnosis& d) {
+void polishKept(CalibratedState& s, const std::vector<std::string>& selected, const SelectionContext& x) {
   CalibrationOptions polish = x.o.calibration;
   polish.max_evaluations = x.o.nominal_evaluations;
   polish.held = s.held;
@@ -372,7 +372,6 @@ void polishKept(CalibratedState& s, const std::vector<std::string>& selected, co
   s.heldout = measureGap(refit.config, x.runs.held, x.o.calibration.gap, &s.fit, false);
   s.where = breakdownFor(s.config, x.runs.held, s.fit, x.map);
   s.values = refit.values;
-  d.final_params = refit.values;
 }
 
 // When the selection stops after keeping effects, the kept model as the
@@ -388,7 +387,6 @@ void keepRecalibrationAtStop(CalibratedState& s, CalibratedState& recalibrated, 
                pct(s.train.percent()) + " -> " + pct(recalibrated.train.percent()) + "; held-out gap " +
                pct(s.heldout.percent()) + " -> " + pct(recalibrated.heldout.percent()));
   recalibrated.where = breakdownFor(recalibrated.config, x.runs.held, recalibrated.fit, x.map);
-  d.final_params = recalibrated.values;
   d.steps.back().heldout_final = recalibrated.heldout;
   addNote(x.o, d, finalRecalibrationNote(d.steps.back(), d.noise, x.o));
   s = std::move(recalibrated);
@@ -440,9 +438,8 @@ bool selectionRound(int round, CalibratedState& s, std::vector<std::string>& sel
   s = {best.config, best.result.heldout_after, best.result.train_after, best.fit,
        {},          best.result.held,          best.result.params};
   s.where = breakdownFor(s.config, x.runs.held, s.fit, x.map);
-  d.final_params = best.result.params;
   remaining.erase(std::find(remaining.begin(), remaining.end(), kept));
-  polishKept(s, selected, x, d);
+  polishKept(s, selected, x);
   d.steps.push_back({kept, best.result.heldout_after, s.heldout, s.heldout});
   addNote(o, d, polishNote(d.steps.back(), d.noise, o));
   say(o, "plsa diagnose: keeping " + kept + " (calibration polished); held-out gap now " + pct(s.heldout.percent()));
@@ -518,7 +515,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   d.gap_after = current.heldout;
   d.final_config = current.config;
   d.where_after = selected.empty() ? d.where : current.where;
-  if (d.final_params.empty()) d.final_params = d.nominal_params;
+  d.final_params = current.values;
   judgeConfidence(d, d.recalibrated_round1, o);
   d.verdict = verdictOf(d, o);
   traceFirstHeldOutRun(d, base, current, split.held[0]);

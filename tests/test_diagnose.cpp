@@ -647,13 +647,10 @@ TEST(Diagnose, AStopTypeHysteresisIsFoundWithItsOrientation) {
   EXPECT_LT(weightSum(d.final_params), -0.1) << "and still in the kept model";
 }
 
-// A smooth hysteresis loop (the weighted family's smooth element, no
-// plays): on this one the smooth element's own start wins the screening,
-// and it holds the plays at zero weight in the round, in the polish and in
-// the later round's calibrations; the selection stops in that round, whose
-// nothing-added re-calibration lowered the training gap, and the diagnosis
-// ends with that model, reported as it is.
-TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
+namespace {
+// A smooth hysteresis loop alone (the weighted law's smooth element, no
+// plays): the truth of the two tests below.
+sim::SimConfig smoothLoopTruth() {
   sim::SimConfig truth = sim::probes::everyEffectOff();
   truth.setEffectEnabled("hysteresis", true);
   auto& h = truth.hysteresis;
@@ -661,6 +658,18 @@ TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
   h.weight_narrow = h.weight_mid = h.weight_wide = 0.0;
   h.weight_smooth = 0.5;
   h.smooth_saturation = 0.8;
+  return truth;
+}
+}  // namespace
+
+// A smooth hysteresis loop (the weighted family's smooth element, no
+// plays): on this one the smooth element's own start wins the screening,
+// and it holds the plays at zero weight in the round, in the polish and in
+// the later round's calibrations; the selection stops in that round, whose
+// nothing-added re-calibration lowered the training gap, and the diagnosis
+// ends with that model, reported as it is.
+TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
+  const sim::SimConfig truth = smoothLoopTruth();
   DiagnoseOptions o = quick();
   o.candidates = {"hysteresis", "deadzone"};
   std::vector<std::string> log;
@@ -695,6 +704,40 @@ TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
                                    [](const auto& p) { return p.first == "hysteresis.weight_smooth"; });
   ASSERT_NE(smooth, d.final_params.end());
   EXPECT_EQ(smooth->second, d.final_config.hysteresis.weight_smooth);
+}
+
+// The same loop, the selection ending at its limit: hysteresis the only
+// candidate (keeping it leaves none), or max_selected 1 with deadzone left.
+// No later round passes nothing and offers its bar; the selection's end
+// re-calibrates the kept model all the same (without that, the diagnosis
+// ended with the polish alone: no such line, a higher held-out gap).
+TEST(Diagnose, ASelectionThatEndsAtItsLimitIsReCalibratedToo) {
+  const sim::SimConfig truth = smoothLoopTruth();
+  const std::vector<RunData> runs = {recorded(truth, 40, 43), recorded(truth, 30, 44)};
+  for (const bool limit_by_count : {false, true}) {
+    SCOPED_TRACE(limit_by_count ? "max_selected 1" : "no candidate left");
+    DiagnoseOptions o = quick();
+    o.candidates =
+        limit_by_count ? std::vector<std::string>{"hysteresis", "deadzone"} : std::vector<std::string>{"hysteresis"};
+    if (limit_by_count) o.max_selected = 1;
+    std::vector<std::string> log;
+    o.log = [&](const std::string& line) { log.push_back(line); };
+    const Diagnosis d = runDiagnosis(sim::probes::everyEffectOff(), runs, o);
+    ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
+    EXPECT_TRUE(d.later_rounds.empty()) << "the selection ended after round 1";
+    const auto said = [&](const std::string& text) {
+      return std::any_of(log.begin(), log.end(),
+                         [&](const std::string& l) { return l.find(text) != std::string::npos; });
+    };
+    EXPECT_TRUE(said(limit_by_count ? "max_selected effects kept; re-calibrating the kept model with nothing added"
+                                    : "no candidate left; re-calibrating the kept model with nothing added"));
+    ASSERT_TRUE(said("re-calibrated with nothing added lowers its training gap")) << "this case's polish stops short";
+    ASSERT_EQ(d.steps.size(), 1u);
+    EXPECT_LT(d.steps[0].heldout_final.total, d.steps[0].heldout.total) << d.verdict;
+    EXPECT_EQ(d.gap_after.total, d.steps[0].heldout_final.total);
+    const Gap again = measureGap(d.final_config, {runs[1]}, o.calibration.gap);
+    EXPECT_NEAR(again.percent(), d.gap_after.percent(), 1e-9) << "the final model is the one reported";
+  }
 }
 
 // A sensor mounted turned about the segment's axis: every reading's

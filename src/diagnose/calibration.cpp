@@ -133,7 +133,7 @@ Gap noiseFloor(const std::vector<RunData>& runs, const GapOptions& o) {
     double sum = 0.0;
     for (Eigen::Index c = 0; c < m.cols(); ++c) {
       std::vector<double> d;
-      for (Eigen::Index i = 2; i < m.rows(); ++i) d.push_back(std::abs(m(i, c) - 2 * m(i - 1, c) + m(i - 2, c)));
+      appendAbsSecondDifferences(m.col(c), d);
       const double sigma = whiteNoiseFromSecondDifferences(std::move(d));
       sum += sigma * sigma * static_cast<double>(m.rows());
     }

@@ -392,6 +392,19 @@ void keepRecalibrationAtStop(CalibratedState& s, CalibratedState& recalibrated, 
   s = std::move(recalibrated);
 }
 
+// When the selection ends at its limit (max_selected effects kept, or no
+// candidate left) instead of at a round that passes nothing, the kept model
+// gets the re-calibration such a round's bar would have given it (a
+// candidate's budget for what is left, two calibrations), kept by the same
+// rule: the final model does not depend on how the selection ended.
+void recalibrateAtLimit(CalibratedState& s, const std::vector<std::string>& selected,
+                        const std::vector<std::string>& remaining, const SelectionContext& x, Diagnosis& d) {
+  say(x.o, "plsa diagnose: " + std::string(remaining.empty() ? "no candidate left" : "max_selected effects kept") +
+               "; re-calibrating the kept model with nothing added");
+  CalibratedState recalibrated = recalibratedWithNothingAdded(s, selected, remaining, Screening{0, 0.0}, x);
+  keepRecalibrationAtStop(s, recalibrated, x, d);
+}
+
 // One round of forward selection: every remaining candidate and the
 // nothing-added bar in parallel, ranked by held-out gap; the best is kept
 // (moved from `remaining` to `selected`, `s` updated and polished) when it
@@ -508,8 +521,10 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   say(o, calibrationStepLine(d, o));
   CalibratedState current = base;
   std::vector<std::string> selected;
-  for (int round = 1; !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)
-    if (!selectionRound(round, current, selected, remaining, x, d)) break;
+  bool stopped = false;
+  for (int round = 1; !stopped && !remaining.empty() && static_cast<int>(selected.size()) < o.max_selected; ++round)
+    stopped = !selectionRound(round, current, selected, remaining, x, d);
+  if (!stopped && !selected.empty()) recalibrateAtLimit(current, selected, remaining, x, d);
   takeReference(reference, o, d);
   d.selected = selected;
   d.gap_after = current.heldout;

@@ -137,9 +137,7 @@ std::vector<RunData> firstMinute(const std::vector<RunData>& runs) {
 double pressureNoise(const std::vector<RunData>& runs) {
   std::vector<double> d;
   for (const RunData& run : runs)
-    for (Eigen::Index c = 0; c < run.pressures.cols(); ++c)
-      for (Eigen::Index i = 2; i < run.pressures.rows(); ++i)
-        d.push_back(std::abs(run.pressures(i, c) - 2.0 * run.pressures(i - 1, c) + run.pressures(i - 2, c)));
+    for (Eigen::Index c = 0; c < run.pressures.cols(); ++c) appendAbsSecondDifferences(run.pressures.col(c), d);
   return d.empty() ? 0.0 : whiteNoiseFromSecondDifferences(std::move(d));
 }
 

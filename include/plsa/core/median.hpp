@@ -19,6 +19,15 @@ inline double median(std::vector<double> values) {
   return *mid;
 }
 
+/// Appends |x(i) - 2 x(i-1) + x(i-2)| for every i of a column `x` (anything
+/// with size() and operator()(i): an Eigen column, say) to `out`: what
+/// whiteNoiseFromSecondDifferences reads, pooled over as many columns as
+/// are appended.
+template <typename Column>
+void appendAbsSecondDifferences(const Column& x, std::vector<double>& out) {
+  for (decltype(x.size()) i = 2; i < x.size(); ++i) out.push_back(std::abs(x(i) - 2.0 * x(i - 1) + x(i - 2)));
+}
+
 /// The standard deviation of white noise on a signal, read off the absolute
 /// values of its second differences (white noise gives them variance
 /// 6 sigma^2) by their median (MAD), so that the signal's steps and

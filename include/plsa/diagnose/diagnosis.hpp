@@ -52,7 +52,11 @@ struct DiagnoseOptions {
   /// the two that, on the calibrated nominal physics, moves the training gap
   /// by at most `coarse_step_tolerance` noise floors (neither: the
   /// configured step; 0: always the configured step). Every gap reported and
-  /// compared is measured at the configured step.
+  /// compared is measured at the configured step. Coarser does not pay: at
+  /// 8 ms (two internal steps per 80 Hz sample) the bench's three-run lag
+  /// case passed the test (0.066 points against 0.13) and ran 14.3 -> 13.0 s,
+  /// but the sharp Bouc-Wen case kept a spurious pneumatic lag and took
+  /// 15.8 s instead of 9.5 s (bench/diagnose_cost.py).
   double calibration_step_s = 0.004;
   double coarse_step_tolerance = 0.1;
   int max_selected = 3;

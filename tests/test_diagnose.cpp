@@ -660,6 +660,11 @@ sim::SimConfig smoothLoopTruth() {
   h.smooth_saturation = 0.8;
   return truth;
 }
+
+// Whether a progress line contains `text`.
+bool logged(const std::vector<std::string>& log, const std::string& text) {
+  return std::any_of(log.begin(), log.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
+}
 }  // namespace
 
 // A smooth hysteresis loop (the weighted family's smooth element, no
@@ -692,10 +697,8 @@ TEST(Diagnose, ASmoothLoopIsCalibratedWithThePlaysHeld) {
   }
   EXPECT_GT(d.final_config.hysteresis.weight_smooth, 0.1);
   ASSERT_EQ(d.steps.size(), 1u);
-  const bool recalibrated = std::any_of(log.begin(), log.end(), [](const std::string& l) {
-    return l.find("re-calibrated with nothing added lowers its training gap") != std::string::npos;
-  });
-  ASSERT_TRUE(recalibrated) << "this case ends with the nothing-added re-calibration";
+  ASSERT_TRUE(logged(log, "re-calibrated with nothing added lowers its training gap"))
+      << "this case ends with the nothing-added re-calibration";
   EXPECT_LT(d.steps[0].heldout_final.total, d.steps[0].heldout.total) << d.verdict;
   EXPECT_EQ(d.gap_after.total, d.steps[0].heldout_final.total);
   const Gap again = measureGap(d.final_config, {recorded(truth, 30, 44)}, o.calibration.gap);
@@ -725,13 +728,11 @@ TEST(Diagnose, ASelectionThatEndsAtItsLimitIsReCalibratedToo) {
     const Diagnosis d = runDiagnosis(sim::probes::everyEffectOff(), runs, o);
     ASSERT_EQ(d.selected, std::vector<std::string>{"hysteresis"}) << d.verdict;
     EXPECT_TRUE(d.later_rounds.empty()) << "the selection ended after round 1";
-    const auto said = [&](const std::string& text) {
-      return std::any_of(log.begin(), log.end(),
-                         [&](const std::string& l) { return l.find(text) != std::string::npos; });
-    };
-    EXPECT_TRUE(said(limit_by_count ? "max_selected effects kept; re-calibrating the kept model with nothing added"
-                                    : "no candidate left; re-calibrating the kept model with nothing added"));
-    ASSERT_TRUE(said("re-calibrated with nothing added lowers its training gap")) << "this case's polish stops short";
+    EXPECT_TRUE(logged(log, limit_by_count
+                                ? "max_selected effects kept; re-calibrating the kept model with nothing added"
+                                : "no candidate left; re-calibrating the kept model with nothing added"));
+    ASSERT_TRUE(logged(log, "re-calibrated with nothing added lowers its training gap"))
+        << "this case's polish stops short";
     ASSERT_EQ(d.steps.size(), 1u);
     EXPECT_LT(d.steps[0].heldout_final.total, d.steps[0].heldout.total) << d.verdict;
     EXPECT_EQ(d.gap_after.total, d.steps[0].heldout_final.total);

@@ -374,9 +374,10 @@ void polishKept(CalibratedState& s, const std::vector<std::string>& selected, co
   s.values = refit.values;
 }
 
-// When the selection stops after keeping effects, the kept model as the
-// nothing-added bar re-calibrated it (a candidate's budget, two
-// calibrations) is the final one if that lowered its training gap: the
+// When the selection ends after keeping effects (a later round passed
+// nothing, or recalibrateAtLimit), the kept model as the nothing-added bar
+// re-calibrated it (a candidate's budget, two calibrations) is the final
+// one if that lowered its training gap: the
 // polish alone left the kept hysteresis's calibration short on sharp
 // Bouc-Wen physics (a self-check case: 11.1% held out against 4.9% after
 // the bar's calibration). The last kept step's final gap records it.

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -25,6 +26,7 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -33,6 +35,8 @@
 #include "plsa/core/text_file.hpp"
 #include "plsa/predict/predictor.hpp"
 #include "plsa/predict/realtime_thread.hpp"
+#include "plsa/sim/actuator.hpp"
+#include "plsa/sim/sim_config.hpp"
 #include "straightforward_predictor.hpp"
 
 namespace {
@@ -503,6 +507,73 @@ void BM_DemoUpdate(benchmark::State& state) { demoUpdates(state, plsa::Predictor
 BENCHMARK(BM_DemoUpdate)->Name("Predictor<>::update (the demo's model)");
 void BM_DemoUpdateUntracked(benchmark::State& state) { demoUpdates(state, 0.0); }
 BENCHMARK(BM_DemoUpdateUntracked)->Name("Predictor<>::update (the demo's model, yaw not tracked)");
+
+// One 120 s replay (9600 samples at 80 Hz, random pressures held 1.25 s
+// each) of the simulated actuator at the 4 ms internal step a diagnosis's
+// calibrations take: what each of its simulator runs costs. Every effect
+// off, then with the diagnosis's flexible (power) pneumatic lag or
+// stiffening switched on (the lag as calibrated on bench/diagnose_cost.py's
+// lag case).
+plsa::sim::SimConfig everyEffectOff() {
+  plsa::sim::SimConfig c;
+  c.sensor.noise_deg = 0.0;
+  for (bool* on : {&c.deadzone.enabled, &c.hysteresis.enabled, &c.stiffening.enabled, &c.coupling.enabled,
+                   &c.pneumatic_lag.enabled, &c.creep.enabled, &c.sensor_bias.enabled})
+    *on = false;
+  c.internal_step_s = 0.004;
+  return c;
+}
+void actuatorReplay(benchmark::State& state, const plsa::sim::SimConfig& c) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> pressure(0.0, 0.36);
+  std::vector<std::array<double, 3>> commands(9600);
+  for (std::size_t k = 0; k < commands.size(); k += 100) {
+    const std::array<double, 3> held = {pressure(rng), pressure(rng), pressure(rng)};
+    std::fill(commands.begin() + static_cast<long>(k), commands.begin() + static_cast<long>(k + 100), held);
+  }
+  int substeps = 1;
+  for (auto _ : state) {
+    plsa::sim::Actuator a(c, 1);
+    substeps = a.substepsPerSample();
+    for (const auto& u : commands) benchmark::DoNotOptimize(a.stepReading(u));
+  }
+  // Seconds per internal step (Google Benchmark prints it with its SI prefix: 77n is 77 ns).
+  state.counters["per_internal_step"] =
+      benchmark::Counter(static_cast<double>(commands.size()) * substeps,
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+void BM_ReplayEffectsOff(benchmark::State& state) { actuatorReplay(state, everyEffectOff()); }
+BENCHMARK(BM_ReplayEffectsOff)
+    ->Name("sim::Actuator, 120 s replay at 4 ms (every effect off)")
+    ->Unit(benchmark::kMillisecond);
+// everyEffectOff() with one effect on in its power law at `values` (by parameter name).
+plsa::sim::SimConfig withPowerLaw(const std::string& effect, const std::map<std::string, double>& values) {
+  plsa::sim::SimConfig c = everyEffectOff();
+  *(effect == "pneumatic_lag" ? &c.pneumatic_lag.enabled : &c.stiffening.enabled) = true;
+  c.formulationOf(effect) = "power";
+  std::size_t set = 0;
+  for (const plsa::sim::ParamRef& p : c.parameters(effect))
+    if (values.count(p.name)) *p.value = values.at(p.name), ++set;
+  if (set != values.size()) throw std::invalid_argument("plsa-bench: a parameter of " + effect + " misnamed");
+  return c;
+}
+void BM_ReplayPowerLag(benchmark::State& state) {
+  actuatorReplay(state, withPowerLaw("pneumatic_lag", {{"fill_time_constant_s", 0.035},
+                                                       {"vent_time_constant_s", 0.042},
+                                                       {"delay_s", 0.030},
+                                                       {"exponent", 0.89},
+                                                       {"pressure_per_bar", -1.97},
+                                                       {"line_time_constant_s", 0.018}}));
+}
+BENCHMARK(BM_ReplayPowerLag)
+    ->Name("sim::Actuator, 120 s replay at 4 ms (power pneumatic lag)")
+    ->Unit(benchmark::kMillisecond);
+void BM_ReplayPowerStiffening(benchmark::State& state) {
+  actuatorReplay(state, withPowerLaw("stiffening", {{"per_bar", 10.0}, {"exponent", 1.3}, {"static_share", 0.4}}));
+}
+BENCHMARK(BM_ReplayPowerStiffening)
+    ->Name("sim::Actuator, 120 s replay at 4 ms (power stiffening)")
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -202,12 +202,22 @@ def bench_diagnose(build, dry_run):
                   "; ".join(summary) + ".\n", dry_run)
 
 
+def gbench_row(b):
+    """One benchmark's line: its mean time over its calls (a simulator replay's also per internal step)."""
+    its = b["iterations"]
+    calls = f"{its / 1e6:.1f} million calls" if its >= 100_000 else f"{its} runs"
+    step = b.get("per_internal_step")
+    per_step = f", {step * 1e9:.0f} ns per internal step" if step else ""
+    t = b["real_time"]
+    return f"- {b['name']}: {t:.0f} {b['time_unit']} (mean of {calls}{per_step})" if t >= 10 else \
+        f"- {b['name']}: {t:.3g} {b['time_unit']} (mean of {calls}{per_step})"
+
+
 def bench_gbench(build, dry_run):
-    """The Google Benchmark run of the demo model's update (no per-call clock reads)."""
+    """The Google Benchmark run of the demo model's update (no per-call clock reads) and of simulator replays."""
     text = run([os.path.join(build, "bench", "plsa-bench"), "--benchmark_format=json"])
     data = json.loads(text[text.index("{"):])
-    rows = [f"- {b['name']}: {b['real_time']:.0f} {b['time_unit']} (mean of {b['iterations'] / 1e6:.1f} million calls)"
-            for b in data["benchmarks"]]
+    rows = [gbench_row(b) for b in data["benchmarks"]]
     replace_block(os.path.join(HERE, "bench", "README.md"), "bench-gbench",
                   stamp("plsa-bench") + "\n\n" + "\n".join(rows) + "\n", dry_run)
 

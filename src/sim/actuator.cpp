@@ -82,6 +82,8 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   const double line_tau = config_.pneumatic_lag.line_time_constant_s;
   if (config_.pneumatic_lag.enabled && flow_law_ == FlowLaw::kPower && line_tau > 0.0)
     line_blend_ = -std::expm1(-dt_ / line_tau);
+  power_log_gain_fill_ = std::log(0.1 / config_.pneumatic_lag.fill_time_constant_s);
+  power_log_gain_vent_ = std::log(0.1 / config_.pneumatic_lag.vent_time_constant_s);
   const std::string& stiff = config_.stiffening.formulation;
   stiffening_law_ = stiff == "quadratic"     ? StiffeningLaw::kQuadratic
                     : stiff == "exponential" ? StiffeningLaw::kExponential
@@ -93,6 +95,10 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   smooth_deadzone_ = config_.deadzone.formulation == "smooth";
   const double tilt = config_.sensor_bias.enabled ? config_.sensor_bias.tilt_deg * kRadPerDeg : 0.0;
   tilted_x_axis_ = {std::cos(tilt - kPi / 2.0), -std::sin(tilt - kPi / 2.0)};
+  lever_ = 2.0 * config_.geometry.length_m / (3.0 * config_.geometry.chamber_radius_m);
+  omega_ = 2.0 * kPi * config_.bending.natural_freq_hz;
+  const double zeta = config_.bending.damping_ratio;
+  piece_limit_ = std::sqrt(4.0 * zeta * zeta + 2.0) - 2.0 * zeta;  // the root of a^2 + 4 zeta a = 2
   for (std::size_t i = 0; i < 3; ++i) {
     const double dir = config_.geometry.bend_direction_deg[i] * kRadPerDeg;
     bend_direction_[i] = {std::cos(dir), std::sin(dir)};
@@ -121,32 +127,46 @@ std::array<double, 3> Actuator::delayedCommand(const std::array<double, 3>& cmd)
   return delayed;
 }
 
+// The power flow law's rate of pressure change (bar/s) for a pressure
+// difference `drive` toward a source above (`filling`) or below the
+// chamber's pressure p: 0.1 bar (|drive| / 0.1 bar)^exponent /
+// (tau e^(pressure_per_bar p)), signed as drive, with tau the fill or vent
+// time constant. As one exponential of a sum of logarithms, the time
+// constants' taken once: every internal step of a kept or candidate lag
+// takes three of these, and pow and exp took a fifth of a diagnosis's time.
+double Actuator::powerLawRate(double drive, bool filling, double p) const {
+  if (drive == 0.0) return 0.0;
+  const auto& lag = config_.pneumatic_lag;
+  const double log_gain = filling ? power_log_gain_fill_ : power_log_gain_vent_;
+  return std::copysign(std::exp(lag.exponent * std::log(std::abs(drive) * 10.0) - lag.pressure_per_bar * p + log_gain),
+                       drive);
+}
+
 // Each chamber's pressure one step toward the delayed command (through its
 // supply line first, when it has one), rate-limited; returns the pressures
 // past the deadzone.
 std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delayed) {
   const SimConfig& c = config_;
   const bool lag = c.pneumatic_lag.enabled;
-  const double max_rate = c.pneumatics.max_rate_bar_per_s, per_bar = c.pneumatic_lag.pressure_per_bar;
+  const double max_rate = c.pneumatics.max_rate_bar_per_s;
   std::array<double, 3> p_eff{};
   for (std::size_t i = 0; i < 3; ++i) {
     double source = delayed[i];
     if (line_blend_ > 0.0) source = line_pressure_[i] += (delayed[i] - line_pressure_[i]) * line_blend_;
-    double tau =
+    const double tau =
         lag ? (source > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
             : c.pneumatics.time_constant_s;
     double drive = source - pressure_[i];
-    if (lag) {
+    double rate = 0.0;
+    if (lag && flow_law_ == FlowLaw::kPower) {
+      rate = powerLawRate(drive, source > pressure_[i], pressure_[i]);
+    } else {
       // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
-      if (flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
-      if (flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
-      if (flow_law_ == FlowLaw::kPower) {
-        drive = std::copysign(0.1 * std::pow(std::abs(drive) / 0.1, c.pneumatic_lag.exponent), drive);
-        if (per_bar != 0.0) tau *= std::exp(per_bar * pressure_[i]);
-      }
+      if (lag && flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);
+      if (lag && flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
+      rate = drive / tau;
     }
-    const double rate = std::clamp(drive / tau, -max_rate, max_rate);
-    pressure_[i] += rate * dt_;
+    pressure_[i] += std::clamp(rate, -max_rate, max_rate) * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
   }
   return p_eff;
@@ -211,18 +231,21 @@ double Actuator::creepStrain(std::size_t i, double strain) {
 // The bending mode one step toward `target`, stiffened by the summed pressure.
 void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
   const SimConfig& c = config_;
-  double omega = 2.0 * kPi * c.bending.natural_freq_hz;
+  double omega = omega_;
   if (c.stiffening.enabled) {
     // Every law is written against a 0.2 bar reference: per_bar means the same growth there.
     const double x = sum_p / 0.2;
     double growth = x;
     if (stiffening_law_ == StiffeningLaw::kQuadratic) growth = x * x;
     if (stiffening_law_ == StiffeningLaw::kExponential) growth = std::expm1(x) / (std::exp(1.0) - 1.0);
-    if (stiffening_law_ == StiffeningLaw::kPower) growth = std::pow(std::max(0.0, x), c.stiffening.exponent);
+    // The power law's powers as exponentials of logarithms: pow took a
+    // fifth of a stiffening candidate's calibration.
+    if (stiffening_law_ == StiffeningLaw::kPower)
+      growth = x > 0.0 ? std::exp(c.stiffening.exponent * std::log(x)) : 0.0;
     const double stiffer = 1.0 + c.stiffening.per_bar * 0.2 * growth;
     omega *= std::sqrt(stiffer);
     if (stiffening_law_ == StiffeningLaw::kPower && c.stiffening.static_share > 0.0)
-      target /= std::pow(stiffer, c.stiffening.static_share);
+      target *= std::exp(-c.stiffening.static_share * std::log(stiffer));
   }
   // Semi-implicit Euler on theta'' = w^2 (target - spring(theta)) - 2 zeta w theta',
   // spring(theta) = theta, or theta (1 + per_rad2 |theta|^2) for a hardening "power" stiffening.
@@ -246,11 +269,9 @@ void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
 // hardening spring) neither diverges nor rings. One piece wherever that
 // holds at internal_step_s, so those runs are unchanged.
 int Actuator::bendingPieces(double omega, double spring_slope) const {
-  const double zeta = config_.bending.damping_ratio;
-  const double a = omega * std::sqrt(spring_slope) * dt_;
-  const double a_max = std::sqrt(4.0 * zeta * zeta + 2.0) - 2.0 * zeta;  // the root of a^2 + 4 zeta a = 2
-  if (!(a > a_max)) return 1;                                            // also a NaN: nothing to split
-  return static_cast<int>(std::min(std::ceil(a / a_max), static_cast<double>(kMaxBendingPieces)));
+  const double a = omega * (spring_slope == 1.0 ? 1.0 : std::sqrt(spring_slope)) * dt_;
+  if (!(a > piece_limit_)) return 1;  // also a NaN: nothing to split
+  return static_cast<int>(std::min(std::ceil(a / piece_limit_), static_cast<double>(kMaxBendingPieces)));
 }
 
 void Actuator::substep(const std::array<double, 3>& cmd) {
@@ -258,7 +279,6 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
   const std::array<double, 3> p_eff = fillChambers(delayedCommand(cmd));
   const double sum_p = p_eff[0] + p_eff[1] + p_eff[2];
   Eigen::Vector2d target = Eigen::Vector2d::Zero();
-  const double lever = 2.0 * c.geometry.length_m / (3.0 * c.geometry.chamber_radius_m);
   for (std::size_t i = 0; i < 3; ++i) {
     double strain = c.elongation.strain_per_bar * p_eff[i] + c.elongation.quadratic * p_eff[i] * p_eff[i];
     if (c.coupling.enabled)
@@ -267,7 +287,7 @@ void Actuator::substep(const std::array<double, 3>& cmd) {
     if (c.hysteresis.enabled) strain = hysteresisStrain(i, strain);
     if (c.creep.enabled) strain = creepStrain(i, strain);
     // Constant-curvature map: a chamber's elongation bends the tip toward its bending direction.
-    target += lever * strain * Eigen::Vector2d(bend_direction_[i][0], bend_direction_[i][1]);
+    target += lever_ * strain * Eigen::Vector2d(bend_direction_[i][0], bend_direction_[i][1]);
   }
   bendToward(target, sum_p);
 }

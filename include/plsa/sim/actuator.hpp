@@ -100,6 +100,7 @@ class Actuator {
   // substep's stages, in order.
   std::array<double, 3> delayedCommand(const std::array<double, 3>& cmd);
   std::array<double, 3> fillChambers(const std::array<double, 3>& delayed);  ///< effective pressures
+  double powerLawRate(double drive, bool filling, double p) const;           ///< pneumatic_lag's "power" law, bar/s
   double hysteresisStrain(std::size_t chamber, double strain);
   double smoothElement(double& z, double& last_strain, double strain) const;
   double creepStrain(std::size_t chamber, double strain);
@@ -133,6 +134,8 @@ class Actuator {
   std::array<double, 3> pressure_{};
   std::array<double, 3> line_pressure_{};  ///< the supply lines' (power flow law with a line volume)
   double line_blend_ = 0.0;                ///< a line's exact first-order step per substep; 0: no line
+  /// log(0.1 bar / the fill or vent time constant): the power flow law's gains, taken once.
+  double power_log_gain_fill_ = 0.0, power_log_gain_vent_ = 0.0;
   /// Per chamber: play operator states (weighted_pi: three plays, then the smooth element's z and last strain).
   std::array<std::vector<double>, 3> play_{};
   std::array<double, 3> creep_{};
@@ -147,6 +150,9 @@ class Actuator {
   /// Each chamber's bending direction (cos, sin), computed once (not three
   /// sincos per internal step).
   std::array<std::array<double, 2>, 3> bend_direction_{};
+  double lever_ = 0.0;        ///< bending per unit strain: 2 length / (3 chamber radius), computed once
+  double omega_ = 0.0;        ///< the bending mode's natural frequency (rad/s), unstiffened
+  double piece_limit_ = 0.0;  ///< bendingPieces' largest stable w dt: the root of a^2 + 4 zeta a = 2
   /// The sensor's x axis tilted by sensor_bias (x and z of Ry(tilt - pi/2) e_x), computed once.
   std::array<double, 2> tilted_x_axis_{};
   bool weighted_pi_ = false;

@@ -13,7 +13,15 @@ with the identified reference (the default) and without it
 CPU time (user + system, every thread, from wait4's rusage) are printed with
 the effects it selected; --json FILE writes them.
 
-Usage: python3 bench/diagnose_cost.py [--build build] [--seed 1] [--repeats 1] [--json FILE]
+--against OTHER_BUILD measures a change: every diagnosis is also run by that
+build's plsa, the two in turn (this build first) --repeats times each, so
+that both meet the same load on a shared host; each mode then carries the
+other build's medians and the ratio of this build's to them. --cases NAMES
+keeps only the cases whose names contain one of NAMES (comma-separated,
+e.g. pneumatic_lag,null).
+
+Usage: python3 bench/diagnose_cost.py [--build build] [--seed 1] [--repeats 1] [--against build]
+                                      [--cases NAMES] [--json FILE]
 """
 import argparse
 import glob
@@ -78,23 +86,49 @@ def record_cases(exe, tmp, seed, effects):
     return cases
 
 
-def diagnose_case(exe, tmp, sim, name, train, heldout, repeats):
-    """Per mode (with and without the identified reference): median CPU s, median wall s, what was selected."""
+def summary(times, out):
+    """Median CPU and wall seconds of `times` and what the diagnosis written to `out` found."""
+    with open(os.path.join(out, "diagnosis.json")) as f:
+        d = json.load(f)
+    return {"cpu_s": statistics.median(t[0] for t in times), "wall_s": statistics.median(t[1] for t in times),
+            "selected": d["selected"],
+            "reference_gap_percent": d["identified_reference"]["heldout_gap_percent"]
+            if d["identified_reference"]["available"] else None,
+            "gap_after_percent": d["gap_after"]}
+
+
+def diagnose_case(exes, tmp, sim, name, train, heldout, repeats):
+    """Per mode (with and without the identified reference): median CPU s, median wall s, what was selected;
+    with a second plsa in `exes`, its figures as "against" and the ratios, the two run in turn."""
     run1, run2 = os.path.join(tmp, name + "_run1.csv"), os.path.join(tmp, name + "_run2.csv")
     split_training(train, run1, run2)
     result = {}
     for mode, extra in (("with_reference", []), ("without_reference", ["--no-identified-reference"])):
-        out = os.path.join(tmp, name + "_" + mode)
-        cmd = [exe, "diagnose", "--sim", sim, "--real", run1, "--real", run2, "--real", heldout, "--out", out] + extra
-        times = [measured(cmd, "diagnose_cost")[1:] for _ in range(repeats)]
-        with open(os.path.join(out, "diagnosis.json")) as f:
-            d = json.load(f)
-        result[mode] = {"cpu_s": statistics.median(t[0] for t in times),
-                        "wall_s": statistics.median(t[1] for t in times), "selected": d["selected"],
-                        "reference_gap_percent": d["identified_reference"]["heldout_gap_percent"]
-                        if d["identified_reference"]["available"] else None,
-                        "gap_after_percent": d["gap_after"]}
+        outs = [os.path.join(tmp, f"{name}_{mode}_{k}") for k in range(len(exes))]
+        times = [[] for _ in exes]
+        for _ in range(repeats):
+            for k, exe in enumerate(exes):
+                cmd = [exe, "diagnose", "--sim", sim, "--real", run1, "--real", run2, "--real", heldout,
+                       "--out", outs[k]] + extra
+                times[k].append(measured(cmd, "diagnose_cost")[1:])
+        result[mode] = summary(times[0], outs[0])
+        if len(exes) > 1:
+            other = summary(times[1], outs[1])
+            result[mode]["against"] = other
+            result[mode]["wall_ratio"] = result[mode]["wall_s"] / other["wall_s"]
+            result[mode]["cpu_ratio"] = result[mode]["cpu_s"] / other["cpu_s"]
     return result
+
+
+def line(mode, m):
+    """One mode's figures as printed (with --against, the other build's and the ratio)."""
+    text = (f"{mode.replace('_', ' ')} wall {m['wall_s']:.1f} s, CPU {m['cpu_s']:.1f} s, selected "
+            f"{'+'.join(m['selected']) or 'nothing'}")
+    if "against" in m:
+        o = m["against"]
+        text += (f" (against: wall {o['wall_s']:.1f} s, CPU {o['cpu_s']:.1f} s, selected "
+                 f"{'+'.join(o['selected']) or 'nothing'}; ratio wall {m['wall_ratio']:.2f}, CPU {m['cpu_ratio']:.2f})")
+    return text
 
 
 def main():
@@ -102,21 +136,29 @@ def main():
     ap.add_argument("--build", default=default_build())
     ap.add_argument("--seed", type=int, default=1, help="the first case's seed (default 1)")
     ap.add_argument("--repeats", type=int, default=1, help="diagnoses per case and mode (default 1; the median is kept)")
+    ap.add_argument("--against", metavar="BUILD", help="another build whose plsa runs every diagnosis too, in turn")
+    ap.add_argument("--cases", help="only the cases whose names contain one of these (comma-separated)")
     ap.add_argument("--json", metavar="FILE", help="write the figures here")
     a = ap.parse_args()
-    exe = plsa_exe(a.build, "diagnose_cost")
+    if a.repeats < 1:
+        raise SystemExit("diagnose_cost: --repeats must be at least 1")
+    exes = [plsa_exe(a.build, "diagnose_cost")] + ([plsa_exe(a.against, "diagnose_cost")] if a.against else [])
+    wanted = [w for w in (a.cases or "").split(",") if w]
     figures = {"seed": a.seed, "repeats": a.repeats, "cases": []}
+    if a.against:
+        figures["against"] = os.path.abspath(a.against)
     with tempfile.TemporaryDirectory() as tmp:
         sim = os.path.join(tmp, "sim_all_off.json")
-        effects = nominal_config(exe, sim)
-        for name, (train, heldout) in record_cases(exe, tmp, a.seed, effects).items():
+        effects = nominal_config(exes[0], sim)
+        cases = record_cases(exes[0], tmp, a.seed, effects)
+        chosen = {n: c for n, c in cases.items() if not wanted or any(w in n for w in wanted)}
+        if not chosen:
+            raise SystemExit(f"diagnose_cost: no case matches --cases {a.cases}; the cases: {', '.join(cases)}")
+        for name, (train, heldout) in chosen.items():
             say(f"diagnose_cost: {name}")
-            figures["cases"].append({"case": name, **diagnose_case(exe, tmp, sim, name, train, heldout, a.repeats)})
+            figures["cases"].append({"case": name, **diagnose_case(exes, tmp, sim, name, train, heldout, a.repeats)})
     for c in figures["cases"]:
-        print(c["case"] + ": " + "; ".join(
-            f"{mode.replace('_', ' ')} wall {m['wall_s']:.1f} s, CPU {m['cpu_s']:.1f} s, selected "
-            f"{'+'.join(m['selected']) or 'nothing'}" for mode, m in ((k, c[k]) for k in
-                                                                      ("with_reference", "without_reference"))))
+        print(c["case"] + ": " + "; ".join(line(mode, c[mode]) for mode in ("with_reference", "without_reference")))
     if a.json:
         with open(a.json + ".part", "w") as f:
             json.dump(figures, f, indent=1)

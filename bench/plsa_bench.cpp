@@ -517,9 +517,7 @@ BENCHMARK(BM_DemoUpdateUntracked)->Name("Predictor<>::update (the demo's model, 
 plsa::sim::SimConfig everyEffectOff() {
   plsa::sim::SimConfig c;
   c.sensor.noise_deg = 0.0;
-  for (bool* on : {&c.deadzone.enabled, &c.hysteresis.enabled, &c.stiffening.enabled, &c.coupling.enabled,
-                   &c.pneumatic_lag.enabled, &c.creep.enabled, &c.sensor_bias.enabled})
-    *on = false;
+  for (const std::string& effect : plsa::sim::effectNames()) c.setEffectEnabled(effect, false);
   c.internal_step_s = 0.004;
   return c;
 }
@@ -549,7 +547,7 @@ BENCHMARK(BM_ReplayEffectsOff)
 // everyEffectOff() with one effect on in its power law at `values` (by parameter name).
 plsa::sim::SimConfig withPowerLaw(const std::string& effect, const std::map<std::string, double>& values) {
   plsa::sim::SimConfig c = everyEffectOff();
-  *(effect == "pneumatic_lag" ? &c.pneumatic_lag.enabled : &c.stiffening.enabled) = true;
+  c.setEffectEnabled(effect, true);
   c.formulationOf(effect) = "power";
   std::size_t set = 0;
   for (const plsa::sim::ParamRef& p : c.parameters(effect))

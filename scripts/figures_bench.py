@@ -209,8 +209,8 @@ def gbench_row(b):
     step = b.get("per_internal_step")
     per_step = f", {step * 1e9:.0f} ns per internal step" if step else ""
     t = b["real_time"]
-    return f"- {b['name']}: {t:.0f} {b['time_unit']} (mean of {calls}{per_step})" if t >= 10 else \
-        f"- {b['name']}: {t:.3g} {b['time_unit']} (mean of {calls}{per_step})"
+    time = f"{t:.0f}" if t >= 10 else f"{t:.3g}"
+    return f"- {b['name']}: {time} {b['time_unit']} (mean of {calls}{per_step})"
 
 
 def bench_gbench(build, dry_run):

@@ -153,13 +153,13 @@ std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delaye
   for (std::size_t i = 0; i < 3; ++i) {
     double source = delayed[i];
     if (line_blend_ > 0.0) source = line_pressure_[i] += (delayed[i] - line_pressure_[i]) * line_blend_;
-    const double tau =
-        lag ? (source > pressure_[i] ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
-            : c.pneumatics.time_constant_s;
+    const bool filling = source > pressure_[i];
+    const double tau = lag ? (filling ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
+                           : c.pneumatics.time_constant_s;
     double drive = source - pressure_[i];
     double rate = 0.0;
     if (lag && flow_law_ == FlowLaw::kPower) {
-      rate = powerLawRate(drive, source > pressure_[i], pressure_[i]);
+      rate = powerLawRate(drive, filling, pressure_[i]);
     } else {
       // Laws equal to the linear one at a 0.1 bar difference (choked: below 0.05 bar).
       if (lag && flow_law_ == FlowLaw::kOrifice) drive = std::copysign(std::sqrt(std::abs(drive) * 0.1), drive);

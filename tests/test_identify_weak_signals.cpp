@@ -199,6 +199,33 @@ TEST(Pipeline, EveryOutputWeakKeepsTheStaircasePartition) {
   expectStaircaseSplits(m, rep);
 }
 
+// The staircase logged without its command and with a noisy pressure
+// sensor (3 mbar): the pressure is its own reference, its noise cuts it at
+// nearly every sample, and its plateaus give back the commanded steps and
+// the same splits. (Pipeline.StaircaseWithoutCommandsStepsOnThePressuresPlateaus
+// compares the fits held out on the simulator, in the Release stage.)
+TEST(Pipeline, AStaircaseWithoutItsCommandStepsOnThePressuresPlateaus) {
+  const io::Log commanded = staircaseLog(Weakness::kOneWeak);
+  io::Log pressure_only = blankLog("no_command.csv", {"time_s", "p_1", "strong", "weak"}, commanded.samples());
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  pressure_only.data << commanded.data.col(0), commanded.data.col(2), commanded.data.col(3), commanded.data.col(4);
+  for (Eigen::Index k = 0; k < pressure_only.samples(); ++k) pressure_only.data(k, 1) += noise(rng);
+  const IdentifyOptions o = partitionOnly({"p_1"}, {"strong", "weak"});
+  IdentifyReport with, without;
+  identifyModel({commanded}, o, &with);
+  const DioPwlObfModel m = identifyModel({pressure_only}, o, &without);
+  EXPECT_FALSE(with.references_from_plateaus);
+  ASSERT_TRUE(without.references_from_plateaus) << progressLine(without, "[2/5]");
+  EXPECT_EQ(without.segments, with.segments);
+  ASSERT_EQ(m.partition.breakpoints().size(), 1u);
+  const auto& b = m.partition.breakpoints()[0];
+  ASSERT_EQ(b.size(), 6u);
+  for (std::size_t i = 0; i < b.size(); ++i) EXPECT_NEAR(b[i], 0.075 + 0.05 * static_cast<double>(i), 0.002);
+  EXPECT_NE(progressLine(without, "[2/5] step references:").find(std::to_string(with.segments) + " step segments"),
+            std::string::npos);
+}
+
 // One step's single local pole is too few to place a bank's five: local
 // windows are fitted too, but while the steps' model (five times the one
 // pole, a Laguerre basis) scores above window_poles_below, their poles are

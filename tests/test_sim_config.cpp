@@ -22,7 +22,10 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
   c.creep.enabled = false;
   c.hysteresis.formulation = "prandtl_ishlinskii";
   c.coupling.per_bar = 0.5;
+  c.integrator = "exponential";
   const SimConfig back = simConfigFromJson(simConfigToJson(c));
+  EXPECT_EQ(back.integrator, "exponential");
+  EXPECT_EQ(SimConfig{}.integrator, "euler");
   EXPECT_FALSE(back.creep.enabled);
   EXPECT_EQ(back.hysteresis.formulation, "prandtl_ishlinskii");
   EXPECT_EQ(back.coupling.per_bar, 0.5);
@@ -39,6 +42,9 @@ TEST(SimConfig, JsonRoundTripAndErrors) {
   EXPECT_NE(error(R"({"creep": {"enabled": "yes"}})").find("true or false"), std::string::npos);
   EXPECT_NE(error(R"({"deadzone": {"formulation": "round"}})").find("formulation 'round'"), std::string::npos);
   EXPECT_NE(error(R"({"bogus": {}})").find("unknown section 'bogus'"), std::string::npos);
+  EXPECT_NE(error(R"({"integrator": "rk4"})").find("integrator 'rk4' is not one of euler, exponential"),
+            std::string::npos);
+  EXPECT_NE(error(R"({"integrator": 1})").find("cfg.json: integrator must be a string"), std::string::npos);
   EXPECT_NE(error("{").find("not valid JSON"), std::string::npos);
   // A number beyond double range escaped as a raw library exception; a key given twice kept the last.
   EXPECT_NE(error(R"({"sample_rate_hz": 1e400})").find("cfg.json: not valid JSON"), std::string::npos);

@@ -18,6 +18,26 @@ Eigen::Matrix3d rotY(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::Un
 
 double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
 
+// The exact step of x'' = -w^2 x - 2 zeta w x' over h: exp(A h) for
+// A = [0 1; -w^2 -2 zeta w], as (x from x, x from x', x' from x, x' from x').
+// exp(A h) = e^(-a h) (C I + S (A + a I)), a = zeta w, with C and S the
+// cosine and the sine over s (s = w sqrt(|1 - zeta^2|)) of s h, hyperbolic
+// when overdamped, and 1 and h at critical damping.
+std::array<double, 4> dampedTransition(double omega, double zeta, double h) {
+  const double a = zeta * omega, split = 1.0 - zeta * zeta, s = omega * std::sqrt(std::abs(split));
+  double c = 1.0, sine_over_s = h;
+  if (s * h > 1e-6) {
+    c = split > 0.0 ? std::cos(s * h) : std::cosh(s * h);
+    sine_over_s = (split > 0.0 ? std::sin(s * h) : std::sinh(s * h)) / s;
+  }
+  const double decay = std::exp(-a * h);
+  return {decay * (c + a * sine_over_s), decay * sine_over_s, -decay * omega * omega * sine_over_s,
+          decay * (c - a * sine_over_s)};
+}
+
+// The share of its distance to a held source a first-order part covers in h.
+double reachIn(double h, double time_constant_s) { return -std::expm1(-h / time_constant_s); }
+
 }  // namespace
 
 void anglesFromRotation(const Eigen::Matrix3d& b_a_g, double& bend_deg, double& steer_deg) {
@@ -99,6 +119,15 @@ Actuator::Actuator(const SimConfig& config, std::uint64_t seed) : config_(config
   omega_ = 2.0 * kPi * config_.bending.natural_freq_hz;
   const double zeta = config_.bending.damping_ratio;
   piece_limit_ = std::sqrt(4.0 * zeta * zeta + 2.0) - 2.0 * zeta;  // the root of a^2 + 4 zeta a = 2
+  exponential_ = config_.integrator == "exponential";
+  const auto& lag = config_.pneumatic_lag;
+  linear_flow_ = !lag.enabled || flow_law_ == FlowLaw::kLinear;
+  reach_fill_ = reachIn(dt_, lag.enabled ? lag.fill_time_constant_s : config_.pneumatics.time_constant_s);
+  reach_vent_ = reachIn(dt_, lag.enabled ? lag.vent_time_constant_s : config_.pneumatics.time_constant_s);
+  reach_creep_ = reachIn(dt_, config_.creep.time_constant_s);
+  reach_creep_fast_ = reachIn(dt_, 0.2 * config_.creep.time_constant_s);
+  reach_creep_slow_ = reachIn(dt_, 2.0 * config_.creep.time_constant_s);
+  bend_transition_ = dampedTransition(omega_, zeta, dt_);
   for (std::size_t i = 0; i < 3; ++i) {
     const double dir = config_.geometry.bend_direction_deg[i] * kRadPerDeg;
     bend_direction_[i] = {std::cos(dir), std::sin(dir)};
@@ -156,7 +185,8 @@ std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delaye
     const bool filling = source > pressure_[i];
     const double tau = lag ? (filling ? c.pneumatic_lag.fill_time_constant_s : c.pneumatic_lag.vent_time_constant_s)
                            : c.pneumatics.time_constant_s;
-    double drive = source - pressure_[i];
+    const double gap = source - pressure_[i];
+    double drive = gap;
     double rate = 0.0;
     if (lag && flow_law_ == FlowLaw::kPower) {
       rate = powerLawRate(drive, filling, pressure_[i]);
@@ -166,10 +196,24 @@ std::array<double, 3> Actuator::fillChambers(const std::array<double, 3>& delaye
       if (lag && flow_law_ == FlowLaw::kChoked) drive = std::clamp(drive, -0.05, 0.05);
       rate = drive / tau;
     }
-    pressure_[i] += std::clamp(rate, -max_rate, max_rate) * dt_;
+    pressure_[i] += exponential_ ? chamberChange(gap, rate, filling) : std::clamp(rate, -max_rate, max_rate) * dt_;
     p_eff[i] = effectivePressure(pressure_[i]);
   }
   return p_eff;
+}
+
+// The exponential integrator's chamber step: the linear law's exact one; a
+// nonlinear law's at the time constant its rate has at the step's start
+// (gap / rate), which neither overshoots the source nor rings at a long
+// step; then the flow limit.
+double Actuator::chamberChange(double gap, double rate, bool filling) const {
+  const double limit = config_.pneumatics.max_rate_bar_per_s * dt_;
+  double change = 0.0;
+  if (linear_flow_)
+    change = gap * (filling ? reach_fill_ : reach_vent_);
+  else if (gap != 0.0)
+    change = -gap * std::expm1(-rate / gap * dt_);
+  return std::clamp(change, -limit, limit);
 }
 
 // A chamber's strain through its play operators, when hysteresis is on.
@@ -220,11 +264,19 @@ double Actuator::smoothElement(double& z, double& last_strain, double strain) co
 double Actuator::creepStrain(std::size_t i, double strain) {
   const SimConfig::Creep& c = config_.creep;
   if (two_rate_creep_) {
-    creep_[i] += (0.5 * c.fraction * strain - creep_[i]) / (0.2 * c.time_constant_s) * dt_;
-    creep_slow_[i] += (0.5 * c.fraction * strain - creep_slow_[i]) / (2.0 * c.time_constant_s) * dt_;
+    if (exponential_) {
+      creep_[i] += (0.5 * c.fraction * strain - creep_[i]) * reach_creep_fast_;
+      creep_slow_[i] += (0.5 * c.fraction * strain - creep_slow_[i]) * reach_creep_slow_;
+    } else {
+      creep_[i] += (0.5 * c.fraction * strain - creep_[i]) / (0.2 * c.time_constant_s) * dt_;
+      creep_slow_[i] += (0.5 * c.fraction * strain - creep_slow_[i]) / (2.0 * c.time_constant_s) * dt_;
+    }
     return strain + creep_[i] + creep_slow_[i];
   }
-  creep_[i] += (c.fraction * strain - creep_[i]) / c.time_constant_s * dt_;
+  if (exponential_)
+    creep_[i] += (c.fraction * strain - creep_[i]) * reach_creep_;
+  else
+    creep_[i] += (c.fraction * strain - creep_[i]) / c.time_constant_s * dt_;
   return strain + creep_[i];
 }
 
@@ -251,6 +303,10 @@ void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
   // spring(theta) = theta, or theta (1 + per_rad2 |theta|^2) for a hardening "power" stiffening.
   const bool hardening =
       c.stiffening.enabled && stiffening_law_ == StiffeningLaw::kPower && c.stiffening.per_rad2 > 0.0;
+  if (exponential_ && !hardening) {
+    bendExactly(target, omega);
+    return;
+  }
   const int pieces = bendingPieces(omega, hardening ? 1.0 + 3.0 * c.stiffening.per_rad2 * bend_.squaredNorm() : 1.0);
   const double h = dt_ / pieces;
   for (int k = 0; k < pieces; ++k) {
@@ -259,6 +315,23 @@ void Actuator::bendToward(Eigen::Vector2d target, double sum_p) {
     bend_rate_ += (omega * omega * (target - spring) - 2.0 * c.bending.damping_ratio * omega * bend_rate_) * h;
     bend_ += bend_rate_ * h;
   }
+}
+
+// The exponential integrator's bending step: exact for the mode toward a
+// target moving at a constant rate r over the step, from the last step's
+// target to this one's (the chambers' pressures move through a step; a
+// held target lags them by half a step). Against a moving target the mode
+// settles 2 zeta r / w behind it: the distance u = theta - target + 2 zeta
+// r / w and its rate u' = theta' - r are a free damped mode (the
+// unstiffened one's transition taken once).
+void Actuator::bendExactly(const Eigen::Vector2d& target, double omega) {
+  const double zeta = config_.bending.damping_ratio;
+  const std::array<double, 4> t = omega == omega_ ? bend_transition_ : dampedTransition(omega, zeta, dt_);
+  const Eigen::Vector2d rate = (target - last_target_) / dt_, behind = 2.0 * zeta / omega * rate;
+  const Eigen::Vector2d u = bend_ - last_target_ + behind, u_rate = bend_rate_ - rate;
+  bend_ = target - behind + t[0] * u + t[1] * u_rate;
+  bend_rate_ = rate + t[2] * u + t[3] * u_rate;
+  last_target_ = target;
 }
 
 // The pieces one substep's bending is integrated in. Semi-implicit Euler on

@@ -111,6 +111,11 @@ const std::vector<std::string>& formulationsOf(const std::string& module) {
   return it->second;
 }
 
+const std::vector<std::string>& integratorNames() {
+  static const std::vector<std::string> names = {"euler", "exponential"};
+  return names;
+}
+
 std::string flexibleFormulationOf(const std::string& effect) {
   const auto& laws = formulationsOf(effect);
   if (effect == "hysteresis") return "weighted_pi";
@@ -164,6 +169,8 @@ void SimConfig::validate() const {
       throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " + list);
     }
   }
+  if (std::find(integratorNames().begin(), integratorNames().end(), integrator) == integratorNames().end())
+    throw std::invalid_argument("sim config: integrator '" + integrator + "' is not one of euler, exponential");
   // Chamber directions: angles on the circle (1e300 was taken), the three apart (at one direction the
   // segment bends in one plane and the steering subspaces are empty).
   for (std::size_t i = 0; i < 3; ++i) {
@@ -232,6 +239,9 @@ SimConfig simConfigFromJson(const std::string& text, const std::string& source) 
           }
         if (!found) throw std::invalid_argument(source + ": unknown key '" + path + "'");
       }
+    } else if (key == "integrator") {
+      if (!it->is_string()) throw std::invalid_argument(source + ": integrator must be a string");
+      c.integrator = it->get<std::string>();
     } else {
       bool found = false;
       for (auto& f : table)
@@ -263,6 +273,7 @@ std::string simConfigToJson(const SimConfig& config) {
     else
       j[f.module][f.ref.name] = *f.ref.value;
   }
+  j["integrator"] = c.integrator;
   j["geometry"]["bend_direction_deg"] = c.geometry.bend_direction_deg;
   for (const auto& e : effectNames()) j[e]["enabled"] = c.effectEnabled(e);
   for (const auto& e : effectNames()) j[e]["formulation"] = *formulation(const_cast<SimConfig&>(c), e);

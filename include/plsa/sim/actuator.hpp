@@ -105,6 +105,11 @@ class Actuator {
   double smoothElement(double& z, double& last_strain, double strain) const;
   double creepStrain(std::size_t chamber, double strain);
   void bendToward(Eigen::Vector2d target, double sum_p);
+  /// The bending mode's exact step toward `target` (reached from the last step's at a constant rate) at `omega`.
+  void bendExactly(const Eigen::Vector2d& target, double omega);
+  /// The exponential integrator's change of a chamber's pressure over one
+  /// internal step, `gap` below its source, at `rate` (bar/s, before the flow limit).
+  double chamberChange(double gap, double rate, bool filling) const;
   int bendingPieces(double omega, double spring_slope) const;
   static constexpr int kMaxBendingPieces = 100000;  ///< a bound on the work of one substep
   /// A chamber's pressure past the deadzone (the smooth law out of line).
@@ -153,6 +158,16 @@ class Actuator {
   double lever_ = 0.0;        ///< bending per unit strain: 2 length / (3 chamber radius), computed once
   double omega_ = 0.0;        ///< the bending mode's natural frequency (rad/s), unstiffened
   double piece_limit_ = 0.0;  ///< bendingPieces' largest stable w dt: the root of a^2 + 4 zeta a = 2
+  // The "exponential" integrator's exact steps, taken once: the share of
+  // a first-order part's distance to its source covered in a step (the
+  // linear flow law's fill and vent, creep's one or two rates) and the
+  // unstiffened bending mode's transition (position and rate, each from
+  // the distance to the target and from the rate).
+  bool exponential_ = false;
+  bool linear_flow_ = true;  ///< a chamber's rate is its drive over a time constant
+  double reach_fill_ = 0.0, reach_vent_ = 0.0, reach_creep_ = 0.0, reach_creep_fast_ = 0.0, reach_creep_slow_ = 0.0;
+  std::array<double, 4> bend_transition_{};
+  Eigen::Vector2d last_target_ = Eigen::Vector2d::Zero();  ///< the bending's target at the last step's end
   /// The sensor's x axis tilted by sensor_bias (x and z of Ry(tilt - pi/2) e_x), computed once.
   std::array<double, 2> tilted_x_axis_{};
   bool weighted_pi_ = false;

@@ -31,6 +31,13 @@ inline constexpr double kMinSampleRateHz = 1.0, kMaxSampleRateHz = 10000.0;
 struct SimConfig {
   double sample_rate_hz = 80.0;
   double internal_step_s = 0.001;
+  /// How an internal step integrates the linear parts: "euler" (explicit
+  /// Euler chambers and creep, semi-implicit Euler bending) or
+  /// "exponential": each first-order part's exact step (a nonlinear flow
+  /// law's at the rate it has at the step's start) and the bending mode's
+  /// exact step toward the target held over the step (a hardening spring
+  /// keeps semi-implicit Euler), accurate at steps several times longer.
+  std::string integrator = "euler";
   double max_pressure_bar = 0.4;  ///< commands are clamped to [0, this]
 
   struct Geometry {
@@ -179,6 +186,9 @@ struct SimConfig {
 
 /// The formulations an effect can take, its default first.
 const std::vector<std::string>& formulationsOf(const std::string& effect);
+
+/// SimConfig::integrator's values, the default first.
+const std::vector<std::string>& integratorNames();
 
 /// The effect's flexible law (one whose shape parameters span its fixed
 /// laws: "power" for stiffening and pneumatic_lag, "weighted_pi" for

@@ -158,6 +158,16 @@ void addCalibrationBudget(CLI::App* app, diagnose::DiagnoseOptions& o) {
   app->add_flag("--both-starts-in-later-rounds", o.both_starts_in_later_rounds,
                 "Later rounds calibrate every candidate from both its starts (default: a candidate that gained "
                 "nothing in round 1 from the start that did best for it there)");
+  app->add_option("--calibration-step", o.calibration_step_s,
+                  "The internal step (s) calibrations run at, or at half of it, where on the calibrated nominal "
+                  "physics it moves the training gap by a tenth of the noise floor or less (0: the configured step)")
+      ->check(CLI::Range(0.0, 0.01))
+      ->capture_default_str();
+  app->add_option("--calibration-integrator", o.calibration.coarse_integrator,
+                  "The simulator's integrator where calibrations run at a coarser internal step than configured "
+                  "(every reported gap is measured at the configured step and integrator)")
+      ->check(CLI::IsMember(sim::integratorNames()))
+      ->capture_default_str();
 }
 
 void addDiagnoseCommand(CLI::App& app) {

@@ -18,15 +18,20 @@ build's plsa, the two in turn (this build first) --repeats times each, so
 that both meet the same load on a shared host; each mode then carries the
 other build's medians and the ratio of this build's to them. --cases NAMES
 keeps only the cases whose names contain one of NAMES (comma-separated,
-e.g. pneumatic_lag,null).
+e.g. pneumatic_lag,null). --against-flags FLAGS: the other diagnoses also
+take these flags (e.g. "--calibration-integrator euler"); without
+--against, the other build is this one, so one build measures an option;
+--flags FLAGS: this build's diagnoses take these.
 
 Usage: python3 bench/diagnose_cost.py [--build build] [--seed 1] [--repeats 1] [--against build]
-                                      [--cases NAMES] [--json FILE]
+                                      [--flags FLAGS] [--against-flags FLAGS] [--cases NAMES]
+                                      [--json FILE]
 """
 import argparse
 import glob
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -94,12 +99,13 @@ def summary(times, out):
             "selected": d["selected"],
             "reference_gap_percent": d["identified_reference"]["heldout_gap_percent"]
             if d["identified_reference"]["available"] else None,
-            "gap_after_percent": d["gap_after"]}
+            "gap_after_percent": d["gap_after"], "calibration_step_s": d["calibration_step_s"],
+            "calibration_step_trials": d.get("calibration_step_trials", [])}
 
 
-def diagnose_case(exes, tmp, sim, name, train, heldout, repeats):
+def diagnose_case(exes, tmp, sims, name, train, heldout, repeats):
     """Per mode (with and without the identified reference): median CPU s, median wall s, what was selected;
-    with a second plsa in `exes`, its figures as "against" and the ratios, the two run in turn."""
+    with a second (plsa, flags) in `exes`, its figures as "against" and the ratios, the two run in turn."""
     run1, run2 = os.path.join(tmp, name + "_run1.csv"), os.path.join(tmp, name + "_run2.csv")
     split_training(train, run1, run2)
     result = {}
@@ -107,9 +113,9 @@ def diagnose_case(exes, tmp, sim, name, train, heldout, repeats):
         outs = [os.path.join(tmp, f"{name}_{mode}_{k}") for k in range(len(exes))]
         times = [[] for _ in exes]
         for _ in range(repeats):
-            for k, exe in enumerate(exes):
-                cmd = [exe, "diagnose", "--sim", sim, "--real", run1, "--real", run2, "--real", heldout,
-                       "--out", outs[k]] + extra
+            for k, (exe, flags) in enumerate(exes):
+                cmd = [exe, "diagnose", "--sim", sims[k], "--real", run1, "--real", run2, "--real", heldout,
+                       "--out", outs[k]] + extra + flags
                 times[k].append(measured(cmd, "diagnose_cost")[1:])
         result[mode] = summary(times[0], outs[0])
         if len(exes) > 1:
@@ -137,26 +143,33 @@ def main():
     ap.add_argument("--seed", type=int, default=1, help="the first case's seed (default 1)")
     ap.add_argument("--repeats", type=int, default=1, help="diagnoses per case and mode (default 1; the median is kept)")
     ap.add_argument("--against", metavar="BUILD", help="another build whose plsa runs every diagnosis too, in turn")
+    ap.add_argument("--flags", default="", metavar="FLAGS", help="flags this build's diagnoses take")
+    ap.add_argument("--against-flags", default="", metavar="FLAGS",
+                    help="flags the other build's diagnoses also take (without --against: this build)")
     ap.add_argument("--cases", help="only the cases whose names contain one of these (comma-separated)")
     ap.add_argument("--json", metavar="FILE", help="write the figures here")
     a = ap.parse_args()
     if a.repeats < 1:
         raise SystemExit("diagnose_cost: --repeats must be at least 1")
-    exes = [plsa_exe(a.build, "diagnose_cost")] + ([plsa_exe(a.against, "diagnose_cost")] if a.against else [])
+    exes = [(plsa_exe(a.build, "diagnose_cost"), shlex.split(a.flags))]
+    if a.against or a.against_flags:
+        exes.append((plsa_exe(a.against or a.build, "diagnose_cost"), shlex.split(a.against_flags)))
     wanted = [w for w in (a.cases or "").split(",") if w]
-    figures = {"seed": a.seed, "repeats": a.repeats, "cases": []}
-    if a.against:
-        figures["against"] = os.path.abspath(a.against)
+    figures = {"seed": a.seed, "repeats": a.repeats, "flags": a.flags, "cases": []}
+    if len(exes) > 1:
+        figures["against"] = os.path.abspath(a.against or a.build)
+        figures["against_flags"] = a.against_flags
     with tempfile.TemporaryDirectory() as tmp:
-        sim = os.path.join(tmp, "sim_all_off.json")
-        effects = nominal_config(exes[0], sim)
-        cases = record_cases(exes[0], tmp, a.seed, effects)
+        # Each build's own configuration file (an older build refuses a newer one's keys).
+        sims = [os.path.join(tmp, f"sim_all_off_{k}.json") for k in range(len(exes))]
+        effects = [nominal_config(exe, path) for (exe, _), path in zip(exes, sims)][0]
+        cases = record_cases(exes[0][0], tmp, a.seed, effects)
         chosen = {n: c for n, c in cases.items() if not wanted or any(w in n for w in wanted)}
         if not chosen:
             raise SystemExit(f"diagnose_cost: no case matches --cases {a.cases}; the cases: {', '.join(cases)}")
         for name, (train, heldout) in chosen.items():
             say(f"diagnose_cost: {name}")
-            figures["cases"].append({"case": name, **diagnose_case(exes, tmp, sim, name, train, heldout, a.repeats)})
+            figures["cases"].append({"case": name, **diagnose_case(exes, tmp, sims, name, train, heldout, a.repeats)})
     for c in figures["cases"]:
         print(c["case"] + ": " + "; ".join(line(mode, c[mode]) for mode in ("with_reference", "without_reference")))
     if a.json:

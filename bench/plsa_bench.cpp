@@ -555,22 +555,49 @@ plsa::sim::SimConfig withPowerLaw(const std::string& effect, const std::map<std:
   if (set != values.size()) throw std::invalid_argument("plsa-bench: a parameter of " + effect + " misnamed");
   return c;
 }
-void BM_ReplayPowerLag(benchmark::State& state) {
-  actuatorReplay(state, withPowerLaw("pneumatic_lag", {{"fill_time_constant_s", 0.035},
-                                                       {"vent_time_constant_s", 0.042},
-                                                       {"delay_s", 0.030},
-                                                       {"exponent", 0.89},
-                                                       {"pressure_per_bar", -1.97},
-                                                       {"line_time_constant_s", 0.018}}));
+plsa::sim::SimConfig calibratedPowerLag() {
+  return withPowerLaw("pneumatic_lag", {{"fill_time_constant_s", 0.035},
+                                        {"vent_time_constant_s", 0.042},
+                                        {"delay_s", 0.030},
+                                        {"exponent", 0.89},
+                                        {"pressure_per_bar", -1.97},
+                                        {"line_time_constant_s", 0.018}});
 }
+plsa::sim::SimConfig powerStiffening() {
+  return withPowerLaw("stiffening", {{"per_bar", 10.0}, {"exponent", 1.3}, {"static_share", 0.4}});
+}
+void BM_ReplayPowerLag(benchmark::State& state) { actuatorReplay(state, calibratedPowerLag()); }
 BENCHMARK(BM_ReplayPowerLag)
     ->Name("sim::Actuator, 120 s replay at 4 ms (power pneumatic lag)")
     ->Unit(benchmark::kMillisecond);
-void BM_ReplayPowerStiffening(benchmark::State& state) {
-  actuatorReplay(state, withPowerLaw("stiffening", {{"per_bar", 10.0}, {"exponent", 1.3}, {"static_share", 0.4}}));
-}
+void BM_ReplayPowerStiffening(benchmark::State& state) { actuatorReplay(state, powerStiffening()); }
 BENCHMARK(BM_ReplayPowerStiffening)
     ->Name("sim::Actuator, 120 s replay at 4 ms (power stiffening)")
+    ->Unit(benchmark::kMillisecond);
+// The same three as the diagnosis calibrates them: the exponential
+// integrator at one 12.5 ms step a sample (internal_step_s 0.01 at 80 Hz).
+plsa::sim::SimConfig exponentialOneStepASample(plsa::sim::SimConfig c) {
+  c.integrator = "exponential";
+  c.internal_step_s = 0.01;
+  return c;
+}
+void BM_ReplayEffectsOffExponential(benchmark::State& state) {
+  actuatorReplay(state, exponentialOneStepASample(everyEffectOff()));
+}
+BENCHMARK(BM_ReplayEffectsOffExponential)
+    ->Name("sim::Actuator, 120 s replay at 12.5 ms, exponential (every effect off)")
+    ->Unit(benchmark::kMillisecond);
+void BM_ReplayPowerLagExponential(benchmark::State& state) {
+  actuatorReplay(state, exponentialOneStepASample(calibratedPowerLag()));
+}
+BENCHMARK(BM_ReplayPowerLagExponential)
+    ->Name("sim::Actuator, 120 s replay at 12.5 ms, exponential (power pneumatic lag)")
+    ->Unit(benchmark::kMillisecond);
+void BM_ReplayPowerStiffeningExponential(benchmark::State& state) {
+  actuatorReplay(state, exponentialOneStepASample(powerStiffening()));
+}
+BENCHMARK(BM_ReplayPowerStiffeningExponential)
+    ->Name("sim::Actuator, 120 s replay at 12.5 ms, exponential (power stiffening)")
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -365,6 +365,15 @@ TEST(Diagnose, BadRunsAreRejectedWithTheirReason) {
     EXPECT_NE(std::string(e.what()).find("'nominal.damping_ratio'"), std::string::npos) << e.what();
   }
   o.calibration.held.clear();
+  o.calibration.coarse_integrator = "rk4";
+  try {
+    runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
+    ADD_FAILURE() << "an unknown integrator was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("coarse_integrator 'rk4' is not one of euler, exponential"), std::string::npos)
+        << e.what();
+  }
+  o.calibration.coarse_integrator = "exponential";
   o.candidates = {"creep", "deadzone", "creep"};  // tried twice, it would be its own runner-up
   try {
     runDiagnosis(sim::probes::everyEffectOff(), {recorded(sim::probes::everyEffectOff(), 20, 1)}, o);
@@ -504,6 +513,12 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   ASSERT_LT(sim::probes::everyEffectOff().internal_step_s, o.calibration_step_s);
   EXPECT_EQ(d.calibration_step_s, o.calibration_step_s);
   EXPECT_EQ(j["calibration_step_s"], o.calibration_step_s);
+  // ...by the coarse integrator; what it returns keeps the configured step and integrator.
+  ASSERT_NE(o.calibration.coarse_integrator, sim::probes::everyEffectOff().integrator);
+  for (const sim::SimConfig& c : {d.calibrated, d.final_config}) {
+    EXPECT_EQ(c.integrator, sim::probes::everyEffectOff().integrator);
+    EXPECT_EQ(c.internal_step_s, sim::probes::everyEffectOff().internal_step_s);
+  }
   // How each calibration went: its starts, runs and where each start ended.
   EXPECT_EQ(d.ranking[0].starts, 2);
   EXPECT_EQ(d.ranking[0].train_gap_per_start.size(), 2u);
@@ -658,6 +673,7 @@ sim::SimConfig smoothLoopTruth() {
   h.weight_narrow = h.weight_mid = h.weight_wide = 0.0;
   h.weight_smooth = 0.5;
   h.smooth_saturation = 0.8;
+  truth.internal_step_s = 1e-4;  // continuous, as hardware: no integrator error for a candidate to absorb
   return truth;
 }
 

@@ -231,15 +231,18 @@ std::vector<CalibrationStart> spreadFor(const sim::SimConfig& c, const std::stri
   return spread;
 }
 
-sim::SimConfig atLeastStep(sim::SimConfig c, double step_s) {
-  c.internal_step_s = std::max(c.internal_step_s, step_s);
+sim::SimConfig atLeastStep(sim::SimConfig c, double step_s, const std::string& integrator) {
+  if (!(step_s > c.internal_step_s)) return c;
+  c.internal_step_s = step_s;
+  c.integrator = integrator;
   return c;
 }
 
 CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, const std::vector<std::string>& modules,
                                   const std::vector<RunData>& train, const CalibrationOptions& o) {
-  CalibrationResult r = calibrate(atLeastStep(start, step_s), modules, train, o);
+  CalibrationResult r = calibrate(atLeastStep(start, step_s, o.coarse_integrator), modules, train, o);
   r.config.internal_step_s = start.internal_step_s;
+  r.config.integrator = start.integrator;
   return r;
 }
 

@@ -40,12 +40,14 @@ struct Screening {
   double step_s = 0.0;
 };
 
-/// `c` with its internal step raised to at least `step_s`.
-sim::SimConfig atLeastStep(sim::SimConfig c, double step_s);
+/// `c` with its internal step raised to at least `step_s`, and where that
+/// raises it, integrated by `integrator`.
+sim::SimConfig atLeastStep(sim::SimConfig c, double step_s, const std::string& integrator);
 
-/// `calibrate` with the simulator's internal step at least `step_s`; the
-/// result's configuration carries `start`'s step again (its training gap
-/// and output map are the coarser step's).
+/// `calibrate` with the simulator's internal step at least `step_s` (where
+/// coarser, integrated by `o.coarse_integrator`); the result's
+/// configuration carries `start`'s step and integrator again (its training
+/// gap and output map are the coarser step's).
 CalibrationResult calibrateCoarse(const sim::SimConfig& start, double step_s, const std::vector<std::string>& modules,
                                   const std::vector<RunData>& train, const CalibrationOptions& o);
 

@@ -132,7 +132,7 @@ double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const
   const DiagnoseOptions& o = x.o;
   for (double step : {o.calibration_step_s, o.calibration_step_s / 2.0}) {
     if (!(step > calibrated.internal_step_s)) break;
-    const sim::SimConfig coarse = atLeastStep(calibrated, step);
+    const sim::SimConfig coarse = atLeastStep(calibrated, step, o.calibration.coarse_integrator);
     const double moved = std::abs(measureGap(coarse, x.runs.train, o.calibration.gap).percent() - train.percent());
     tried.emplace_back(step, moved);
     if (moved <= o.coarse_step_tolerance * noise.percent()) return step;
@@ -141,16 +141,26 @@ double calibrationStep(const sim::SimConfig& calibrated, const Gap& train, const
 }
 
 // The progress line naming the calibrations' step and why.
-std::string calibrationStepLine(const Diagnosis& d, const DiagnoseOptions& o) {
+std::string calibrationStepLine(const Diagnosis& d, const DiagnoseOptions& o, double sample_time_s) {
   std::string s = "plsa diagnose: candidates calibrated at a " + significantDigits(1e3 * d.calibration_step_s, 3) +
                   " ms internal step";
+  // As the simulator takes it: a whole number of steps a sample.
+  const double per_sample = std::max(1.0, std::round(sample_time_s / d.calibration_step_s)),
+               taken = sample_time_s / per_sample;
+  if (std::abs(taken - d.calibration_step_s) > 1e-9)
+    s += ", " + significantDigits(1e3 * taken, 3) + " ms at the runs' " + significantDigits(1.0 / sample_time_s, 3) +
+         " Hz (" + significantDigits(per_sample, 3) + " a sample)";
   if (d.calibration_step_trials.empty()) return s;
+  const bool coarse = std::any_of(d.calibration_step_trials.begin(), d.calibration_step_trials.end(),
+                                  [&](const auto& trial) { return trial.first == d.calibration_step_s; });
+  if (coarse) s += ", by the " + o.calibration.coarse_integrator + " integrator";
   s += " (on the calibrated nominal physics";
   for (const auto& [step, moved] : d.calibration_step_trials)
     s += ", " + significantDigits(1e3 * step, 3) + " ms moves the training gap by " + significantDigits(moved, 2) +
          " points";
   return s + "; the tolerance " + significantDigits(o.coarse_step_tolerance * d.noise.percent(), 2) + ", " +
-         significantDigits(o.coarse_step_tolerance, 3) + " noise floors; every gap is measured at the configured step)";
+         significantDigits(o.coarse_step_tolerance, 3) +
+         " noise floors; every gap is measured at the configured step and integrator)";
 }
 
 // Calibration modules: the nominal physics, the kept effects, then `extra` if given.
@@ -501,6 +511,10 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   if (!o.calibration.held.empty())
     throw std::invalid_argument("diagnose: calibration.held names '" + o.calibration.held.front() +
                                 "': the diagnosis's starts choose what their calibrations hold; leave it empty");
+  const auto& integrators = sim::integratorNames();
+  if (std::find(integrators.begin(), integrators.end(), o.calibration.coarse_integrator) == integrators.end())
+    throw std::invalid_argument("diagnose: calibration.coarse_integrator '" + o.calibration.coarse_integrator +
+                                "' is not one of euler, exponential");
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);
@@ -519,7 +533,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   const CalibratedState base = calibrateBaseline(simulator, x, d);
   x.step_s = calibrationStep(base.config, base.train, x, d.noise, d.calibration_step_trials);
   d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;
-  say(o, calibrationStepLine(d, o));
+  say(o, calibrationStepLine(d, o, split.train.front().sample_time_s));
   CalibratedState current = base;
   std::vector<std::string> selected;
   bool stopped = false;

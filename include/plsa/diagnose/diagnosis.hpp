@@ -43,21 +43,21 @@ struct DiagnoseOptions {
   /// candidate; a Bouc-Wen loop's basin was found from 120.
   int screen_evaluations = 120;
   /// The simulator's internal step in the screening stage, where it is
-  /// coarser than the configured one (0: the configured step): it only
-  /// ranks the starts, and a 4 ms step moves a training gap by under 0.1
-  /// point while running about four times fewer steps.
-  double screen_step_s = 0.004;
+  /// coarser than the configured one (0: the configured step), integrated
+  /// by calibration.coarse_integrator: it only ranks the starts.
+  double screen_step_s = 0.01;
   /// The candidates', the bar's and the polish's calibrations run at this
   /// internal step, or at half of it, when accuracy allows: the coarsest of
   /// the two that, on the calibrated nominal physics, moves the training gap
   /// by at most `coarse_step_tolerance` noise floors (neither: the
-  /// configured step; 0: always the configured step). Every gap reported and
-  /// compared is measured at the configured step. Coarser does not pay: at
-  /// 8 ms (two internal steps per 80 Hz sample) the bench's three-run lag
-  /// case passed the test (0.066 points against 0.13) and ran 14.3 -> 13.0 s,
-  /// but the sharp Bouc-Wen case kept a spurious pneumatic lag and took
-  /// 15.8 s instead of 9.5 s (bench/diagnose_cost.py).
-  double calibration_step_s = 0.004;
+  /// configured step; 0: always the configured step), integrated by
+  /// calibration.coarse_integrator. A run's step is a whole number a sample
+  /// (the nearest; 10 ms at 80 Hz: one 12.5 ms step a sample). Every gap
+  /// reported and compared is measured at the configured step and
+  /// integrator. On bench/diagnose_cost.py's eight cases the exponential
+  /// integrator at 10 ms moved the calibrated training gap by 0.001-0.024
+  /// points (Euler at 4 ms: up to 0.21, so the null case ran at 2 ms).
+  double calibration_step_s = 0.01;
   double coarse_step_tolerance = 0.1;
   int max_selected = 3;
   /// Later rounds calibrate a candidate whose round-1 calibration ended no

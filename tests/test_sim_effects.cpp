@@ -682,8 +682,9 @@ TEST(SimIntegration, AStiffSegmentAtTheLongestStepStaysFiniteAndSettlesAsAFineSt
 // and 12.5 ms (three, two and one steps per 80 Hz sample) follows the same
 // run at 0.1 ms far closer than Euler does at those steps (measured: 4 to
 // 50 times; docs/simulator.md), on nominal physics alone and with the
-// effects whose parts it steps exactly (a linear or a power flow law,
-// linear or power stiffening, one- or two-rate creep).
+// effects whose parts it steps exactly (a linear, orifice or power flow
+// law, linear or power stiffening, one- or two-rate creep), under-,
+// critically and overdamped.
 TEST(SimIntegration, TheExponentialIntegratorFollowsAFineStepCloserThanEulerAtCoarseSteps) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> level(0.0, 0.4);
@@ -714,8 +715,16 @@ TEST(SimIntegration, TheExponentialIntegratorFollowsAFineStepCloserThanEulerAtCo
   flexible.creep.formulation = "two_rate";
   SimConfig lag_and_creep = allOff();
   lag_and_creep.pneumatic_lag.enabled = lag_and_creep.creep.enabled = lag_and_creep.stiffening.enabled = true;
-  const std::map<std::string, SimConfig> cases = {
-      {"nominal", allOff()}, {"linear lag, stiffening, creep", lag_and_creep}, {"power laws", flexible}};
+  SimConfig critical = allOff(), overdamped = allOff(), orifice = only("pneumatic_lag");
+  critical.bending.damping_ratio = 1.0;
+  overdamped.bending.damping_ratio = 3.0;
+  orifice.pneumatic_lag.formulation = "orifice";
+  const std::map<std::string, SimConfig> cases = {{"nominal", allOff()},
+                                                  {"critically damped", critical},
+                                                  {"overdamped (3)", overdamped},
+                                                  {"orifice lag", orifice},
+                                                  {"linear lag, stiffening, creep", lag_and_creep},
+                                                  {"power laws", flexible}};
   for (const auto& [name, c] : cases) {
     const std::vector<Eigen::Vector2d> fine = run(c, "euler", 1e-4);
     const double euler_default = rms(run(c, "euler", 1e-3), fine);
@@ -730,5 +739,31 @@ TEST(SimIntegration, TheExponentialIntegratorFollowsAFineStepCloserThanEulerAtCo
         EXPECT_LT(exact, euler_default) << name;
       }
     }
+  }
+}
+
+// A segment stiffened far past its natural frequency and overdamped, at
+// one 12.5 ms step a sample: the exponential integrator's transition
+// stays finite (e^(-a h) cosh(s h) would be 0 times inf: NaN from the
+// first pressurised step) and settles where Euler at 0.1 ms does.
+TEST(SimIntegration, TheExponentialIntegratorStaysFiniteOnAStiffOverdampedSegment) {
+  SimConfig c = allOff();
+  c.bending.natural_freq_hz = 20.0;
+  c.bending.damping_ratio = 5.0;
+  c.stiffening.enabled = true;
+  c.stiffening.formulation = "exponential";
+  c.stiffening.per_bar = 60.0;
+  c.max_pressure_bar = 1.0;
+  c.elongation.quadratic = -0.3;  // still lengthening at 1 bar
+  SimConfig coarse = c, fine = c;
+  coarse.integrator = "exponential";
+  coarse.internal_step_s = 0.01;
+  fine.internal_step_s = 1e-4;
+  Actuator coarse_a(coarse, 3), fine_a(fine, 3);
+  for (const std::array<double, 3> cmd : {std::array<double, 3>{1.0, 1.0, 1.0}, {1.0, 0.2, 0.0}, {0.5, 1.0, 0.3}}) {
+    const std::vector<ActuatorSample> run = hold(coarse_a, cmd, 3.0);
+    for (const ActuatorSample& s : run) ASSERT_TRUE(std::isfinite(s.true_bend_deg)) << "at t = " << s.time_s;
+    const double settled = run.back().true_bend_deg, reference = hold(fine_a, cmd, 3.0).back().true_bend_deg;
+    EXPECT_NEAR(settled, reference, 0.02 * std::max(1.0, reference)) << cmd[0] << " " << cmd[1] << " " << cmd[2];
   }
 }

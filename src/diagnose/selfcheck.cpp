@@ -285,10 +285,6 @@ sim::IndependentPhysics independentTruth(const Spec& spec, bool flexible, std::m
 sim::SimConfig ownLawsTruth(const Spec& spec, const SelfcheckOptions& o, std::mt19937_64& rng, SelfcheckCase& c) {
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   sim::SimConfig truth = allOff();
-  // The laws as hardware follows them, continuous: at a tenth of a
-  // millisecond the integrator's own error (0.13-0.31 deg at the default
-  // 1 ms, docs/simulator.md) is not in the runs for a candidate to absorb.
-  truth.internal_step_s = 1e-4;
   for (const sim::ParamRef& p : truth.parameters("nominal"))
     *p.value = std::clamp(*p.value * (1.0 + o.nominal_perturbation * (2 * uni(rng) - 1)), p.lower, p.upper);
   std::string forms;

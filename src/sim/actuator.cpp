@@ -20,15 +20,22 @@ double softplus(double x) { return x > 30 ? x : std::log1p(std::exp(x)); }
 
 // The exact step of x'' = -w^2 x - 2 zeta w x' over h: exp(A h) for
 // A = [0 1; -w^2 -2 zeta w], as (x from x, x from x', x' from x, x' from x').
-// exp(A h) = e^(-a h) (C I + S (A + a I)), a = zeta w, with C and S the
-// cosine and the sine over s (s = w sqrt(|1 - zeta^2|)) of s h, hyperbolic
-// when overdamped, and 1 and h at critical damping.
+// exp(A h) = C I + S (A + a I), a = zeta w, with C = e^(-a h) cos(s h) and
+// S = e^(-a h) sin(s h) / s (s = w sqrt(|1 - zeta^2|)); overdamped, the
+// hyperbolic ones, taken from the slower eigenvalue -a + s so that neither
+// overflows (e^(-a h) cosh(s h) of a stiff step would be 0 times inf); at
+// critical damping e^(-a h) and h e^(-a h).
 std::array<double, 4> dampedTransition(double omega, double zeta, double h) {
   const double a = zeta * omega, split = 1.0 - zeta * zeta, s = omega * std::sqrt(std::abs(split));
+  if (split < 0.0 && s * h > 1e-6) {
+    const double slow = std::exp((s - a) * h);  // e^(-a h) e^(s h)
+    const double c = 0.5 * slow * (1.0 + std::exp(-2.0 * s * h)), sine = -0.5 * slow * std::expm1(-2.0 * s * h) / s;
+    return {c + a * sine, sine, -omega * omega * sine, c - a * sine};
+  }
   double c = 1.0, sine_over_s = h;
   if (s * h > 1e-6) {
-    c = split > 0.0 ? std::cos(s * h) : std::cosh(s * h);
-    sine_over_s = (split > 0.0 ? std::sin(s * h) : std::sinh(s * h)) / s;
+    c = std::cos(s * h);
+    sine_over_s = std::sin(s * h) / s;
   }
   const double decay = std::exp(-a * h);
   return {decay * (c + a * sine_over_s), decay * sine_over_s, -decay * omega * omega * sine_over_s,

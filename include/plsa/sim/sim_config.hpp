@@ -35,8 +35,9 @@ struct SimConfig {
   /// Euler chambers and creep, semi-implicit Euler bending) or
   /// "exponential": each first-order part's exact step (a nonlinear flow
   /// law's at the rate it has at the step's start) and the bending mode's
-  /// exact step toward the target held over the step (a hardening spring
-  /// keeps semi-implicit Euler), accurate at steps several times longer.
+  /// exact step toward a target moving at a constant rate from the last
+  /// step's to this one's (a hardening spring keeps semi-implicit Euler),
+  /// accurate at steps several times longer.
   std::string integrator = "euler";
   double max_pressure_bar = 0.4;  ///< commands are clamped to [0, this]
 

@@ -26,7 +26,6 @@ using namespace plsa::diagnose;
 namespace fs = std::filesystem;
 
 namespace {
-
 RunData recorded(const sim::SimConfig& truth, double seconds, std::uint64_t seed) {
   RunData r;
   r.name = "run" + std::to_string(seed);
@@ -95,6 +94,44 @@ TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) 
 // hysteresis, creep, the sensor's drift carry state) has no gap there. Replayed
 // from a settled start at the cut, it had one (a probe: 39% against a noise
 // floor of 0.8%).
+// A logged sample time T whose rate 1 / T gives back a period below T by a
+// rounding (147.5 Hz here): a calibration step coarser than T runs at the
+// period as the simulator computes it (capped at T itself, the simulator
+// refused the step as longer than its sample period, and the diagnosis
+// stopped).
+TEST(Diagnose, ACoarseStepRunsAtAnyLoggedSampleTime) {
+  const double period = 0.006780649266392011;
+  ASSERT_LT(1.0 / (1.0 / period), period) << "not a period that rounds down";
+  sim::SimConfig c = sim::probes::everyEffectOff();
+  RunData run = recorded(c, 5, 1);
+  run.sample_time_s = period;
+  c.internal_step_s = 0.01;
+  Gap gap;
+  ASSERT_NO_THROW(gap = measureGap(c, {run}, GapOptions{}));
+  EXPECT_TRUE(std::isfinite(gap.percent()));
+}
+
+// Calibrations at a coarser step by the exponential integrator (any change
+// of the gap accepted): the diagnosis says so, and what it returns keeps the
+// configured step and integrator.
+TEST(Diagnose, ACoarseIntegratorStaysInsideTheCalibrations) {
+  DiagnoseOptions o = quick();
+  o.candidates = {"creep"};
+  o.calibration.coarse_integrator = "exponential";
+  o.calibration_step_s = 0.01;
+  o.coarse_step_tolerance = 1e9;
+  const sim::SimConfig simulator = sim::probes::everyEffectOff();
+  ASSERT_NE(simulator.integrator, o.calibration.coarse_integrator);
+  const Diagnosis d = runDiagnosis(simulator, {recorded(simulator, 20, 1), recorded(simulator, 15, 2)}, o);
+  EXPECT_EQ(d.calibration_step_s, 0.01);
+  EXPECT_EQ(d.calibration_integrator, "exponential");
+  EXPECT_EQ(nlohmann::json::parse(toJson(d))["calibration_integrator"], "exponential");
+  for (const sim::SimConfig& c : {d.calibrated, d.final_config}) {
+    EXPECT_EQ(c.integrator, simulator.integrator);
+    EXPECT_EQ(c.internal_step_s, simulator.internal_step_s);
+  }
+}
+
 TEST(Diagnose, TheHeldOutPartOfOneRunCarriesTheStateBuiltBeforeIt) {
   sim::SimConfig truth;  // every effect on
   truth.sensor.noise_deg = 0.0;
@@ -513,12 +550,8 @@ TEST(Diagnose, FindsAWithheldDeadzoneBlindAndSaysWhere) {
   ASSERT_LT(sim::probes::everyEffectOff().internal_step_s, o.calibration_step_s);
   EXPECT_EQ(d.calibration_step_s, o.calibration_step_s);
   EXPECT_EQ(j["calibration_step_s"], o.calibration_step_s);
-  // ...by the coarse integrator; what it returns keeps the configured step and integrator.
-  ASSERT_NE(o.calibration.coarse_integrator, sim::probes::everyEffectOff().integrator);
-  for (const sim::SimConfig& c : {d.calibrated, d.final_config}) {
-    EXPECT_EQ(c.integrator, sim::probes::everyEffectOff().integrator);
-    EXPECT_EQ(c.internal_step_s, sim::probes::everyEffectOff().internal_step_s);
-  }
+  EXPECT_EQ(d.calibration_integrator, o.calibration.coarse_integrator);
+  EXPECT_EQ(j["calibration_integrator"], o.calibration.coarse_integrator);
   // How each calibration went: its starts, runs and where each start ended.
   EXPECT_EQ(d.ranking[0].starts, 2);
   EXPECT_EQ(d.ranking[0].train_gap_per_start.size(), 2u);
@@ -594,6 +627,7 @@ TEST(Diagnose, NullCaseClaimsNothing) {
   const Diagnosis d =
       runDiagnosis(sim::probes::everyEffectOff(), {recorded(truth, 40, 21), recorded(truth, 30, 22)}, o);
   EXPECT_EQ(d.calibration_step_s, sim::probes::everyEffectOff().internal_step_s);
+  EXPECT_EQ(d.calibration_integrator, sim::probes::everyEffectOff().integrator) << "the configured step's own";
   EXPECT_TRUE(d.selected.empty()) << d.verdict;
   EXPECT_NE(d.verdict.find("No candidate effect explains the held-out gap beyond noise"), std::string::npos);
   // It names the bar the best candidate did not clear, with both gaps.
@@ -673,7 +707,6 @@ sim::SimConfig smoothLoopTruth() {
   h.weight_narrow = h.weight_mid = h.weight_wide = 0.0;
   h.weight_smooth = 0.5;
   h.smooth_saturation = 0.8;
-  truth.internal_step_s = 1e-4;  // continuous, as hardware: no integrator error for a candidate to absorb
   return truth;
 }
 

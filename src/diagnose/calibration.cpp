@@ -59,7 +59,8 @@ SimTrace simulateRun(const sim::SimConfig& config, const RunData& run, OutputMap
   sim::SimConfig c = config;
   c.sensor.noise_deg = 0.0;
   c.sample_rate_hz = 1.0 / run.sample_time_s;
-  c.internal_step_s = std::min(c.internal_step_s, run.sample_time_s);
+  // The sample period as validate() computes it (1 / (1 / T) can fall below T by a rounding).
+  c.internal_step_s = std::min(c.internal_step_s, 1.0 / c.sample_rate_hz);
   const double preroll = run.start == RunStart::kSettled ? settlingTime(config) : 0.0;
   const sim::ReadingBranch branch = readingBranchFor(map);
   if (run.lead_in.rows() == 0) return replayCommands(c, run.commands, 1, preroll, 0, branch);

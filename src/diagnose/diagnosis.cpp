@@ -150,10 +150,8 @@ std::string calibrationStepLine(const Diagnosis& d, const DiagnoseOptions& o, do
   if (std::abs(taken - d.calibration_step_s) > 1e-9)
     s += ", " + significantDigits(1e3 * taken, 3) + " ms at the runs' " + significantDigits(1.0 / sample_time_s, 3) +
          " Hz (" + significantDigits(per_sample, 3) + " a sample)";
+  s += ", by the " + d.calibration_integrator + " integrator";
   if (d.calibration_step_trials.empty()) return s;
-  const bool coarse = std::any_of(d.calibration_step_trials.begin(), d.calibration_step_trials.end(),
-                                  [&](const auto& trial) { return trial.first == d.calibration_step_s; });
-  if (coarse) s += ", by the " + o.calibration.coarse_integrator + " integrator";
   s += " (on the calibrated nominal physics";
   for (const auto& [step, moved] : d.calibration_step_trials)
     s += ", " + significantDigits(1e3 * step, 3) + " ms moves the training gap by " + significantDigits(moved, 2) +
@@ -533,6 +531,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   const CalibratedState base = calibrateBaseline(simulator, x, d);
   x.step_s = calibrationStep(base.config, base.train, x, d.noise, d.calibration_step_trials);
   d.calibration_step_s = x.step_s > 0.0 ? x.step_s : base.config.internal_step_s;
+  d.calibration_integrator = x.step_s > 0.0 ? o.calibration.coarse_integrator : base.config.integrator;
   say(o, calibrationStepLine(d, o, split.train.front().sample_time_s));
   CalibratedState current = base;
   std::vector<std::string> selected;

@@ -112,6 +112,7 @@ std::string toJson(const Diagnosis& d) {
   j["nominal_params"] = paramsJson(d.nominal_params);
   j["nominal_evaluations"] = d.nominal_evaluations;
   j["calibration_step_s"] = d.calibration_step_s;
+  j["calibration_integrator"] = d.calibration_integrator;
   j["calibration_step_trials"] = nlohmann::json::array();
   for (const auto& [step, moved] : d.calibration_step_trials)
     j["calibration_step_trials"].push_back({{"step_s", step}, {"training_gap_moved_points", moved}});

@@ -107,7 +107,7 @@ struct CalibrationOptions {
   /// screening and calibration steps); every gap it reports is measured at
   /// the configured step and integrator. "exponential" follows a 0.1 ms run
   /// closer at 6.25 ms than "euler" does at 1 ms (SimIntegration tests).
-  std::string coarse_integrator = "exponential";
+  std::string coarse_integrator = "euler";
 };
 
 struct CalibrationResult {

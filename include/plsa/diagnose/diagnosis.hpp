@@ -44,20 +44,25 @@ struct DiagnoseOptions {
   int screen_evaluations = 120;
   /// The simulator's internal step in the screening stage, where it is
   /// coarser than the configured one (0: the configured step), integrated
-  /// by calibration.coarse_integrator: it only ranks the starts.
-  double screen_step_s = 0.01;
+  /// by calibration.coarse_integrator: it only ranks the starts, and a 4 ms
+  /// step moves a training gap by under 0.1 point while running about four
+  /// times fewer steps.
+  double screen_step_s = 0.004;
   /// The candidates', the bar's and the polish's calibrations run at this
   /// internal step, or at half of it, when accuracy allows: the coarsest of
   /// the two that, on the calibrated nominal physics, moves the training gap
   /// by at most `coarse_step_tolerance` noise floors (neither: the
   /// configured step; 0: always the configured step), integrated by
   /// calibration.coarse_integrator. A run's step is a whole number a sample
-  /// (the nearest; 10 ms at 80 Hz: one 12.5 ms step a sample). Every gap
-  /// reported and compared is measured at the configured step and
-  /// integrator. On bench/diagnose_cost.py's eight cases the exponential
-  /// integrator at 10 ms moved the calibrated training gap by 0.001-0.024
-  /// points (Euler at 4 ms: up to 0.21, so the null case ran at 2 ms).
-  double calibration_step_s = 0.01;
+  /// (the nearest). Every gap reported and compared is measured at the
+  /// configured step and integrator. 10 ms (one 12.5 ms step a sample at
+  /// 80 Hz) with the exponential integrator moved the calibrated training
+  /// gap by 0.001-0.024 points on bench/diagnose_cost.py's eight cases
+  /// (Euler at 4 ms: up to 0.21) and took x0.64-0.87 of the time, but made
+  /// the default it kept a spurious pneumatic lag in one of the three
+  /// own-laws cases of Cli.DiagnoseSelfcheckMeetsItsTargetsOnASmallSet
+  /// (docs/diagnosis.md): an option, not yet the default.
+  double calibration_step_s = 0.004;
   double coarse_step_tolerance = 0.1;
   int max_selected = 3;
   /// Later rounds calibrate a candidate whose round-1 calibration ended no
@@ -109,8 +114,9 @@ struct Diagnosis {
   Gap noise;                      ///< noise floor of the held-out data, same measure
   IdentifiedReference reference;  ///< what an identified model reaches on the same split
   std::vector<std::pair<std::string, double>> nominal_params;
-  int nominal_evaluations = 0;      ///< simulator runs the nominal calibration spent (grid and every start)
-  double calibration_step_s = 0.0;  ///< the internal step the candidates were calibrated at
+  int nominal_evaluations = 0;         ///< simulator runs the nominal calibration spent (grid and every start)
+  double calibration_step_s = 0.0;     ///< the internal step the candidates were calibrated at
+  std::string calibration_integrator;  ///< and the simulator's integrator there (sim::SimConfig::integrator)
   /// The coarser steps tried for the calibrations, coarsest first, and how
   /// far each moved the calibrated nominal physics' training gap (points).
   std::vector<std::pair<double, double>> calibration_step_trials;

@@ -650,6 +650,21 @@ TEST(SimEffects, SensorOffsetAndDriftMoveTheBendingVector) {
 
 // --- the integration itself ---------------------------------------------------
 
+// `coarse` holds each command 3 s in turn: every sample finite, and each hold
+// settles within 2% (at least 0.02 deg) of where Euler at 0.1 ms does.
+void expectFiniteAndSettledAsAFineStep(const SimConfig& coarse, const std::vector<std::array<double, 3>>& commands) {
+  SimConfig fine = coarse;
+  fine.integrator = "euler";
+  fine.internal_step_s = 1e-4;
+  Actuator coarse_a(coarse, 3), fine_a(fine, 3);
+  for (const std::array<double, 3>& cmd : commands) {
+    const std::vector<ActuatorSample> run = hold(coarse_a, cmd, 3.0);
+    for (const ActuatorSample& s : run) ASSERT_TRUE(std::isfinite(s.true_bend_deg)) << "at t = " << s.time_s;
+    const double settled = run.back().true_bend_deg, reference = hold(fine_a, cmd, 3.0).back().true_bend_deg;
+    EXPECT_NEAR(settled, reference, 0.02 * std::max(1.0, reference)) << cmd[0] << " " << cmd[1] << " " << cmd[2];
+  }
+}
+
 // A segment stiffened far past its natural frequency at the longest
 // internal_step_s the configuration accepts: 6 Hz, linear stiffening of 20
 // per bar (25 times as stiff with three chambers at 0.4 bar), damping 0.85.
@@ -666,15 +681,7 @@ TEST(SimIntegration, AStiffSegmentAtTheLongestStepStaysFiniteAndSettlesAsAFineSt
   c.stiffening.per_bar = 20.0;
   c.max_pressure_bar = 0.4;
   c.internal_step_s = 0.01;
-  SimConfig fine = c;
-  fine.internal_step_s = 1e-4;
-  Actuator coarse_a(c, 3), fine_a(fine, 3);
-  for (const std::array<double, 3> cmd : {std::array<double, 3>{0.4, 0.4, 0.4}, {0.4, 0.1, 0.0}, {0.3, 0.4, 0.2}}) {
-    const std::vector<ActuatorSample> run = hold(coarse_a, cmd, 3.0);
-    for (const ActuatorSample& s : run) ASSERT_TRUE(std::isfinite(s.true_bend_deg)) << "at t = " << s.time_s;
-    const double coarse = run.back().true_bend_deg, reference = hold(fine_a, cmd, 3.0).back().true_bend_deg;
-    EXPECT_NEAR(coarse, reference, 0.02 * std::max(1.0, reference)) << cmd[0] << " " << cmd[1] << " " << cmd[2];
-  }
+  expectFiniteAndSettledAsAFineStep(c, {{{0.4, 0.4, 0.4}, {0.4, 0.1, 0.0}, {0.3, 0.4, 0.2}}});
 }
 
 // The exponential integrator at the diagnosis's coarse steps: a run of held
@@ -755,15 +762,7 @@ TEST(SimIntegration, TheExponentialIntegratorStaysFiniteOnAStiffOverdampedSegmen
   c.stiffening.per_bar = 60.0;
   c.max_pressure_bar = 1.0;
   c.elongation.quadratic = -0.3;  // still lengthening at 1 bar
-  SimConfig coarse = c, fine = c;
-  coarse.integrator = "exponential";
-  coarse.internal_step_s = 0.01;
-  fine.internal_step_s = 1e-4;
-  Actuator coarse_a(coarse, 3), fine_a(fine, 3);
-  for (const std::array<double, 3> cmd : {std::array<double, 3>{1.0, 1.0, 1.0}, {1.0, 0.2, 0.0}, {0.5, 1.0, 0.3}}) {
-    const std::vector<ActuatorSample> run = hold(coarse_a, cmd, 3.0);
-    for (const ActuatorSample& s : run) ASSERT_TRUE(std::isfinite(s.true_bend_deg)) << "at t = " << s.time_s;
-    const double settled = run.back().true_bend_deg, reference = hold(fine_a, cmd, 3.0).back().true_bend_deg;
-    EXPECT_NEAR(settled, reference, 0.02 * std::max(1.0, reference)) << cmd[0] << " " << cmd[1] << " " << cmd[2];
-  }
+  c.integrator = "exponential";
+  c.internal_step_s = 0.01;
+  expectFiniteAndSettledAsAFineStep(c, {{{1.0, 1.0, 1.0}, {1.0, 0.2, 0.0}, {0.5, 1.0, 0.3}}});
 }

@@ -509,10 +509,7 @@ Diagnosis runDiagnosis(const sim::SimConfig& simulator, const std::vector<RunDat
   if (!o.calibration.held.empty())
     throw std::invalid_argument("diagnose: calibration.held names '" + o.calibration.held.front() +
                                 "': the diagnosis's starts choose what their calibrations hold; leave it empty");
-  const auto& integrators = sim::integratorNames();
-  if (std::find(integrators.begin(), integrators.end(), o.calibration.coarse_integrator) == integrators.end())
-    throw std::invalid_argument("diagnose: calibration.coarse_integrator '" + o.calibration.coarse_integrator +
-                                "' is not one of euler, exponential");
+  sim::requireIntegratorName(o.calibration.coarse_integrator, "diagnose: calibration.coarse_integrator");
   Diagnosis d;
   d.map = o.calibration.gap.map;
   const RunSplit split = splitRuns(runs, o);

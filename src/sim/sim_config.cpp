@@ -116,6 +116,14 @@ const std::vector<std::string>& integratorNames() {
   return names;
 }
 
+void requireIntegratorName(const std::string& name, const std::string& field) {
+  const auto& names = integratorNames();
+  if (std::find(names.begin(), names.end(), name) != names.end()) return;
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  throw std::invalid_argument(field + " '" + name + "' is not one of " + list);
+}
+
 std::string flexibleFormulationOf(const std::string& effect) {
   const auto& laws = formulationsOf(effect);
   if (effect == "hysteresis") return "weighted_pi";
@@ -169,8 +177,7 @@ void SimConfig::validate() const {
       throw std::invalid_argument("sim config: " + m + ".formulation '" + f + "' is not one of " + list);
     }
   }
-  if (std::find(integratorNames().begin(), integratorNames().end(), integrator) == integratorNames().end())
-    throw std::invalid_argument("sim config: integrator '" + integrator + "' is not one of euler, exponential");
+  requireIntegratorName(integrator, "sim config: integrator");
   // Chamber directions: angles on the circle (1e300 was taken), the three apart (at one direction the
   // segment bends in one plane and the steering subspaces are empty).
   for (std::size_t i = 0; i < 3; ++i) {

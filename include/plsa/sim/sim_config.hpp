@@ -191,6 +191,10 @@ const std::vector<std::string>& formulationsOf(const std::string& effect);
 /// SimConfig::integrator's values, the default first.
 const std::vector<std::string>& integratorNames();
 
+/// Throws std::invalid_argument "<field> '<name>' is not one of <names>"
+/// unless `name` is one of integratorNames().
+void requireIntegratorName(const std::string& name, const std::string& field);
+
 /// The effect's flexible law (one whose shape parameters span its fixed
 /// laws: "power" for stiffening and pneumatic_lag, "weighted_pi" for
 /// hysteresis), or "" when it has none.

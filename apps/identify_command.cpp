@@ -315,10 +315,11 @@ void addShapingCandidates(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) 
 // identify's output drift, cross-validation layout and outlier check.
 void addDriftAndValidationOptions(CLI::App* id, const std::shared_ptr<IdentifyArgs>& a) {
   addChoice(id, "--output-drift", a->options.output_drift,
-            "auto (default): estimate a sensor drift linear in time (a tip sensor's yaw with tip_cartesian, each "
-            "output's trend otherwise) on an input-side model and take it out of the training outputs if "
-            "cross-validated simulation gains more than one standard error over folds and outputs; on: always "
-            "take it out; off: fit the outputs as logged");
+            "off (default): fit the outputs as logged; auto: estimate a sensor drift linear in time (a tip "
+            "sensor's yaw with tip_cartesian, each output's trend otherwise) on an input-side model and take it "
+            "out of the training outputs if cross-validated simulation gains more than one standard error over "
+            "folds and outputs (for a sensor known to drift, as the built-in simulator's yaw does); on: always "
+            "take it out");
   addChoice(id, "--cv-layout", a->options.cv_layout,
             "How cross-validation cuts the training logs for every choice above: interleaved (default): chunks "
             "of --cv-chunk seconds dealt to the folds in turn, so each fold's fit spans the whole experiment; "

@@ -3,7 +3,7 @@
 
 Records a joystick run of the built-in simulator (default an hour at 80 Hz,
 from rest, every effect on), then runs `plsa identify` with the demo's
-options (input-side scheduling), the same with the structure search on every
+options (input-side scheduling, the sensor's drift asked for), the same with the structure search on every
 sample (--search-samples 0) instead of its default sample, and `plsa
 validate` of the first model on the same log, each as its own process
 --repeats times (default 3), and reads each one's peak resident memory and
@@ -60,7 +60,7 @@ def main():
         figures["samples"] = samples
         hours = samples / 80.0 / 3600.0
         every = os.path.join(tmp, "model_every_sample.json")
-        identify = [exe, "identify", "--log", log, "--scheduling", "input", "--out"]
+        identify = [exe, "identify", "--log", log, "--scheduling", "input", "--output-drift", "auto", "--out"]
         steps = {"identify": identify + [model],
                  "identify, search on every sample": identify + [every, "--search-samples", "0"],
                  "validate": [exe, "validate", "--model", model, "--log", log]}

@@ -370,7 +370,7 @@ void bindModel(py::module_& m) {
 void bindTools(py::module_& m) {
   m.def("identify", &identify, py::arg("logs"), py::arg("inputs") = py::none(), py::arg("outputs") = py::none(),
         py::arg("poles") = 5, py::arg("scheduling") = "auto", py::arg("cv_layout") = "interleaved",
-        py::arg("output_drift") = "auto", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
+        py::arg("output_drift") = "off", py::arg("output_frame") = py::none(), py::arg("refine_play") = 0,
         py::arg("progress") = py::none(), py::arg("levels") = 0, py::arg("angle_unit") = py::none(),
         "Identify a model from CSV logs, as `plsa identify` (the same options and defaults; levels: its --levels, "
         "quantile levels per input for logs without a staircase, 0 to choose them; angle_unit: its --angle-unit, "

@@ -56,7 +56,7 @@ TEST_F(Cli, IdentifyThenValidateWritesFitsJson) {
   ASSERT_EQ(run("simulate --experiment joystick --duration 30 --seed 2 --out " + file("val.lcmlog")), 0) << err_;
   ASSERT_EQ(run("identify --log " + file("train.csv") +
                 " --output-frame tip_cartesian --play-coupling 0.3 "
-                "--play-threshold 0.2 --out " +
+                "--play-threshold 0.2 --output-drift auto --out " +
                 file("model.json")),
             0)
       << err_;
@@ -213,6 +213,13 @@ TEST_F(Cli, IdentifyFitsThePapersConfigurationAndTheGlobalLinearObf) {
       << err_;
   EXPECT_NE(err_.find("global linear OBF: the poles and play channels chosen above, one region"), std::string::npos)
       << err_;
+  // By default the outputs are fitted as logged, though this simulator's
+  // sensor drifts: the stage says so and names the option that estimates it.
+  EXPECT_NE(err_.find("[5/5] sensor drift: not estimated (--output-drift off: the outputs as logged; "
+                      "--output-drift auto estimates"),
+            std::string::npos)
+      << err_;
+  EXPECT_FALSE(nlohmann::json::parse(slurp(file("linear.json"))).contains("training_output_drift"));
   const plsa::DioPwlObfModel linear = plsa::loadModel(file("linear.json"));
   EXPECT_EQ(linear.partition.regionCount(), 1);
   EXPECT_EQ(linear.schedule_lag_s, 0.0);

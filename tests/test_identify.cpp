@@ -63,7 +63,8 @@ TEST(Pipeline, ProgressCountsEveryHeldOutScoreOfEachStage) {
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.2};
   o.play_threshold_candidates = {0.2};
-  o.slow_pole_candidates = {0.0, 5.0};  // 0 is "none", scored once
+  o.slow_pole_candidates = {0.0, 5.0};        // 0 is "none", scored once
+  o.output_drift = OutputDriftChoice::kAuto;  // scored twice
   o.progress_interval_s = 0.0;
   IdentifyReport rep;
   const DioPwlObfModel m = identifyModel({train}, o, &rep);
@@ -497,6 +498,7 @@ TEST(Pipeline, PlayThresholdIsChosenNearTheDeadzoneAndLiftsTheFits) {
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.8};
   o.slow_pole_candidates = {2.0};
+  o.output_drift = OutputDriftChoice::kAuto;  // as the demo asks, its sensor drifting
   o.play_threshold_candidates = {};
   const DioPwlObfModel from_zero = identifyModel({train}, o);
   EXPECT_EQ(from_zero.shaping.threshold, 0.0);

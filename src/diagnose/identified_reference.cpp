@@ -34,7 +34,8 @@ io::Log asLog(const RunData& run, bool pressures) {
 
 // Identification's defaults (on short runs its quantile grid takes 2 levels
 // per input instead of 3: IdentifyOptions::quantile_levels), scheduled on the
-// input side when the inputs are the measured pressures, without banks of plays.
+// input side when the inputs are the measured pressures, without banks of
+// plays, with the sensor drift stage.
 IdentifyOptions referenceOptions(bool pressures) {
   IdentifyOptions o;
   o.inputs = {"u_1", "u_2", "u_3"};
@@ -50,6 +51,10 @@ IdentifyOptions referenceOptions(bool pressures) {
   // No bank of plays: scoring one costs two or three more fits of three
   // times the regressors, on the thread that bounds a diagnosis's time.
   o.play_bank_candidates = {};
+  // A drift stage, as identification's default was: a diagnosed sensor may
+  // drift (sensor_bias is a candidate), and the reference is what a model
+  // could reach; kept only where held-out simulation gains.
+  o.output_drift = OutputDriftChoice::kAuto;
   return o;
 }
 

@@ -87,6 +87,7 @@ inline IdentifyOptions fixedInputSide(OutputFrame frame) {
   o.schedule_lag_candidates = {0.8};
   o.play_threshold_candidates = {};
   o.slow_pole_candidates = {};
+  o.output_drift = OutputDriftChoice::kAuto;  // the drift stage runs (and, on these runs, decides)
   return o;
 }
 

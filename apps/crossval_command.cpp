@@ -248,6 +248,9 @@ void addCrossvalCommand(CLI::App& app) {
                 "Fits spent refining threshold, coupling, softening and band together, as in identify; default 0")
       ->check(CLI::Range(0, 10000));
   addPlayBankOptions(c, a->options);
+  addChoice(c, "--output-drift", a->options.output_drift,
+            "Sensor drift of plsa's model, as in identify: off (default), auto (estimated on each training set, "
+            "kept when held-out simulation gains), on");
   c->add_option("--arx-na", a->arx_na, "ARX output lags")->check(CLI::Range(0, 64));
   c->add_option("--arx-nb", a->arx_nb, "ARX input lags")->check(CLI::Range(1, 64));
   c->add_option("--json", a->json, "Write the fits as JSON ('-': standard output)")->check(kOutputPath);

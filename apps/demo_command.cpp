@@ -74,6 +74,7 @@ DemoRuns recordRuns(const sim::SimConfig& config, std::uint64_t seed, const Outp
 // cross-validation), the paper's (switched, no play, the angles as logged)
 // and the two linear baselines.
 struct DemoModels {
+  bool drift_asked = false;  ///< whether plsa's identification ran the drift stage
   IdentifyReport report;
   DioPwlObfModel model, paper, linear;
   eval::ArxModel arx;
@@ -99,6 +100,7 @@ DemoModels identifyModels(const io::Log& train, bool drifting_sensor, const Outp
   if (drifting_sensor) io_.output_drift = OutputDriftChoice::kAuto;
   io_.progress = [](const std::string& l) { std::printf("  identify: %s\n", l.c_str()); };
   DemoModels m;
+  m.drift_asked = drifting_sensor;
   m.model = identifyModel({train}, io_, &m.report);
   m.paper = identifyModel({train}, paperConfiguration(io_));
   // The baselines are fitted to the same outputs as plsa's model: less any sensor drift it took out.
@@ -309,18 +311,19 @@ void writeReport(const DemoModels& m, const DemoScores& s, const io::Log& val, c
           : std::string();
   const Eigen::MatrixXd Yv = val.columnsOf(m.model.outputs);
   std::ostringstream html;
-  html
-      << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
-      << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
-      << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child,th:first-child{text-align:left}"
-      << "pre{white-space:pre-wrap;font-size:12px}"
-      << "</style></head><body><h1>plsa demo: DIO-PWL-OBF on the simulated actuator</h1>"
-      << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving "
-         "at a "
-      << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ". plsa's model runs "
-      << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
-      << "coupling, schedule lag, play threshold, slow pole and (the simulated sensor drifting) sensor drift chosen by "
-      << "cross-validation on the grid. " << drift_text << "Every model is scored on the logged angles.</p>";
+  html << "<!doctype html><html><head><meta charset=\"utf-8\"><title>plsa demo</title><style>"
+       << "body{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}table{border-collapse:collapse}"
+       << "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}td:first-child,th:first-child{text-align:left}"
+       << "pre{white-space:pre-wrap;font-size:12px}"
+       << "</style></head><body><h1>plsa demo: DIO-PWL-OBF on the simulated actuator</h1>"
+       << "<p>Identified on a two-chamber grid experiment (0.20 to 0.35 bar, four levels per chamber, one input moving "
+          "at a "
+       << "time), validated on a joystick-like run. Effects on: " << report::escape(effects) << ". plsa's model runs "
+       << "on the tip direction's components (bend cos steer, bend sin steer) with input-side scheduling; play, "
+       << "coupling, schedule lag, play threshold, slow pole"
+       << (m.drift_asked ? " and (the simulated sensor drifting) sensor drift" : "")
+       << " chosen by cross-validation on the grid. " << drift_text
+       << "Every model is scored on the logged angles.</p>";
   reportTables(html, m, s);
   html << "<p>Every plotted series: <a href=\"predictions.csv\">predictions.csv</a>. " << report::kChartHint << "</p>";
   for (std::size_t o = 0; o < m.model.outputs.size(); ++o) {

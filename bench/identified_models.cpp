@@ -73,6 +73,7 @@ std::vector<BenchModel> identifiedModels(std::uint64_t seed, void (*say)(const s
   IdentifyOptions demo;
   demo.output_frame = OutputFrame::kTipCartesian;
   demo.scheduling = SchedulingChoice::kInputSide;
+  demo.output_drift = OutputDriftChoice::kAuto;  // the simulated sensor drifts, as the demo asks
   const DioPwlObfModel model = identifyModel({grid}, demo);
   add("demo", model);
   DioPwlObfModel no_lag = model;

@@ -6,7 +6,9 @@ actuator, every case and seed, recorded from rest): per row the grid run
 trains and the joystick run validates. Each configuration is `plsa identify`
 with its defaults but one candidate family left out ('0' alone, or off), so
 a knob that cross-validation keeps but that does not pay on the held-out
-joystick run shows up as a row where leaving it out fits better.
+joystick run shows up as a row where leaving it out fits better; "output
+drift" instead asks for the drift stage, off by default, and a row whose
+stage leaves the drift in counts as the defaults' model.
 "fractions on increments" fits the tied slow fractions on the output
 increments alone instead of stepping them on the simulated level.
 

@@ -215,8 +215,8 @@ TEST_F(Cli, IdentifyFitsThePapersConfigurationAndTheGlobalLinearObf) {
       << err_;
   // By default the outputs are fitted as logged, though this simulator's
   // sensor drifts: the stage says so and names the option that estimates it.
-  EXPECT_NE(err_.find("[5/5] sensor drift: not estimated (--output-drift off: the outputs as logged; "
-                      "--output-drift auto estimates"),
+  EXPECT_NE(err_.find("[5/5] sensor drift: not estimated (output drift off: the outputs as logged; 'auto' "
+                      "(--output-drift auto) estimates"),
             std::string::npos)
       << err_;
   EXPECT_FALSE(nlohmann::json::parse(slurp(file("linear.json"))).contains("training_output_drift"));
@@ -440,6 +440,8 @@ TEST_F(Cli, ALogOrHorizonGivenTwiceIsRefused) {
       << err_;
   EXPECT_EQ(run("crossval --log " + file("runs") + " --horizons 0"), 2);  // a usage error
   EXPECT_NE(err_.find("--horizons"), std::string::npos) << err_;
+  EXPECT_EQ(run("crossval --log " + file("runs") + " --output-drift sometimes"), 2);  // identify's choices
+  EXPECT_NE(err_.find("--output-drift"), std::string::npos) << err_;
   fs::create_directories(file("empty"));
   EXPECT_EQ(run("crossval --log " + file("empty") + " --log " + file("runs")), 1);
   EXPECT_NE(err_.find("empty: no logs in this folder (.csv, .lcmlog, .candump, LCM event logs by content, or candump "

@@ -466,6 +466,7 @@ TEST(Pipeline, TipFrameLiftsTheKStepFits) {
   // The demo's structure, fixed so that only the frame differs.
   IdentifyOptions o;
   o.scheduling = SchedulingChoice::kInputSide;
+  o.output_drift = OutputDriftChoice::kAuto;
   o.play_candidates = {{PlayChannel(0.0, 0.12)}};
   o.play_coupling_candidates = {0.3};
   o.schedule_lag_candidates = {0.8};

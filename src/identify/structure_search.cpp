@@ -483,9 +483,9 @@ std::optional<IdentificationRun::HeldOutScore> IdentificationRun::searchOutputDr
   } else if (o.output_drift != OutputDriftChoice::kOff) {
     say("[5/5] sensor drift: not estimated (it needs input-side scheduling, where the level is a function of the "
         "inputs)");
-  } else {
-    say("[5/5] sensor drift: not estimated (--output-drift off: the outputs as logged; --output-drift auto "
-        "estimates a drift linear in time and keeps it when held-out simulation gains)");
+  } else if (model.schedule_side == ScheduleSide::kInput) {
+    say("[5/5] sensor drift: not estimated (output drift off: the outputs as logged; 'auto' (--output-drift "
+        "auto) estimates a drift linear in time and keeps it when held-out simulation gains)");
   }
   return as_it_stands;
 }

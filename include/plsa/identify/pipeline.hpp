@@ -277,7 +277,7 @@ struct IdentifyOptions {
   /// state over the training run. Off by default: one training run cannot
   /// tell a sensor's drift from a trend its physics leaves in that run, and
   /// on physics plsa did not write (whose sensor does not drift) "auto" kept
-  /// a drift in 8 of 60 rows and cost them fits (docs/generalisation.md).
+  /// a drift in 8 of 64 rows and cost them fits (docs/generalisation.md).
   OutputDriftChoice output_drift = OutputDriftChoice::kOff;
   /// Then, for an input-side model, the time constants (s) of one extra real
   /// pole in every bank, tried against none: dynamics slower than the local

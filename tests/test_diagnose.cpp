@@ -26,6 +26,7 @@ using namespace plsa::diagnose;
 namespace fs = std::filesystem;
 
 namespace {
+
 RunData recorded(const sim::SimConfig& truth, double seconds, std::uint64_t seed) {
   RunData r;
   r.name = "run" + std::to_string(seed);
@@ -89,11 +90,6 @@ TEST(Diagnose, GapIsZeroForTheSimulatorItselfAndNoiseFloorMatchesInjectedNoise) 
   EXPECT_NEAR(floor / expected, 1.0, 0.25) << "floor " << floor << " vs injected " << expected;
 }
 
-// A single run is split in time; its held-out part is replayed after the
-// part before it, so the very simulator that recorded it (every effect on:
-// hysteresis, creep, the sensor's drift carry state) has no gap there. Replayed
-// from a settled start at the cut, it had one (a probe: 39% against a noise
-// floor of 0.8%).
 // A logged sample time T whose rate 1 / T gives back a period below T by a
 // rounding (147.5 Hz here): a calibration step coarser than T runs at the
 // period as the simulator computes it (capped at T itself, the simulator
@@ -132,6 +128,11 @@ TEST(Diagnose, ACoarseIntegratorStaysInsideTheCalibrations) {
   }
 }
 
+// A single run is split in time; its held-out part is replayed after the
+// part before it, so the very simulator that recorded it (every effect on:
+// hysteresis, creep, the sensor's drift carry state) has no gap there. Replayed
+// from a settled start at the cut, it had one (a probe: 39% against a noise
+// floor of 0.8%).
 TEST(Diagnose, TheHeldOutPartOfOneRunCarriesTheStateBuiltBeforeIt) {
   sim::SimConfig truth;  // every effect on
   truth.sensor.noise_deg = 0.0;
